@@ -1,0 +1,22 @@
+//! # neumann
+//!
+//! A physically based Monte Carlo renderer. It solves the rendering equation `L = Lₑ + T L` by
+//! sampling its Neumann series `L = Σₖ Tᵏ Lₑ` with unbiased estimators
+//! `F_N = 1/N Σ f(Xᵢ) / p(Xᵢ)`.
+//!
+//! Layers, each depending only on those above it in this list:
+//!
+//! - [`math`]: vectors, frames, transforms, bounds, rays, floating-point error bounds.
+//! - [`sampling`]: warps (`sample` / `pdf` / `invert`), discrete and tabulated distributions,
+//!   MIS heuristics, the RNG and the samplers.
+//! - [`testkit`]: the statistical harness (χ², Kolmogorov–Smirnov, quadrature) that every
+//!   sampler, BSDF and light is tested with.
+//! - [`estimators`]: small Monte Carlo estimators from the lecture material (irradiance under a
+//!   uniform sky) with their error analysis.
+
+#![warn(missing_docs)]
+
+pub mod estimators;
+pub mod math;
+pub mod sampling;
+pub mod testkit;
