@@ -6,17 +6,20 @@
 //!
 //! Layers, each depending only on those above it in this list:
 //!
-//! - [`math`]: vectors, frames, transforms, bounds, rays, floating-point error bounds.
+//! - [`math`]: vectors, colors, frames, transforms, bounds, rays, floating-point error bounds.
 //! - [`sampling`]: warps (`sample` / `pdf` / `invert`), discrete and tabulated distributions,
 //!   MIS heuristics, the RNG and the samplers.
 //! - [`testkit`]: the statistical harness (χ², Kolmogorov–Smirnov, quadrature) that every
 //!   sampler, BSDF and light is tested with.
 //! - [`estimators`]: small Monte Carlo estimators from the lecture material (irradiance under a
 //!   uniform sky) with their error analysis.
+//! - [`geometry`], [`bvh`]: shapes, intersection with error bounds, area sampling; the BVH.
 
 #![warn(missing_docs)]
 
+pub mod bvh;
 pub mod estimators;
+pub mod geometry;
 pub mod math;
 pub mod sampling;
 pub mod testkit;

@@ -7,12 +7,14 @@
 //! local shading frame ([`Frame`]) has its normal on +z.
 
 pub mod bounds;
+pub mod color;
 pub mod float;
 pub mod frame;
 pub mod ray;
 pub mod transform;
 
 pub use bounds::Bounds3;
+pub use color::{luminance, Rgb};
 pub use frame::Frame;
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use ray::Ray;

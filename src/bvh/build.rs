@@ -1,0 +1,195 @@
+//! Binned SAH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume
+//! Hierarchies"): at each node, primitive centroids are binned along each axis and the split
+//! minimizing the surface area heuristic is taken; subtrees are built in parallel with rayon.
+//! O(n log n) overall.
+
+use super::{Bvh, Node, INTERIOR};
+use crate::math::{Bounds3, Vec3};
+
+/// Build settings.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildOptions {
+    /// Largest leaf (primitives); larger sets are always split.
+    pub max_leaf: usize,
+    /// SAH bins per axis.
+    pub bins: usize,
+    /// Subtrees with more primitives than this are built in parallel.
+    pub parallel_threshold: usize,
+    /// Cost of a traversal step relative to one primitive intersection.
+    pub traversal_cost: f32,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0 }
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Item {
+    bounds: Bounds3,
+    centroid: Vec3,
+    index: u32,
+}
+
+enum BuildNode {
+    Leaf { bounds: Bounds3, first: u32, count: u32 },
+    Interior { bounds: Bounds3, axis: u32, children: Box<[BuildNode; 2]> },
+}
+
+pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
+    if bounds.is_empty() {
+        return Bvh::default();
+    }
+    let mut items: Vec<Item> = bounds
+        .iter()
+        .enumerate()
+        .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 })
+        .collect();
+    let (root, count) = build_rec(&mut items, 0, 0, opts);
+    let mut nodes = Vec::with_capacity(count);
+    flatten(&root, &mut nodes);
+    Bvh { nodes, order: items.iter().map(|it| it.index).collect() }
+}
+
+fn leaf(items: &[Item], offset: usize, bounds: Bounds3) -> (BuildNode, usize) {
+    (BuildNode::Leaf { bounds, first: offset as u32, count: items.len() as u32 }, 1)
+}
+
+fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOptions) -> (BuildNode, usize) {
+    let n = items.len();
+    let mut bounds = Bounds3::EMPTY;
+    let mut cbounds = Bounds3::EMPTY;
+    for it in items.iter() {
+        bounds = bounds.union(&it.bounds);
+        cbounds = cbounds.union_point(it.centroid);
+    }
+    if n <= 1 || depth >= 60 {
+        return leaf(items, offset, bounds);
+    }
+    let mid = match best_split(items, &bounds, &cbounds, opts) {
+        Split::Leaf if n <= opts.max_leaf => return leaf(items, offset, bounds),
+        Split::Leaf | Split::Median => {
+            // No useful SAH split (or none at all): halve along the largest centroid extent.
+            let axis = cbounds.max_extent();
+            items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+            n / 2
+        }
+        Split::At { axis, bin } => {
+            let (lo, extent) = (cbounds.min[axis], cbounds.diagonal()[axis]);
+            let nb = opts.bins;
+            let mid = partition(items, |it| bin_of(it.centroid[axis], lo, extent, nb) < bin);
+            if mid == 0 || mid == n {
+                items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+                n / 2
+            } else {
+                mid
+            }
+        }
+    };
+    let axis = cbounds.max_extent() as u32;
+    let (left, right) = items.split_at_mut(mid);
+    let ((l, lc), (r, rc)) = if n > opts.parallel_threshold {
+        rayon::join(|| build_rec(left, offset, depth + 1, opts), || build_rec(right, offset + mid, depth + 1, opts))
+    } else {
+        (build_rec(left, offset, depth + 1, opts), build_rec(right, offset + mid, depth + 1, opts))
+    };
+    (BuildNode::Interior { bounds, axis, children: Box::new([l, r]) }, 1 + lc + rc)
+}
+
+enum Split {
+    Leaf,
+    Median,
+    At { axis: usize, bin: usize },
+}
+
+#[inline]
+fn bin_of(c: f32, lo: f32, extent: f32, nb: usize) -> usize {
+    (((c - lo) / extent * nb as f32) as usize).min(nb - 1)
+}
+
+/// The SAH-best bin boundary over the three axes, or `Leaf` when no split beats a leaf.
+fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildOptions) -> Split {
+    let nb = opts.bins;
+    let n = items.len();
+    let extent = cbounds.diagonal();
+    if extent.max_element() <= 0.0 {
+        return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
+    }
+    let mut counts = vec![[0u32; 3]; nb];
+    let mut boxes = vec![[Bounds3::EMPTY; 3]; nb];
+    for it in items {
+        for axis in 0..3 {
+            if extent[axis] > 0.0 {
+                let b = bin_of(it.centroid[axis], cbounds.min[axis], extent[axis], nb);
+                counts[b][axis] += 1;
+                boxes[b][axis] = boxes[b][axis].union(&it.bounds);
+            }
+        }
+    }
+    let parent_area = bounds.surface_area().max(1e-30);
+    let mut best = (f32::INFINITY, 0usize, 0usize);
+    let mut right_area = vec![0.0f32; nb];
+    let mut right_count = vec![0u32; nb];
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        // Suffix sweep: right side of boundary k holds bins k..nb.
+        let (mut b, mut c) = (Bounds3::EMPTY, 0u32);
+        for k in (1..nb).rev() {
+            b = b.union(&boxes[k][axis]);
+            c += counts[k][axis];
+            right_area[k] = b.surface_area();
+            right_count[k] = c;
+        }
+        let (mut b, mut c) = (Bounds3::EMPTY, 0u32);
+        for k in 1..nb {
+            b = b.union(&boxes[k - 1][axis]);
+            c += counts[k - 1][axis];
+            if c == 0 || right_count[k] == 0 {
+                continue;
+            }
+            let cost = opts.traversal_cost
+                + (c as f32 * b.surface_area() + right_count[k] as f32 * right_area[k]) / parent_area;
+            if cost < best.0 {
+                best = (cost, axis, k);
+            }
+        }
+    }
+    if !best.0.is_finite() {
+        return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
+    }
+    if best.0 >= n as f32 && n <= opts.max_leaf {
+        return Split::Leaf;
+    }
+    Split::At { axis: best.1, bin: best.2 }
+}
+
+/// Moves the items satisfying `pred` to the front; returns how many there are.
+fn partition(items: &mut [Item], pred: impl Fn(&Item) -> bool) -> usize {
+    let mut first = 0;
+    for i in 0..items.len() {
+        if pred(&items[i]) {
+            items.swap(first, i);
+            first += 1;
+        }
+    }
+    first
+}
+
+fn flatten(node: &BuildNode, out: &mut Vec<Node>) -> u32 {
+    let idx = out.len() as u32;
+    match node {
+        BuildNode::Leaf { bounds, first, count } => {
+            out.push(Node { min: bounds.min.into(), offset: *first, max: bounds.max.into(), meta: *count });
+        }
+        BuildNode::Interior { bounds, axis, children } => {
+            out.push(Node { min: bounds.min.into(), offset: 0, max: bounds.max.into(), meta: INTERIOR | axis });
+            flatten(&children[0], out);
+            let right = flatten(&children[1], out);
+            out[idx as usize].offset = right;
+        }
+    }
+    idx
+}

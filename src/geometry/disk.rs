@@ -1,0 +1,106 @@
+//! Disks: the unit disk in the local xy plane (normal +z), placed by a transform (Mitsuba's
+//! `disk` shape). Analytic intersection and uniform area sampling.
+
+use super::sphere::SurfacePoint;
+use crate::math::float::gamma;
+use crate::math::{Ray, Transform, Vec2, Vec3, PI};
+use crate::sampling::sample_uniform_disk_concentric;
+
+/// A disk: the image of the unit disk `{x² + y² ≤ 1, z = 0}` under `to_world` (any affine map:
+/// an ellipse in general). Its area is `π |M e_x × M e_y|`.
+#[derive(Clone, Copy, Debug)]
+pub struct Disk {
+    to_world: Transform,
+    to_object: Transform,
+    n: Vec3,
+    area: f32,
+}
+
+impl Disk {
+    /// The unit disk placed by `to_world`; `flip` reverses the normal. `None` for a transform
+    /// that flattens the disk to zero area.
+    pub fn new(to_world: Transform, flip: bool) -> Option<Disk> {
+        let ex = to_world.apply_vector(Vec3::X);
+        let ey = to_world.apply_vector(Vec3::Y);
+        let cross = ex.cross(ey);
+        let area = PI * cross.length();
+        if !(area > 0.0 && area.is_finite()) {
+            return None;
+        }
+        let mut n = to_world.apply_normal(Vec3::Z).normalize();
+        if flip {
+            n = -n;
+        }
+        Some(Disk { to_world, to_object: to_world.inverse(), n, area })
+    }
+
+    /// Surface area.
+    pub fn area(&self) -> f32 {
+        self.area
+    }
+
+    /// Unit normal (front side).
+    pub fn normal(&self) -> Vec3 {
+        self.n
+    }
+
+    /// Intersection in `(0, t_max)`: ray parameter and local point `(x, y)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<(f32, Vec2)> {
+        let r = self.to_object.apply_ray(ray);
+        if r.d.z == 0.0 {
+            return None;
+        }
+        let t = -r.o.z / r.d.z;
+        if !(t > 0.0 && t < t_max) {
+            return None;
+        }
+        let x = r.o.x + t * r.d.x;
+        let y = r.o.y + t * r.d.y;
+        (x * x + y * y <= 1.0).then_some((t, Vec2::new(x, y)))
+    }
+
+    /// World point, error bound and normal of the local point `q`; `uv = (r, φ / 2π)`.
+    #[inline]
+    pub fn surface(&self, q: Vec2) -> (SurfacePoint, Vec2) {
+        let local = Vec3::new(q.x, q.y, 0.0);
+        let p = self.to_world.apply_point(local);
+        let m = self.to_world.matrix();
+        let abs_lin = m.x_axis.truncate().abs() * local.x.abs() + m.y_axis.truncate().abs() * local.y.abs();
+        let p_error = gamma(6) * (abs_lin + m.w_axis.truncate().abs());
+        let mut phi = q.y.atan2(q.x);
+        if phi < 0.0 {
+            phi += 2.0 * PI;
+        }
+        (SurfacePoint { p, n: self.n, p_error }, Vec2::new(q.length(), phi / (2.0 * PI)))
+    }
+
+    /// Uniform point on the disk (concentric map); pdf `1 / area` per unit area.
+    pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
+        let q = sample_uniform_disk_concentric(u).value;
+        (self.surface(q).0, 1.0 / self.area)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disk_intersection_area_and_normal() {
+        let t = Transform::translate(Vec3::new(0.0, 0.0, 2.0)) * Transform::scale(Vec3::new(2.0, 1.0, 1.0)).unwrap();
+        let d = Disk::new(t, false).unwrap();
+        assert!((d.area() - 2.0 * PI).abs() < 1e-5);
+        assert!((d.normal() - Vec3::Z).length() < 1e-6);
+        let (t_hit, q) = d.intersect(&Ray::new(Vec3::new(1.5, 0.0, 0.0), Vec3::Z), f32::INFINITY).unwrap();
+        assert!((t_hit - 2.0).abs() < 1e-6 && (q.x - 0.75).abs() < 1e-6);
+        assert!(d.intersect(&Ray::new(Vec3::new(0.0, 1.5, 0.0), Vec3::Z), f32::INFINITY).is_none());
+        assert!(Disk::new(t, true).unwrap().normal().z < 0.0);
+        let mut rng = crate::sampling::Pcg32::new(1, 1);
+        for _ in 0..1000 {
+            let (sp, pdf) = d.sample_area(crate::testkit::u2(&mut rng));
+            assert!((sp.p.z - 2.0).abs() < 1e-6 && (sp.p.x / 2.0).powi(2) + sp.p.y.powi(2) <= 1.0 + 1e-5);
+            assert!((pdf - 1.0 / (2.0 * PI)).abs() < 1e-6);
+        }
+    }
+}

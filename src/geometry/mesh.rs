@@ -1,0 +1,240 @@
+//! Triangle meshes, and the built-in rectangle and cube of Mitsuba 3.
+
+use super::sphere::SurfacePoint;
+use crate::math::{Transform, Vec2, Vec3};
+use crate::sampling::{sample_uniform_triangle, AliasTable};
+
+/// An indexed triangle mesh in world space. Triangles are counter-clockwise seen from their
+/// front side: the geometric normal is `(p1 - p0) × (p2 - p0)`.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex unit normals (empty: flat shading).
+    pub normals: Vec<Vec3>,
+    /// Per-vertex texture coordinates (empty: barycentric defaults).
+    pub uvs: Vec<Vec2>,
+    /// Vertex indices of each triangle.
+    pub indices: Vec<[u32; 3]>,
+    /// Reverse the orientation of every normal (Mitsuba's `flip_normals`).
+    pub flip_normals: bool,
+    /// Triangle-by-area distribution, built by [`TriangleMesh::prepare_sampling`].
+    area_distribution: Option<AliasTable>,
+    total_area: f32,
+}
+
+impl TriangleMesh {
+    /// A mesh from its arrays. `normals` and `uvs` are either empty or one per vertex.
+    /// Returns a description of the first problem found, if any.
+    pub fn new(positions: Vec<Vec3>, normals: Vec<Vec3>, uvs: Vec<Vec2>, indices: Vec<[u32; 3]>) -> Result<Self, String> {
+        let n = positions.len();
+        if !normals.is_empty() && normals.len() != n {
+            return Err(format!("{} normals for {} vertices", normals.len(), n));
+        }
+        if !uvs.is_empty() && uvs.len() != n {
+            return Err(format!("{} texture coordinates for {} vertices", uvs.len(), n));
+        }
+        if let Some((i, t)) = indices.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= n)) {
+            return Err(format!("triangle {i} refers to vertex {:?} but there are only {n} vertices", t));
+        }
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(format!("vertex {i} has a non-finite position"));
+        }
+        let normals = normals.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
+        Ok(TriangleMesh { positions, normals, uvs, indices, flip_normals: false, area_distribution: None, total_area: 0.0 })
+    }
+
+    /// Mitsuba's `rectangle`: `[-1, 1]²` in the xy plane, normal +z, uv from (0,0) at (-1,-1)
+    /// to (1,1) at (1,1).
+    pub fn rectangle() -> TriangleMesh {
+        let positions = vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
+        let uvs = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)];
+        TriangleMesh::new(positions, vec![], uvs, vec![[0, 1, 2], [2, 3, 0]]).expect("valid rectangle")
+    }
+
+    /// Mitsuba's `cube`: `[-1, 1]³` with outward faces, 4 vertices per face (flat shading).
+    pub fn cube() -> TriangleMesh {
+        let mut positions = Vec::with_capacity(24);
+        let mut uvs = Vec::with_capacity(24);
+        let mut indices = Vec::with_capacity(12);
+        let axes = [Vec3::X, Vec3::Y, Vec3::Z];
+        for a in 0..3 {
+            for s in [1.0f32, -1.0] {
+                let c = axes[a] * s;
+                let (mut u, mut v) = (axes[(a + 1) % 3], axes[(a + 2) % 3]);
+                if s < 0.0 {
+                    std::mem::swap(&mut u, &mut v);
+                }
+                let base = positions.len() as u32;
+                positions.extend([c - u - v, c + u - v, c + u + v, c - u + v]);
+                uvs.extend([Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]);
+                indices.extend([[base, base + 1, base + 2], [base + 2, base + 3, base]]);
+            }
+        }
+        TriangleMesh::new(positions, vec![], uvs, indices).expect("valid cube")
+    }
+
+    /// Applies `t` to positions and normals. A transform that swaps handedness reverses the
+    /// winding too, so the geometric normal keeps pointing to the same side as the (correctly
+    /// transformed) vertex normals.
+    pub fn transform(&mut self, t: &Transform) {
+        for p in &mut self.positions {
+            *p = t.apply_point(*p);
+        }
+        for n in &mut self.normals {
+            *n = t.apply_normal(*n).normalize_or(Vec3::Z);
+        }
+        if t.swaps_handedness() {
+            for tri in &mut self.indices {
+                tri.swap(1, 2);
+            }
+        }
+        self.area_distribution = None;
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// Whether the mesh has no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// Vertices of triangle `i`.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Sum of the triangle areas.
+    pub fn area(&self) -> f32 {
+        if self.area_distribution.is_some() {
+            return self.total_area;
+        }
+        (0..self.len()).map(|i| crate::sampling::triangle_area(self.triangle(i)) as f64).sum::<f64>() as f32
+    }
+
+    /// Builds the triangle-by-area distribution used by [`TriangleMesh::sample_area`].
+    /// Returns `false` if the mesh has no area.
+    pub fn prepare_sampling(&mut self) -> bool {
+        let areas: Vec<f32> = (0..self.len()).map(|i| crate::sampling::triangle_area(self.triangle(i))).collect();
+        self.total_area = areas.iter().map(|&a| a as f64).sum::<f64>() as f32;
+        self.area_distribution = AliasTable::new(&areas);
+        self.area_distribution.is_some()
+    }
+
+    /// Geometric normal of triangle `i` (unit, front side).
+    #[inline]
+    pub fn face_normal(&self, i: usize) -> Vec3 {
+        let p = self.triangle(i);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
+        if self.flip_normals {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// Shading normal and uv at barycentrics `(b0, b1, b2)` of triangle `i`, given its face
+    /// normal `ng`.
+    #[inline]
+    pub fn shading(&self, i: usize, b: [f32; 3], ng: Vec3) -> (Vec3, Vec2) {
+        let [a, bb, c] = self.indices[i].map(|v| v as usize);
+        let ns = if self.normals.is_empty() {
+            ng
+        } else {
+            let n = (self.normals[a] * b[0] + self.normals[bb] * b[1] + self.normals[c] * b[2]).normalize_or(ng);
+            if self.flip_normals {
+                -n
+            } else {
+                n
+            }
+        };
+        let uv = if self.uvs.is_empty() {
+            Vec2::new(b[1] + b[2], b[2])
+        } else {
+            self.uvs[a] * b[0] + self.uvs[bb] * b[1] + self.uvs[c] * b[2]
+        };
+        (ns, uv)
+    }
+
+    /// Uniform point on the mesh (triangle by area with the alias table, then the triangle
+    /// warp); pdf `1 / area` per unit area. Returns the point (with its geometric normal), the
+    /// shading normal there, and the pdf. `None` before [`TriangleMesh::prepare_sampling`].
+    pub fn sample_area(&self, u: Vec2) -> Option<(SurfacePoint, Vec3, f32)> {
+        let dist = self.area_distribution.as_ref()?;
+        let (tri, u_rest) = dist.sample(u.x);
+        let i = tri.value;
+        let b = sample_uniform_triangle(Vec2::new(u_rest, u.y)).value;
+        let p = self.triangle(i);
+        let x = p[0] * b.x + p[1] * b.y + p[2] * b.z;
+        let err = crate::math::float::gamma(6) * ((b.x * p[0]).abs() + (b.y * p[1]).abs() + (b.z * p[2]).abs());
+        let ng = self.face_normal(i);
+        let (ns, _) = self.shading(i, [b.x, b.y, b.z], ng);
+        Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_shapes_have_expected_area_and_orientation() {
+        let r = TriangleMesh::rectangle();
+        assert!((r.area() - 4.0).abs() < 1e-6);
+        assert!((r.face_normal(0) - Vec3::Z).length() < 1e-6 && (r.face_normal(1) - Vec3::Z).length() < 1e-6);
+        let c = TriangleMesh::cube();
+        assert!((c.area() - 24.0).abs() < 1e-5);
+        for i in 0..c.len() {
+            let p = c.triangle(i);
+            let centroid = (p[0] + p[1] + p[2]) / 3.0;
+            assert!(c.face_normal(i).dot(centroid) > 0.0, "cube face {i} not outward");
+        }
+    }
+
+    #[test]
+    fn mirror_transform_keeps_orientation_consistent() {
+        let mut c = TriangleMesh::cube();
+        c.transform(&Transform::scale(Vec3::new(-1.0, 2.0, 1.0)).unwrap());
+        for i in 0..c.len() {
+            let p = c.triangle(i);
+            let centroid = (p[0] + p[1] + p[2]) / 3.0;
+            assert!(c.face_normal(i).dot(centroid) > 0.0, "face {i} turned inward");
+        }
+        assert!((c.area() - (2.0 * (4.0 * 2.0 + 4.0 * 2.0 + 4.0))).abs() < 1e-4);
+    }
+
+    #[test]
+    fn area_sampling_is_uniform_over_triangles() {
+        let mut c = TriangleMesh::cube();
+        c.transform(&Transform::scale(Vec3::new(3.0, 1.0, 0.5)).unwrap());
+        assert!(c.prepare_sampling());
+        let total = c.area();
+        let counts = {
+            let mut k = vec![0.0; 6];
+            let mut rng = crate::sampling::Pcg32::new(2, 2);
+            for _ in 0..300_000 {
+                let (sp, _, pdf) = c.sample_area(crate::testkit::u2(&mut rng)).unwrap();
+                assert!((pdf - 1.0 / total).abs() < 1e-6);
+                let a = sp.n.abs();
+                let face = if a.x > 0.5 { 0 } else if a.y > 0.5 { 2 } else { 4 } + usize::from(sp.n.max_element() < 0.5);
+                k[face] += 1.0;
+            }
+            k
+        };
+        let face_area = [2.0, 2.0, 6.0, 6.0, 12.0, 12.0];
+        let expected: Vec<f64> = face_area.iter().map(|a| a / total as f64 * 300_000.0).collect();
+        let out = crate::testkit::pearson(&counts, &expected, &crate::testkit::Chi2Config::default());
+        assert!(out.passed(), "{out}");
+        assert!(TriangleMesh::new(vec![Vec3::ZERO], vec![], vec![], vec![[0, 1, 2]]).is_err());
+    }
+}

@@ -1,0 +1,18 @@
+//! Geometry: shapes (triangle meshes, spheres, disks; rectangles and cubes as meshes), their
+//! ray intersection with floating-point error bounds, and area / solid-angle sampling.
+//!
+//! All geometry is stored in world space (transforms are applied when a shape is built), so
+//! the BVH intersects world-space rays directly.
+
+pub mod disk;
+pub mod interaction;
+pub mod mesh;
+pub mod shape;
+pub mod sphere;
+pub mod triangle;
+
+pub use disk::Disk;
+pub use interaction::SurfaceInteraction;
+pub use mesh::TriangleMesh;
+pub use shape::{Geometry, ShapeSample};
+pub use sphere::Sphere;

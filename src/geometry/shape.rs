@@ -1,0 +1,119 @@
+//! The closed set of shape geometries, with area and solid-angle sampling for emitters.
+
+use super::{Disk, Sphere, TriangleMesh};
+use crate::math::{Bounds3, Vec2, Vec3};
+use crate::sampling::area_to_solid_angle;
+
+/// A shape's geometry (world space).
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// Triangle mesh (also rectangles and cubes).
+    Mesh(TriangleMesh),
+    /// Analytic sphere.
+    Sphere(Sphere),
+    /// Analytic disk.
+    Disk(Disk),
+}
+
+/// A point sampled on a shape as seen from a reference point.
+#[derive(Clone, Copy, Debug)]
+pub struct ShapeSample {
+    /// Sampled point.
+    pub p: Vec3,
+    /// Geometric normal there (front side).
+    pub ng: Vec3,
+    /// Shading normal there (front side), which decides which side emits.
+    pub ns: Vec3,
+    /// Error bound of `p`.
+    pub p_error: Vec3,
+    /// Density of the direction `p - p_ref` per unit solid angle at the reference point.
+    pub pdf: f32,
+}
+
+impl Geometry {
+    /// Surface area.
+    pub fn area(&self) -> f32 {
+        match self {
+            Geometry::Mesh(m) => m.area(),
+            Geometry::Sphere(s) => s.area(),
+            Geometry::Disk(d) => d.area(),
+        }
+    }
+
+    /// Number of primitives the BVH holds for this shape.
+    pub fn primitive_count(&self) -> usize {
+        match self {
+            Geometry::Mesh(m) => m.len(),
+            _ => 1,
+        }
+    }
+
+    /// Bounds of primitive `i`.
+    pub fn primitive_bounds(&self, i: usize) -> Bounds3 {
+        match self {
+            Geometry::Mesh(m) => {
+                let p = m.triangle(i);
+                Bounds3::from_point(p[0]).union_point(p[1]).union_point(p[2])
+            }
+            Geometry::Sphere(s) => Bounds3::new(s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
+            Geometry::Disk(d) => {
+                let mut b = Bounds3::EMPTY;
+                for k in 0..16 {
+                    let a = k as f32 / 16.0 * std::f32::consts::TAU;
+                    // The disk lies inside the polygon circumscribing it (radius 1/cos(π/16)).
+                    let r = 1.0 / (std::f32::consts::PI / 16.0).cos();
+                    b = b.union_point(d.surface(Vec2::new(r * a.cos(), r * a.sin())).0.p);
+                }
+                b
+            }
+        }
+    }
+
+    /// Prepares area sampling (a triangle distribution for meshes). `false` if the shape has no
+    /// area to sample.
+    pub fn prepare_sampling(&mut self) -> bool {
+        match self {
+            Geometry::Mesh(m) => m.prepare_sampling(),
+            _ => self.area() > 0.0,
+        }
+    }
+
+    /// A point on the shape for direct lighting at `p_ref`, with its solid-angle pdf. Spheres
+    /// sample the cone they subtend; meshes and disks sample area uniformly and convert
+    /// (`p_ω = p_A r² / |cos θ|`). `None` if nothing can be sampled (grazing or degenerate).
+    pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<ShapeSample> {
+        let (sp, ns, pdf_area) = match self {
+            Geometry::Sphere(s) => {
+                let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;
+                return Some(ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf });
+            }
+            Geometry::Mesh(m) => m.sample_area(u)?,
+            Geometry::Disk(d) => {
+                let (sp, pdf) = d.sample_area(u);
+                (sp, sp.n, pdf)
+            }
+        };
+        let d = sp.p - p_ref;
+        let dist2 = d.length_squared();
+        if dist2 == 0.0 {
+            return None;
+        }
+        let cos = sp.n.dot(d).abs() / dist2.sqrt();
+        let pdf = area_to_solid_angle(pdf_area, dist2, cos);
+        (pdf > 0.0 && pdf.is_finite()).then_some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
+    }
+
+    /// Solid-angle density of [`Geometry::sample_solid_angle`] from `p_ref` for the point `p` with
+    /// geometric normal `ng`.
+    pub fn pdf_solid_angle(&self, p_ref: Vec3, p: Vec3, ng: Vec3) -> f32 {
+        if let Geometry::Sphere(s) = self {
+            return s.pdf_solid_angle(p_ref, p, ng);
+        }
+        let d = p - p_ref;
+        let dist2 = d.length_squared();
+        if dist2 == 0.0 {
+            return 0.0;
+        }
+        area_to_solid_angle(1.0 / self.area(), dist2, ng.dot(d).abs() / dist2.sqrt())
+    }
+}

@@ -1,0 +1,218 @@
+//! Spheres: analytic intersection (pbrt-v4's robust discriminant) and sampling of the cone
+//! they subtend from a reference point.
+
+use crate::math::float::gamma;
+use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, INV_4PI, PI};
+use crate::sampling::sample_uniform_sphere;
+
+/// A sphere in world space. `flip` turns normals inward (Mitsuba's `flip_normals`): the
+/// inside becomes the front side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius (> 0).
+    pub radius: f32,
+    /// Whether normals point inward.
+    pub flip: bool,
+}
+
+/// A hit on a sphere: ray parameter.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereHit {
+    /// Ray parameter.
+    pub t: f32,
+}
+
+/// A point sampled on a surface with its pdf.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    /// Position.
+    pub p: Vec3,
+    /// Unit normal (front side).
+    pub n: Vec3,
+    /// Error bound of `p`.
+    pub p_error: Vec3,
+}
+
+impl Sphere {
+    /// Surface area `4π r²`.
+    pub fn area(&self) -> f32 {
+        4.0 * PI * self.radius * self.radius
+    }
+
+    /// Closest intersection in `(0, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SphereHit> {
+        let oc = ray.o - self.center;
+        let a = ray.d.length_squared();
+        let b = 2.0 * ray.d.dot(oc);
+        let c = oc.length_squared() - self.radius * self.radius;
+        // Discriminant as 4a (r - |f|)(r + |f|), f = oc - (b / 2a) d: no cancellation in b² - 4ac.
+        let f = oc - (b / (2.0 * a)) * ray.d;
+        let len = f.length();
+        let disc = 4.0 * a * (self.radius + len) * (self.radius - len);
+        if disc < 0.0 {
+            return None;
+        }
+        let root = disc.sqrt();
+        let q = if b < 0.0 { -0.5 * (b - root) } else { -0.5 * (b + root) };
+        let (mut t0, mut t1) = (q / a, c / q);
+        if t0 > t1 {
+            std::mem::swap(&mut t0, &mut t1);
+        }
+        if t0 >= t_max || t1 <= 0.0 {
+            return None;
+        }
+        let t = if t0 > 0.0 { t0 } else { t1 };
+        (t < t_max).then_some(SphereHit { t })
+    }
+
+    /// Reprojects the hit at `ray.at(t)` onto the sphere: point, error bound, outward-or-flipped
+    /// unit normal, and (u, v) = (φ / 2π, θ / π) of the outward direction.
+    #[inline]
+    pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
+        let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
+        let p = self.center + self.radius * v;
+        let p_error = gamma(5) * (self.radius * v).abs() + gamma(2) * p.abs();
+        let uv = Vec2::new(crate::math::spherical_phi(v) / (2.0 * PI), crate::math::spherical_theta(v) / PI);
+        (SurfacePoint { p, n: if self.flip { -v } else { v }, p_error }, uv)
+    }
+
+    fn point(&self, v: Vec3) -> SurfacePoint {
+        let p = self.center + self.radius * v;
+        SurfacePoint {
+            p,
+            n: if self.flip { -v } else { v },
+            p_error: gamma(5) * (self.radius * v).abs() + gamma(2) * p.abs(),
+        }
+    }
+
+    /// Uniform point on the surface; pdf `1 / (4π r²)` per unit area.
+    pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
+        let v = sample_uniform_sphere(u).value;
+        (self.point(v), INV_4PI / (self.radius * self.radius))
+    }
+
+    /// A point on the sphere seen from `p_ref`, sampled uniformly in the cone of directions the
+    /// sphere subtends (pbrt-v4 §6.2.4), with pdf `1 / (2π (1 - cos θ_max))` per unit solid
+    /// angle at `p_ref`. From inside the sphere, falls back to uniform area sampling and returns
+    /// the area pdf converted to solid angle. `None` if the conversion is degenerate.
+    pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<(SurfacePoint, f32)> {
+        let dc2 = (p_ref - self.center).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 * (1.0 + 1e-4) {
+            let (sp, pdf_a) = self.sample_area(u);
+            let d = sp.p - p_ref;
+            let cos = sp.n.dot(-d.normalize_or_zero()).abs();
+            let pdf = crate::sampling::area_to_solid_angle(pdf_a, d.length_squared(), cos);
+            return (pdf > 0.0 && pdf.is_finite()).then_some((sp, pdf));
+        }
+        let dc = dc2.sqrt();
+        let sin2_max = r2 / dc2;
+        let sin_max = sin2_max.sqrt();
+        let cos_max = safe_sqrt(1.0 - sin2_max);
+        let mut one_minus_cos_max = 1.0 - cos_max;
+        let mut cos_theta = (cos_max - 1.0) * u.x + 1.0;
+        let mut sin2_theta = 1.0 - cos_theta * cos_theta;
+        if sin2_max < 0.000_685_23 {
+            // Small cones: use sin² (Taylor) to keep precision.
+            sin2_theta = sin2_max * u.x;
+            cos_theta = (1.0 - sin2_theta).sqrt();
+            one_minus_cos_max = sin2_max / 2.0;
+        }
+        // Angle α at the centre between -(direction to p_ref) and the sampled point.
+        let cos_alpha = sin2_theta / sin_max + cos_theta * safe_sqrt(1.0 - sin2_theta / sin2_max);
+        let sin_alpha = safe_sqrt(1.0 - cos_alpha * cos_alpha);
+        let phi = u.y * 2.0 * PI;
+        let w = spherical_direction(sin_alpha, cos_alpha, phi);
+        let frame = Frame::from_z((self.center - p_ref) / dc);
+        let v = frame.to_world(-w);
+        Some((self.point(v), 1.0 / (2.0 * PI * one_minus_cos_max)))
+    }
+
+    /// Solid-angle pdf of [`Sphere::sample_solid_angle`] for the point `p` (on the sphere, seen
+    /// from `p_ref` along `wi`).
+    pub fn pdf_solid_angle(&self, p_ref: Vec3, p: Vec3, n: Vec3) -> f32 {
+        let dc2 = (p_ref - self.center).length_squared();
+        let r2 = self.radius * self.radius;
+        if dc2 <= r2 * (1.0 + 1e-4) {
+            let d = p - p_ref;
+            let cos = n.dot(d.normalize_or_zero()).abs();
+            return crate::sampling::area_to_solid_angle(1.0 / self.area(), d.length_squared(), cos);
+        }
+        let sin2_max = r2 / dc2;
+        let cos_max = safe_sqrt(1.0 - sin2_max);
+        let one_minus_cos_max = if sin2_max < 0.000_685_23 { sin2_max / 2.0 } else { 1.0 - cos_max };
+        1.0 / (2.0 * PI * one_minus_cos_max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testkit::{chi2_2d, u2, Chi2Config, SphericalCap};
+
+    #[test]
+    fn intersect_from_outside_and_inside() {
+        let s = Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, flip: false };
+        let h = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), f32::INFINITY).unwrap();
+        assert!((h.t - 4.0).abs() < 1e-5);
+        let inside = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::X);
+        assert!((s.intersect(&inside, f32::INFINITY).unwrap().t - 1.0).abs() < 1e-6);
+        assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
+        assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), 3.0).is_none());
+    }
+
+    #[test]
+    fn leaving_the_surface_never_hits_it_again() {
+        // Rays leaving points of a sphere outward (from outside) must not re-hit it, and rays
+        // going inward must hit the far side, not the start point.
+        let s = Sphere { center: Vec3::new(3.0, -2.0, 1.0), radius: 2.5, flip: false };
+        let mut rng = crate::sampling::Pcg32::new(3, 3);
+        for _ in 0..20_000 {
+            let (sp, _) = s.sample_area(u2(&mut rng));
+            let w = sample_uniform_sphere(u2(&mut rng)).value;
+            let o = crate::math::float::offset_ray_origin(sp.p, sp.p_error, sp.n, w);
+            let hit = s.intersect(&Ray::new(o, w), f32::INFINITY);
+            if w.dot(sp.n) > 0.0 {
+                assert!(hit.is_none(), "outgoing ray re-hit its sphere at t = {:?}", hit.map(|h| h.t));
+            } else if let Some(h) = hit {
+                assert!(h.t > 1e-3 * s.radius * (-w.dot(sp.n)), "self-hit at t = {}", h.t);
+            }
+        }
+    }
+
+    #[test]
+    fn cone_sampling_chi2_and_pdf() {
+        let s = Sphere { center: Vec3::new(0.0, 0.0, 4.0), radius: 1.5, flip: false };
+        let p_ref = Vec3::ZERO;
+        let cos_max = (1.0 - (1.5f64 / 4.0).powi(2)).sqrt();
+        let out = chi2_2d(
+            &SphericalCap { z_min: cos_max - 1e-6 },
+            [15, 31],
+            500_000,
+            |r| s.sample_solid_angle(p_ref, u2(r)).map(|(sp, _)| (sp.p - p_ref).normalize()),
+            |w| {
+                let h = s.intersect(&Ray::new(p_ref, *w), f32::INFINITY);
+                match h {
+                    Some(h) => {
+                        let (sp, _) = s.surface(&Ray::new(p_ref, *w), h.t);
+                        s.pdf_solid_angle(p_ref, sp.p, sp.n) as f64
+                    }
+                    None => 0.0,
+                }
+            },
+            &Chi2Config::default(),
+        );
+        assert!(out.passed(), "{out}");
+        // The sampled points lie on the sphere, on the visible side.
+        let mut rng = crate::sampling::Pcg32::new(1, 1);
+        for _ in 0..1000 {
+            let (sp, pdf) = s.sample_solid_angle(p_ref, u2(&mut rng)).unwrap();
+            assert!(((sp.p - s.center).length() - 1.5).abs() < 1e-4);
+            assert!(sp.n.dot(p_ref - sp.p) >= -1e-4);
+            assert!((pdf - s.pdf_solid_angle(p_ref, sp.p, sp.n)).abs() < 1e-3 * pdf);
+        }
+    }
+}
