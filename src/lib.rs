@@ -14,12 +14,23 @@
 //! - [`estimators`]: small Monte Carlo estimators from the lecture material (irradiance under a
 //!   uniform sky) with their error analysis.
 //! - [`geometry`], [`bvh`]: shapes, intersection with error bounds, area sampling; the BVH.
+//! - [`material`], [`light`]: BSDFs and emitters (closed enums).
+//! - [`camera`], [`scene`]: cameras; the runtime scene and its builder; built-in scenes.
+//! - [`integrator`]: the `Integrator` trait and the path tracer.
+//! - [`film`], [`render`]: accumulation and image files; the parallel render driver.
 
 #![warn(missing_docs)]
 
 pub mod bvh;
+pub mod camera;
 pub mod estimators;
+pub mod film;
 pub mod geometry;
+pub mod integrator;
+pub mod light;
+pub mod material;
 pub mod math;
+pub mod render;
 pub mod sampling;
+pub mod scene;
 pub mod testkit;

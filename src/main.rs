@@ -1,9 +1,18 @@
 //! The `neumann` command.
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
 use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, HemisphereStrategy};
+use neumann::film::output::{write_image, Format, ImageInfo};
+use neumann::integrator::{DirectStrategy, PathIntegrator};
+use neumann::render::{render, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
+use neumann::scene::cornell;
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+mod bench;
 
 #[derive(Parser, Debug)]
 #[command(name = "neumann", version, about = "A physically based Monte Carlo renderer", arg_required_else_help = true)]
@@ -12,8 +21,69 @@ struct Cli {
     command: Command,
 }
 
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum SamplerArg {
+    Independent,
+    Stratified,
+    Sobol,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum DirectArg {
+    /// Light sampling and BSDF sampling, combined by the power heuristic.
+    Mis,
+    /// Light (emitter area) sampling only.
+    Light,
+    /// BSDF sampling only.
+    Bsdf,
+}
+
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Render a scene (default: the built-in Cornell box) to an image (.png, .exr or .pfm).
+    Render {
+        /// Scene to render: a built-in scene name (cbox).
+        scene: Option<String>,
+        /// Output image; the extension picks the format (default: <scene>.png).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Samples per pixel.
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited).
+        #[arg(long, allow_negative_numbers = true)]
+        max_depth: Option<i32>,
+        /// Film resolution, W or WxH.
+        #[arg(long)]
+        res: Option<String>,
+        /// Seed of all random numbers.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Worker threads (default: one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        /// Render for this many seconds (whole passes), instead of a sample count.
+        #[arg(long)]
+        time: Option<f64>,
+        /// Scene parameter override name=value (the built-in Cornell box has res, spp, max_depth).
+        #[arg(short = 'D', value_name = "NAME=VALUE")]
+        define: Vec<String>,
+        /// Sampler.
+        #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
+        sampler: SamplerArg,
+        /// Direct-light strategy of the path tracer.
+        #[arg(long, value_enum, default_value_t = DirectArg::Mis)]
+        direct: DirectArg,
+        /// Exposure in stops for PNG output (× 2^EV).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f32,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Benchmarks: BVH build, ray throughput (primary, incoherent closest-hit and shadow rays) and
+    /// path-tracing samples per second on the Cornell box.
+    Bench(bench::BenchArgs),
     /// Monte Carlo estimator demos: estimate, exact value and RMSE over independent runs.
     Mc {
         /// Independent runs per row (for the RMSE).
@@ -28,18 +98,197 @@ enum Command {
     },
 }
 
+static CANCEL: AtomicBool = AtomicBool::new(false);
+
+/// An error and the exit code it maps to (1: could not do it, 2: bad arguments).
+struct Failure(u8, String);
+
+fn usage(msg: String) -> Failure {
+    Failure(2, msg)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {
+    let result = match cli.command {
+        Command::Render {
+            scene,
+            output,
+            spp,
+            max_depth,
+            res,
+            seed,
+            threads,
+            time,
+            define,
+            sampler,
+            direct,
+            exposure,
+            quiet,
+        } => run_render(RenderArgs {
+            scene,
+            output,
+            spp,
+            max_depth,
+            res,
+            seed,
+            threads,
+            time,
+            define,
+            sampler,
+            direct,
+            exposure,
+            quiet,
+        }),
+        Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e)),
         Command::Mc { runs, seed, radiance } => {
-            if !(radiance.is_finite() && radiance >= 0.0) {
-                eprintln!("error: --radiance must be a finite non-negative number, got {radiance}");
-                return ExitCode::from(2);
+            if radiance.is_finite() && radiance >= 0.0 {
+                mc_irradiance(runs, seed, radiance);
+                Ok(())
+            } else {
+                Err(usage(format!("--radiance must be a finite non-negative number, got {radiance}")))
             }
-            mc_irradiance(runs, seed, radiance);
-            ExitCode::SUCCESS
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure(code, msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(code)
         }
     }
+}
+
+struct RenderArgs {
+    scene: Option<String>,
+    output: Option<PathBuf>,
+    spp: Option<u32>,
+    max_depth: Option<i32>,
+    res: Option<String>,
+    seed: u64,
+    threads: usize,
+    time: Option<f64>,
+    define: Vec<String>,
+    sampler: SamplerArg,
+    direct: DirectArg,
+    exposure: f32,
+    quiet: bool,
+}
+
+/// Parses `W` or `WxH`.
+fn parse_res(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("invalid resolution '{s}': expected W or WxH with positive integers, e.g. 512 or 640x480");
+    let (w, h) = match s.split_once(['x', 'X']) {
+        Some((w, h)) => (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?),
+        None => {
+            let w = s.trim().parse().map_err(|_| bad())?;
+            (w, w)
+        }
+    };
+    if w == 0 || h == 0 || w > 65536 || h > 65536 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn run_render(a: RenderArgs) -> Result<(), Failure> {
+    let name = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
+    if name != "cbox" {
+        return Err(Failure(
+            1,
+            format!("unknown scene '{name}': the built-in scenes are: cbox (scene files are not supported yet)"),
+        ));
+    }
+    // Scene parameters (as cbox.xml's <default> values), then -D overrides, then flags.
+    let (mut res, mut spp, mut max_depth) = ((cornell::DEFAULT_RES, cornell::DEFAULT_RES), cornell::DEFAULT_SPP, cornell::DEFAULT_MAX_DEPTH);
+    for d in &a.define {
+        let (k, v) = d.split_once('=').ok_or_else(|| usage(format!("-D expects NAME=VALUE, got '{d}'")))?;
+        let bad = |what: &str| usage(format!("-D {k}: expected {what}, got '{v}'"));
+        match k.trim() {
+            "res" => res = parse_res(v).map_err(usage)?,
+            "spp" => spp = v.trim().parse().ok().filter(|&s: &u32| s > 0).ok_or_else(|| bad("a positive integer"))?,
+            "max_depth" => max_depth = v.trim().parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| bad("an integer ≥ -1"))?,
+            other => {
+                return Err(usage(format!("-D {other}: the scene '{name}' has no parameter '{other}' (it has res, spp, max_depth)")))
+            }
+        }
+    }
+    if let Some(r) = &a.res {
+        res = parse_res(r).map_err(usage)?;
+    }
+    if let Some(s) = a.spp {
+        if s == 0 {
+            return Err(usage("--spp must be at least 1".into()));
+        }
+        spp = s;
+    }
+    if let Some(d) = a.max_depth {
+        if d < -1 {
+            return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
+        }
+        max_depth = d;
+    }
+    let time_budget = match a.time {
+        None => None,
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => return Err(usage(format!("--time must be a positive number of seconds, got {t}"))),
+    };
+    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
+    Format::from_path(&output).map_err(usage)?;
+
+    let scene = cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?;
+    let integrator = PathIntegrator {
+        max_depth,
+        strategy: match a.direct {
+            DirectArg::Mis => DirectStrategy::Mis,
+            DirectArg::Light => DirectStrategy::Light,
+            DirectArg::Bsdf => DirectStrategy::Bsdf,
+        },
+        ..Default::default()
+    };
+    let settings = RenderSettings {
+        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { spp },
+        time_budget,
+        seed: a.seed,
+        threads: a.threads,
+        sampler: match a.sampler {
+            SamplerArg::Independent => SamplerKind::Independent,
+            SamplerArg::Stratified => SamplerKind::Stratified,
+            SamplerArg::Sobol => SamplerKind::Sobol,
+        },
+        progress: !a.quiet,
+        ..Default::default()
+    };
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)");
+    });
+    println!(
+        "rendering {name} at {}x{}, {} spp, max_depth {max_depth}, {} threads",
+        res.0,
+        res.1,
+        if time_budget.is_some() { format!("{}s of", a.time.unwrap_or(0.0)) } else { spp.to_string() },
+        if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
+    );
+    let out = render(&scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    let (lo, hi) = out.film.spp_range();
+    write_image(&output, res.0, res.1, &out.film.image(), &ImageInfo { spp: lo, exposure: a.exposure })
+        .map_err(|e| Failure(1, e))?;
+    let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
+    println!(
+        "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",
+        output.display(),
+        out.elapsed.as_secs_f64(),
+        out.samples_per_second() / 1e6
+    );
+    if out.interrupted {
+        println!("render interrupted: the image holds {spp_text}");
+    }
+    if out.film.dropped() > 0 {
+        println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    Ok(())
 }
 
 /// Irradiance under a uniform sky, `E = L π`, by uniform and cosine-weighted hemisphere sampling.
@@ -47,9 +296,7 @@ fn mc_irradiance(runs: u32, seed: u64, radiance: f64) {
     let exact = radiance * std::f64::consts::PI;
     println!("Irradiance under a uniform sky of radiance L = {radiance}: E = ∫ L cos θ dω = L π = {exact:.6}");
     println!("{:<22} {:>8} {:>12} {:>12} {:>12}", "estimator", "N", "estimate", "exact", "RMSE");
-    for (name, strategy) in
-        [("uniform hemisphere", HemisphereStrategy::Uniform), ("cosine-weighted", HemisphereStrategy::Cosine)]
-    {
+    for (name, strategy) in [("uniform hemisphere", HemisphereStrategy::Uniform), ("cosine-weighted", HemisphereStrategy::Cosine)] {
         for n in [16usize, 256, 4096, 65536] {
             let mut rng = Pcg32::new(seed, n as u64);
             let estimates: Vec<f64> =

@@ -1,0 +1,201 @@
+//! Cameras: Mitsuba's `perspective` (pinhole) and `thinlens`.
+//!
+//! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
+//! convention); film coordinates run from (0, 0) at the top-left pixel corner to
+//! (width, height) at the bottom-right. The field of view applies to the axis given by
+//! [`FovAxis`].
+
+use crate::math::{Ray, Transform, Vec2, Vec3};
+use crate::sampling::sample_uniform_disk_concentric;
+
+/// Which image axis the field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// Horizontal.
+    X,
+    /// Vertical.
+    Y,
+    /// The shorter image side.
+    Smaller,
+    /// The longer image side.
+    Larger,
+    /// The diagonal.
+    Diagonal,
+}
+
+impl std::str::FromStr for FovAxis {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "x" => Ok(FovAxis::X),
+            "y" => Ok(FovAxis::Y),
+            "smaller" => Ok(FovAxis::Smaller),
+            "larger" => Ok(FovAxis::Larger),
+            "diagonal" => Ok(FovAxis::Diagonal),
+            _ => Err(format!("unknown fov_axis '{s}' (expected x, y, smaller, larger or diagonal)")),
+        }
+    }
+}
+
+/// A perspective camera, optionally with a thin lens.
+#[derive(Clone, Debug)]
+pub struct Camera {
+    to_world: Transform,
+    /// tan of half the horizontal / vertical field of view.
+    tan_half: Vec2,
+    width: u32,
+    height: u32,
+    near_clip: f32,
+    far_clip: f32,
+    lens_radius: f32,
+    focus_distance: f32,
+}
+
+impl Camera {
+    /// Pinhole camera placed by `to_world` (e.g. [`Transform::look_at`]) with a full field of
+    /// view `fov_deg` along `fov_axis`, for a `width × height` film.
+    pub fn perspective(to_world: Transform, fov_deg: f32, fov_axis: FovAxis, width: u32, height: u32) -> Result<Camera, String> {
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(format!("field of view must be in (0, 180) degrees, got {fov_deg}"));
+        }
+        if width == 0 || height == 0 {
+            return Err(format!("film size must be positive, got {width}x{height}"));
+        }
+        let t = (0.5 * fov_deg.to_radians()).tan();
+        let aspect = width as f32 / height as f32;
+        let tan_half = match fov_axis {
+            FovAxis::X => Vec2::new(t, t / aspect),
+            FovAxis::Y => Vec2::new(t * aspect, t),
+            FovAxis::Smaller if aspect >= 1.0 => Vec2::new(t * aspect, t),
+            FovAxis::Smaller => Vec2::new(t, t / aspect),
+            FovAxis::Larger if aspect >= 1.0 => Vec2::new(t, t / aspect),
+            FovAxis::Larger => Vec2::new(t * aspect, t),
+            FovAxis::Diagonal => {
+                let diag = (aspect * aspect + 1.0).sqrt();
+                Vec2::new(t * aspect / diag, t / diag)
+            }
+        };
+        Ok(Camera {
+            to_world,
+            tan_half,
+            width,
+            height,
+            near_clip: 1e-2,
+            far_clip: 1e4,
+            lens_radius: 0.0,
+            focus_distance: 1.0,
+        })
+    }
+
+    /// Sets the near and far clip distances (along the view axis).
+    pub fn with_clip(mut self, near: f32, far: f32) -> Result<Camera, String> {
+        if !(near > 0.0 && far > near) {
+            return Err(format!("need 0 < near_clip < far_clip, got {near} and {far}"));
+        }
+        self.near_clip = near;
+        self.far_clip = far;
+        Ok(self)
+    }
+
+    /// Makes it a thin-lens camera (Mitsuba's `thinlens`): `aperture_radius` and
+    /// `focus_distance` in world units.
+    pub fn with_thin_lens(mut self, aperture_radius: f32, focus_distance: f32) -> Result<Camera, String> {
+        if !(aperture_radius >= 0.0 && focus_distance > 0.0) {
+            return Err(format!("need aperture_radius ≥ 0 and focus_distance > 0, got {aperture_radius}, {focus_distance}"));
+        }
+        self.lens_radius = aperture_radius;
+        self.focus_distance = focus_distance;
+        Ok(self)
+    }
+
+    /// Film width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Film height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Centre of projection (world).
+    pub fn position(&self) -> Vec3 {
+        self.to_world.apply_point(Vec3::ZERO)
+    }
+
+    /// World-space ray through film position `film` (pixels, continuous) and lens sample
+    /// `u_lens ∈ [0,1)²` (ignored by a pinhole). The direction is unit length; the ray spans the
+    /// clip range.
+    #[inline]
+    pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        let ndc = Vec2::new(2.0 * film.x / self.width as f32 - 1.0, 2.0 * film.y / self.height as f32 - 1.0);
+        // +x is left and +y is up in camera space; film x grows right and y grows down.
+        let d = Vec3::new(-ndc.x * self.tan_half.x, -ndc.y * self.tan_half.y, 1.0);
+        let (o, d) = if self.lens_radius > 0.0 {
+            let lens = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
+            let focus = d * self.focus_distance;
+            let o = Vec3::new(lens.x, lens.y, 0.0);
+            (o, focus - o)
+        } else {
+            (Vec3::ZERO, d)
+        };
+        let inv_z = 1.0 / d.z;
+        let o_clip = o + d * (self.near_clip * inv_z);
+        let len = d.length();
+        let t_max = (self.far_clip - self.near_clip) * inv_z * len;
+        let d_world = self.to_world.apply_vector(d / len).normalize();
+        Ray::bounded(self.to_world.apply_point(o_clip), d_world, t_max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam(axis: FovAxis, w: u32, h: u32) -> Camera {
+        let t = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
+        Camera::perspective(t, 90.0, axis, w, h).unwrap()
+    }
+
+    #[test]
+    fn centre_ray_looks_at_target_and_image_is_not_mirrored() {
+        let c = cam(FovAxis::X, 200, 100);
+        let r = c.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO);
+        assert!((r.d - (-Vec3::Z)).length() < 1e-6);
+        // Looking down -z from +z with y up: the right of the image is world +x, the top +y.
+        let right = c.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO);
+        assert!(right.d.x > 0.0 && (right.d.x / -right.d.z - 1.0).abs() < 1e-5, "{}", right.d);
+        let top = c.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO);
+        assert!(top.d.y > 0.0 && (top.d.y / -top.d.z - 0.5).abs() < 1e-5, "{}", top.d);
+    }
+
+    #[test]
+    fn fov_axis_variants() {
+        let edge = |c: &Camera, film: Vec2| {
+            let d = c.generate_ray(film, Vec2::ZERO).d;
+            (d.x / -d.z, d.y / -d.z)
+        };
+        // Wide image: `smaller` means vertical.
+        let c = cam(FovAxis::Smaller, 200, 100);
+        assert!((edge(&c, Vec2::new(100.0, 0.0)).1 - 1.0).abs() < 1e-5);
+        let c = cam(FovAxis::Larger, 200, 100);
+        assert!((edge(&c, Vec2::new(200.0, 50.0)).0 - 1.0).abs() < 1e-5);
+        let c = cam(FovAxis::Diagonal, 200, 100);
+        let (x, y) = edge(&c, Vec2::new(200.0, 0.0));
+        assert!(((x * x + y * y).sqrt() - 1.0).abs() < 1e-5);
+        assert!(Camera::perspective(Transform::IDENTITY, 180.0, FovAxis::X, 1, 1).is_err());
+    }
+
+    #[test]
+    fn thin_lens_rays_converge_on_the_focal_plane() {
+        let c = cam(FovAxis::X, 100, 100).with_thin_lens(0.5, 3.0).unwrap();
+        let film = Vec2::new(30.0, 70.0);
+        let pin = cam(FovAxis::X, 100, 100).generate_ray(film, Vec2::ZERO);
+        let target = Vec3::new(0.0, 0.0, 5.0) + pin.d * (3.0 / -pin.d.z);
+        for u in [Vec2::new(0.1, 0.9), Vec2::new(0.7, 0.2), Vec2::new(0.5, 0.5)] {
+            let r = c.generate_ray(film, u);
+            let t = (r.o.z - 2.0) / -r.d.z; // plane z = 5 - 3
+            assert!((r.at(t) - target).length() < 1e-4, "{} vs {}", r.at(t), target);
+        }
+    }
+}

@@ -1,0 +1,187 @@
+//! Image files: OpenEXR (float32 RGB, linear), PNG (8-bit sRGB-encoded, with exposure) and PFM
+//! (float32 RGB, linear), chosen by the file extension.
+
+use crate::math::color::srgb_encode;
+use crate::math::Rgb;
+use std::path::Path;
+
+/// Information stored alongside the pixels.
+#[derive(Clone, Debug, Default)]
+pub struct ImageInfo {
+    /// Samples per pixel actually rendered (written to the EXR header as `spp`).
+    pub spp: u32,
+    /// Exposure in stops applied when writing 8-bit formats (`× 2^exposure`).
+    pub exposure: f32,
+}
+
+/// Supported output formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// OpenEXR, float32 RGB.
+    Exr,
+    /// PNG, 8-bit sRGB.
+    Png,
+    /// Portable float map, float32 RGB.
+    Pfm,
+}
+
+impl Format {
+    /// The format for a file name's extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Format, String> {
+        match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+            Some("exr") => Ok(Format::Exr),
+            Some("png") => Ok(Format::Png),
+            Some("pfm") => Ok(Format::Pfm),
+            other => Err(format!(
+                "cannot tell the image format of '{}' from its extension {}: use .exr, .png or .pfm",
+                path.display(),
+                other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
+            )),
+        }
+    }
+}
+
+/// Writes `pixels` (row-major from the top-left, linear radiance) to `path` in the format its
+/// extension names. Non-finite values are written as 0.
+pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+    assert_eq!(pixels.len(), (width * height) as usize);
+    let fail = |e: String| format!("cannot write '{}': {e}", path.display());
+    match Format::from_path(path)? {
+        Format::Exr => write_exr(path, width, height, pixels, info).map_err(fail),
+        Format::Png => write_png(path, width, height, pixels, info).map_err(fail),
+        Format::Pfm => write_pfm(path, width, height, pixels).map_err(fail),
+    }
+}
+
+fn clean(c: Rgb) -> Rgb {
+    Rgb::new(
+        if c.x.is_finite() { c.x } else { 0.0 },
+        if c.y.is_finite() { c.y } else { 0.0 },
+        if c.z.is_finite() { c.z } else { 0.0 },
+    )
+}
+
+fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+    use exr::prelude::*;
+    let w = width as usize;
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let c = clean(pixels[pos.y() * w + pos.x()]);
+        (c.x, c.y, c.z)
+    });
+    let mut attributes = LayerAttributes::named("");
+    attributes.software_name = Some(Text::from("neumann"));
+    let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
+    let mut image = Image::from_layer(layer);
+    image.attributes.other.insert(Text::from("spp"), exr::meta::attribute::AttributeValue::I32(info.spp as i32));
+    image.write().to_file(path).map_err(|e| e.to_string())
+}
+
+fn write_png(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    let scale = 2f32.powf(info.exposure);
+    let data: Vec<u8> = pixels
+        .iter()
+        .flat_map(|&c| {
+            let c = clean(c) * scale;
+            [c.x, c.y, c.z].map(|v| (srgb_encode(v.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+        })
+        .collect();
+    let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+    writer.write_image_data(&data).map_err(|e| e.to_string())?;
+    writer.finish().map_err(|e| e.to_string())
+}
+
+fn write_pfm(path: &Path, width: u32, height: u32, pixels: &[Rgb]) -> Result<(), String> {
+    // PFM: header "PF\nW H\n-1.0\n" (negative scale = little endian), rows bottom to top.
+    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+    for y in (0..height).rev() {
+        for x in 0..width {
+            let c = clean(pixels[(y * width + x) as usize]);
+            for v in [c.x, c.y, c.z] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    std::fs::write(path, out).map_err(|e| e.to_string())
+}
+
+/// Reads a PFM file written by [`write_image`] (or any little/big-endian colour PFM) back as
+/// width, height and pixels (row-major from the top-left).
+pub fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), String> {
+    let data = std::fs::read(path).map_err(|e| format!("cannot read '{}': {e}", path.display()))?;
+    let bad = |what: &str| format!("'{}' is not a colour PFM file: {what}", path.display());
+    let mut fields = Vec::new();
+    let mut pos = 0;
+    while fields.len() < 4 {
+        while pos < data.len() && data[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        let start = pos;
+        while pos < data.len() && !data[pos].is_ascii_whitespace() {
+            pos += 1;
+        }
+        if start == pos {
+            return Err(bad("truncated header"));
+        }
+        fields.push(String::from_utf8_lossy(&data[start..pos]).to_string());
+    }
+    pos += 1; // the single whitespace after the scale
+    if fields[0] != "PF" {
+        return Err(bad("missing 'PF' magic"));
+    }
+    let w: u32 = fields[1].parse().map_err(|_| bad("bad width"))?;
+    let h: u32 = fields[2].parse().map_err(|_| bad("bad height"))?;
+    let scale: f32 = fields[3].parse().map_err(|_| bad("bad scale"))?;
+    let n = (w as usize) * (h as usize);
+    if data.len() < pos + n * 12 {
+        return Err(bad("truncated pixel data"));
+    }
+    let rd = |i: usize| {
+        let b = [data[pos + 4 * i], data[pos + 4 * i + 1], data[pos + 4 * i + 2], data[pos + 4 * i + 3]];
+        if scale < 0.0 {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let mut pixels = vec![Rgb::ZERO; n];
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            let k = (y * w as usize + x) * 3;
+            pixels[(h as usize - 1 - y) * w as usize + x] = Rgb::new(rd(k), rd(k + 1), rd(k + 2));
+        }
+    }
+    Ok((w, h, pixels))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_by_extension_and_round_trips() {
+        assert_eq!(Format::from_path(Path::new("a.EXR")).unwrap(), Format::Exr);
+        assert!(Format::from_path(Path::new("a.jpg")).unwrap_err().contains(".exr, .png or .pfm"));
+        assert!(Format::from_path(Path::new("noext")).is_err());
+        let dir = std::env::temp_dir().join(format!("neumann-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px: Vec<Rgb> = (0..6).map(|i| Rgb::new(i as f32, 0.5, f32::NAN)).collect();
+        let info = ImageInfo { spp: 7, exposure: 0.0 };
+        for name in ["t.exr", "t.png", "t.pfm"] {
+            write_image(&dir.join(name), 3, 2, &px, &info).unwrap();
+            assert!(std::fs::metadata(dir.join(name)).unwrap().len() > 20);
+        }
+        let (w, h, back) = read_pfm(&dir.join("t.pfm")).unwrap();
+        assert_eq!((w, h), (3, 2));
+        assert_eq!(back[4], Rgb::new(4.0, 0.5, 0.0), "NaN written as 0, rows in order");
+        // The EXR header carries the sample count.
+        let meta = exr::meta::MetaData::read_from_file(dir.join("t.exr"), false).unwrap();
+        let spp = meta.headers[0].shared_attributes.other.get(&exr::meta::attribute::Text::from("spp")).cloned();
+        assert!(matches!(spp, Some(exr::meta::attribute::AttributeValue::I32(7))), "{spp:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,22 @@
+//! Integrators: estimators of the radiance arriving at the camera.
+//!
+//! An integrator implements [`Integrator::li`], one unbiased sample of the radiance along a
+//! camera ray; the render driver averages them per pixel. The path tracer samples the Neumann
+//! series `L = Σₖ Tᵏ Lₑ` term by term along one path per sample.
+
+pub mod path;
+
+pub use path::{DirectStrategy, PathIntegrator};
+
+use crate::math::{Ray, Rgb};
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+
+/// An estimator of incident radiance along camera rays.
+pub trait Integrator: Sync {
+    /// Name (Mitsuba's plugin name where one exists).
+    fn name(&self) -> &'static str;
+    /// One sample of the radiance arriving along `ray` (toward its origin). The sampler is
+    /// positioned at the pixel sample; the integrator draws its dimensions in a fixed order.
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb;
+}

@@ -1,0 +1,110 @@
+//! Assembles a [`Scene`]: collects shapes, BSDFs and emitters, then builds the BVH and the
+//! light distribution.
+
+use super::{PrimRef, Primitive, Scene, Shape};
+use crate::bvh::{BuildOptions, Bvh};
+use crate::camera::Camera;
+use crate::geometry::Geometry;
+use crate::light::Light;
+use crate::material::Bsdf;
+use crate::math::{Rgb, Vec3};
+use crate::sampling::AliasTable;
+
+/// Collects the parts of a scene.
+#[derive(Debug, Default)]
+pub struct SceneBuilder {
+    shapes: Vec<Shape>,
+    geometries: Vec<Geometry>,
+    bsdfs: Vec<Bsdf>,
+    lights: Vec<Light>,
+    camera: Option<Camera>,
+}
+
+impl SceneBuilder {
+    /// An empty builder.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a BSDF and returns its index.
+    pub fn add_bsdf(&mut self, bsdf: Bsdf) -> u32 {
+        self.bsdfs.push(bsdf);
+        self.bsdfs.len() as u32 - 1
+    }
+
+    /// Adds a shape with BSDF `bsdf`; with `Some(radiance)` it is also an area emitter (front
+    /// side). Returns the shape index.
+    pub fn add_shape(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Rgb>) -> u32 {
+        let index = self.shapes.len() as u32;
+        let light = emission.map(|radiance| {
+            self.lights.push(Light::Area { shape: index, radiance });
+            self.lights.len() as u32 - 1
+        });
+        self.shapes.push(Shape { bsdf, light });
+        self.geometries.push(geometry);
+        index
+    }
+
+    /// Adds an isotropic point light of radiant intensity `intensity` (W/sr) at `position`.
+    pub fn add_point_light(&mut self, position: Vec3, intensity: Rgb) {
+        self.lights.push(Light::Point { position, intensity });
+    }
+
+    /// Sets the camera.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = Some(camera);
+    }
+
+    /// Builds the scene: BVH, primitive arrays in leaf order, and the power-proportional light
+    /// distribution. Errors name what is missing or inconsistent.
+    pub fn build(mut self) -> Result<Scene, String> {
+        let camera = self.camera.take().ok_or("the scene has no camera")?;
+        for (i, s) in self.shapes.iter().enumerate() {
+            if s.bsdf as usize >= self.bsdfs.len() {
+                return Err(format!("shape {i} refers to BSDF {} but only {} exist", s.bsdf, self.bsdfs.len()));
+            }
+        }
+        for l in &self.lights {
+            if let Light::Area { shape, .. } = l {
+                if !self.geometries[*shape as usize].prepare_sampling() {
+                    return Err(format!("emitting shape {shape} has no area"));
+                }
+            }
+        }
+        // Primitives and their bounds.
+        let mut refs = Vec::new();
+        let mut bounds = Vec::new();
+        for (s, g) in self.geometries.iter().enumerate() {
+            for i in 0..g.primitive_count() {
+                refs.push(PrimRef { shape: s as u32, index: i as u32 });
+                bounds.push(g.primitive_bounds(i));
+            }
+        }
+        let bvh = Bvh::build(&bounds, &BuildOptions::default());
+        let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[k as usize]).collect();
+        let prims = refs
+            .iter()
+            .map(|r| match &self.geometries[r.shape as usize] {
+                Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
+                Geometry::Sphere(s) => Primitive::Sphere(*s),
+                Geometry::Disk(_) => Primitive::Disk,
+            })
+            .collect();
+        let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
+        let light_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
+        if !powers.is_empty() && light_distribution.is_none() {
+            return Err("every light has zero power".into());
+        }
+        Ok(Scene {
+            shapes: self.shapes,
+            geometries: self.geometries,
+            bsdfs: self.bsdfs,
+            lights: self.lights,
+            light_distribution,
+            bvh,
+            prims,
+            refs,
+            camera,
+        })
+    }
+}
