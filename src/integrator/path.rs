@@ -162,3 +162,132 @@ impl Integrator for PathIntegrator {
         l
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, FovAxis};
+    use crate::geometry::{Geometry, Sphere, TriangleMesh};
+    use crate::material::{Bsdf, Diffuse};
+    use crate::math::Transform;
+    use crate::render::{render, RenderSettings, SamplerKind};
+    use crate::scene::SceneBuilder;
+    use std::sync::atomic::AtomicBool;
+
+    /// Mean over all pixels and channels of the image, and the standard error of that mean
+    /// (from the per-pixel variances).
+    fn image_mean(film: &crate::film::Film) -> (f64, f64) {
+        let img = film.image();
+        let var = film.variance_of_mean();
+        let n = (img.len() * 3) as f64;
+        let mean = img.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / n;
+        let v = var.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / (n * n);
+        (mean, v.sqrt())
+    }
+
+    /// A point light of intensity I at the centre of a closed diffuse sphere (albedo ρ, radius
+    /// r, normals inward), seen from the centre. Direct irradiance at the wall is I / r², so the
+    /// once-scattered radiance is `L₁ = ρ I / (π r²)`. Every further bounce scatters the
+    /// (uniform) wall radiance once more over a sphere whose interior form factor to itself is
+    /// 1, multiplying by ρ: `L = L₁ Σ_{k≥0} ρᵏ = ρ I / (π r² (1 - ρ))`. A path of at most D
+    /// segments carries the terms k ≤ D - 2.
+    #[test]
+    fn point_light_in_closed_sphere_matches_geometric_series() {
+        let (rho, intensity, r) = (0.6f32, 5.0f32, 2.0f32);
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+        let c = Vec3::new(0.3, -0.2, 1.0);
+        b.add_shape(Geometry::Sphere(Sphere { center: c, radius: r, flip: true }), m, None);
+        b.add_point_light(c, Rgb::splat(intensity));
+        let to_world = Transform::look_at(c, c + Vec3::new(0.2, 0.1, 1.0), Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 100.0, FovAxis::X, 16, 12).unwrap());
+        let scene = b.build().unwrap();
+        let l1 = (rho * intensity / (std::f32::consts::PI * r * r)) as f64;
+        for (max_depth, spp) in [(1, 4), (2, 4), (3, 64), (5, 64), (-1, 256)] {
+            let expected = match max_depth {
+                -1 => l1 / (1.0 - rho as f64),
+                d => (0..(d - 1).max(0)).map(|k| l1 * (rho as f64).powi(k)).sum(),
+            };
+            let integrator = PathIntegrator { max_depth, ..Default::default() };
+            let settings = RenderSettings { spp, seed: 3, ..Default::default() };
+            let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
+            let (mean, se) = image_mean(&out.film);
+            let tol = 3.0 * se + 1e-5 * expected.max(1.0);
+            assert!((mean - expected).abs() <= tol, "max_depth {max_depth}: {mean} vs {expected} (±{tol})");
+            if max_depth == -1 {
+                assert!(se < 0.02 * expected, "test too noisy to detect bias: se {se}");
+            }
+        }
+    }
+
+    /// Form factor from a differential area to a parallel rectangle `a × b` at distance `h`
+    /// whose corner lies on the element's normal.
+    fn corner_form_factor(a: f64, b: f64, h: f64) -> f64 {
+        let (x, y) = (a / h, b / h);
+        let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+        (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+    }
+
+    /// Direct light on a diffuse floor from a small parallel rectangular emitter overhead:
+    /// `E = π Lₑ F`, reflected radiance `ρ Lₑ F`, with F the form factor of the rectangle seen
+    /// from the point below its centre (four corner form factors). Every direct-light strategy
+    /// must match it within 3σ.
+    #[test]
+    fn direct_light_from_parallel_rectangle() {
+        let (rho, le, h, a, bb) = (0.7f32, 3.0f32, 1.5f32, 0.4f32, 0.25f32);
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+        let mut floor = TriangleMesh::rectangle();
+        floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));
+        b.add_shape(Geometry::Mesh(floor), m, None);
+        let mut light = TriangleMesh::rectangle();
+        light.transform(
+            &(Transform::translate(Vec3::new(0.0, h, 0.0))
+                * Transform::rotate(Vec3::X, 90.0).unwrap()
+                * Transform::scale(Vec3::new(a, bb, 1.0)).unwrap()),
+        );
+        b.add_shape(Geometry::Mesh(light), m, Some(Rgb::splat(le)));
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        let f = 4.0 * corner_form_factor(a as f64, bb as f64, h as f64);
+        let expected = rho as f64 * le as f64 * f;
+        // A camera ray grazing under the light onto the floor point below its centre.
+        let o = Vec3::new(0.0, 0.5, -4.0);
+        let ray = Ray::new(o, (Vec3::ZERO - o).normalize());
+        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate() {
+            let integrator = PathIntegrator { max_depth: 2, strategy, ..Default::default() };
+            let mut sampler = SamplerKind::Independent.make(1, k as u64);
+            let n = if strategy == DirectStrategy::Bsdf { 400_000 } else { 50_000 };
+            let values: Vec<f64> = (0..n)
+                .map(|i| {
+                    sampler.start_pixel_sample([0, 0], i, 0);
+                    integrator.li(&scene, &ray, &mut sampler).x as f64
+                })
+                .collect();
+            let est = crate::estimators::Estimate::from_values(values);
+            let tol = 3.0 * est.std_error() + 1e-6;
+            assert!((est.value - expected).abs() <= tol, "{strategy:?}: {} vs {expected} (±{tol})", est.value);
+            assert!(est.std_error() < 0.01 * expected, "{strategy:?} too noisy to detect bias");
+        }
+    }
+
+    /// Light-only and BSDF-only direct lighting give the same Cornell box image mean as MIS.
+    #[test]
+    fn strategies_agree_on_the_cornell_box() {
+        let scene = crate::scene::cornell::cornell_box(24, 24).unwrap();
+        let mut means = Vec::new();
+        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate() {
+            let integrator = PathIntegrator { max_depth: 6, strategy, ..Default::default() };
+            let spp = if strategy == DirectStrategy::Bsdf { 512 } else { 128 };
+            let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };
+            let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
+            means.push((strategy, image_mean(&out.film)));
+        }
+        let (_, (m0, s0)) = means[0];
+        assert!(s0 < 0.01 * m0, "MIS estimate too noisy: {s0} of {m0}");
+        for &(strategy, (m, s)) in &means[1..] {
+            let tol = 3.0 * (s0 * s0 + s * s).sqrt();
+            assert!((m - m0).abs() <= tol, "{strategy:?}: {m} vs MIS {m0} (±{tol})");
+        }
+    }
+}
