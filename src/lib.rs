@@ -16,6 +16,7 @@
 //! - [`geometry`], [`bvh`]: shapes, intersection with error bounds, area sampling; the BVH.
 //! - [`material`], [`light`]: BSDFs and emitters (closed enums).
 //! - [`camera`], [`scene`]: cameras; the runtime scene and its builder; built-in scenes.
+//! - [`load`]: mesh files (OBJ, PLY).
 //! - [`integrator`]: the `Integrator` trait and the path tracer.
 //! - [`film`], [`render`]: accumulation and image files; the parallel render driver.
 
@@ -28,6 +29,7 @@ pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod load;
 pub mod material;
 pub mod math;
 pub mod render;

@@ -199,16 +199,21 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         ));
     }
     // Scene parameters (as cbox.xml's <default> values), then -D overrides, then flags.
-    let (mut res, mut spp, mut max_depth) = ((cornell::DEFAULT_RES, cornell::DEFAULT_RES), cornell::DEFAULT_SPP, cornell::DEFAULT_MAX_DEPTH);
+    let (mut res, mut spp, mut max_depth) =
+        ((cornell::DEFAULT_RES, cornell::DEFAULT_RES), cornell::DEFAULT_SPP, cornell::DEFAULT_MAX_DEPTH);
     for d in &a.define {
         let (k, v) = d.split_once('=').ok_or_else(|| usage(format!("-D expects NAME=VALUE, got '{d}'")))?;
         let bad = |what: &str| usage(format!("-D {k}: expected {what}, got '{v}'"));
         match k.trim() {
             "res" => res = parse_res(v).map_err(usage)?,
             "spp" => spp = v.trim().parse().ok().filter(|&s: &u32| s > 0).ok_or_else(|| bad("a positive integer"))?,
-            "max_depth" => max_depth = v.trim().parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| bad("an integer ≥ -1"))?,
+            "max_depth" => {
+                max_depth = v.trim().parse().ok().filter(|&d: &i32| d >= -1).ok_or_else(|| bad("an integer ≥ -1"))?
+            }
             other => {
-                return Err(usage(format!("-D {other}: the scene '{name}' has no parameter '{other}' (it has res, spp, max_depth)")))
+                return Err(usage(format!(
+                    "-D {other}: the scene '{name}' has no parameter '{other}' (it has res, spp, max_depth)"
+                )))
             }
         }
     }
@@ -262,7 +267,9 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         if CANCEL.swap(true, Ordering::SeqCst) {
             std::process::exit(130);
         }
-        eprintln!("\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)");
+        eprintln!(
+            "\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)"
+        );
     });
     println!(
         "rendering {name} at {}x{}, {} spp, max_depth {max_depth}, {} threads",
@@ -296,7 +303,9 @@ fn mc_irradiance(runs: u32, seed: u64, radiance: f64) {
     let exact = radiance * std::f64::consts::PI;
     println!("Irradiance under a uniform sky of radiance L = {radiance}: E = ∫ L cos θ dω = L π = {exact:.6}");
     println!("{:<22} {:>8} {:>12} {:>12} {:>12}", "estimator", "N", "estimate", "exact", "RMSE");
-    for (name, strategy) in [("uniform hemisphere", HemisphereStrategy::Uniform), ("cosine-weighted", HemisphereStrategy::Cosine)] {
+    for (name, strategy) in
+        [("uniform hemisphere", HemisphereStrategy::Uniform), ("cosine-weighted", HemisphereStrategy::Cosine)]
+    {
         for n in [16usize, 256, 4096, 65536] {
             let mut rng = Pcg32::new(seed, n as u64);
             let estimates: Vec<f64> =

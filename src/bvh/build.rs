@@ -41,11 +41,8 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     if bounds.is_empty() {
         return Bvh::default();
     }
-    let mut items: Vec<Item> = bounds
-        .iter()
-        .enumerate()
-        .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 })
-        .collect();
+    let mut items: Vec<Item> =
+        bounds.iter().enumerate().map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 }).collect();
     let (root, count) = build_rec(&mut items, 0, 0, opts);
     let mut nodes = Vec::with_capacity(count);
     flatten(&root, &mut nodes);
@@ -67,27 +64,26 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
     if n <= 1 || depth >= 60 {
         return leaf(items, offset, bounds);
     }
-    let mid = match best_split(items, &bounds, &cbounds, opts) {
+    let median = |items: &mut [Item], axis: usize| {
+        items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+        (n / 2, axis)
+    };
+    let (mid, axis) = match best_split(items, &bounds, &cbounds, opts) {
         Split::Leaf if n <= opts.max_leaf => return leaf(items, offset, bounds),
-        Split::Leaf | Split::Median => {
-            // No useful SAH split (or none at all): halve along the largest centroid extent.
-            let axis = cbounds.max_extent();
-            items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-            n / 2
-        }
+        // No useful SAH split (or none at all): halve along the largest centroid extent.
+        Split::Leaf | Split::Median => median(items, cbounds.max_extent()),
         Split::At { axis, bin } => {
             let (lo, extent) = (cbounds.min[axis], cbounds.diagonal()[axis]);
             let nb = opts.bins;
             let mid = partition(items, |it| bin_of(it.centroid[axis], lo, extent, nb) < bin);
             if mid == 0 || mid == n {
-                items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-                n / 2
+                median(items, axis)
             } else {
-                mid
+                (mid, axis)
             }
         }
     };
-    let axis = cbounds.max_extent() as u32;
+    let axis = axis as u32;
     let (left, right) = items.split_at_mut(mid);
     let ((l, lc), (r, rc)) = if n > opts.parallel_threshold {
         rayon::join(|| build_rec(left, offset, depth + 1, opts), || build_rec(right, offset + mid, depth + 1, opts))
@@ -182,13 +178,13 @@ fn flatten(node: &BuildNode, out: &mut Vec<Node>) -> u32 {
     let idx = out.len() as u32;
     match node {
         BuildNode::Leaf { bounds, first, count } => {
-            out.push(Node { min: bounds.min.into(), offset: *first, max: bounds.max.into(), meta: *count });
+            out.push(Node::new(bounds, *first, *count));
         }
         BuildNode::Interior { bounds, axis, children } => {
-            out.push(Node { min: bounds.min.into(), offset: 0, max: bounds.max.into(), meta: INTERIOR | axis });
+            out.push(Node::new(bounds, 0, INTERIOR | axis));
             flatten(&children[0], out);
             let right = flatten(&children[1], out);
-            out[idx as usize].offset = right;
+            out[idx as usize].set_offset(right);
         }
     }
     idx

@@ -9,33 +9,50 @@
 mod build;
 
 use crate::math::float::gamma;
-use crate::math::{Bounds3, Ray, Vec3};
+use crate::math::{Bounds3, Ray};
+use glam::{Vec3A, Vec4};
 
 pub use build::BuildOptions;
 
-/// A flattened node: bounds, and either a leaf (primitives `offset .. offset + count`) or an
-/// interior node whose first child follows it and whose second child is at `offset`.
+/// A flattened node (32 bytes): bounds, and either a leaf (primitives `offset .. offset +
+/// count`) or an interior node whose first child follows it and whose second child is at
+/// `offset`. The integer fields ride in the `w` lanes of the bounds so that one aligned SIMD load
+/// fetches each corner.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct Node {
-    min: [f32; 3],
-    offset: u32,
-    max: [f32; 3],
-    /// Leaf: primitive count (> 0). Interior: `INTERIOR | split axis`.
-    meta: u32,
+    /// Lower corner; `w` holds the bits of `offset`.
+    min: Vec4,
+    /// Upper corner; `w` holds the bits of `meta`: leaf primitive count (> 0), or
+    /// `INTERIOR | split axis`.
+    max: Vec4,
 }
 
 const INTERIOR: u32 = 0x8000_0000;
 
 impl Node {
+    pub(crate) fn new(bounds: &Bounds3, offset: u32, meta: u32) -> Node {
+        Node { min: bounds.min.extend(f32::from_bits(offset)), max: bounds.max.extend(f32::from_bits(meta)) }
+    }
+    #[inline(always)]
+    fn offset(&self) -> u32 {
+        self.min.w.to_bits()
+    }
+    #[inline(always)]
+    fn meta(&self) -> u32 {
+        self.max.w.to_bits()
+    }
+    pub(crate) fn set_offset(&mut self, offset: u32) {
+        self.min.w = f32::from_bits(offset);
+    }
     /// Node bounds.
     pub fn bounds(&self) -> Bounds3 {
-        Bounds3 { min: Vec3::from(self.min), max: Vec3::from(self.max) }
+        Bounds3 { min: self.min.truncate(), max: self.max.truncate() }
     }
     /// Whether the node is a leaf.
-    #[inline]
+    #[inline(always)]
     pub fn is_leaf(&self) -> bool {
-        self.meta & INTERIOR == 0
+        self.meta() & INTERIOR == 0
     }
 }
 
@@ -94,11 +111,11 @@ impl Bvh {
             s.max_depth = s.max_depth.max(depth);
             if n.is_leaf() {
                 s.leaves += 1;
-                s.sah_cost += rel * n.meta as f32;
+                s.sah_cost += rel * n.meta() as f32;
             } else {
                 s.sah_cost += rel;
                 stack.push((i + 1, depth + 1));
-                stack.push((n.offset as usize, depth + 1));
+                stack.push((n.offset() as usize, depth + 1));
             }
         }
         s
@@ -106,37 +123,57 @@ impl Bvh {
 
     /// Finds the closest hit. `leaf(first, count, t_max)` intersects leaf primitives
     /// `first .. first + count` (in [`Bvh::order`] positions) and lowers `t_max` to the closest hit
-    /// found; traversal then culls everything farther.
+    /// found; traversal then culls everything farther. Children are visited nearest first, and
+    /// postponed nodes whose entry distance is beyond the current `t_max` are skipped.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else { return };
+        let r = SlabRay::new(ray);
+        if r.entry(root, t_max).is_none() {
             return;
         }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
-        let mut stack = [0u32; 64];
+        let mut stack = [(0u32, 0.0f32); 64];
         let mut sp = 0usize;
         let mut idx = 0u32;
         loop {
             let node = unsafe { self.nodes.get_unchecked(idx as usize) };
-            if slab(node, ray.o, inv_d, t_max) {
-                if node.is_leaf() {
-                    leaf(node.offset, node.meta, &mut t_max);
-                } else {
-                    let axis = (node.meta & 3) as usize;
-                    // Visit the near child first; push the far one.
-                    let (near, far) = if neg[axis] { (node.offset, idx + 1) } else { (idx + 1, node.offset) };
-                    stack[sp] = far;
-                    sp += 1;
-                    idx = near;
-                    continue;
+            if node.is_leaf() {
+                leaf(node.offset(), node.meta(), &mut t_max);
+            } else {
+                let (a, b) = (idx + 1, node.offset());
+                let ta = r.entry(unsafe { self.nodes.get_unchecked(a as usize) }, t_max);
+                let tb = r.entry(unsafe { self.nodes.get_unchecked(b as usize) }, t_max);
+                match (ta, tb) {
+                    (Some(ta), Some(tb)) => {
+                        let (near, far, t_far) = if ta <= tb { (a, b, tb) } else { (b, a, ta) };
+                        stack[sp] = (far, t_far);
+                        sp += 1;
+                        idx = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        idx = a;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        idx = b;
+                        continue;
+                    }
+                    (None, None) => {}
                 }
             }
-            if sp == 0 {
-                break;
+            // Pop the next postponed node that can still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let (next, t_entry) = stack[sp];
+                if t_entry <= t_max {
+                    idx = next;
+                    break;
+                }
             }
-            sp -= 1;
-            idx = stack[sp];
         }
     }
 
@@ -144,27 +181,34 @@ impl Bvh {
     /// soon as one of the leaf's primitives is hit.
     #[inline]
     pub fn any_hit(&self, ray: &Ray, t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> bool) -> bool {
-        if self.nodes.is_empty() {
+        let Some(root) = self.nodes.first() else { return false };
+        let r = SlabRay::new(ray);
+        if r.entry(root, t_max).is_none() {
             return false;
         }
-        let inv_d = ray.d.recip();
-        let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let mut stack = [0u32; 64];
         let mut sp = 0usize;
         let mut idx = 0u32;
         loop {
             let node = unsafe { self.nodes.get_unchecked(idx as usize) };
-            if slab(node, ray.o, inv_d, t_max) {
-                if node.is_leaf() {
-                    if leaf(node.offset, node.meta, t_max) {
-                        return true;
-                    }
-                } else {
-                    let axis = (node.meta & 3) as usize;
-                    let (near, far) = if neg[axis] { (node.offset, idx + 1) } else { (idx + 1, node.offset) };
-                    stack[sp] = far;
+            if node.is_leaf() {
+                if leaf(node.offset(), node.meta(), t_max) {
+                    return true;
+                }
+            } else {
+                let (a, b) = (idx + 1, node.offset());
+                let ha = r.entry(unsafe { self.nodes.get_unchecked(a as usize) }, t_max).is_some();
+                let hb = r.entry(unsafe { self.nodes.get_unchecked(b as usize) }, t_max).is_some();
+                if ha && hb {
+                    stack[sp] = b;
                     sp += 1;
-                    idx = near;
+                    idx = a;
+                    continue;
+                } else if ha {
+                    idx = a;
+                    continue;
+                } else if hb {
+                    idx = b;
                     continue;
                 }
             }
@@ -177,21 +221,35 @@ impl Bvh {
     }
 }
 
-/// Ray–box slab test against `(0, t_max)`, with the far distance enlarged by `1 + 2γ₃` so
-/// round-off never culls a box the ray really enters.
-#[inline(always)]
-fn slab(node: &Node, o: Vec3, inv_d: Vec3, t_max: f32) -> bool {
-    let t0 = (Vec3::from(node.min) - o) * inv_d;
-    let t1 = (Vec3::from(node.max) - o) * inv_d;
-    let t_near = t0.min(t1).max_element().max(0.0);
-    let t_far = (t0.max(t1).min_element() * (1.0 + 2.0 * gamma(3))).min(t_max);
-    t_near <= t_far
+/// A ray prepared for SIMD slab tests.
+struct SlabRay {
+    o: Vec3A,
+    inv_d: Vec3A,
+}
+
+impl SlabRay {
+    #[inline(always)]
+    fn new(ray: &Ray) -> SlabRay {
+        SlabRay { o: Vec3A::from(ray.o), inv_d: Vec3A::from(ray.d.recip()) }
+    }
+
+    /// Entry distance of the ray into the node's box within `(0, t_max)`, or `None`. The far
+    /// distance is enlarged by `1 + 2γ₃` so that round-off never culls a box the ray enters.
+    #[inline(always)]
+    fn entry(&self, node: &Node, t_max: f32) -> Option<f32> {
+        let t0 = (Vec3A::from_vec4(node.min) - self.o) * self.inv_d;
+        let t1 = (Vec3A::from_vec4(node.max) - self.o) * self.inv_d;
+        let t_near = t0.min(t1).max_element().max(0.0);
+        let t_far = (t0.max(t1).min_element() * (1.0 + 2.0 * gamma(3))).min(t_max);
+        (t_near <= t_far).then_some(t_near)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::triangle::{intersect_triangle, RayPrecomp};
+    use crate::math::Vec3;
     use crate::sampling::Pcg32;
 
     fn random_triangles(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
@@ -221,7 +279,11 @@ mod tests {
             let d = crate::sampling::sample_uniform_sphere(crate::testkit::u2(&mut rng)).value;
             let ray = Ray::new(o, d);
             let pre = RayPrecomp::new(&ray);
-            let brute = tris.iter().filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY)).map(|h| h.t).fold(f32::INFINITY, f32::min);
+            let brute = tris
+                .iter()
+                .filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY))
+                .map(|h| h.t)
+                .fold(f32::INFINITY, f32::min);
             let mut best = f32::INFINITY;
             bvh.closest_hit(&ray, f32::INFINITY, |first, count, t_max| {
                 for k in first..first + count {

@@ -54,7 +54,13 @@ pub struct Camera {
 impl Camera {
     /// Pinhole camera placed by `to_world` (e.g. [`Transform::look_at`]) with a full field of
     /// view `fov_deg` along `fov_axis`, for a `width × height` film.
-    pub fn perspective(to_world: Transform, fov_deg: f32, fov_axis: FovAxis, width: u32, height: u32) -> Result<Camera, String> {
+    pub fn perspective(
+        to_world: Transform,
+        fov_deg: f32,
+        fov_axis: FovAxis,
+        width: u32,
+        height: u32,
+    ) -> Result<Camera, String> {
         if !(fov_deg > 0.0 && fov_deg < 180.0) {
             return Err(format!("field of view must be in (0, 180) degrees, got {fov_deg}"));
         }
@@ -101,7 +107,9 @@ impl Camera {
     /// `focus_distance` in world units.
     pub fn with_thin_lens(mut self, aperture_radius: f32, focus_distance: f32) -> Result<Camera, String> {
         if !(aperture_radius >= 0.0 && focus_distance > 0.0) {
-            return Err(format!("need aperture_radius ≥ 0 and focus_distance > 0, got {aperture_radius}, {focus_distance}"));
+            return Err(format!(
+                "need aperture_radius ≥ 0 and focus_distance > 0, got {aperture_radius}, {focus_distance}"
+            ));
         }
         self.lens_radius = aperture_radius;
         self.focus_distance = focus_distance;

@@ -31,7 +31,16 @@ impl TileBuffer {
     /// An empty tile.
     pub fn new(x0: u32, y0: u32, width: u32, height: u32) -> TileBuffer {
         let n = (width * height) as usize;
-        TileBuffer { x0, y0, width, height, sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], count: vec![0; n], dropped: 0 }
+        TileBuffer {
+            x0,
+            y0,
+            width,
+            height,
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+            count: vec![0; n],
+            dropped: 0,
+        }
     }
 
     /// Adds a radiance sample to pixel `(x, y)` (image coordinates, inside the tile). Samples

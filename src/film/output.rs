@@ -180,7 +180,9 @@ mod tests {
         assert_eq!(back[4], Rgb::new(4.0, 0.5, 0.0), "NaN written as 0, rows in order");
         // The EXR header carries the sample count.
         let meta = exr::meta::MetaData::read_from_file(dir.join("t.exr"), false).unwrap();
-        let spp = meta.headers[0].shared_attributes.other.get(&exr::meta::attribute::Text::from("spp")).cloned();
+        let key = exr::meta::attribute::Text::from("spp");
+        let h = &meta.headers[0];
+        let spp = h.shared_attributes.other.get(&key).or_else(|| h.own_attributes.other.get(&key)).cloned();
         assert!(matches!(spp, Some(exr::meta::attribute::AttributeValue::I32(7))), "{spp:?}");
         std::fs::remove_dir_all(&dir).ok();
     }

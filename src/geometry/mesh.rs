@@ -26,7 +26,12 @@ pub struct TriangleMesh {
 impl TriangleMesh {
     /// A mesh from its arrays. `normals` and `uvs` are either empty or one per vertex.
     /// Returns a description of the first problem found, if any.
-    pub fn new(positions: Vec<Vec3>, normals: Vec<Vec3>, uvs: Vec<Vec2>, indices: Vec<[u32; 3]>) -> Result<Self, String> {
+    pub fn new(
+        positions: Vec<Vec3>,
+        normals: Vec<Vec3>,
+        uvs: Vec<Vec2>,
+        indices: Vec<[u32; 3]>,
+    ) -> Result<Self, String> {
         let n = positions.len();
         if !normals.is_empty() && normals.len() != n {
             return Err(format!("{} normals for {} vertices", normals.len(), n));
@@ -41,7 +46,15 @@ impl TriangleMesh {
             return Err(format!("vertex {i} has a non-finite position"));
         }
         let normals = normals.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
-        Ok(TriangleMesh { positions, normals, uvs, indices, flip_normals: false, area_distribution: None, total_area: 0.0 })
+        Ok(TriangleMesh {
+            positions,
+            normals,
+            uvs,
+            indices,
+            flip_normals: false,
+            area_distribution: None,
+            total_area: 0.0,
+        })
     }
 
     /// Mitsuba's `rectangle`: `[-1, 1]²` in the xy plane, normal +z, uv from (0,0) at (-1,-1)
@@ -226,7 +239,13 @@ mod tests {
                 let (sp, _, pdf) = c.sample_area(crate::testkit::u2(&mut rng)).unwrap();
                 assert!((pdf - 1.0 / total).abs() < 1e-6);
                 let a = sp.n.abs();
-                let face = if a.x > 0.5 { 0 } else if a.y > 0.5 { 2 } else { 4 } + usize::from(sp.n.max_element() < 0.5);
+                let face = if a.x > 0.5 {
+                    0
+                } else if a.y > 0.5 {
+                    2
+                } else {
+                    4
+                } + usize::from(sp.n.max_element() < 0.5);
                 k[face] += 1.0;
             }
             k

@@ -10,17 +10,17 @@
 use crate::math::float::gamma;
 use crate::math::{Ray, Vec3};
 
-/// Per-ray data of the watertight test, computed once per ray.
+/// Per-ray data of the watertight test, computed once per ray: the permutation and shear as
+/// three row vectors, so that transforming a vertex is three dot products. Each row has one
+/// entry 1 (or `sz`), at most one other non-zero entry and zeros elsewhere, so the dot products
+/// round exactly like the permuted scalar expressions of Woop et al. and stay watertight.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPrecomp {
     /// Ray origin.
     pub o: Vec3,
-    kx: usize,
-    ky: usize,
-    kz: usize,
-    sx: f32,
-    sy: f32,
-    sz: f32,
+    mx: Vec3,
+    my: Vec3,
+    mz: Vec3,
 }
 
 impl RayPrecomp {
@@ -29,14 +29,33 @@ impl RayPrecomp {
     pub fn new(ray: &Ray) -> RayPrecomp {
         let d = ray.d;
         let a = d.abs();
-        let kz = if a.x > a.y { if a.x > a.z { 0 } else { 2 } } else if a.y > a.z { 1 } else { 2 };
+        let kz = if a.x > a.y {
+            if a.x > a.z {
+                0
+            } else {
+                2
+            }
+        } else if a.y > a.z {
+            1
+        } else {
+            2
+        };
         let mut kx = (kz + 1) % 3;
         let mut ky = (kx + 1) % 3;
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
         let sz = 1.0 / d[kz];
-        RayPrecomp { o: ray.o, kx, ky, kz, sx: d[kx] * sz, sy: d[ky] * sz, sz }
+        let (sx, sy) = (d[kx] * sz, d[ky] * sz);
+        let mut mx = Vec3::ZERO;
+        mx[kx] = 1.0;
+        mx[kz] = -sx;
+        let mut my = Vec3::ZERO;
+        my[ky] = 1.0;
+        my[kz] = -sy;
+        let mut mz = Vec3::ZERO;
+        mz[kz] = sz;
+        RayPrecomp { o: ray.o, mx, my, mz }
     }
 }
 
@@ -56,18 +75,13 @@ pub struct TriangleHit {
 /// Intersects the precomputed ray with the triangle `p` within `(0, t_max)`.
 #[inline(always)]
 pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<TriangleHit> {
-    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
     let p0 = p[0] - r.o;
     let p1 = p[1] - r.o;
     let p2 = p[2] - r.o;
-    // Permute and shear.
-    let (p0z, p1z, p2z) = (p0[kz], p1[kz], p2[kz]);
-    let p0x = p0[kx] - r.sx * p0z;
-    let p0y = p0[ky] - r.sy * p0z;
-    let p1x = p1[kx] - r.sx * p1z;
-    let p1y = p1[ky] - r.sy * p1z;
-    let p2x = p2[kx] - r.sx * p2z;
-    let p2y = p2[ky] - r.sy * p2z;
+    // Permute and shear (x, y), and scale z.
+    let (p0x, p0y, z0) = (p0.dot(r.mx), p0.dot(r.my), p0.dot(r.mz));
+    let (p1x, p1y, z1) = (p1.dot(r.mx), p1.dot(r.my), p1.dot(r.mz));
+    let (p2x, p2y, z2) = (p2.dot(r.mx), p2.dot(r.my), p2.dot(r.mz));
     // Edge functions.
     let mut e0 = p1x * p2y - p1y * p2x;
     let mut e1 = p2x * p0y - p2y * p0x;
@@ -85,7 +99,6 @@ pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<T
     if det == 0.0 {
         return None;
     }
-    let (z0, z1, z2) = (p0z * r.sz, p1z * r.sz, p2z * r.sz);
     let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
     if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
         return None;
@@ -156,9 +169,9 @@ mod tests {
         let tris: Vec<[Vec3; 3]> = (0..n).map(|i| [c, ring[i], ring[(i + 1) % n]]).collect();
         let mut rng = Pcg32::new(1, 2);
         let mut targets = vec![c];
-        for i in 0..n {
+        for v in &ring {
             for k in 1..20 {
-                targets.push(c + (ring[i] - c) * (k as f32 / 20.0)); // on the shared edge
+                targets.push(c + (*v - c) * (k as f32 / 20.0)); // on the shared edge
             }
         }
         for _ in 0..20_000 {

@@ -66,8 +66,7 @@ impl Integrator for PathIntegrator {
         // The previous vertex (position, BSDF pdf of the direction taken, whether delta).
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
-        loop {
-            let Some(si) = scene.intersect(&ray) else { break };
+        while let Some(si) = scene.intersect(&ray) {
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
 
@@ -148,7 +147,7 @@ impl Integrator for PathIntegrator {
             // Russian roulette.
             let u_rr = sampler.next_1d();
             let beta_max = beta.max_element();
-            if !(beta_max > 0.0) {
+            if beta_max <= 0.0 || beta_max.is_nan() {
                 break;
             }
             if depth >= self.rr_depth {
@@ -254,7 +253,8 @@ mod tests {
         // A camera ray grazing under the light onto the floor point below its centre.
         let o = Vec3::new(0.0, 0.5, -4.0);
         let ray = Ray::new(o, (Vec3::ZERO - o).normalize());
-        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate() {
+        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate()
+        {
             let integrator = PathIntegrator { max_depth: 2, strategy, ..Default::default() };
             let mut sampler = SamplerKind::Independent.make(1, k as u64);
             let n = if strategy == DirectStrategy::Bsdf { 400_000 } else { 50_000 };
@@ -276,7 +276,8 @@ mod tests {
     fn strategies_agree_on_the_cornell_box() {
         let scene = crate::scene::cornell::cornell_box(24, 24).unwrap();
         let mut means = Vec::new();
-        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate() {
+        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate()
+        {
             let integrator = PathIntegrator { max_depth: 6, strategy, ..Default::default() };
             let spp = if strategy == DirectStrategy::Bsdf { 512 } else { 128 };
             let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };

@@ -54,7 +54,9 @@ mod tests {
     #[test]
     fn sample_matches_pdf_and_eval() {
         let b = Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.2, 0.5, 0.9) });
-        for (k, wo) in [Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::new(-0.1, 0.99, 0.1).normalize()].into_iter().enumerate() {
+        for (k, wo) in
+            [Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::new(-0.1, 0.99, 0.1).normalize()].into_iter().enumerate()
+        {
             let out = chi2_2d(
                 &HEMISPHERE,
                 [11, 21],

@@ -92,7 +92,12 @@ impl RenderOutcome {
 
 /// Renders `scene` with `integrator`. Returns when the sample target is reached, the time budget
 /// is used, or `cancel` becomes true (then the completed tiles of the current pass are kept).
-pub fn render(scene: &Scene, integrator: &dyn Integrator, settings: &RenderSettings, cancel: &AtomicBool) -> Result<RenderOutcome, String> {
+pub fn render(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+) -> Result<RenderOutcome, String> {
     let cam = scene.camera();
     let (width, height) = (cam.width(), cam.height());
     let spp = settings.spp.max(1);
@@ -208,7 +213,8 @@ mod tests {
             images.push(out.film.image());
         }
         assert!(images.iter().all(|im| *im == images[0]), "images differ between thread counts");
-        let other_seed = render(&scene, &integrator, &RenderSettings { spp: 4, seed: 8, ..Default::default() }, &never).unwrap();
+        let other_seed =
+            render(&scene, &integrator, &RenderSettings { spp: 4, seed: 8, ..Default::default() }, &never).unwrap();
         assert_ne!(other_seed.film.image(), images[0]);
     }
 
@@ -216,7 +222,9 @@ mod tests {
     fn cancellation_keeps_completed_work() {
         let scene = cornell_box(16, 16).unwrap();
         let cancelled = AtomicBool::new(true);
-        let out = render(&scene, &PathIntegrator::default(), &RenderSettings { spp: 8, ..Default::default() }, &cancelled).unwrap();
+        let out =
+            render(&scene, &PathIntegrator::default(), &RenderSettings { spp: 8, ..Default::default() }, &cancelled)
+                .unwrap();
         assert!(out.interrupted);
         assert_eq!(out.film.total_samples(), 0);
     }
@@ -224,7 +232,8 @@ mod tests {
     #[test]
     fn time_budget_renders_whole_passes() {
         let scene = cornell_box(16, 16).unwrap();
-        let settings = RenderSettings { spp: 1 << 20, time_budget: Some(Duration::from_millis(300)), ..Default::default() };
+        let settings =
+            RenderSettings { spp: 1 << 20, time_budget: Some(Duration::from_millis(300)), ..Default::default() };
         let out = render(&scene, &PathIntegrator::default(), &settings, &AtomicBool::new(false)).unwrap();
         let (lo, hi) = out.film.spp_range();
         assert!(lo >= 1 && lo == hi, "whole passes only: {lo}..{hi}");

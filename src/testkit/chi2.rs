@@ -169,13 +169,32 @@ fn cell_masses_2d<D: Domain>(domain: &D, res: [usize; 2], pdf: &impl Fn(&D::Poin
     for j in 0..res[1] {
         for i in 0..res[0] {
             let (s0, t0) = (lo[0] + i as f64 * hs, lo[1] + j as f64 * ht);
-            masses.push(gauss_legendre_5x5(s0, s0 + hs, t0, t0 + ht, |s, t| {
+            let f = |s: f64, t: f64| {
                 let (x, jac) = domain.param_to_point([s, t]);
                 pdf(&x) * jac
-            }));
+            };
+            masses.push(integrate_cell(&f, s0, s0 + hs, t0, t0 + ht, 0));
         }
     }
     masses
+}
+
+/// Integral of `f` over a cell by 5×5 Gauss–Legendre quadrature, refined adaptively where a
+/// discontinuity (a light's silhouette, a cone's edge) crosses the cell: when the rule disagrees
+/// with the sum over the four sub-cells, or when the cell's corners disagree on whether `f` is
+/// zero (the edge of the support passes through the cell, perhaps as a sliver no quadrature
+/// node sees), the sub-cells are integrated recursively.
+fn integrate_cell(f: &impl Fn(f64, f64) -> f64, x0: f64, x1: f64, y0: f64, y1: f64, depth: u32) -> f64 {
+    let coarse = gauss_legendre_5x5(x0, x1, y0, y1, f);
+    let (xm, ym) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    let quads = [(x0, xm, y0, ym), (xm, x1, y0, ym), (x0, xm, ym, y1), (xm, x1, ym, y1)];
+    let fine: f64 = quads.iter().map(|&(a, b, c, d)| gauss_legendre_5x5(a, b, c, d, f)).sum();
+    let zero_corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)].iter().filter(|&&(x, y)| f(x, y) == 0.0).count();
+    let edge_inside = (zero_corners > 0 && zero_corners < 4) || (zero_corners == 4) != (fine == 0.0);
+    if depth >= 6 || (!edge_inside && (fine - coarse).abs() <= 1e-5 * fine.abs() + 1e-12) {
+        return fine;
+    }
+    quads.iter().map(|&(a, b, c, d)| integrate_cell(f, a, b, c, d, depth + 1)).sum()
 }
 
 /// χ² goodness-of-fit of `n` draws of `sample` against `pdf` on a 2D `domain`, histogrammed on

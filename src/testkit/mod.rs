@@ -8,7 +8,7 @@
 //! - [`chi2_2d`]: Pearson's χ² goodness-of-fit of samples on a 2D [`Domain`] (square, disk,
 //!   sphere, hemisphere, spherical cap, triangle) against the claimed pdf, the pdf being
 //!   *integrated* over every histogram cell by Gauss–Legendre quadrature (not evaluated at the
-//!   cell centre); cells with expected count below 5 are merged into one (Mitsuba 3's harness
+//!   cell centre), refined adaptively where the pdf is discontinuous inside a cell; cells with expected count below 5 are merged into one (Mitsuba 3's harness
 //!   does the same).
 //! - [`chi2_1d`] and [`chi2_discrete`]: the same on an interval (with an overflow cell for
 //!   unbounded supports) and over a finite set of outcomes.

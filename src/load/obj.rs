@@ -1,0 +1,134 @@
+//! Wavefront OBJ: `v`, `vt`, `vn` and `f` records (polygons are triangulated as fans; negative
+//! indices count from the end); other records (groups, materials, smoothing) are ignored.
+//! Vertices are unified per distinct (position, uv, normal) triple.
+
+use crate::geometry::TriangleMesh;
+use crate::math::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Loads an OBJ file.
+pub fn load_obj(path: &Path) -> Result<TriangleMesh, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    parse_obj(&text).map_err(|(line, msg)| format!("{}:{line}: {msg}", path.display()))
+}
+
+/// Parses OBJ text; errors carry the 1-based line number.
+pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
+    let (mut v, mut vt, mut vn) = (Vec::new(), Vec::new(), Vec::new());
+    let mut positions = Vec::new();
+    let mut uvs = Vec::new();
+    let mut normals = Vec::new();
+    let mut indices = Vec::new();
+    let mut unified: HashMap<(usize, Option<usize>, Option<usize>), u32> = HashMap::new();
+    let (mut any_uv, mut any_n) = (false, false);
+    for (ln, raw) in text.lines().enumerate() {
+        let line_no = ln + 1;
+        let line = raw.split('#').next().unwrap_or("").trim();
+        let mut it = line.split_whitespace();
+        let Some(tag) = it.next() else { continue };
+        let floats = |it: std::str::SplitWhitespace, n: usize, what: &str| -> Result<Vec<f32>, (usize, String)> {
+            let vals: Vec<f32> = it
+                .take(n)
+                .map(|s| {
+                    s.parse::<f32>()
+                        .map_err(|_| (line_no, format!("expected a number in '{what}' record, found '{s}'")))
+                })
+                .collect::<Result<_, _>>()?;
+            if vals.len() < n {
+                return Err((line_no, format!("'{what}' record needs {n} numbers, found {}", vals.len())));
+            }
+            Ok(vals)
+        };
+        match tag {
+            "v" => {
+                let f = floats(it, 3, "v")?;
+                v.push(Vec3::new(f[0], f[1], f[2]));
+            }
+            "vt" => {
+                let f = floats(it, 2, "vt")?;
+                vt.push(Vec2::new(f[0], f[1]));
+            }
+            "vn" => {
+                let f = floats(it, 3, "vn")?;
+                vn.push(Vec3::new(f[0], f[1], f[2]));
+            }
+            "f" => {
+                let mut corner = Vec::new();
+                for tok in it {
+                    let mut parts = tok.split('/');
+                    let resolve = |s: Option<&str>, len: usize, what: &str| -> Result<Option<usize>, (usize, String)> {
+                        match s {
+                            None | Some("") => Ok(None),
+                            Some(s) => {
+                                let i: i64 =
+                                    s.parse().map_err(|_| (line_no, format!("bad {what} index '{s}' in face")))?;
+                                let idx = if i > 0 { i - 1 } else { len as i64 + i };
+                                if i == 0 || idx < 0 || idx >= len as i64 {
+                                    return Err((line_no, format!("{what} index {i} out of range (have {len})")));
+                                }
+                                Ok(Some(idx as usize))
+                            }
+                        }
+                    };
+                    let p = resolve(parts.next(), v.len(), "vertex")?
+                        .ok_or((line_no, "face corner without a vertex index".to_string()))?;
+                    let t = resolve(parts.next(), vt.len(), "texture")?;
+                    let n = resolve(parts.next(), vn.len(), "normal")?;
+                    any_uv |= t.is_some();
+                    any_n |= n.is_some();
+                    let key = (p, t, n);
+                    let id = *unified.entry(key).or_insert_with(|| {
+                        positions.push(v[p]);
+                        uvs.push(t.map_or(Vec2::ZERO, |t| vt[t]));
+                        normals.push(n.map_or(Vec3::ZERO, |n| vn[n]));
+                        positions.len() as u32 - 1
+                    });
+                    corner.push(id);
+                }
+                if corner.len() < 3 {
+                    return Err((line_no, format!("face with {} vertices (need at least 3)", corner.len())));
+                }
+                for k in 1..corner.len() - 1 {
+                    indices.push([corner[0], corner[k], corner[k + 1]]);
+                }
+            }
+            _ => {}
+        }
+    }
+    if !any_uv {
+        uvs.clear();
+    }
+    if !any_n || normals.contains(&Vec3::ZERO) {
+        normals.clear();
+    }
+    TriangleMesh::new(positions, normals, uvs, indices).map_err(|e| (0, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_quads_negative_indices_and_attributes() {
+        let text = "# a quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1 -1/-1/-1\n";
+        let m = parse_obj(text).unwrap();
+        assert_eq!(m.len(), 2);
+        assert_eq!(m.positions.len(), 4);
+        assert_eq!(m.uvs.len(), 4);
+        assert_eq!(m.normals.len(), 4);
+        assert!((m.area() - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn errors_name_the_line() {
+        let e = parse_obj("v 0 0 0\nv 1 0\n").unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.contains("3 numbers"), "{}", e.1);
+        let e = parse_obj("v 0 0 0\nf 1 2 3\n").unwrap_err();
+        assert_eq!(e.0, 2);
+        assert!(e.1.contains("out of range"));
+        let e = parse_obj("v 0 0 x\n").unwrap_err();
+        assert!(e.1.contains("'x'"));
+    }
+}

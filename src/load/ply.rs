@@ -1,0 +1,287 @@
+//! Stanford PLY meshes, ASCII and binary (little- and big-endian): `vertex` elements with
+//! `x y z`, optional `nx ny nz` and `u v` / `s t` / `texture_u texture_v`, and `face` elements
+//! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Other elements and
+//! properties are read and skipped.
+
+use crate::geometry::TriangleMesh;
+use crate::math::{Vec2, Vec3};
+use std::path::Path;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(s: &str) -> Option<Scalar> {
+        Some(match s {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    kind: Scalar,
+    /// For lists: the type of the count.
+    list_count: Option<Scalar>,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    props: Vec<Property>,
+}
+
+#[derive(Clone, Copy, PartialEq)]
+enum Encoding {
+    Ascii,
+    Little,
+    Big,
+}
+
+/// Loads a PLY file.
+pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
+    let data = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    parse_ply(&data).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// A reader of property values from the body.
+struct Body<'a> {
+    data: &'a [u8],
+    pos: usize,
+    enc: Encoding,
+}
+
+impl Body<'_> {
+    fn next_token(&mut self) -> Option<&str> {
+        while self.pos < self.data.len() && self.data[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        let start = self.pos;
+        while self.pos < self.data.len() && !self.data[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        (start < self.pos).then(|| std::str::from_utf8(&self.data[start..self.pos]).unwrap_or(""))
+    }
+
+    fn read(&mut self, kind: Scalar) -> Result<f64, String> {
+        if self.enc == Encoding::Ascii {
+            let t = self.next_token().ok_or("unexpected end of data")?;
+            return t.parse::<f64>().map_err(|_| format!("expected a number in the body, found '{t}'"));
+        }
+        let n = kind.size();
+        if self.pos + n > self.data.len() {
+            return Err("unexpected end of binary data".into());
+        }
+        let mut b = [0u8; 8];
+        b[..n].copy_from_slice(&self.data[self.pos..self.pos + n]);
+        self.pos += n;
+        if self.enc == Encoding::Big {
+            b[..n].reverse();
+        }
+        Ok(match kind {
+            Scalar::I8 => b[0] as i8 as f64,
+            Scalar::U8 => b[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(b),
+        })
+    }
+}
+
+/// Parses a PLY file's bytes.
+pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
+    // Header: text lines up to "end_header".
+    let mut pos = 0;
+    let mut lines = Vec::new();
+    loop {
+        let end = data[pos..].iter().position(|&c| c == b'\n').ok_or("header has no 'end_header' line")? + pos;
+        let line = String::from_utf8_lossy(&data[pos..end]).trim().to_string();
+        pos = end + 1;
+        if line == "end_header" {
+            break;
+        }
+        lines.push(line);
+    }
+    if lines.first().map(String::as_str) != Some("ply") {
+        return Err("not a PLY file (missing 'ply' magic)".into());
+    }
+    let mut enc = None;
+    let mut elements: Vec<Element> = Vec::new();
+    for (i, line) in lines.iter().enumerate().skip(1) {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let at = |msg: String| format!("header line {}: {msg}", i + 1);
+        match w.first().copied() {
+            Some("format") => {
+                enc = Some(match w.get(1).copied() {
+                    Some("ascii") => Encoding::Ascii,
+                    Some("binary_little_endian") => Encoding::Little,
+                    Some("binary_big_endian") => Encoding::Big,
+                    other => return Err(at(format!("unknown format {other:?}"))),
+                })
+            }
+            Some("element") => {
+                let (Some(name), Some(count)) = (w.get(1), w.get(2).and_then(|c| c.parse().ok())) else {
+                    return Err(at("expected 'element NAME COUNT'".into()));
+                };
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
+            }
+            Some("property") => {
+                let el = elements.last_mut().ok_or_else(|| at("property before any element".into()))?;
+                let prop = if w.get(1) == Some(&"list") {
+                    let (Some(c), Some(k), Some(name)) =
+                        (w.get(2).and_then(|s| Scalar::parse(s)), w.get(3).and_then(|s| Scalar::parse(s)), w.get(4))
+                    else {
+                        return Err(at("expected 'property list COUNT_TYPE ITEM_TYPE NAME'".into()));
+                    };
+                    Property { name: name.to_string(), kind: k, list_count: Some(c) }
+                } else {
+                    let (Some(k), Some(name)) = (w.get(1).and_then(|s| Scalar::parse(s)), w.get(2)) else {
+                        return Err(at(format!("expected 'property TYPE NAME', found '{line}'")));
+                    };
+                    Property { name: name.to_string(), kind: k, list_count: None }
+                };
+                el.props.push(prop);
+            }
+            Some("comment") | Some("obj_info") | None => {}
+            Some(other) => return Err(at(format!("unknown header keyword '{other}'"))),
+        }
+    }
+    let enc = enc.ok_or("header has no 'format' line")?;
+    let mut body = Body { data, pos, enc };
+    let (mut positions, mut normals, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for el in &elements {
+        let find = |names: &[&str]| el.props.iter().position(|p| names.contains(&p.name.as_str()));
+        let (ix, iy, iz) = (find(&["x"]), find(&["y"]), find(&["z"]));
+        let (inx, iny, inz) = (find(&["nx"]), find(&["ny"]), find(&["nz"]));
+        let (iu, iv) = (find(&["u", "s", "texture_u", "texture_s"]), find(&["v", "t", "texture_v", "texture_t"]));
+        let iface = find(&["vertex_indices", "vertex_index"]);
+        let mut vals = vec![0.0f64; el.props.len()];
+        let mut list: Vec<u32> = Vec::new();
+        for item in 0..el.count {
+            for (k, p) in el.props.iter().enumerate() {
+                match p.list_count {
+                    None => vals[k] = body.read(p.kind).map_err(|e| format!("{} {item}: {e}", el.name))?,
+                    Some(ct) => {
+                        let n = body.read(ct).map_err(|e| format!("{} {item}: {e}", el.name))? as usize;
+                        let keep = Some(k) == iface;
+                        if keep {
+                            list.clear();
+                        }
+                        for _ in 0..n {
+                            let x = body.read(p.kind).map_err(|e| format!("{} {item}: {e}", el.name))?;
+                            if keep {
+                                list.push(x as u32);
+                            }
+                        }
+                    }
+                }
+            }
+            if el.name == "vertex" {
+                let (Some(x), Some(y), Some(z)) = (ix, iy, iz) else {
+                    return Err("vertex element lacks x, y or z".into());
+                };
+                positions.push(Vec3::new(vals[x] as f32, vals[y] as f32, vals[z] as f32));
+                if let (Some(a), Some(b), Some(c)) = (inx, iny, inz) {
+                    normals.push(Vec3::new(vals[a] as f32, vals[b] as f32, vals[c] as f32));
+                }
+                if let (Some(a), Some(b)) = (iu, iv) {
+                    uvs.push(Vec2::new(vals[a] as f32, vals[b] as f32));
+                }
+            } else if el.name == "face" && iface.is_some() {
+                if list.len() < 3 {
+                    return Err(format!("face {item} has {} vertices (need at least 3)", list.len()));
+                }
+                for k in 1..list.len() - 1 {
+                    indices.push([list[0], list[k], list[k + 1]]);
+                }
+            }
+        }
+    }
+    TriangleMesh::new(positions, normals, uvs, indices)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ASCII: &str = "ply\nformat ascii 1.0\ncomment test\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0\n2 0 0 1 0\n2 2 0 1 1\n0 2 0 0 1\n4 0 1 2 3\n";
+
+    #[test]
+    fn ascii_quad() {
+        let m = parse_ply(ASCII.as_bytes()).unwrap();
+        assert_eq!(m.len(), 2);
+        assert_eq!(m.uvs.len(), 4);
+        assert!((m.area() - 4.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn binary_both_endians_match_ascii() {
+        for (fmt, big) in [("binary_little_endian", false), ("binary_big_endian", true)] {
+            let mut d = format!(
+                "ply\nformat {fmt} 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty double nx\nproperty double ny\nproperty double nz\nelement extra 1\nproperty short junk\nelement face 1\nproperty list uchar uint vertex_indices\nend_header\n"
+            )
+            .into_bytes();
+            let f32b = |x: f32| if big { x.to_be_bytes().to_vec() } else { x.to_le_bytes().to_vec() };
+            let f64b = |x: f64| if big { x.to_be_bytes().to_vec() } else { x.to_le_bytes().to_vec() };
+            for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]] {
+                for c in p {
+                    d.extend(f32b(c));
+                }
+                for c in [0.0, 0.0, 1.0] {
+                    d.extend(f64b(c));
+                }
+            }
+            d.extend([7u8, 0]); // the skipped 'extra' element
+            d.push(3);
+            for i in [0u32, 1, 2] {
+                d.extend(if big { i.to_be_bytes() } else { i.to_le_bytes() });
+            }
+            let m = parse_ply(&d).unwrap();
+            assert_eq!(m.len(), 1, "{fmt}");
+            assert!((m.area() - 0.5).abs() < 1e-6);
+            assert_eq!(m.normals.len(), 3);
+        }
+    }
+
+    #[test]
+    fn clear_errors() {
+        assert!(parse_ply(b"plx\nend_header\n").unwrap_err().contains("magic"));
+        assert!(parse_ply(b"ply\nformat ascii 1.0\nelement vertex 1\nproperty floot x\nend_header\n")
+            .unwrap_err()
+            .contains("header line 4"));
+        let truncated = ASCII.replace("4 0 1 2 3\n", "4 0 1\n");
+        assert!(parse_ply(truncated.as_bytes()).unwrap_err().contains("end of data"));
+        let bad_index = ASCII.replace("4 0 1 2 3", "3 0 1 9");
+        assert!(parse_ply(bad_index.as_bytes()).unwrap_err().contains("vertex"));
+    }
+}
