@@ -27,8 +27,8 @@ impl RayPrecomp {
     /// Precomputes the permutation and shear for `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> RayPrecomp {
-        let d = ray.d;
-        let a = d.abs();
+        let d = ray.d.to_array();
+        let a = ray.d.abs();
         let kz = if a.x > a.y {
             if a.x > a.z {
                 0
@@ -47,15 +47,13 @@ impl RayPrecomp {
         }
         let sz = 1.0 / d[kz];
         let (sx, sy) = (d[kx] * sz, d[ky] * sz);
-        let mut mx = Vec3::ZERO;
+        let (mut mx, mut my, mut mz) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
         mx[kx] = 1.0;
         mx[kz] = -sx;
-        let mut my = Vec3::ZERO;
         my[ky] = 1.0;
         my[kz] = -sy;
-        let mut mz = Vec3::ZERO;
         mz[kz] = sz;
-        RayPrecomp { o: ray.o, mx, my, mz }
+        RayPrecomp { o: ray.o, mx: Vec3::from(mx), my: Vec3::from(my), mz: Vec3::from(mz) }
     }
 }
 
