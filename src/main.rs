@@ -272,10 +272,13 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         );
     });
     println!(
-        "rendering {name} at {}x{}, {} spp, max_depth {max_depth}, {} threads",
+        "rendering {name} at {}x{}, {}, max_depth {max_depth}, {} threads",
         res.0,
         res.1,
-        if time_budget.is_some() { format!("{}s of", a.time.unwrap_or(0.0)) } else { spp.to_string() },
+        match a.time {
+            Some(t) => format!("for {t} s"),
+            None => format!("{spp} spp"),
+        },
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
     let out = render(&scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;

@@ -1,0 +1,87 @@
+//! End-to-end checks of the `neumann` command: exit codes, messages, files written, Ctrl-C.
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+fn neumann() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_neumann"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("neumann-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn renders_the_builtin_scene_to_each_format() {
+    for ext in ["png", "exr", "pfm"] {
+        let out = temp(&format!("cbox.{ext}"));
+        let r = neumann()
+            .args(["render", "--res", "12x8", "--spp", "2", "--quiet", "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        assert!(r.status.success(), "{ext}: {stdout} {}", String::from_utf8_lossy(&r.stderr));
+        assert!(stdout.contains("wrote") && stdout.contains("2 spp"), "{stdout}");
+        assert!(std::fs::metadata(&out).unwrap().len() > 0);
+    }
+    let (w, h, px) = neumann::film::output::read_pfm(&temp("cbox.pfm")).unwrap();
+    assert_eq!((w, h), (12, 8));
+    assert!(px.iter().any(|c| c.x > 0.0), "image is black");
+}
+
+#[test]
+fn bad_arguments_exit_2_with_a_message() {
+    for args in [
+        vec!["render", "--res", "0"],
+        vec!["render", "--res", "12xq"],
+        vec!["render", "--spp", "0"],
+        vec!["render", "--spp", "many"],
+        vec!["render", "--max-depth", "-7"],
+        vec!["render", "-D", "colour=blue"],
+        vec!["render", "-D", "spp"],
+        vec!["render", "--time", "-1"],
+        vec!["render", "-o", "image.jpg"],
+        vec!["render", "--sampler", "halton"],
+        vec!["frobnicate"],
+    ] {
+        let r = neumann().args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("error"), "{args:?}: no message in {err}");
+    }
+    let r = neumann().args(["render", "nosuchscene"]).output().unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("cbox"));
+}
+
+#[test]
+fn defines_override_scene_defaults() {
+    let out = temp("small.pfm");
+    let r = neumann().args(["render", "-Dres=6x4", "-Dspp=3", "--quiet", "-o"]).arg(&out).output().unwrap();
+    assert!(r.status.success());
+    assert!(String::from_utf8_lossy(&r.stdout).contains("6x4, 3 spp"));
+}
+
+#[test]
+fn interrupt_writes_what_was_rendered() {
+    let out = temp("interrupted.exr");
+    let child = neumann()
+        .args(["render", "--res", "64", "--time", "60", "--quiet", "-o"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(killed.success());
+    let r = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("interrupted"), "{stdout}");
+    assert!(std::fs::metadata(&out).unwrap().len() > 0);
+}
