@@ -27,8 +27,10 @@ impl RayPrecomp {
     /// Precomputes the permutation and shear for `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> RayPrecomp {
-        let d = ray.d.to_array();
-        let a = ray.d.abs();
+        let d = ray.d;
+        let a = d.abs();
+        // kz: the dominant axis; (kx, ky) the other two in cyclic order, swapped when d[kz] < 0
+        // to keep the winding of the projected triangle.
         let kz = if a.x > a.y {
             if a.x > a.z {
                 0
@@ -40,20 +42,22 @@ impl RayPrecomp {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
-        let sz = 1.0 / d[kz];
-        let (sx, sy) = (d[kx] * sz, d[ky] * sz);
-        let (mut mx, mut my, mut mz) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
-        mx[kx] = 1.0;
-        mx[kz] = -sx;
-        my[ky] = 1.0;
-        my[kz] = -sy;
-        mz[kz] = sz;
-        RayPrecomp { o: ray.o, mx: Vec3::from(mx), my: Vec3::from(my), mz: Vec3::from(mz) }
+        let (dz, (kx, ky)) = match kz {
+            0 => (d.x, (1, 2)),
+            1 => (d.y, (2, 0)),
+            _ => (d.z, (0, 1)),
+        };
+        let (kx, ky) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
+        let sz = 1.0 / dz;
+        let unit = |k: usize, v: f32| match k {
+            0 => Vec3::new(v, 0.0, 0.0),
+            1 => Vec3::new(0.0, v, 0.0),
+            _ => Vec3::new(0.0, 0.0, v),
+        };
+        let ez = unit(kz, 1.0);
+        let mx = unit(kx, 1.0) - ez * (d.dot(unit(kx, 1.0)) * sz);
+        let my = unit(ky, 1.0) - ez * (d.dot(unit(ky, 1.0)) * sz);
+        RayPrecomp { o: ray.o, mx, my, mz: unit(kz, sz) }
     }
 }
 
