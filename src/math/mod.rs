@@ -11,6 +11,7 @@ pub mod color;
 pub mod float;
 pub mod frame;
 pub mod ray;
+pub mod special;
 pub mod transform;
 
 pub use bounds::Bounds3;
