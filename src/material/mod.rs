@@ -8,6 +8,7 @@
 //! are black, as in Mitsuba.
 
 mod diffuse;
+pub mod fresnel;
 pub mod microfacet;
 
 pub use diffuse::Diffuse;
