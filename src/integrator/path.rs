@@ -5,8 +5,9 @@
 //! light sampled on one emitter (chosen with probability proportional to power); the two
 //! strategies for direct light (BSDF sampling finds emitters by chance, light sampling aims at
 //! them) are combined with the power heuristic. Russian roulette ends paths of low throughput
-//! `β` from `rr_depth` on, with survival probability `q = min(max(β), 0.95)` and `β /= q`,
-//! which keeps the estimator unbiased.
+//! `β` from `rr_depth` on, with survival probability `q = min(max(β) η², 0.95)` and `β /= q`,
+//! which keeps the estimator unbiased (η: product of the relative IORs crossed, which undoes the
+//! η² radiance scaling of refraction).
 //!
 //! `max_depth` has Mitsuba's meaning: the longest path has `max_depth` segments. 1: only
 //! emitters seen directly; 2: direct illumination; -1: unlimited.
@@ -66,6 +67,9 @@ impl Integrator for PathIntegrator {
         // The previous vertex (position, BSDF pdf of the direction taken, whether delta).
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
+        // Product of the relative IORs crossed: radiance scales by η² at refractions, which
+        // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
+        let mut eta = 1.0f32;
         while let Some(si) = scene.intersect(&ray) {
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
@@ -139,6 +143,7 @@ impl Integrator for PathIntegrator {
             let u_bsdf2 = sampler.next_2d();
             let Some(bs) = bsdf.sample(wo_local, u_bsdf, u_bsdf2) else { break };
             beta *= bs.weight;
+            eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
             prev = Some((si.p, bs.pdf, bs.delta));
             ray = si.spawn_ray(wi);
@@ -151,7 +156,7 @@ impl Integrator for PathIntegrator {
                 break;
             }
             if depth >= self.rr_depth {
-                let q = beta_max.min(0.95);
+                let q = (beta_max * eta * eta).min(0.95);
                 if u_rr >= q {
                     break;
                 }

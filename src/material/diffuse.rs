@@ -41,7 +41,7 @@ impl Diffuse {
             return None;
         }
         let s = sample_cosine_hemisphere_malley(u);
-        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: self.reflectance, delta: false })
+        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: self.reflectance, delta: false, eta: 1.0 })
     }
 }
 

@@ -7,10 +7,14 @@
 //! `f |cos θᵢ| / pdf`. BSDFs are one-sided unless stated: seen from the back (`wo.z ≤ 0`) they
 //! are black, as in Mitsuba.
 
+mod conductor;
+mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
 
+pub use conductor::{Conductor, ConductorIor, RoughConductor};
+pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 
 use crate::math::{Rgb, Vec2, Vec3};
@@ -20,12 +24,15 @@ use crate::math::{Rgb, Vec2, Vec3};
 pub struct BsdfSample {
     /// Sampled incident direction (local frame, unit).
     pub wi: Vec3,
-    /// Its density per unit solid angle (ignored for delta lobes).
+    /// Its density per unit solid angle; for delta lobes, the discrete probability of the lobe.
     pub pdf: f32,
     /// `f(wo, wi) |cos θᵢ| / pdf`: the factor the path throughput is multiplied by.
     pub weight: Rgb,
     /// Whether `wi` was chosen by a delta (specular) lobe, which light sampling cannot reach.
     pub delta: bool,
+    /// Relative index of refraction crossed (`η_it` for refraction, 1 otherwise), for Russian
+    /// roulette to see through the η² radiance scaling.
+    pub eta: f32,
 }
 
 /// The BSDFs (closed set, dispatched by `match`).
@@ -33,22 +40,57 @@ pub struct BsdfSample {
 pub enum Bsdf {
     /// Lambertian reflection `ρ / π`.
     Diffuse(Diffuse),
+    /// Smooth conductor (mirror with Fresnel reflectance).
+    Conductor(Conductor),
+    /// Microfacet conductor.
+    RoughConductor(RoughConductor),
+    /// Smooth dielectric (glass).
+    Dielectric(Dielectric),
+    /// Thin dielectric pane.
+    ThinDielectric(ThinDielectric),
+    /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
+    /// the back side, each seen as if from its front.
+    TwoSided(Box<[Bsdf; 2]>),
+}
+
+/// Flips a local direction to the other side (z → -z).
+#[inline]
+fn flip(w: Vec3) -> Vec3 {
+    Vec3::new(w.x, w.y, -w.z)
 }
 
 impl Bsdf {
-    /// `f(wo, wi) |cos θᵢ|` (local frame).
+    /// `f(wo, wi) |cos θᵢ|` (local frame); 0 for delta BSDFs.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.eval(wo, wi),
+            Bsdf::RoughConductor(b) => b.eval(wo, wi),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
+            Bsdf::TwoSided(b) => {
+                if wo.z >= 0.0 {
+                    b[0].eval(wo, wi)
+                } else {
+                    b[1].eval(flip(wo), flip(wi))
+                }
+            }
         }
     }
 
-    /// Density of [`Bsdf::sample`] choosing `wi`, per unit solid angle.
+    /// Density of [`Bsdf::sample`] choosing `wi`, per unit solid angle; 0 for delta BSDFs.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::RoughConductor(b) => b.pdf(wo, wi),
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::TwoSided(b) => {
+                if wo.z >= 0.0 {
+                    b[0].pdf(wo, wi)
+                } else {
+                    b[1].pdf(flip(wo), flip(wi))
+                }
+            }
         }
     }
 
@@ -57,6 +99,17 @@ impl Bsdf {
     pub fn sample(&self, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Diffuse(b) => b.sample(wo, u1, u),
+            Bsdf::Conductor(b) => b.sample(wo),
+            Bsdf::RoughConductor(b) => b.sample(wo, u),
+            Bsdf::Dielectric(b) => b.sample(wo, u1),
+            Bsdf::ThinDielectric(b) => b.sample(wo, u1),
+            Bsdf::TwoSided(b) => {
+                if wo.z >= 0.0 {
+                    b[0].sample(wo, u1, u)
+                } else {
+                    b[1].sample(flip(wo), u1, u).map(|s| BsdfSample { wi: flip(s.wi), ..s })
+                }
+            }
         }
     }
 
@@ -64,7 +117,12 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) => false,
+            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) => false,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
+            Bsdf::TwoSided(b) => b[0].is_delta() && b[1].is_delta(),
         }
     }
 }
+
+#[cfg(test)]
+mod tests;

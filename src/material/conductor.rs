@@ -1,0 +1,112 @@
+//! Mitsuba's `conductor` (smooth metal: a perfect mirror with Fresnel reflectance) and
+//! `roughconductor` (microfacet metal, Cook–Torrance with Smith shadowing).
+//!
+//! Parameters (Mitsuba): `eta`, `k` (complex index of refraction relative to the exterior, RGB;
+//! the default, no material, is a perfect mirror with reflectance 1), `specular_reflectance`
+//! (RGB scale, default 1); for `roughconductor` also `distribution` (`beckmann` | `ggx`), `alpha`
+//! or `alpha_u` / `alpha_v` (default 0.1), and `sample_visible` (always on here).
+
+use super::fresnel::{fresnel_conductor, reflect, reflect_about};
+use super::microfacet::Microfacet;
+use super::BsdfSample;
+use crate::math::{Rgb, Vec2, Vec3};
+
+/// The Fresnel term of a conductor: complex IOR, or none (perfect reflector).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConductorIor {
+    /// Real part per channel.
+    pub eta: Rgb,
+    /// Imaginary part (absorption) per channel.
+    pub k: Rgb,
+}
+
+impl ConductorIor {
+    /// Fresnel reflectance at `cos θ` (1 everywhere when `None`).
+    #[inline]
+    pub fn reflectance(ior: &Option<ConductorIor>, cos_theta: f32) -> Rgb {
+        match ior {
+            None => Rgb::ONE,
+            Some(c) => fresnel_conductor(cos_theta, c.eta, c.k),
+        }
+    }
+}
+
+/// Smooth conductor: delta reflection with Fresnel reflectance.
+#[derive(Clone, Debug)]
+pub struct Conductor {
+    /// Complex index of refraction (`None`: perfect mirror).
+    pub ior: Option<ConductorIor>,
+    /// Reflectance scale.
+    pub specular_reflectance: Rgb,
+}
+
+impl Conductor {
+    /// Mirror reflection of `wo`, weight `F(cos θ) · specular_reflectance`. One-sided.
+    #[inline]
+    pub fn sample(&self, wo: Vec3) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let weight = self.specular_reflectance * ConductorIor::reflectance(&self.ior, wo.z);
+        Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight, delta: true, eta: 1.0 })
+    }
+}
+
+/// Rough conductor: `f = F(wo·m) D(m) G(wi, wo, m) / (4 cos θᵢ cos θₒ)`, `m = (wi + wo)/|wi + wo|`,
+/// sampled through the visible normals seen from `wo`.
+#[derive(Clone, Debug)]
+pub struct RoughConductor {
+    /// Microfacet distribution.
+    pub distribution: Microfacet,
+    /// Complex index of refraction (`None`: perfect reflector).
+    pub ior: Option<ConductorIor>,
+    /// Reflectance scale.
+    pub specular_reflectance: Rgb,
+}
+
+impl RoughConductor {
+    /// `f cos θᵢ`; 0 unless both directions are above the surface.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let m = (wo + wi).normalize();
+        let d = self.distribution.d(m);
+        if d == 0.0 {
+            return Rgb::ZERO;
+        }
+        let g = self.distribution.g(wi, wo, m);
+        let f = ConductorIor::reflectance(&self.ior, wi.dot(m));
+        self.specular_reflectance * f * (d * g / (4.0 * wo.z))
+    }
+
+    /// Density of [`RoughConductor::sample`]: `pdf(m) / (4 |wo·m|)` (Jacobian of reflection).
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let m = (wo + wi).normalize();
+        self.distribution.pdf(wo, m) / (4.0 * wo.dot(m).abs())
+    }
+
+    /// A visible microfacet normal from `wo`, reflected.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let m = self.distribution.sample(wo, u);
+        if m.pdf <= 0.0 {
+            return None;
+        }
+        let wi = reflect_about(wo, m.value);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let pdf = m.pdf / (4.0 * wo.dot(m.value).abs());
+        let weight = self.eval(wo, wi) / pdf;
+        (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+    }
+}
