@@ -50,6 +50,31 @@ impl Default for PathIntegrator {
     }
 }
 
+impl PathIntegrator {
+    /// Weight of emission found by the path itself (not by light sampling). `prev` is the previous
+    /// vertex (position, BSDF pdf of the direction taken, delta?), `None` for camera rays;
+    /// `pdf_light` computes the light-sampling density of the same direction (solid angle,
+    /// including the light selection probability).
+    #[inline]
+    fn emission_weight(&self, prev: Option<(Vec3, f32, bool)>, pdf_light: impl FnOnce() -> f32) -> f32 {
+        match prev {
+            None => {
+                if self.hide_emitters {
+                    0.0
+                } else {
+                    1.0
+                }
+            }
+            Some((_, _, true)) => 1.0,
+            Some((_, pdf_bsdf, false)) => match self.strategy {
+                DirectStrategy::Bsdf => 1.0,
+                DirectStrategy::Light => 0.0,
+                DirectStrategy::Mis => power_heuristic(1, pdf_bsdf, 1, pdf_light()),
+            },
+        }
+    }
+}
+
 impl Integrator for PathIntegrator {
     fn name(&self) -> &'static str {
         "path"
@@ -70,7 +95,17 @@ impl Integrator for PathIntegrator {
         // Product of the relative IORs crossed: radiance scales by η² at refractions, which
         // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
         let mut eta = 1.0f32;
-        while let Some(si) = scene.intersect(&ray) {
+        loop {
+            let Some(si) = scene.intersect(&ray) else {
+                // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
+                let d = ray.d.normalize();
+                for &i in scene.infinite_lights() {
+                    let light = &scene.lights()[i as usize];
+                    let weight = self.emission_weight(prev, || scene.light_pmf(i) * light.pdf_li_direction(d));
+                    l += beta * light.le_escaped(d) * weight;
+                }
+                break;
+            };
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
 
@@ -78,26 +113,11 @@ impl Integrator for PathIntegrator {
             if let Some(light_index) = shape.light {
                 let le = scene.lights()[light_index as usize].le(si.ns, wo);
                 if le != Rgb::ZERO {
-                    let weight = match prev {
-                        None => {
-                            if self.hide_emitters {
-                                0.0
-                            } else {
-                                1.0
-                            }
-                        }
-                        Some((_, _, true)) => 1.0,
-                        Some((p_prev, pdf_bsdf, false)) => match self.strategy {
-                            DirectStrategy::Bsdf => 1.0,
-                            DirectStrategy::Light => 0.0,
-                            DirectStrategy::Mis => {
-                                let light = &scene.lights()[light_index as usize];
-                                let pdf_light =
-                                    scene.light_pmf(light_index) * light.pdf_li(geometries, p_prev, si.p, si.ng);
-                                power_heuristic(1, pdf_bsdf, 1, pdf_light)
-                            }
-                        },
-                    };
+                    let light = &scene.lights()[light_index as usize];
+                    let weight = self.emission_weight(prev, || {
+                        let p_prev = prev.map_or(si.p, |p| p.0);
+                        scene.light_pmf(light_index) * light.pdf_li(geometries, p_prev, si.p, si.ng)
+                    });
                     l += beta * le * weight;
                 }
             }
@@ -294,6 +314,40 @@ mod tests {
         for &(strategy, (m, s)) in &means[1..] {
             let tol = 3.0 * (s0 * s0 + s * s).sqrt();
             assert!((m - m0).abs() <= tol, "{strategy:?}: {m} vs MIS {m0} (±{tol})");
+        }
+    }
+
+    /// White furnace: a sphere inside a constant environment of radiance 1, filling the view.
+    /// A diffuse sphere of albedo a shows exactly a (it sees only the environment) for any
+    /// max_depth ≥ 2; lossless glass and a perfect mirror show 1 (energy conservation).
+    #[test]
+    fn white_furnace() {
+        use crate::material::{Conductor, Dielectric};
+        let cases: Vec<(&str, Bsdf, i32, f64)> = vec![
+            ("diffuse, direct only", Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }), 2, 0.5),
+            ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }), -1, 0.5),
+            ("mirror", Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }), -1, 1.0),
+            (
+                "glass",
+                Bsdf::Dielectric(Dielectric { eta: 1.5, specular_reflectance: Rgb::ONE, specular_transmittance: Rgb::ONE }),
+                -1,
+                1.0,
+            ),
+        ];
+        for (k, (name, bsdf, max_depth, expected)) in cases.into_iter().enumerate() {
+            let mut b = SceneBuilder::new();
+            let m = b.add_bsdf(bsdf);
+            b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), m, None);
+            b.add_constant_environment(Rgb::ONE);
+            let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
+            b.set_camera(Camera::perspective(to_world, 10.0, FovAxis::X, 12, 12).unwrap());
+            let scene = b.build().unwrap();
+            let integrator = PathIntegrator { max_depth, ..Default::default() };
+            let settings = RenderSettings { spp: 64, seed: 10 + k as u64, ..Default::default() };
+            let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
+            let (mean, se) = image_mean(&out.film);
+            assert!((mean - expected).abs() <= 3.0 * se + 1e-4, "{name}: {mean} vs {expected} (±{se})");
+            assert!(se < 0.01, "{name}: too noisy ({se})");
         }
     }
 }

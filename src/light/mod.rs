@@ -19,6 +19,17 @@ pub enum Light {
         /// Emitted radiance.
         radiance: Rgb,
     },
+    /// Mitsuba's `constant` emitter: uniform radiance arriving from every direction at
+    /// infinity. Parameters: `radiance` (W m⁻² sr⁻¹ per channel). `center` / `radius` bound the
+    /// scene (filled in when the scene is built), to place shadow-ray endpoints and estimate power.
+    Constant {
+        /// Radiance from every direction.
+        radiance: Rgb,
+        /// Centre of the scene's bounding sphere.
+        center: Vec3,
+        /// Radius of the scene's bounding sphere.
+        radius: f32,
+    },
     /// Mitsuba's `point` emitter: an isotropic point source. Parameters: `position`,
     /// `intensity` (W sr⁻¹ per channel).
     Point {
@@ -55,12 +66,29 @@ impl Light {
         match self {
             Light::Area { shape, radiance } => PI * shapes[*shape as usize].area() * luminance(*radiance),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
+            // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
+            Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
         }
     }
 
     /// Whether the light is a delta distribution (cannot be hit by rays).
     pub fn is_delta(&self) -> bool {
         matches!(self, Light::Point { .. })
+    }
+
+    /// Whether the light sits at infinity (seen by rays that escape the scene).
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Constant { .. })
+    }
+
+    /// Radiance arriving from an infinite light along a ray that escaped in direction `d`
+    /// (world, unit); zero for lights that are not at infinity.
+    #[inline]
+    pub fn le_escaped(&self, _d: Vec3) -> Rgb {
+        match self {
+            Light::Constant { radiance, .. } => *radiance,
+            _ => Rgb::ZERO,
+        }
     }
 
     /// Samples incident light at `p_ref`. `None` when nothing can arrive (back side, degenerate).
@@ -75,6 +103,20 @@ impl Light {
                     return None; // one-sided: the back does not emit
                 }
                 Some(LightSample { wi, li: *radiance, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
+            }
+            Light::Constant { radiance, center, radius } => {
+                let s = crate::sampling::sample_uniform_sphere(u);
+                // A shadow-ray endpoint beyond everything in the scene.
+                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                Some(LightSample {
+                    wi: s.value,
+                    li: *radiance,
+                    pdf: s.pdf,
+                    p: p_ref + s.value * far,
+                    n: Vec3::ZERO,
+                    p_error: Vec3::ZERO,
+                    delta: false,
+                })
             }
             Light::Point { position, intensity } => {
                 let d = *position - p_ref;
@@ -102,6 +144,17 @@ impl Light {
         match self {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
             Light::Point { .. } => 0.0,
+            Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
+        }
+    }
+
+    /// Solid-angle density with which [`Light::sample_li`] picks direction `wi` toward an
+    /// infinite light (0 for other lights).
+    #[inline]
+    pub fn pdf_li_direction(&self, _wi: Vec3) -> f32 {
+        match self {
+            Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
+            _ => 0.0,
         }
     }
 

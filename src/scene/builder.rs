@@ -45,6 +45,11 @@ impl SceneBuilder {
         index
     }
 
+    /// Adds a constant environment (Mitsuba's `constant` emitter) of radiance `radiance`.
+    pub fn add_constant_environment(&mut self, radiance: Rgb) {
+        self.lights.push(Light::Constant { radiance, center: Vec3::ZERO, radius: 0.0 });
+    }
+
     /// Adds an isotropic point light of radiant intensity `intensity` (W/sr) at `position`.
     pub fn add_point_light(&mut self, position: Vec3, intensity: Rgb) {
         self.lights.push(Light::Point { position, intensity });
@@ -90,6 +95,15 @@ impl SceneBuilder {
                 Geometry::Disk(_) => Primitive::Disk,
             })
             .collect();
+        // Infinite lights need the scene's extent.
+        let (center, radius) = bvh.bounds().bounding_sphere();
+        for l in &mut self.lights {
+            if let Light::Constant { center: c, radius: r, .. } = l {
+                *c = center;
+                *r = radius.max(1e-3);
+            }
+        }
+        let infinite_lights = (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect();
         let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
         let light_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
         if !powers.is_empty() && light_distribution.is_none() {
@@ -101,6 +115,7 @@ impl SceneBuilder {
             bsdfs: self.bsdfs,
             lights: self.lights,
             light_distribution,
+            infinite_lights,
             bvh,
             prims,
             refs,

@@ -56,6 +56,7 @@ pub struct Scene {
     bsdfs: Vec<Bsdf>,
     lights: Vec<Light>,
     light_distribution: Option<AliasTable>,
+    infinite_lights: Vec<u32>,
     bvh: Bvh,
     prims: Vec<Primitive>,
     refs: Vec<PrimRef>,
@@ -91,6 +92,11 @@ impl Scene {
     /// The lights.
     pub fn lights(&self) -> &[Light] {
         &self.lights
+    }
+
+    /// Indices of the lights at infinity (environments), seen by rays that escape.
+    pub fn infinite_lights(&self) -> &[u32] {
+        &self.infinite_lights
     }
 
     /// The BVH over all primitives.
