@@ -18,11 +18,7 @@ fn temp(name: &str) -> PathBuf {
 fn renders_the_builtin_scene_to_each_format() {
     for ext in ["png", "exr", "pfm"] {
         let out = temp(&format!("cbox.{ext}"));
-        let r = neumann()
-            .args(["render", "--res", "12x8", "--spp", "2", "--quiet", "-o"])
-            .arg(&out)
-            .output()
-            .unwrap();
+        let r = neumann().args(["render", "--res", "12x8", "--spp", "2", "--quiet", "-o"]).arg(&out).output().unwrap();
         let stdout = String::from_utf8_lossy(&r.stdout);
         assert!(r.status.success(), "{ext}: {stdout} {}", String::from_utf8_lossy(&r.stderr));
         assert!(stdout.contains("wrote") && stdout.contains("2 spp"), "{stdout}");

@@ -329,7 +329,11 @@ mod tests {
             ("mirror", Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }), -1, 1.0),
             (
                 "glass",
-                Bsdf::Dielectric(Dielectric { eta: 1.5, specular_reflectance: Rgb::ONE, specular_transmittance: Rgb::ONE }),
+                Bsdf::Dielectric(Dielectric {
+                    eta: 1.5,
+                    specular_reflectance: Rgb::ONE,
+                    specular_transmittance: Rgb::ONE,
+                }),
                 -1,
                 1.0,
             ),

@@ -95,7 +95,9 @@ mod tests {
     #[test]
     fn glass_splits_energy_by_fresnel() {
         let d = Dielectric { eta: 1.5, specular_reflectance: Rgb::ONE, specular_transmittance: Rgb::ONE };
-        for wo in [Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.8, -0.6), Vec3::new(0.99, 0.0, -0.141).normalize()] {
+        for wo in
+            [Vec3::Z, Vec3::new(0.6, 0.0, 0.8), Vec3::new(0.0, 0.8, -0.6), Vec3::new(0.99, 0.0, -0.141).normalize()]
+        {
             let (f, ..) = fresnel_dielectric(wo.z, 1.5);
             let mut rng = crate::sampling::Pcg32::new(1, 1);
             let n = 100_000;
@@ -117,7 +119,10 @@ mod tests {
                 }
             }
             let frac = refl as f64 / n as f64;
-            assert!((frac - f as f64).abs() < 4.0 * (f as f64 * (1.0 - f as f64) / n as f64).sqrt() + 1e-9, "{wo}: {frac} vs {f}");
+            assert!(
+                (frac - f as f64).abs() < 4.0 * (f as f64 * (1.0 - f as f64) / n as f64).sqrt() + 1e-9,
+                "{wo}: {frac} vs {f}"
+            );
             assert!((energy / n as f64 - 1.0).abs() < 1e-5, "lossless glass must conserve energy");
         }
     }

@@ -16,7 +16,10 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
         Microfacet::new(MicrofacetType::Beckmann, 0.1, 0.5),
         Microfacet::blinn_phong(40.0),
     ] {
-        v.push((format!("roughconductor {md:?}"), Bsdf::RoughConductor(RoughConductor { distribution: md, ior: gold, specular_reflectance: Rgb::ONE })));
+        v.push((
+            format!("roughconductor {md:?}"),
+            Bsdf::RoughConductor(RoughConductor { distribution: md, ior: gold, specular_reflectance: Rgb::ONE }),
+        ));
     }
     v
 }
@@ -26,13 +29,21 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     v.extend(rough_conductors());
     v.push((
         "twosided(roughconductor)".into(),
-        Bsdf::TwoSided(Box::new([rough_conductors().remove(0).1, Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) })])),
+        Bsdf::TwoSided(Box::new([
+            rough_conductors().remove(0).1,
+            Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }),
+        ])),
     ));
     v
 }
 
 fn outgoing() -> Vec<Vec3> {
-    vec![Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.5, -0.3, 0.81).normalize(), Vec3::new(0.9, 0.2, 0.15).normalize(), Vec3::new(0.2, 0.4, -0.89).normalize()]
+    vec![
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.5, -0.3, 0.81).normalize(),
+        Vec3::new(0.9, 0.2, 0.15).normalize(),
+        Vec3::new(0.2, 0.4, -0.89).normalize(),
+    ]
 }
 
 #[test]
@@ -67,7 +78,11 @@ fn returned_pdf_and_weight_agree_with_pdf_and_eval() {
                 let pdf = b.pdf(wo, s.wi);
                 assert!((s.pdf - pdf).abs() <= 1e-3 * pdf.max(1e-3), "{name}: pdf {} vs {pdf}", s.pdf);
                 let w = b.eval(wo, s.wi) / pdf;
-                assert!((w - s.weight).abs().max_element() <= 1e-3 * w.max_element().max(1.0), "{name}: weight {} vs {w}", s.weight);
+                assert!(
+                    (w - s.weight).abs().max_element() <= 1e-3 * w.max_element().max(1.0),
+                    "{name}: weight {} vs {w}",
+                    s.weight
+                );
                 assert!(!s.delta);
             }
         }
@@ -111,20 +126,34 @@ fn energy_is_conserved() {
     // (GGX loses a lot to its long tail: about 5 % at α = 0.2 and 31 % at α = 0.5 when seen
     // head-on, from rays reflected below the horizon and masked.)
     for (k, a) in [0.2f32, 0.5].into_iter().enumerate() {
-        let white = RoughConductor { distribution: Microfacet::new(MicrofacetType::Ggx, a, a), ior: None, specular_reflectance: Rgb::ONE };
+        let white = RoughConductor {
+            distribution: Microfacet::new(MicrofacetType::Ggx, a, a),
+            ior: None,
+            specular_reflectance: Rgb::ONE,
+        };
         let wo = Vec3::new(0.3, 0.0, 0.954).normalize();
-        let exact = crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| white.eval(wo, *wi).x as f64);
+        let exact =
+            crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| white.eval(wo, *wi).x as f64);
         let mut rng = crate::sampling::Pcg32::new(4, k as u64);
         let n = 100_000;
-        let est = crate::estimators::Estimate::from_values((0..n).map(|_| white.sample(wo, u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)));
-        assert!((est.value - exact).abs() < 4.0 * est.std_error() + 1e-4, "α = {a}: sampled albedo {} vs quadrature {exact}", est.value);
+        let est = crate::estimators::Estimate::from_values(
+            (0..n).map(|_| white.sample(wo, u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)),
+        );
+        assert!(
+            (est.value - exact).abs() < 4.0 * est.std_error() + 1e-4,
+            "α = {a}: sampled albedo {} vs quadrature {exact}",
+            est.value
+        );
         assert!(exact < 1.0 && exact > 0.5);
     }
 }
 
 #[test]
 fn smooth_conductor_mirrors_with_fresnel() {
-    let b = Bsdf::Conductor(Conductor { ior: Some(ConductorIor { eta: Rgb::splat(0.2), k: Rgb::splat(3.9) }), specular_reflectance: Rgb::ONE });
+    let b = Bsdf::Conductor(Conductor {
+        ior: Some(ConductorIor { eta: Rgb::splat(0.2), k: Rgb::splat(3.9) }),
+        specular_reflectance: Rgb::ONE,
+    });
     let wo = Vec3::new(0.3, 0.4, 0.866).normalize();
     let s = b.sample(wo, 0.5, Vec2::splat(0.5)).unwrap();
     assert!(s.delta && b.is_delta());
@@ -132,9 +161,11 @@ fn smooth_conductor_mirrors_with_fresnel() {
     assert!((s.weight.x - fresnel::fresnel_conductor(wo.z, Rgb::splat(0.2), Rgb::splat(3.9)).x).abs() < 1e-6);
     assert_eq!(b.eval(wo, s.wi), Rgb::ZERO);
     assert!(b.sample(-wo, 0.5, Vec2::splat(0.5)).is_none(), "one-sided");
-    let mirror = Bsdf::TwoSided(Box::new([Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }), Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE })]));
+    let mirror = Bsdf::TwoSided(Box::new([
+        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
+        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
+    ]));
     let s = mirror.sample(flip(wo), 0.5, Vec2::splat(0.5)).unwrap();
     assert!((s.wi - Vec3::new(-wo.x, -wo.y, -wo.z)).length() < 1e-6, "twosided mirrors the back too");
     assert_eq!(s.weight, Rgb::ONE);
 }
-

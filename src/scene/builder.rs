@@ -103,7 +103,8 @@ impl SceneBuilder {
                 *r = radius.max(1e-3);
             }
         }
-        let infinite_lights = (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect();
+        let infinite_lights =
+            (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect();
         let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
         let light_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
         if !powers.is_empty() && light_distribution.is_none() {
