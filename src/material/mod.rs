@@ -12,10 +12,12 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod roughdielectric;
 
 pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
+pub use roughdielectric::RoughDielectric;
 
 use crate::math::{Rgb, Vec2, Vec3};
 
@@ -46,6 +48,8 @@ pub enum Bsdf {
     RoughConductor(RoughConductor),
     /// Smooth dielectric (glass).
     Dielectric(Dielectric),
+    /// Microfacet dielectric (rough glass).
+    RoughDielectric(RoughDielectric),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
@@ -66,6 +70,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.eval(wo, wi),
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
+            Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -83,6 +88,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
+            Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -102,6 +108,7 @@ impl Bsdf {
             Bsdf::Conductor(b) => b.sample(wo),
             Bsdf::RoughConductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
+            Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -117,7 +124,7 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) => false,
+            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::TwoSided(b) => b[0].is_delta() && b[1].is_delta(),
         }

@@ -27,6 +27,21 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
 fn all_non_delta() -> Vec<(String, Bsdf)> {
     let mut v = vec![("diffuse".to_string(), Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.3, 0.6, 0.9) }))];
     v.extend(rough_conductors());
+    for (md, eta) in [
+        (Microfacet::new(MicrofacetType::Ggx, 0.3, 0.3), 1.5),
+        (Microfacet::new(MicrofacetType::Beckmann, 0.2, 0.4), 1.33),
+        (Microfacet::new(MicrofacetType::Ggx, 0.5, 0.5), 1.0 / 1.5),
+    ] {
+        v.push((
+            format!("roughdielectric η={eta} {md:?}"),
+            Bsdf::RoughDielectric(RoughDielectric {
+                distribution: md,
+                eta,
+                specular_reflectance: Rgb::ONE,
+                specular_transmittance: Rgb::ONE,
+            }),
+        ));
+    }
     v.push((
         "twosided(roughconductor)".into(),
         Bsdf::TwoSided(Box::new([
@@ -115,7 +130,8 @@ fn energy_is_conserved() {
             let mut sum = Rgb::ZERO;
             for _ in 0..n {
                 if let Some(s) = b.sample(wo, rng.next_f32(), u2(&mut rng)) {
-                    sum += s.weight;
+                    // Undo the η² radiance scaling of refraction: what is conserved is importance.
+                    sum += s.weight * s.eta * s.eta;
                 }
             }
             let albedo = sum / n as f32;
