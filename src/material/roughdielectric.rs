@@ -124,7 +124,7 @@ impl RoughDielectric {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) {
+        if pdf <= 0.0 || pdf.is_nan() {
             return None;
         }
         let weight = self.eval(wo, wi) / pdf;
