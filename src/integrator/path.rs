@@ -354,4 +354,63 @@ mod tests {
             assert!(se < 0.01, "{name}: too noisy ({se})");
         }
     }
+
+    /// Directional and spot lights on a diffuse floor, direct light only: the reflected
+    /// radiance is `ρ/π E` with `E = E⊥ cos θ` (directional) or `I f(θ) cos θ / r²` (spot, with
+    /// its falloff f); both are delta lights, so every sample gives the exact value.
+    #[test]
+    fn directional_and_spot_lights_on_a_floor() {
+        use crate::light::Light;
+        use crate::math::Frame;
+        let rho = 0.6f32;
+        let build = |light: Light| {
+            let mut b = SceneBuilder::new();
+            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+            let mut floor = TriangleMesh::rectangle();
+            floor.transform(
+                &(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()),
+            );
+            b.add_shape(Geometry::Mesh(floor), m, None);
+            b.add_light(light);
+            b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
+            b.build().unwrap()
+        };
+        let radiance_at = |scene: &crate::scene::Scene, x: f32| {
+            let target = Vec3::new(x, 0.0, 0.0);
+            let o = target + Vec3::new(0.0, 1.0, -1.0);
+            let integrator = PathIntegrator { max_depth: 2, ..Default::default() };
+            let mut sampler = SamplerKind::Independent.make(1, 0);
+            sampler.start_pixel_sample([0, 0], 0, 0);
+            integrator.li(scene, &Ray::new(o, (target - o).normalize()), &mut sampler).x
+        };
+        let d = Vec3::new(0.3, -1.0, 0.2).normalize();
+        let sun =
+            build(Light::Directional { direction: d, irradiance: Rgb::splat(2.0), center: Vec3::ZERO, radius: 0.0 });
+        let expected = rho / std::f32::consts::PI * 2.0 * -d.y;
+        assert!((radiance_at(&sun, 0.0) - expected).abs() < 1e-5 * expected, "directional");
+
+        let (cutoff, beam) = (30f32.to_radians(), 20f32.to_radians());
+        let spot = build(Light::Spot {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            frame: Frame::from_z(-Vec3::Y),
+            intensity: Rgb::splat(8.0),
+            cutoff,
+            beam,
+        });
+        for theta_deg in [0.0f32, 10.0, 25.0, 35.0] {
+            let theta = theta_deg.to_radians();
+            let x = 2.0 * theta.tan();
+            let r2 = 4.0 + x * x;
+            let falloff = if theta <= beam {
+                1.0
+            } else if theta >= cutoff {
+                0.0
+            } else {
+                (cutoff - theta) / (cutoff - beam)
+            };
+            let expected = rho / std::f32::consts::PI * 8.0 * falloff * theta.cos() / r2;
+            let got = radiance_at(&spot, x);
+            assert!((got - expected).abs() <= 1e-4 * expected.max(1e-3), "spot at {theta_deg}°: {got} vs {expected}");
+        }
+    }
 }

@@ -30,6 +30,34 @@ pub enum Light {
         /// Radius of the scene's bounding sphere.
         radius: f32,
     },
+    /// Mitsuba's `directional` emitter: parallel light of irradiance `irradiance` (W m⁻² per
+    /// channel, on a surface facing it) travelling along `direction`. `center` / `radius` bound
+    /// the scene (filled in when the scene is built).
+    Directional {
+        /// Unit direction the light travels in (world).
+        direction: Vec3,
+        /// Irradiance on a surface perpendicular to the light.
+        irradiance: Rgb,
+        /// Centre of the scene's bounding sphere.
+        center: Vec3,
+        /// Radius of the scene's bounding sphere.
+        radius: f32,
+    },
+    /// Mitsuba's `spot` emitter: a point source of intensity `intensity` (W sr⁻¹) shining along
+    /// its local +z, full strength within `beam_width`, falling off linearly in angle to zero at
+    /// `cutoff_angle` (Mitsuba's defaults: cutoff 20°, beam width ¾ of the cutoff).
+    Spot {
+        /// Position (world).
+        position: Vec3,
+        /// Frame whose +z is the spot axis.
+        frame: crate::math::Frame,
+        /// Intensity on the axis.
+        intensity: Rgb,
+        /// Cutoff angle (radians).
+        cutoff: f32,
+        /// Beam width (radians, ≤ cutoff).
+        beam: f32,
+    },
     /// Mitsuba's `point` emitter: an isotropic point source. Parameters: `position`,
     /// `intensity` (W sr⁻¹ per channel).
     Point {
@@ -68,12 +96,31 @@ impl Light {
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
+            // Flux through the scene's cross-section.
+            Light::Directional { irradiance, radius, .. } => PI * radius * radius * luminance(*irradiance),
+            // ∫ falloff dω, with the transition band counted at half strength.
+            Light::Spot { intensity, cutoff, beam, .. } => {
+                2.0 * PI * (1.0 - 0.5 * (cutoff.cos() + beam.cos())) * luminance(*intensity)
+            }
         }
     }
 
     /// Whether the light is a delta distribution (cannot be hit by rays).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point { .. })
+        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. })
+    }
+
+    /// Spot falloff for a unit direction `w_local` in the spot's frame: 1 inside the beam, 0
+    /// beyond the cutoff, linear in angle between.
+    #[inline]
+    fn spot_falloff(cos_theta: f32, cutoff: f32, beam: f32) -> f32 {
+        if cos_theta >= beam.cos() {
+            1.0
+        } else if cos_theta <= cutoff.cos() {
+            0.0
+        } else {
+            ((cutoff - crate::math::safe_acos(cos_theta)) / (cutoff - beam)).clamp(0.0, 1.0)
+        }
     }
 
     /// Whether the light sits at infinity (seen by rays that escape the scene).
@@ -118,6 +165,40 @@ impl Light {
                     delta: false,
                 })
             }
+            Light::Directional { direction, irradiance, center, radius } => {
+                let wi = -*direction;
+                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                Some(LightSample {
+                    wi,
+                    li: *irradiance,
+                    pdf: 1.0,
+                    p: p_ref + wi * far,
+                    n: Vec3::ZERO,
+                    p_error: Vec3::ZERO,
+                    delta: true,
+                })
+            }
+            Light::Spot { position, frame, intensity, cutoff, beam } => {
+                let d = *position - p_ref;
+                let dist2 = d.length_squared();
+                if dist2 == 0.0 {
+                    return None;
+                }
+                let wi = d / dist2.sqrt();
+                let falloff = Self::spot_falloff(frame.to_local(-wi).z, *cutoff, *beam);
+                if falloff == 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    wi,
+                    li: *intensity * (falloff / dist2),
+                    pdf: 1.0,
+                    p: *position,
+                    n: Vec3::ZERO,
+                    p_error: Vec3::ZERO,
+                    delta: true,
+                })
+            }
             Light::Point { position, intensity } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
@@ -143,7 +224,7 @@ impl Light {
     pub fn pdf_li(&self, shapes: &[Geometry], p_ref: Vec3, p: Vec3, ng: Vec3) -> f32 {
         match self {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
-            Light::Point { .. } => 0.0,
+            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => 0.0,
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
         }
     }

@@ -50,6 +50,11 @@ impl SceneBuilder {
         self.lights.push(Light::Constant { radiance, center: Vec3::ZERO, radius: 0.0 });
     }
 
+    /// Adds any emitter that is not attached to a shape (point, spot, directional, environment).
+    pub fn add_light(&mut self, light: Light) {
+        self.lights.push(light);
+    }
+
     /// Adds an isotropic point light of radiant intensity `intensity` (W/sr) at `position`.
     pub fn add_point_light(&mut self, position: Vec3, intensity: Rgb) {
         self.lights.push(Light::Point { position, intensity });
@@ -98,7 +103,7 @@ impl SceneBuilder {
         // Infinite lights need the scene's extent.
         let (center, radius) = bvh.bounds().bounding_sphere();
         for l in &mut self.lights {
-            if let Light::Constant { center: c, radius: r, .. } = l {
+            if let Light::Constant { center: c, radius: r, .. } | Light::Directional { center: c, radius: r, .. } = l {
                 *c = center;
                 *r = radius.max(1e-3);
             }
