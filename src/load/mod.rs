@@ -1,6 +1,7 @@
-//! Loading geometry from files: Wavefront OBJ and Stanford PLY meshes. Errors name the file,
+//! Loading files: Wavefront OBJ and Stanford PLY meshes, PNG and OpenEXR images. Errors name the file,
 //! the line (for text formats) and what was expected.
 
+pub mod image;
 pub mod obj;
 pub mod ply;
 

@@ -1,0 +1,112 @@
+//! Image files as linear RGB: PNG (8- or 16-bit, sRGB-decoded unless `raw`) and OpenEXR (float,
+//! linear). Used by bitmap textures and environment maps.
+
+use crate::math::color::srgb_decode;
+use crate::math::Rgb;
+use std::path::Path;
+
+/// A linear RGB image, rows from the top.
+#[derive(Clone, Debug)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, row-major from the top-left.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// Pixel at column `x`, row `y` (clamped to the image).
+    #[inline]
+    pub fn get(&self, x: i64, y: i64) -> Rgb {
+        let x = x.clamp(0, self.width as i64 - 1) as usize;
+        let y = y.clamp(0, self.height as i64 - 1) as usize;
+        self.pixels[y * self.width as usize + x]
+    }
+}
+
+/// Loads a `.png` or `.exr` image. 8- and 16-bit PNGs are sRGB-encoded unless `raw` (data such as
+/// roughness maps), in which case values are only scaled to [0, 1].
+pub fn load_image(path: &Path, raw: bool) -> Result<Image, String> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let fail = |e: String| format!("{}: {e}", path.display());
+    match ext.as_deref() {
+        Some("png") => load_png(path, raw).map_err(fail),
+        Some("exr") => load_exr(path).map_err(fail),
+        _ => Err(fail("unsupported image format (expected .png or .exr)".into())),
+    }
+}
+
+fn load_png(path: &Path, raw: bool) -> Result<Image, String> {
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
+    let mut buf = vec![0u8; reader.output_buffer_size().ok_or("PNG too large")?];
+    let info = reader.next_frame(&mut buf).map_err(|e| format!("corrupt PNG data: {e}"))?;
+    let (w, h) = (info.width, info.height);
+    let channels = info.color_type.samples();
+    let sixteen = info.bit_depth == png::BitDepth::Sixteen;
+    let sample = |i: usize| -> f32 {
+        if sixteen {
+            u16::from_be_bytes([buf[2 * i], buf[2 * i + 1]]) as f32 / 65535.0
+        } else {
+            buf[i] as f32 / 255.0
+        }
+    };
+    let decode = |v: f32| if raw { v } else { srgb_decode(v) };
+    let mut pixels = Vec::with_capacity((w * h) as usize);
+    for p in 0..(w * h) as usize {
+        let base = p * channels;
+        let c = match channels {
+            1 | 2 => Rgb::splat(decode(sample(base))),
+            _ => Rgb::new(decode(sample(base)), decode(sample(base + 1)), decode(sample(base + 2))),
+        };
+        pixels.push(c);
+    }
+    Ok(Image { width: w, height: h, pixels })
+}
+
+fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| crate::load::image::Image {
+            width: resolution.width() as u32,
+            height: resolution.height() as u32,
+            pixels: vec![Rgb::ZERO; resolution.width() * resolution.height()],
+        },
+        |img: &mut crate::load::image::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            img.pixels[pos.y() * img.width as usize + pos.x()] = Rgb::new(r, g, b);
+        },
+    )
+    .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::film::output::{write_image, ImageInfo};
+
+    #[test]
+    fn exr_and_png_round_trip() {
+        let dir = std::env::temp_dir().join(format!("neumann-img-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px = vec![Rgb::new(0.25, 2.0, 0.0), Rgb::new(0.5, 0.1, 1.0), Rgb::new(0.0, 0.0, 0.0), Rgb::new(8.0, 1.0, 0.3)];
+        write_image(&dir.join("a.exr"), 2, 2, &px, &ImageInfo::default()).unwrap();
+        let back = load_image(&dir.join("a.exr"), false).unwrap();
+        assert_eq!((back.width, back.height), (2, 2));
+        assert_eq!(back.pixels, px);
+        write_image(&dir.join("a.png"), 2, 2, &px, &ImageInfo::default()).unwrap();
+        let png = load_image(&dir.join("a.png"), false).unwrap();
+        // 8-bit sRGB round trip: within quantization, clamped to [0, 1].
+        for (a, b) in png.pixels.iter().zip(&px) {
+            assert!((*a - b.clamp(Rgb::ZERO, Rgb::ONE)).abs().max_element() < 0.01, "{a} vs {b}");
+        }
+        assert!(load_image(&dir.join("missing.png"), false).unwrap_err().contains("missing.png"));
+        assert!(load_image(&dir.join("a.tga"), false).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
