@@ -5,6 +5,10 @@
 //! it can be MIS-combined with BSDF sampling); delta lights (points) flag `delta` instead and
 //! their pdf is a probability (1).
 
+mod envmap;
+
+pub use envmap::EnvMap;
+
 use crate::geometry::Geometry;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
 
@@ -25,6 +29,15 @@ pub enum Light {
     Constant {
         /// Radiance from every direction.
         radiance: Rgb,
+        /// Centre of the scene's bounding sphere.
+        center: Vec3,
+        /// Radius of the scene's bounding sphere.
+        radius: f32,
+    },
+    /// Mitsuba's `envmap` emitter (see [`EnvMap`]). `center` / `radius` bound the scene.
+    EnvMap {
+        /// The map and its sampling distribution.
+        map: Box<EnvMap>,
         /// Centre of the scene's bounding sphere.
         center: Vec3,
         /// Radius of the scene's bounding sphere.
@@ -96,6 +109,7 @@ impl Light {
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
+            Light::EnvMap { map, radius, .. } => PI * radius * radius * map.integral_luminance(),
             // Flux through the scene's cross-section.
             Light::Directional { irradiance, radius, .. } => PI * radius * radius * luminance(*irradiance),
             // ∫ falloff dω, with the transition band counted at half strength.
@@ -125,15 +139,16 @@ impl Light {
 
     /// Whether the light sits at infinity (seen by rays that escape the scene).
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Light::Constant { .. })
+        matches!(self, Light::Constant { .. } | Light::EnvMap { .. })
     }
 
     /// Radiance arriving from an infinite light along a ray that escaped in direction `d`
     /// (world, unit); zero for lights that are not at infinity.
     #[inline]
-    pub fn le_escaped(&self, _d: Vec3) -> Rgb {
+    pub fn le_escaped(&self, d: Vec3) -> Rgb {
         match self {
             Light::Constant { radiance, .. } => *radiance,
+            Light::EnvMap { map, .. } => map.eval(d),
             _ => Rgb::ZERO,
         }
     }
@@ -164,6 +179,11 @@ impl Light {
                     p_error: Vec3::ZERO,
                     delta: false,
                 })
+            }
+            Light::EnvMap { map, center, radius } => {
+                let (wi, li, pdf) = map.sample(u)?;
+                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
             }
             Light::Directional { direction, irradiance, center, radius } => {
                 let wi = -*direction;
@@ -226,15 +246,17 @@ impl Light {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
             Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => 0.0,
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
+            Light::EnvMap { .. } => 0.0,
         }
     }
 
     /// Solid-angle density with which [`Light::sample_li`] picks direction `wi` toward an
     /// infinite light (0 for other lights).
     #[inline]
-    pub fn pdf_li_direction(&self, _wi: Vec3) -> f32 {
+    pub fn pdf_li_direction(&self, wi: Vec3) -> f32 {
         match self {
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
+            Light::EnvMap { map, .. } => map.pdf(wi),
             _ => 0.0,
         }
     }

@@ -94,7 +94,8 @@ mod tests {
     fn exr_and_png_round_trip() {
         let dir = std::env::temp_dir().join(format!("neumann-img-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let px = vec![Rgb::new(0.25, 2.0, 0.0), Rgb::new(0.5, 0.1, 1.0), Rgb::new(0.0, 0.0, 0.0), Rgb::new(8.0, 1.0, 0.3)];
+        let px =
+            vec![Rgb::new(0.25, 2.0, 0.0), Rgb::new(0.5, 0.1, 1.0), Rgb::new(0.0, 0.0, 0.0), Rgb::new(8.0, 1.0, 0.3)];
         write_image(&dir.join("a.exr"), 2, 2, &px, &ImageInfo::default()).unwrap();
         let back = load_image(&dir.join("a.exr"), false).unwrap();
         assert_eq!((back.width, back.height), (2, 2));

@@ -103,7 +103,10 @@ impl SceneBuilder {
         // Infinite lights need the scene's extent.
         let (center, radius) = bvh.bounds().bounding_sphere();
         for l in &mut self.lights {
-            if let Light::Constant { center: c, radius: r, .. } | Light::Directional { center: c, radius: r, .. } = l {
+            if let Light::Constant { center: c, radius: r, .. }
+            | Light::Directional { center: c, radius: r, .. }
+            | Light::EnvMap { center: c, radius: r, .. } = l
+            {
                 *c = center;
                 *r = radius.max(1e-3);
             }
