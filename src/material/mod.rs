@@ -12,11 +12,13 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod plastic;
 mod roughdielectric;
 
 pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
+pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use roughdielectric::RoughDielectric;
 
 use crate::math::{Rgb, Vec2, Vec3};
@@ -50,6 +52,8 @@ pub enum Bsdf {
     Dielectric(Dielectric),
     /// Microfacet dielectric (rough glass).
     RoughDielectric(RoughDielectric),
+    /// Smooth plastic: dielectric coating over a diffuse base.
+    Plastic(Plastic),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
@@ -71,6 +75,7 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.eval(wo, wi),
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
+            Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -89,6 +94,7 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
             Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
+            Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -109,6 +115,7 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
+            Bsdf::Plastic(b) => b.sample(wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
@@ -124,7 +131,7 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) => false,
+            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) | Bsdf::Plastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::TwoSided(b) => b[0].is_delta() && b[1].is_delta(),
         }
