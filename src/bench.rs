@@ -156,7 +156,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
 
 fn mesh_scene(mesh: TriangleMesh) -> Result<Scene, String> {
     let mut b = SceneBuilder::new();
-    let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }));
+    let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
     b.add_shape(Geometry::Mesh(mesh), m, None);
     b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1)?);
     b.build()

@@ -14,7 +14,7 @@
 //! - [`estimators`]: small Monte Carlo estimators from the lecture material (irradiance under a
 //!   uniform sky) with their error analysis.
 //! - [`geometry`], [`bvh`]: shapes, intersection with error bounds, area sampling; the BVH.
-//! - [`material`], [`light`]: BSDFs and emitters (closed enums).
+//! - [`texture`], [`material`], [`light`]: textures; BSDFs and emitters (closed enums).
 //! - [`camera`], [`scene`]: cameras; the runtime scene and its builder; built-in scenes.
 //! - [`load`]: mesh files (OBJ, PLY).
 //! - [`integrator`]: the `Integrator` trait and the path tracer.
@@ -36,3 +36,4 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod testkit;
+pub mod texture;

@@ -15,6 +15,7 @@
 //! Parameters (Mitsuba): `max_depth` (default -1), `rr_depth` (5), `hide_emitters` (false).
 
 use super::Integrator;
+use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::Scene;
@@ -128,6 +129,7 @@ impl Integrator for PathIntegrator {
             let bsdf = &scene.bsdfs()[shape.bsdf as usize];
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
+            let ctx = BsdfContext { uv: si.uv };
 
             // Next-event estimation (its random numbers are drawn whether used or not, so that
             // every vertex consumes the same sampler dimensions).
@@ -138,7 +140,7 @@ impl Integrator for PathIntegrator {
                     let light = &scene.lights()[light_index as usize];
                     if let Some(ls) = light.sample_li(geometries, si.p, u_light2) {
                         let wi_local = frame.to_local(ls.wi);
-                        let f = bsdf.eval(wo_local, wi_local);
+                        let f = bsdf.eval(&ctx, wo_local, wi_local);
                         if f != Rgb::ZERO && !scene.occluded(&si.spawn_ray_to(ls.p, ls.n, ls.p_error)) {
                             let contribution = if ls.delta {
                                 f * ls.li / pmf
@@ -146,7 +148,7 @@ impl Integrator for PathIntegrator {
                                 let pdf_light = pmf * ls.pdf;
                                 let w = match self.strategy {
                                     DirectStrategy::Mis => {
-                                        power_heuristic(1, pdf_light, 1, bsdf.pdf(wo_local, wi_local))
+                                        power_heuristic(1, pdf_light, 1, bsdf.pdf(&ctx, wo_local, wi_local))
                                     }
                                     _ => 1.0,
                                 };
@@ -161,7 +163,7 @@ impl Integrator for PathIntegrator {
             // Continue the path by BSDF sampling.
             let u_bsdf = sampler.next_1d();
             let u_bsdf2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample(wo_local, u_bsdf, u_bsdf2) else { break };
+            let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
@@ -220,7 +222,7 @@ mod tests {
     fn point_light_in_closed_sphere_matches_geometric_series() {
         let (rho, intensity, r) = (0.6f32, 5.0f32, 2.0f32);
         let mut b = SceneBuilder::new();
-        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(rho))));
         let c = Vec3::new(0.3, -0.2, 1.0);
         b.add_shape(Geometry::Sphere(Sphere { center: c, radius: r, flip: true }), m, None);
         b.add_point_light(c, Rgb::splat(intensity));
@@ -261,7 +263,7 @@ mod tests {
     fn direct_light_from_parallel_rectangle() {
         let (rho, le, h, a, bb) = (0.7f32, 3.0f32, 1.5f32, 0.4f32, 0.25f32);
         let mut b = SceneBuilder::new();
-        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(rho))));
         let mut floor = TriangleMesh::rectangle();
         floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));
         b.add_shape(Geometry::Mesh(floor), m, None);
@@ -325,8 +327,8 @@ mod tests {
     fn white_furnace() {
         use crate::material::{Conductor, Dielectric};
         let cases: Vec<(&str, Bsdf, i32, f64)> = vec![
-            ("diffuse, direct only", Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }), 2, 0.5),
-            ("diffuse", Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }), -1, 0.5),
+            ("diffuse, direct only", Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))), 2, 0.5),
+            ("diffuse", Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))), -1, 0.5),
             ("mirror", Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }), -1, 1.0),
             (
                 "glass",
@@ -366,7 +368,7 @@ mod tests {
         let rho = 0.6f32;
         let build = |light: Light| {
             let mut b = SceneBuilder::new();
-            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(rho) }));
+            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(rho))));
             let mut floor = TriangleMesh::rectangle();
             floor.transform(
                 &(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()),
@@ -424,7 +426,7 @@ mod tests {
         use crate::load::image::Image;
         let image = Image { width: 8, height: 4, pixels: vec![Rgb::ONE; 32] };
         let mut b = SceneBuilder::new();
-        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }));
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
         b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), m, None);
         let map = EnvMap::new(image, 1.0, Transform::rotate(Vec3::X, 30.0).unwrap()).unwrap();
         b.add_light(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 });
@@ -440,5 +442,43 @@ mod tests {
         .unwrap();
         let (mean, se) = image_mean(&out.film);
         assert!((mean - 0.5).abs() <= 3.0 * se + 1e-4 && se < 0.01, "{mean} ± {se}");
+    }
+
+    /// Surface uv reaches textured BSDF parameters: a checkerboard floor under a vertical
+    /// directional light shows `ρ/π E` with the ρ of the checker cell hit.
+    #[test]
+    fn textured_floor_follows_its_checkerboard() {
+        use crate::light::Light;
+        use crate::texture::Texture;
+        let (rho0, rho1) = (Rgb::splat(0.8), Rgb::splat(0.2));
+        let mut b = SceneBuilder::new();
+        let checker = Texture::Checkerboard {
+            color0: rho0,
+            color1: rho1,
+            to_uv: crate::math::Mat3::from_scale(crate::math::Vec2::splat(10.0)),
+        };
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: checker }));
+        let mut floor = TriangleMesh::rectangle();
+        floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));
+        b.add_shape(Geometry::Mesh(floor), m, None);
+        b.add_light(Light::Directional {
+            direction: -Vec3::Y,
+            irradiance: Rgb::splat(3.0),
+            center: Vec3::ZERO,
+            radius: 0.0,
+        });
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        let integrator = PathIntegrator { max_depth: 2, ..Default::default() };
+        // uv = ((X/10 + 1)/2, (1 - Z/10)/2); ×10 → cell parity from the fractional parts.
+        for (x, rho) in [(0.5f32, rho0.x), (1.5, rho1.x), (2.5, rho0.x)] {
+            let target = Vec3::new(x, 0.0, -0.5);
+            let o = target + Vec3::new(0.0, 1.0, 1.0);
+            let mut sampler = SamplerKind::Independent.make(1, 0);
+            sampler.start_pixel_sample([0, 0], 0, 0);
+            let l = integrator.li(&scene, &Ray::new(o, (target - o).normalize()), &mut sampler).x;
+            let expected = rho / std::f32::consts::PI * 3.0;
+            assert!((l - expected).abs() < 1e-4, "x = {x}: {l} vs {expected}");
+        }
     }
 }

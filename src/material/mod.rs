@@ -23,6 +23,13 @@ pub use roughdielectric::RoughDielectric;
 
 use crate::math::{Rgb, Vec2, Vec3};
 
+/// Where on the surface a BSDF is evaluated (what textured parameters need).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BsdfContext {
+    /// Surface texture coordinates.
+    pub uv: Vec2,
+}
+
 /// The outcome of sampling a BSDF.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfSample {
@@ -70,18 +77,18 @@ fn flip(w: Vec3) -> Vec3 {
 impl Bsdf {
     /// `f(wo, wi) |cos θᵢ|` (local frame); 0 for delta BSDFs.
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         match self {
-            Bsdf::Diffuse(b) => b.eval(wo, wi),
+            Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
-                    b[0].eval(wo, wi)
+                    b[0].eval(ctx, wo, wi)
                 } else {
-                    b[1].eval(flip(wo), flip(wi))
+                    b[1].eval(ctx, flip(wo), flip(wi))
                 }
             }
         }
@@ -89,7 +96,7 @@ impl Bsdf {
 
     /// Density of [`Bsdf::sample`] choosing `wi`, per unit solid angle; 0 for delta BSDFs.
     #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
@@ -98,9 +105,9 @@ impl Bsdf {
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
-                    b[0].pdf(wo, wi)
+                    b[0].pdf(ctx, wo, wi)
                 } else {
-                    b[1].pdf(flip(wo), flip(wi))
+                    b[1].pdf(ctx, flip(wo), flip(wi))
                 }
             }
         }
@@ -108,9 +115,9 @@ impl Bsdf {
 
     /// Samples `wi` for `wo` from one number `u1` (lobe choice) and two `u` (direction).
     #[inline]
-    pub fn sample(&self, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
-            Bsdf::Diffuse(b) => b.sample(wo, u1, u),
+            Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Conductor(b) => b.sample(wo),
             Bsdf::RoughConductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
@@ -119,9 +126,9 @@ impl Bsdf {
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
-                    b[0].sample(wo, u1, u)
+                    b[0].sample(ctx, wo, u1, u)
                 } else {
-                    b[1].sample(flip(wo), u1, u).map(|s| BsdfSample { wi: flip(s.wi), ..s })
+                    b[1].sample(ctx, flip(wo), u1, u).map(|s| BsdfSample { wi: flip(s.wi), ..s })
                 }
             }
         }

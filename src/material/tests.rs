@@ -6,6 +6,8 @@ use super::microfacet::{Microfacet, MicrofacetType};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 
+const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO };
+
 fn rough_conductors() -> Vec<(String, Bsdf)> {
     let gold = Some(ConductorIor { eta: Rgb::new(0.143, 0.374, 1.442), k: Rgb::new(3.983, 2.385, 1.603) });
     let mut v = Vec::new();
@@ -25,7 +27,7 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
 }
 
 fn all_non_delta() -> Vec<(String, Bsdf)> {
-    let mut v = vec![("diffuse".to_string(), Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.3, 0.6, 0.9) }))];
+    let mut v = vec![("diffuse".to_string(), Bsdf::Diffuse(Diffuse::new(Rgb::new(0.3, 0.6, 0.9))))];
     v.extend(rough_conductors());
     for (md, eta) in [
         (Microfacet::new(MicrofacetType::Ggx, 0.3, 0.3), 1.5),
@@ -49,10 +51,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     ));
     v.push((
         "twosided(roughconductor)".into(),
-        Bsdf::TwoSided(Box::new([
-            rough_conductors().remove(0).1,
-            Bsdf::Diffuse(Diffuse { reflectance: Rgb::splat(0.5) }),
-        ])),
+        Bsdf::TwoSided(Box::new([rough_conductors().remove(0).1, Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))])),
     ));
     v
 }
@@ -72,7 +71,7 @@ fn sample_matches_pdf_chi2() {
     for (name, b) in all_non_delta() {
         for wo in outgoing() {
             k += 1;
-            if b.sample(wo, 0.5, Vec2::splat(0.5)).is_none() && b.pdf(wo, Vec3::Z) == 0.0 && wo.z < 0.0 {
+            if b.sample(&CTX, wo, 0.5, Vec2::splat(0.5)).is_none() && b.pdf(&CTX, wo, Vec3::Z) == 0.0 && wo.z < 0.0 {
                 continue; // one-sided BSDF seen from the back: nothing to test
             }
             let out = chi2_2d(
@@ -81,8 +80,8 @@ fn sample_matches_pdf_chi2() {
                 300_000,
                 // Delta lobes (plastic's coating) have no density: they count as "no sample",
                 // whose probability the harness compares with 1 - ∫ pdf.
-                |r| b.sample(wo, r.next_f32(), u2(r)).filter(|s| !s.delta).map(|s| s.wi),
-                |wi| b.pdf(wo, *wi) as f64,
+                |r| b.sample(&CTX, wo, r.next_f32(), u2(r)).filter(|s| !s.delta).map(|s| s.wi),
+                |wi| b.pdf(&CTX, wo, *wi) as f64,
                 &Chi2Config::default().with_seed(k),
             );
             assert!(out.passed(), "{name}, wo {wo}: {out}");
@@ -96,13 +95,13 @@ fn returned_pdf_and_weight_agree_with_pdf_and_eval() {
         for wo in outgoing() {
             let mut rng = crate::sampling::Pcg32::new(5, 5);
             for _ in 0..2000 {
-                let Some(s) = b.sample(wo, rng.next_f32(), u2(&mut rng)) else { continue };
+                let Some(s) = b.sample(&CTX, wo, rng.next_f32(), u2(&mut rng)) else { continue };
                 if s.delta {
                     continue;
                 }
-                let pdf = b.pdf(wo, s.wi);
+                let pdf = b.pdf(&CTX, wo, s.wi);
                 assert!((s.pdf - pdf).abs() <= 1e-3 * pdf.max(1e-3), "{name}: pdf {} vs {pdf}", s.pdf);
-                let w = b.eval(wo, s.wi) / pdf;
+                let w = b.eval(&CTX, wo, s.wi) / pdf;
                 assert!(
                     (w - s.weight).abs().max_element() <= 1e-3 * w.max_element().max(1.0),
                     "{name}: weight {} vs {w}",
@@ -121,8 +120,8 @@ fn reflection_is_reciprocal() {
             let a = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;
             let c = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;
             // eval includes cos θᵢ: f(a, c) = eval(a, c) / c.z must equal f(c, a).
-            let f1 = b.eval(a, c) / c.z;
-            let f2 = b.eval(c, a) / a.z;
+            let f1 = b.eval(&CTX, a, c) / c.z;
+            let f2 = b.eval(&CTX, c, a) / a.z;
             assert!((f1 - f2).abs().max_element() <= 1e-3 * f1.max_element().max(1e-3), "{name}: {f1} vs {f2}");
         }
     }
@@ -138,7 +137,7 @@ fn energy_is_conserved() {
             let n = 50_000;
             let mut sum = Rgb::ZERO;
             for _ in 0..n {
-                if let Some(s) = b.sample(wo, rng.next_f32(), u2(&mut rng)) {
+                if let Some(s) = b.sample(&CTX, wo, rng.next_f32(), u2(&mut rng)) {
                     // Undo the η² radiance scaling of refraction: what is conserved is importance.
                     sum += s.weight * s.eta * s.eta;
                 }
@@ -180,17 +179,17 @@ fn smooth_conductor_mirrors_with_fresnel() {
         specular_reflectance: Rgb::ONE,
     });
     let wo = Vec3::new(0.3, 0.4, 0.866).normalize();
-    let s = b.sample(wo, 0.5, Vec2::splat(0.5)).unwrap();
+    let s = b.sample(&CTX, wo, 0.5, Vec2::splat(0.5)).unwrap();
     assert!(s.delta && b.is_delta());
     assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-6);
     assert!((s.weight.x - fresnel::fresnel_conductor(wo.z, Rgb::splat(0.2), Rgb::splat(3.9)).x).abs() < 1e-6);
-    assert_eq!(b.eval(wo, s.wi), Rgb::ZERO);
-    assert!(b.sample(-wo, 0.5, Vec2::splat(0.5)).is_none(), "one-sided");
+    assert_eq!(b.eval(&CTX, wo, s.wi), Rgb::ZERO);
+    assert!(b.sample(&CTX, -wo, 0.5, Vec2::splat(0.5)).is_none(), "one-sided");
     let mirror = Bsdf::TwoSided(Box::new([
         Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
         Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
     ]));
-    let s = mirror.sample(flip(wo), 0.5, Vec2::splat(0.5)).unwrap();
+    let s = mirror.sample(&CTX, flip(wo), 0.5, Vec2::splat(0.5)).unwrap();
     assert!((s.wi - Vec3::new(-wo.x, -wo.y, -wo.z)).length() < 1e-6, "twosided mirrors the back too");
     assert_eq!(s.weight, Rgb::ONE);
 }

@@ -27,9 +27,9 @@ fn placed(mut mesh: TriangleMesh, scale: Vec3, axis: Vec3, angle: f32, translate
 /// The Cornell box rendered on a `width × height` film.
 pub fn cornell_box(width: u32, height: u32) -> Result<Scene, String> {
     let mut b = SceneBuilder::new();
-    let white = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.885809, 0.698859, 0.666422) }));
-    let green = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.105421, 0.37798, 0.076425) }));
-    let red = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Rgb::new(0.570068, 0.0430135, 0.0443706) }));
+    let white = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.885809, 0.698859, 0.666422))));
+    let green = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.105421, 0.37798, 0.076425))));
+    let red = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.570068, 0.0430135, 0.0443706))));
     let rect = TriangleMesh::rectangle;
     let one = Vec3::ONE;
     // Area light: 0.46 × 0.38, facing down, just below the ceiling.

@@ -1,0 +1,188 @@
+//! Textures: spatially varying parameters of materials, looked up by surface uv.
+//!
+//! Mitsuba 3's plugins: `bitmap` (an image; bilinear or nearest filtering; repeat, mirror or
+//! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`) and constant
+//! values. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
+//! Image convention: uv (0, 0) is the *bottom-left* corner of the image and (1, 1) the top-right
+//! (v grows upward, as on Mitsuba's rectangle).
+
+use crate::load::image::Image;
+use crate::math::{Mat3, Rgb, Vec2};
+use std::sync::Arc;
+
+/// How lookups between texel centres are filtered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    /// Bilinear interpolation of the four nearest texels.
+    Bilinear,
+    /// The nearest texel.
+    Nearest,
+}
+
+/// What happens outside [0, 1)².
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    /// Tile the image.
+    Repeat,
+    /// Tile with every other copy mirrored.
+    Mirror,
+    /// Repeat the edge texels.
+    Clamp,
+}
+
+/// An image texture.
+#[derive(Clone, Debug)]
+pub struct Bitmap {
+    /// The (linear RGB) image.
+    pub image: Arc<Image>,
+    /// Filtering.
+    pub filter: Filter,
+    /// Wrapping.
+    pub wrap: Wrap,
+}
+
+/// A texture (closed set).
+#[derive(Clone, Debug)]
+pub enum Texture {
+    /// The same value everywhere.
+    Constant(Rgb),
+    /// An image lookup after the uv transform.
+    Bitmap {
+        /// The image.
+        bitmap: Bitmap,
+        /// uv transform (homogeneous 2D affine).
+        to_uv: Mat3,
+    },
+    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v lie on the same
+    /// side of 1/2, `color1` elsewhere.
+    Checkerboard {
+        /// First colour.
+        color0: Rgb,
+        /// Second colour.
+        color1: Rgb,
+        /// uv transform.
+        to_uv: Mat3,
+    },
+}
+
+impl From<Rgb> for Texture {
+    fn from(c: Rgb) -> Texture {
+        Texture::Constant(c)
+    }
+}
+
+impl Bitmap {
+    fn texel(&self, x: i64, y: i64) -> Rgb {
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let wrap = |i: i64, n: i64| match self.wrap {
+            Wrap::Repeat => i.rem_euclid(n),
+            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Mirror => {
+                let m = i.rem_euclid(2 * n);
+                if m < n {
+                    m
+                } else {
+                    2 * n - 1 - m
+                }
+            }
+        };
+        // Row 0 of the image is its top: v = 1.
+        self.image.get(wrap(x, w), h - 1 - wrap(y, h))
+    }
+
+    /// The filtered value at `uv` (v up).
+    pub fn eval(&self, uv: Vec2) -> Rgb {
+        let (w, h) = (self.image.width as f32, self.image.height as f32);
+        let (x, y) = (uv.x * w, uv.y * h);
+        match self.filter {
+            Filter::Nearest => self.texel(x.floor() as i64, y.floor() as i64),
+            Filter::Bilinear => {
+                let (x, y) = (x - 0.5, y - 0.5);
+                let (x0, y0) = (x.floor(), y.floor());
+                let (fx, fy) = (x - x0, y - y0);
+                let (x0, y0) = (x0 as i64, y0 as i64);
+                self.texel(x0, y0) * ((1.0 - fx) * (1.0 - fy))
+                    + self.texel(x0 + 1, y0) * (fx * (1.0 - fy))
+                    + self.texel(x0, y0 + 1) * ((1.0 - fx) * fy)
+                    + self.texel(x0 + 1, y0 + 1) * (fx * fy)
+            }
+        }
+    }
+}
+
+impl Texture {
+    /// The value at surface coordinates `uv`.
+    #[inline]
+    pub fn eval(&self, uv: Vec2) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
+            Texture::Checkerboard { color0, color1, to_uv } => {
+                let p = to_uv.transform_point2(uv);
+                let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
+                if (fu > 0.5) == (fv > 0.5) {
+                    *color0
+                } else {
+                    *color1
+                }
+            }
+        }
+    }
+
+    /// Average value (over the image, or the two checker colours).
+    pub fn mean(&self) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Bitmap { bitmap, .. } => {
+                bitmap.image.pixels.iter().copied().sum::<Rgb>() / bitmap.image.pixels.len().max(1) as f32
+            }
+            Texture::Checkerboard { color0, color1, .. } => 0.5 * (*color0 + *color1),
+        }
+    }
+
+    /// Whether every value lies in [0, 1] (valid as a reflectance).
+    pub fn is_reflectance(&self) -> bool {
+        let ok = |c: Rgb| c.min_element() >= 0.0 && c.max_element() <= 1.0;
+        match self {
+            Texture::Constant(c) => ok(*c),
+            Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
+            Texture::Checkerboard { color0, color1, .. } => ok(*color0) && ok(*color1),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image() -> Arc<Image> {
+        // 2 × 2: top row red, green; bottom row blue, white.
+        Arc::new(Image { width: 2, height: 2, pixels: vec![Rgb::X, Rgb::Y, Rgb::Z, Rgb::ONE] })
+    }
+
+    #[test]
+    fn bitmap_orientation_filtering_and_wrapping() {
+        let nearest = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Repeat };
+        assert_eq!(nearest.eval(Vec2::new(0.25, 0.75)), Rgb::X, "top-left texel at v near 1");
+        assert_eq!(nearest.eval(Vec2::new(0.25, 0.25)), Rgb::Z, "bottom-left texel at v near 0");
+        assert_eq!(nearest.eval(Vec2::new(1.25, -0.75)), Rgb::Z, "repeat");
+        let bilinear = Bitmap { image: image(), filter: Filter::Bilinear, wrap: Wrap::Clamp };
+        assert_eq!(bilinear.eval(Vec2::new(0.25, 0.75)), Rgb::X, "texel centres are exact");
+        let mid = bilinear.eval(Vec2::new(0.5, 0.5));
+        assert!((mid - Rgb::new(0.5, 0.5, 0.5)).abs().max_element() < 1e-6, "{mid}");
+        let mirror = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Mirror };
+        assert_eq!(mirror.eval(Vec2::new(1.25, 0.75)), Rgb::Y, "mirrored copy");
+    }
+
+    #[test]
+    fn checkerboard_and_uv_transform() {
+        let t =
+            Texture::Checkerboard { color0: Rgb::ONE, color1: Rgb::ZERO, to_uv: Mat3::from_scale(Vec2::splat(2.0)) };
+        assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Rgb::ONE);
+        assert_eq!(t.eval(Vec2::new(0.3, 0.1)), Rgb::ZERO);
+        assert_eq!(t.eval(Vec2::new(0.3, 0.3)), Rgb::ONE);
+        assert_eq!(t.mean(), Rgb::splat(0.5));
+        assert!(t.is_reflectance());
+        assert!(!Texture::Constant(Rgb::splat(1.5)).is_reflectance());
+    }
+}
