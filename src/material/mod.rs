@@ -63,6 +63,22 @@ pub enum Bsdf {
     Plastic(Plastic),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
+    /// Mitsuba's `blendbsdf`: `(1 - w) f₀ + w f₁` with blend weight `w ∈ [0, 1]` (constant or
+    /// textured, luminance used).
+    Blend {
+        /// Blend weight toward the second BSDF.
+        weight: crate::texture::Texture,
+        /// The two BSDFs.
+        bsdfs: Box<[Bsdf; 2]>,
+    },
+    /// Mitsuba's `mask`: opacity α (constant or textured); with probability 1 - α light passes
+    /// straight through (a delta "null" lobe, `wi = -wo`, weight 1).
+    Mask {
+        /// Opacity.
+        opacity: crate::texture::Texture,
+        /// The BSDF of the opaque part.
+        bsdf: Box<Bsdf>,
+    },
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided(Box<[Bsdf; 2]>),
@@ -84,6 +100,11 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                bsdfs[0].eval(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval(ctx, wo, wi) * w
+            }
+            Bsdf::Mask { opacity, bsdf } => bsdf.eval(ctx, wo, wi) * blend_weight(opacity, ctx),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].eval(ctx, wo, wi)
@@ -105,6 +126,11 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                bsdfs[0].pdf(ctx, wo, wi) * (1.0 - w) + bsdfs[1].pdf(ctx, wo, wi) * w
+            }
+            Bsdf::Mask { opacity, bsdf } => bsdf.pdf(ctx, wo, wi) * blend_weight(opacity, ctx),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].pdf(ctx, wo, wi)
@@ -126,6 +152,28 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
             Bsdf::Plastic(b) => b.sample(wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                // Choose a component with its blend probability and reuse u1 for its own choice.
+                let (k, u1r, p) = if u1 < w { (1, u1 / w, w) } else { (0, (u1 - w) / (1.0 - w), 1.0 - w) };
+                let s = bsdfs[k].sample(ctx, wo, u1r.min(crate::math::ONE_MINUS_EPSILON), u)?;
+                if s.delta {
+                    // A delta lobe of one component: the other cannot produce this direction.
+                    return Some(BsdfSample { pdf: s.pdf * p, ..s });
+                }
+                let pdf = self.pdf(ctx, wo, s.wi);
+                let f = self.eval(ctx, wo, s.wi);
+                (pdf > 0.0).then(|| BsdfSample { pdf, weight: f / pdf, ..s })
+            }
+            Bsdf::Mask { opacity, bsdf } => {
+                let a = blend_weight(opacity, ctx);
+                if u1 < a {
+                    let s = bsdf.sample(ctx, wo, (u1 / a).min(crate::math::ONE_MINUS_EPSILON), u)?;
+                    Some(BsdfSample { pdf: s.pdf * a, ..s })
+                } else {
+                    Some(BsdfSample { wi: -wo, pdf: 1.0 - a, weight: Rgb::ONE, delta: true, eta: 1.0 })
+                }
+            }
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].sample(ctx, wo, u1, u)
@@ -142,9 +190,16 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) | Bsdf::Plastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
-            Bsdf::TwoSided(b) => b[0].is_delta() && b[1].is_delta(),
+            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
+            Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
         }
     }
+}
+
+/// A blend weight or opacity in [0, 1] from a texture (its luminance).
+#[inline]
+fn blend_weight(t: &crate::texture::Texture, ctx: &BsdfContext) -> f32 {
+    crate::math::luminance(t.eval(ctx.uv)).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]
