@@ -41,46 +41,7 @@ enum DirectArg {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene (default: the built-in Cornell box) to an image (.png, .exr or .pfm).
-    Render {
-        /// Scene to render: a built-in scene name (cbox).
-        scene: Option<String>,
-        /// Output image; the extension picks the format (default: <scene>.png).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// Samples per pixel.
-        #[arg(long)]
-        spp: Option<u32>,
-        /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited).
-        #[arg(long, allow_negative_numbers = true)]
-        max_depth: Option<i32>,
-        /// Film resolution, W or WxH.
-        #[arg(long)]
-        res: Option<String>,
-        /// Seed of all random numbers.
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Worker threads (default: one per core).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
-        /// Render for this many seconds (whole passes), instead of a sample count.
-        #[arg(long)]
-        time: Option<f64>,
-        /// Scene parameter override name=value (the built-in Cornell box has res, spp, max_depth).
-        #[arg(short = 'D', value_name = "NAME=VALUE")]
-        define: Vec<String>,
-        /// Sampler.
-        #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
-        sampler: SamplerArg,
-        /// Direct-light strategy of the path tracer.
-        #[arg(long, value_enum, default_value_t = DirectArg::Mis)]
-        direct: DirectArg,
-        /// Exposure in stops for PNG output (× 2^EV).
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-        exposure: f32,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
-    },
+    Render(RenderArgs),
     /// Benchmarks: BVH build, ray throughput (primary, incoherent closest-hit and shadow rays) and
     /// path-tracing samples per second on the Cornell box.
     Bench(bench::BenchArgs),
@@ -110,35 +71,7 @@ fn usage(msg: String) -> Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render {
-            scene,
-            output,
-            spp,
-            max_depth,
-            res,
-            seed,
-            threads,
-            time,
-            define,
-            sampler,
-            direct,
-            exposure,
-            quiet,
-        } => run_render(RenderArgs {
-            scene,
-            output,
-            spp,
-            max_depth,
-            res,
-            seed,
-            threads,
-            time,
-            define,
-            sampler,
-            direct,
-            exposure,
-            quiet,
-        }),
+        Command::Render(args) => run_render(args),
         Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e)),
         Command::Mc { runs, seed, radiance } => {
             if radiance.is_finite() && radiance >= 0.0 {
@@ -158,19 +91,45 @@ fn main() -> ExitCode {
     }
 }
 
+#[derive(clap::Args, Debug)]
 struct RenderArgs {
+    /// Scene to render: a built-in scene name (cbox).
     scene: Option<String>,
+    /// Output image; the extension picks the format (default: <scene>.png).
+    #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Samples per pixel.
+    #[arg(long)]
     spp: Option<u32>,
+    /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited).
+    #[arg(long, allow_negative_numbers = true)]
     max_depth: Option<i32>,
+    /// Film resolution, W or WxH.
+    #[arg(long)]
     res: Option<String>,
+    /// Seed of all random numbers.
+    #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Render for this many seconds (whole passes), instead of a sample count.
+    #[arg(long)]
     time: Option<f64>,
+    /// Scene parameter override name=value (the built-in Cornell box has res, spp, max_depth).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
     define: Vec<String>,
+    /// Sampler.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
     sampler: SamplerArg,
+    /// Direct-light strategy of the path tracer.
+    #[arg(long, value_enum, default_value_t = DirectArg::Mis)]
     direct: DirectArg,
+    /// Exposure in stops for PNG output (× 2^EV).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
+    /// No progress bar.
+    #[arg(long)]
     quiet: bool,
 }
 

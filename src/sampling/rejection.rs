@@ -87,10 +87,10 @@ mod tests {
         assert!((mean - c).abs() < 5.0 * (c * (c - 1.0) / n as f64).sqrt(), "mean attempts {mean}, expected {c}");
     }
 
-    #[test]
-    fn beta_2_2_by_rejection_from_uniform() {
-        // f(x) = 6x(1-x) ≤ 1.5 on [0,1]; proposal uniform (pdf 1).
-        let out = chi2_1d(
+    /// χ² of Beta(2, 2) (`f(x) = 6x(1-x) ≤ 1.5`) sampled by rejection from the uniform
+    /// proposal with bound `c`.
+    fn beta_2_2_with_bound(c: f32) -> crate::testkit::Chi2Outcome {
+        chi2_1d(
             (0.0, 1.0),
             40,
             500_000,
@@ -99,37 +99,26 @@ mod tests {
                     || r.next_f32(),
                     |u: [f32; 1]| Sample::length(u[0], 1.0),
                     |x: &f32| 6.0 * x * (1.0 - x),
-                    1.5,
+                    c,
                     1000,
                 )
                 .map(|s| s.value as f64)
             },
             |x| 6.0 * x * (1.0 - x),
             &Chi2Config::default(),
-        );
+        )
+    }
+
+    #[test]
+    fn beta_2_2_by_rejection_from_uniform() {
+        let out = beta_2_2_with_bound(1.5);
         assert!(out.passed(), "{out}");
     }
 
     #[test]
     fn a_bound_that_is_too_small_biases_the_result() {
         // With c below sup f/g the sampler no longer follows f: the harness must see it.
-        let out = chi2_1d(
-            (0.0, 1.0),
-            40,
-            500_000,
-            |r| {
-                sample_rejection(
-                    || r.next_f32(),
-                    |u: [f32; 1]| Sample::length(u[0], 1.0),
-                    |x: &f32| 6.0 * x * (1.0 - x),
-                    1.0,
-                    1000,
-                )
-                .map(|s| s.value as f64)
-            },
-            |x| 6.0 * x * (1.0 - x),
-            &Chi2Config::default(),
-        );
+        let out = beta_2_2_with_bound(1.0);
         assert!(!out.passed(), "{out}");
     }
 

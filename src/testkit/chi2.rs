@@ -212,24 +212,38 @@ pub fn chi2_2d<D: Domain>(
 where
     D::Point: fmt::Debug,
 {
+    match histogram_2d(domain, res, n, &mut sample, Pcg32::new(cfg.seed, 0x000c_4159)) {
+        Ok(observed) => finish(observed, cell_masses_2d(domain, res, &pdf), n, cfg),
+        Err(e) => Chi2Outcome::failed(e, cfg),
+    }
+}
+
+/// Counts of `n` draws per parameter cell (row-major), plus a last cell for `None`; an error
+/// names the first sample that is not on the domain.
+fn histogram_2d<D: Domain>(
+    domain: &D,
+    res: [usize; 2],
+    n: usize,
+    sample: &mut impl FnMut(&mut Pcg32) -> Option<D::Point>,
+    mut rng: Pcg32,
+) -> Result<Vec<f64>, String>
+where
+    D::Point: fmt::Debug,
+{
     let [lo, hi] = domain.bounds();
-    let mut observed = vec![0.0; res[0] * res[1] + 1];
-    let mut rng = Pcg32::new(cfg.seed, 0x000c_4159);
+    let mut counts = vec![0.0; res[0] * res[1] + 1];
     for _ in 0..n {
         match sample(&mut rng) {
-            None => *observed.last_mut().unwrap() += 1.0,
-            Some(x) => match domain.to_param(&x) {
-                None => return Chi2Outcome::failed(format!("sample {x:?} is not on the {}", domain.name()), cfg),
-                Some(p) => {
-                    let i = cell_index(p[0], lo[0], hi[0], res[0]);
-                    let j = cell_index(p[1], lo[1], hi[1], res[1]);
-                    observed[j * res[0] + i] += 1.0;
-                }
-            },
+            None => *counts.last_mut().unwrap() += 1.0,
+            Some(x) => {
+                let p = domain.to_param(&x).ok_or_else(|| format!("sample {x:?} is not on the {}", domain.name()))?;
+                let i = cell_index(p[0], lo[0], hi[0], res[0]);
+                let j = cell_index(p[1], lo[1], hi[1], res[1]);
+                counts[j * res[0] + i] += 1.0;
+            }
         }
     }
-    let masses = cell_masses_2d(domain, res, &pdf);
-    finish(observed, masses, n, cfg)
+    Ok(counts)
 }
 
 /// Turns cell probabilities into expected counts, adds the "no sample / outside" cell and runs
@@ -312,29 +326,11 @@ pub fn chi2_two_sample_2d<D: Domain>(
 where
     D::Point: fmt::Debug,
 {
-    let [lo, hi] = domain.bounds();
-    let hist = |sample: &mut dyn FnMut(&mut Pcg32) -> Option<D::Point>, stream: u64| {
-        let mut h = vec![0.0; res[0] * res[1] + 1];
-        let mut rng = Pcg32::new(cfg.seed, stream);
-        for _ in 0..n {
-            match sample(&mut rng) {
-                None => *h.last_mut().unwrap() += 1.0,
-                Some(x) => match domain.to_param(&x) {
-                    None => return Err(format!("sample {x:?} is not on the {}", domain.name())),
-                    Some(p) => {
-                        h[cell_index(p[1], lo[1], hi[1], res[1]) * res[0] + cell_index(p[0], lo[0], hi[0], res[0])] +=
-                            1.0
-                    }
-                },
-            }
-        }
-        Ok(h)
-    };
-    let a = match hist(&mut sample_a, 0xa) {
+    let a = match histogram_2d(domain, res, n, &mut sample_a, Pcg32::new(cfg.seed, 0xa)) {
         Ok(h) => h,
         Err(e) => return Chi2Outcome::failed(e, cfg),
     };
-    let b = match hist(&mut sample_b, 0xb) {
+    let b = match histogram_2d(domain, res, n, &mut sample_b, Pcg32::new(cfg.seed, 0xb)) {
         Ok(h) => h,
         Err(e) => return Chi2Outcome::failed(e, cfg),
     };
