@@ -14,12 +14,14 @@ pub mod fresnel;
 pub mod microfacet;
 mod plastic;
 mod roughdielectric;
+mod roughplastic;
 
 pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use roughdielectric::RoughDielectric;
+pub use roughplastic::RoughPlastic;
 
 use crate::math::{Rgb, Vec2, Vec3};
 
@@ -61,6 +63,8 @@ pub enum Bsdf {
     RoughDielectric(RoughDielectric),
     /// Smooth plastic: dielectric coating over a diffuse base.
     Plastic(Plastic),
+    /// Rough plastic: microfacet coating over a diffuse base.
+    RoughPlastic(RoughPlastic),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `blendbsdf`: `(1 - w) f₀ + w f₁` with blend weight `w ∈ [0, 1]` (constant or
@@ -99,6 +103,7 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
+            Bsdf::RoughPlastic(b) => b.eval(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -125,6 +130,7 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.pdf(wo, wi),
             Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
+            Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -151,6 +157,7 @@ impl Bsdf {
             Bsdf::Dielectric(b) => b.sample(wo, u1),
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
             Bsdf::Plastic(b) => b.sample(wo, u1, u),
+            Bsdf::RoughPlastic(b) => b.sample(wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -188,7 +195,11 @@ impl Bsdf {
     #[inline]
     pub fn is_delta(&self) -> bool {
         match self {
-            Bsdf::Diffuse(_) | Bsdf::RoughConductor(_) | Bsdf::RoughDielectric(_) | Bsdf::Plastic(_) => false,
+            Bsdf::Diffuse(_)
+            | Bsdf::RoughConductor(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::Plastic(_)
+            | Bsdf::RoughPlastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),

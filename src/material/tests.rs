@@ -50,6 +50,26 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         Bsdf::Plastic(Plastic::new(Rgb::new(0.9, 0.5, 0.1), Rgb::splat(0.5), 1.6, true)),
     ));
     v.push((
+        "roughplastic ggx".into(),
+        Bsdf::RoughPlastic(RoughPlastic::new(
+            Microfacet::new(MicrofacetType::Ggx, 0.2, 0.2),
+            Rgb::new(0.2, 0.5, 0.8),
+            Rgb::ONE,
+            1.49,
+            false,
+        )),
+    ));
+    v.push((
+        "roughplastic beckmann, nonlinear".into(),
+        Bsdf::RoughPlastic(RoughPlastic::new(
+            Microfacet::new(MicrofacetType::Beckmann, 0.4, 0.4),
+            Rgb::new(0.9, 0.3, 0.1),
+            Rgb::splat(0.7),
+            1.6,
+            true,
+        )),
+    ));
+    v.push((
         "blendbsdf(diffuse, roughconductor)".into(),
         Bsdf::Blend {
             weight: crate::texture::Texture::Constant(Rgb::splat(0.3)),
