@@ -1,9 +1,9 @@
 //! Binned SAH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume
 //! Hierarchies"): at each node, primitive centroids are binned along each axis and the split
 //! minimizing the surface area heuristic is taken; subtrees are built in parallel with rayon.
-//! O(n log n) overall.
+//! O(n log n) overall. The binary tree is then collapsed into 4-wide nodes.
 
-use super::{Bvh, Node, INTERIOR};
+use super::{Bvh, Node4};
 use crate::math::{Bounds3, Vec3};
 
 /// Build settings.
@@ -34,7 +34,7 @@ struct Item {
 
 enum BuildNode {
     Leaf { bounds: Bounds3, first: u32, count: u32 },
-    Interior { bounds: Bounds3, axis: u32, children: Box<[BuildNode; 2]> },
+    Interior { bounds: Bounds3, children: Box<[BuildNode; 2]> },
 }
 
 pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
@@ -44,9 +44,12 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     let mut items: Vec<Item> =
         bounds.iter().enumerate().map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 }).collect();
     let (root, count) = build_rec(&mut items, 0, 0, opts);
-    let mut nodes = Vec::with_capacity(count);
-    flatten(&root, &mut nodes);
-    Bvh { nodes, order: items.iter().map(|it| it.index).collect() }
+    let mut nodes = Vec::with_capacity(count / 2 + 1);
+    collapse(&root, &mut nodes);
+    let bounds = match &root {
+        BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
+    };
+    Bvh { nodes, order: items.iter().map(|it| it.index).collect(), bounds }
 }
 
 fn leaf(items: &[Item], offset: usize, bounds: Bounds3) -> (BuildNode, usize) {
@@ -68,7 +71,7 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
         items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         (n / 2, axis)
     };
-    let (mid, axis) = match best_split(items, &bounds, &cbounds, opts) {
+    let (mid, _axis) = match best_split(items, &bounds, &cbounds, opts) {
         Split::Leaf if n <= opts.max_leaf => return leaf(items, offset, bounds),
         // No useful SAH split (or none at all): halve along the largest centroid extent.
         Split::Leaf | Split::Median => median(items, cbounds.max_extent()),
@@ -83,14 +86,13 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
             }
         }
     };
-    let axis = axis as u32;
     let (left, right) = items.split_at_mut(mid);
     let ((l, lc), (r, rc)) = if n > opts.parallel_threshold {
         rayon::join(|| build_rec(left, offset, depth + 1, opts), || build_rec(right, offset + mid, depth + 1, opts))
     } else {
         (build_rec(left, offset, depth + 1, opts), build_rec(right, offset + mid, depth + 1, opts))
     };
-    (BuildNode::Interior { bounds, axis, children: Box::new([l, r]) }, 1 + lc + rc)
+    (BuildNode::Interior { bounds, children: Box::new([l, r]) }, 1 + lc + rc)
 }
 
 enum Split {
@@ -174,18 +176,43 @@ fn partition(items: &mut [Item], pred: impl Fn(&Item) -> bool) -> usize {
     first
 }
 
-fn flatten(node: &BuildNode, out: &mut Vec<Node>) -> u32 {
-    let idx = out.len() as u32;
-    match node {
-        BuildNode::Leaf { bounds, first, count } => {
-            out.push(Node::new(bounds, *first, *count));
-        }
-        BuildNode::Interior { bounds, axis, children } => {
-            out.push(Node::new(bounds, 0, INTERIOR | axis));
-            flatten(&children[0], out);
-            let right = flatten(&children[1], out);
-            out[idx as usize].set_offset(right);
+/// Collapses the binary tree below `node` into 4-wide nodes (Wald et al. 2008, "Getting rid of
+/// packets"): each wide node takes its binary node's two children and repeatedly opens the
+/// interior child of largest surface area until it holds four. Returns the wide node's index.
+fn collapse(node: &BuildNode, out: &mut Vec<Node4>) -> u32 {
+    let mut children: Vec<&BuildNode> = match node {
+        BuildNode::Interior { children, .. } => vec![&children[0], &children[1]],
+        leaf @ BuildNode::Leaf { .. } => vec![leaf],
+    };
+    while children.len() < 4 {
+        let best = children
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| matches!(c, BuildNode::Interior { .. }))
+            .max_by(|a, b| area(a.1).total_cmp(&area(b.1)))
+            .map(|(i, _)| i);
+        let Some(i) = best else { break };
+        if let BuildNode::Interior { children: grand, .. } = children[i] {
+            children[i] = &grand[0];
+            children.insert(i + 1, &grand[1]);
         }
     }
-    idx
+    let index = out.len() as u32;
+    out.push(Node4::empty());
+    for (slot, child) in children.into_iter().enumerate() {
+        match child {
+            BuildNode::Leaf { bounds, first, count } => out[index as usize].set(slot, bounds, *first, *count),
+            BuildNode::Interior { bounds, .. } => {
+                let c = collapse(child, out);
+                out[index as usize].set(slot, bounds, c, 0);
+            }
+        }
+    }
+    index
+}
+
+fn area(n: &BuildNode) -> f32 {
+    match n {
+        BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => bounds.surface_area(),
+    }
 }

@@ -1,5 +1,5 @@
-//! Bounding volume hierarchy: binned SAH build (parallel), flattened depth-first nodes of 32
-//! bytes, closest-hit and any-hit traversal.
+//! Bounding volume hierarchy: binned SAH build (parallel), collapsed into 4-wide nodes tested
+//! with one SIMD slab test per node; closest-hit and any-hit traversal.
 //!
 //! The BVH knows only primitive bounds; the caller intersects primitives in leaves through a
 //! closure, so one BVH serves triangles, spheres and disks alike (and, later, instances). After
@@ -9,58 +9,54 @@
 mod build;
 
 use crate::math::float::gamma;
-use crate::math::{Bounds3, Ray};
-use glam::{Vec3A, Vec4};
+use crate::math::{Bounds3, Ray, Vec3};
+use glam::Vec4;
 
 pub use build::BuildOptions;
 
-/// A flattened node (32 bytes): bounds, and either a leaf (primitives `offset .. offset +
-/// count`) or an interior node whose first child follows it and whose second child is at
-/// `offset`. The integer fields ride in the `w` lanes of the bounds so that one aligned SIMD load
-/// fetches each corner.
+/// A 4-wide node (128 bytes, cache-line aligned): the bounds of up to four children in
+/// structure-of-arrays form (`bounds[0]` = lower corners, `bounds[1]` = upper corners, each as x,
+/// y, z lane vectors), so one SIMD slab test checks all four; and per child either a leaf
+/// (`count > 0` primitives from `child`) or an interior node (`count == 0`, node index `child`).
+/// Unused slots have `child == u32::MAX`.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-pub struct Node {
-    /// Lower corner; `w` holds the bits of `offset`.
-    min: Vec4,
-    /// Upper corner; `w` holds the bits of `meta`: leaf primitive count (> 0), or
-    /// `INTERIOR | split axis`.
-    max: Vec4,
+#[repr(C, align(64))]
+pub struct Node4 {
+    bounds: [[Vec4; 3]; 2],
+    child: [u32; 4],
+    count: [u32; 4],
 }
 
-const INTERIOR: u32 = 0x8000_0000;
+impl Node4 {
+    pub(crate) fn empty() -> Node4 {
+        Node4 { bounds: [[Vec4::ZERO; 3]; 2], child: [u32::MAX; 4], count: [0; 4] }
+    }
 
-impl Node {
-    pub(crate) fn new(bounds: &Bounds3, offset: u32, meta: u32) -> Node {
-        Node { min: bounds.min.extend(f32::from_bits(offset)), max: bounds.max.extend(f32::from_bits(meta)) }
+    pub(crate) fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u32) {
+        for axis in 0..3 {
+            self.bounds[0][axis][slot] = b.min[axis];
+            self.bounds[1][axis][slot] = b.max[axis];
+        }
+        self.child[slot] = child;
+        self.count[slot] = count;
     }
-    #[inline(always)]
-    fn offset(&self) -> u32 {
-        self.min.w.to_bits()
+
+    fn valid(&self, slot: usize) -> bool {
+        self.child[slot] != u32::MAX
     }
-    #[inline(always)]
-    fn meta(&self) -> u32 {
-        self.max.w.to_bits()
-    }
-    pub(crate) fn set_offset(&mut self, offset: u32) {
-        self.min.w = f32::from_bits(offset);
-    }
-    /// Node bounds.
-    pub fn bounds(&self) -> Bounds3 {
-        Bounds3 { min: self.min.truncate(), max: self.max.truncate() }
-    }
-    /// Whether the node is a leaf.
-    #[inline(always)]
-    pub fn is_leaf(&self) -> bool {
-        self.meta() & INTERIOR == 0
+
+    fn child_bounds(&self, slot: usize) -> Bounds3 {
+        let v = |c: usize| Vec3::new(self.bounds[c][0][slot], self.bounds[c][1][slot], self.bounds[c][2][slot]);
+        Bounds3 { min: v(0), max: v(1) }
     }
 }
 
 /// A bounding volume hierarchy over primitives given by their bounds.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    nodes: Vec<Node4>,
     order: Vec<u32>,
+    bounds: Bounds3,
 }
 
 /// Statistics of a built BVH.
@@ -87,14 +83,13 @@ impl Bvh {
         &self.order
     }
 
-    /// The flattened nodes (root first).
-    pub fn nodes(&self) -> &[Node] {
-        &self.nodes
-    }
-
     /// Bounds of everything.
     pub fn bounds(&self) -> Bounds3 {
-        self.nodes.first().map_or(Bounds3::EMPTY, |n| n.bounds())
+        if self.nodes.is_empty() {
+            Bounds3::EMPTY
+        } else {
+            self.bounds
+        }
     }
 
     /// Node count, leaf count, depth and SAH cost.
@@ -103,19 +98,21 @@ impl Bvh {
         if self.nodes.is_empty() {
             return s;
         }
-        let root_area = self.nodes[0].bounds().surface_area().max(1e-30);
+        let root_area = self.bounds.surface_area().max(1e-30);
+        s.sah_cost = 1.0;
         let mut stack = vec![(0usize, 1usize)];
         while let Some((i, depth)) = stack.pop() {
             let n = &self.nodes[i];
-            let rel = n.bounds().surface_area() / root_area;
             s.max_depth = s.max_depth.max(depth);
-            if n.is_leaf() {
-                s.leaves += 1;
-                s.sah_cost += rel * n.meta() as f32;
-            } else {
-                s.sah_cost += rel;
-                stack.push((i + 1, depth + 1));
-                stack.push((n.offset() as usize, depth + 1));
+            for slot in (0..4).filter(|&k| n.valid(k)) {
+                let rel = n.child_bounds(slot).surface_area() / root_area;
+                if n.count[slot] > 0 {
+                    s.leaves += 1;
+                    s.sah_cost += rel * n.count[slot] as f32;
+                } else {
+                    s.sah_cost += rel;
+                    stack.push((n.child[slot] as usize, depth + 1));
+                }
             }
         }
         s
@@ -123,56 +120,59 @@ impl Bvh {
 
     /// Finds the closest hit. `leaf(first, count, t_max)` intersects leaf primitives
     /// `first .. first + count` (in [`Bvh::order`] positions) and lowers `t_max` to the closest hit
-    /// found; traversal then culls everything farther. Children are visited nearest first, and
-    /// postponed nodes whose entry distance is beyond the current `t_max` are skipped.
+    /// found; traversal then culls everything farther. The children of a node are tested at
+    /// once, visited nearest first, and postponed ones are skipped when a closer hit was found
+    /// meanwhile.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
-        let Some(root) = self.nodes.first() else { return };
-        let r = SlabRay::new(ray);
-        if r.entry(root, t_max).is_none() {
+        if self.nodes.is_empty() {
             return;
         }
-        // Uninitialized: only slots below `sp` are ever read (saves a 512-byte memset per ray).
-        let mut stack = [std::mem::MaybeUninit::<(u32, f32)>::uninit(); 64];
+        let r = SlabRay::new(ray);
+        // Stack of (node or leaf, entry distance); leaves carry their count.
+        // Binary depth ≤ 60 bounds the wide depth by 60; ≤ 3 postponed children per level.
+        let mut stack = [std::mem::MaybeUninit::<(u32, u32, f32)>::uninit(); 192];
         let mut sp = 0usize;
-        let mut idx = 0u32;
+        let mut current = Some((0u32, 0u32));
         loop {
-            let node = unsafe { self.nodes.get_unchecked(idx as usize) };
-            if node.is_leaf() {
-                leaf(node.offset(), node.meta(), &mut t_max);
-            } else {
-                let (a, b) = (idx + 1, node.offset());
-                let ta = r.entry(unsafe { self.nodes.get_unchecked(a as usize) }, t_max);
-                let tb = r.entry(unsafe { self.nodes.get_unchecked(b as usize) }, t_max);
-                match (ta, tb) {
-                    (Some(ta), Some(tb)) => {
-                        let (near, far, t_far) = if ta <= tb { (a, b, tb) } else { (b, a, ta) };
-                        stack[sp].write((far, t_far));
-                        sp += 1;
-                        idx = near;
+            if let Some((child, count)) = current.take() {
+                if count > 0 {
+                    leaf(child, count, &mut t_max);
+                } else {
+                    let node = unsafe { self.nodes.get_unchecked(child as usize) };
+                    let (mask, t_near) = r.test4(node, t_max);
+                    // Collect hit children, then push all but the nearest, farthest first.
+                    let mut hits = [(0u32, 0u32, 0.0f32); 4];
+                    let mut n = 0;
+                    for slot in 0..4 {
+                        if mask & (1 << slot) != 0 {
+                            hits[n] = (node.child[slot], node.count[slot], t_near[slot]);
+                            n += 1;
+                        }
+                    }
+                    if n > 0 {
+                        let hits = &mut hits[..n];
+                        hits.sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
+                        for h in &hits[..n - 1] {
+                            stack[sp].write(*h);
+                            sp += 1;
+                        }
+                        let nearest = hits[n - 1];
+                        current = Some((nearest.0, nearest.1));
                         continue;
                     }
-                    (Some(_), None) => {
-                        idx = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        idx = b;
-                        continue;
-                    }
-                    (None, None) => {}
                 }
             }
-            // Pop the next postponed node that can still hold a closer hit.
+            // Pop the next postponed child that can still hold a closer hit.
             loop {
                 if sp == 0 {
                     return;
                 }
                 sp -= 1;
                 // SAFETY: slot `sp` was written before `sp` was incremented past it.
-                let (next, t_entry) = unsafe { stack[sp].assume_init() };
+                let (child, count, t_entry) = unsafe { stack[sp].assume_init() };
                 if t_entry <= t_max {
-                    idx = next;
+                    current = Some((child, count));
                     break;
                 }
             }
@@ -183,68 +183,72 @@ impl Bvh {
     /// soon as one of the leaf's primitives is hit.
     #[inline]
     pub fn any_hit(&self, ray: &Ray, t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> bool) -> bool {
-        let Some(root) = self.nodes.first() else { return false };
-        let r = SlabRay::new(ray);
-        if r.entry(root, t_max).is_none() {
+        if self.nodes.is_empty() {
             return false;
         }
-        let mut stack = [std::mem::MaybeUninit::<u32>::uninit(); 64];
-        let mut sp = 0usize;
-        let mut idx = 0u32;
-        loop {
-            let node = unsafe { self.nodes.get_unchecked(idx as usize) };
-            if node.is_leaf() {
-                if leaf(node.offset(), node.meta(), t_max) {
-                    return true;
-                }
-            } else {
-                let (a, b) = (idx + 1, node.offset());
-                let ha = r.entry(unsafe { self.nodes.get_unchecked(a as usize) }, t_max).is_some();
-                let hb = r.entry(unsafe { self.nodes.get_unchecked(b as usize) }, t_max).is_some();
-                if ha && hb {
-                    stack[sp].write(b);
-                    sp += 1;
-                    idx = a;
-                    continue;
-                } else if ha {
-                    idx = a;
-                    continue;
-                } else if hb {
-                    idx = b;
-                    continue;
-                }
-            }
-            if sp == 0 {
-                return false;
-            }
+        let r = SlabRay::new(ray);
+        let mut stack = [std::mem::MaybeUninit::<(u32, u32)>::uninit(); 256];
+        stack[0].write((0, 0));
+        let mut sp = 1usize;
+        while sp > 0 {
             sp -= 1;
             // SAFETY: slot `sp` was written before `sp` was incremented past it.
-            idx = unsafe { stack[sp].assume_init() };
+            let (child, count) = unsafe { stack[sp].assume_init() };
+            if count > 0 {
+                if leaf(child, count, t_max) {
+                    return true;
+                }
+                continue;
+            }
+            let node = unsafe { self.nodes.get_unchecked(child as usize) };
+            let (mask, _) = r.test4(node, t_max);
+            for slot in 0..4 {
+                if mask & (1 << slot) != 0 {
+                    stack[sp].write((node.child[slot], node.count[slot]));
+                    sp += 1;
+                }
+            }
         }
+        false
     }
 }
 
-/// A ray prepared for SIMD slab tests.
+/// A ray prepared for 4-wide SIMD slab tests: origin and reciprocal direction splatted per axis,
+/// and which corner is the near one on each axis.
 struct SlabRay {
-    o: Vec3A,
-    inv_d: Vec3A,
+    o: [Vec4; 3],
+    inv_d: [Vec4; 3],
+    near: [usize; 3],
 }
 
 impl SlabRay {
     #[inline(always)]
     fn new(ray: &Ray) -> SlabRay {
-        SlabRay { o: Vec3A::from(ray.o), inv_d: Vec3A::from(ray.d.recip()) }
+        let inv = ray.d.recip();
+        SlabRay {
+            o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
+            inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            near: [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize],
+        }
     }
 
-    /// Entry distance of the ray into the node's box within `(0, t_max)`, or `None`. The far
-    /// distance is enlarged by `1 + 2γ₃` so that round-off never culls a box the ray enters.
+    /// Slab test of the four children within `(0, t_max)`: bit mask of the hit (valid) children
+    /// and their entry distances. The far distance is enlarged by `1 + 2γ₃` so that round-off
+    /// never culls a box the ray enters.
     #[inline(always)]
-    fn entry(&self, node: &Node, t_max: f32) -> Option<f32> {
-        let t0 = (Vec3A::from_vec4(node.min) - self.o) * self.inv_d;
-        let t1 = (Vec3A::from_vec4(node.max) - self.o) * self.inv_d;
-        let t_near = t0.min(t1).max_element().max(0.0);
-        let t_far = (t0.max(t1).min_element() * (1.0 + 2.0 * gamma(3))).min(t_max);
-        (t_near <= t_far).then_some(t_near)
+    fn test4(&self, node: &Node4, t_max: f32) -> (u32, [f32; 4]) {
+        let b = &node.bounds;
+        let tn = |a: usize| (b[self.near[a]][a] - self.o[a]) * self.inv_d[a];
+        let tf = |a: usize| (b[1 - self.near[a]][a] - self.o[a]) * self.inv_d[a];
+        let t_near = tn(0).max(tn(1)).max(tn(2)).max(Vec4::ZERO);
+        let t_far = (tf(0).min(tf(1)).min(tf(2)) * (1.0 + 2.0 * gamma(3))).min(Vec4::splat(t_max));
+        let mut mask = t_near.cmple(t_far).bitmask();
+        for slot in 0..4 {
+            if !node.valid(slot) {
+                mask &= !(1 << slot);
+            }
+        }
+        (mask, t_near.to_array())
     }
 }
 
@@ -252,7 +256,6 @@ impl SlabRay {
 mod tests {
     use super::*;
     use crate::geometry::triangle::{intersect_triangle, RayPrecomp};
-    use crate::math::Vec3;
     use crate::sampling::Pcg32;
 
     fn random_triangles(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
