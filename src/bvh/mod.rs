@@ -144,9 +144,9 @@ impl Bvh {
                     // Collect hit children, then push all but the nearest, farthest first.
                     let mut hits = [(0u32, 0u32, 0.0f32); 4];
                     let mut n = 0;
-                    for slot in 0..4 {
+                    for (slot, &t) in t_near.iter().enumerate() {
                         if mask & (1 << slot) != 0 {
-                            hits[n] = (node.child[slot], node.count[slot], t_near[slot]);
+                            hits[n] = (node.child[slot], node.count[slot], t);
                             n += 1;
                         }
                     }
