@@ -73,12 +73,11 @@ impl Sphere {
     #[inline]
     pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
         let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
-        let p = self.center + self.radius * v;
-        let p_error = gamma(5) * (self.radius * v).abs() + gamma(2) * p.abs();
         let uv = Vec2::new(crate::math::spherical_phi(v) / (2.0 * PI), crate::math::spherical_theta(v) / PI);
-        (SurfacePoint { p, n: if self.flip { -v } else { v }, p_error }, uv)
+        (self.point(v), uv)
     }
 
+    /// The point in unit direction `v` from the centre, its normal and error bound.
     fn point(&self, v: Vec3) -> SurfacePoint {
         let p = self.center + self.radius * v;
         SurfacePoint {

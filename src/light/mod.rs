@@ -100,6 +100,13 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// A distance from `p_ref` that reaches past everything in the scene (bounding sphere `center`,
+/// `radius`): where shadow rays toward lights at infinity end.
+#[inline]
+fn beyond_scene(p_ref: Vec3, center: Vec3, radius: f32) -> f32 {
+    2.0 * (radius + (p_ref - center).length()) + 1.0
+}
+
 impl Light {
     /// Emitted power (luminance of the radiant flux, W) used to choose lights proportionally:
     /// `π A L` for a one-sided Lambertian area emitter of area `A`, `4π I` for a point light.
@@ -169,7 +176,7 @@ impl Light {
             Light::Constant { radiance, center, radius } => {
                 let s = crate::sampling::sample_uniform_sphere(u);
                 // A shadow-ray endpoint beyond everything in the scene.
-                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                let far = beyond_scene(p_ref, *center, *radius);
                 Some(LightSample {
                     wi: s.value,
                     li: *radiance,
@@ -182,12 +189,12 @@ impl Light {
             }
             Light::EnvMap { map, center, radius } => {
                 let (wi, li, pdf) = map.sample(u)?;
-                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                let far = beyond_scene(p_ref, *center, *radius);
                 Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
             }
             Light::Directional { direction, irradiance, center, radius } => {
                 let wi = -*direction;
-                let far = 2.0 * (radius + (p_ref - *center).length()) + 1.0;
+                let far = beyond_scene(p_ref, *center, *radius);
                 Some(LightSample {
                     wi,
                     li: *irradiance,

@@ -49,27 +49,45 @@ pub fn diffuse_fresnel_reflectance(eta: f32) -> f32 {
     (2.0 * sum / n as f64) as f32
 }
 
+/// Probability weight of the specular lobe of a coated material: `s / (s + d)` with `s`, `d` the
+/// mean specular and diffuse reflectances (½ when both are black). Shared by `plastic` and
+/// `roughplastic`.
+pub(super) fn specular_sampling_weight(diffuse: Rgb, specular: Rgb) -> f32 {
+    let d = diffuse.element_sum() / 3.0;
+    let s = specular.element_sum() / 3.0;
+    if s + d > 0.0 {
+        s / (s + d)
+    } else {
+        0.5
+    }
+}
+
+/// Albedo of the base once internal reflections at the coating (diffuse reflectance `r_int`
+/// seen from inside) are summed: `ρ / (1 - r_int)`, or `ρ / (1 - ρ r_int)` for the `nonlinear`
+/// model. Shared by `plastic` and `roughplastic`.
+pub(super) fn coated_diffuse_albedo(rho: Rgb, r_int: f32, nonlinear: bool) -> Rgb {
+    if nonlinear {
+        rho / (Rgb::ONE - rho * r_int)
+    } else {
+        rho / (1.0 - r_int)
+    }
+}
+
 impl Plastic {
     /// Plastic with the given parameters.
     pub fn new(diffuse_reflectance: Rgb, specular_reflectance: Rgb, eta: f32, nonlinear: bool) -> Plastic {
-        let d = diffuse_reflectance.element_sum() / 3.0;
-        let s = specular_reflectance.element_sum() / 3.0;
         Plastic {
             diffuse_reflectance,
             specular_reflectance,
             eta,
             nonlinear,
             fdr_int: diffuse_fresnel_reflectance(1.0 / eta),
-            specular_weight: if s + d > 0.0 { s / (s + d) } else { 0.5 },
+            specular_weight: specular_sampling_weight(diffuse_reflectance, specular_reflectance),
         }
     }
 
     fn diffuse_albedo(&self) -> Rgb {
-        if self.nonlinear {
-            self.diffuse_reflectance / (Rgb::ONE - self.diffuse_reflectance * self.fdr_int)
-        } else {
-            self.diffuse_reflectance / (1.0 - self.fdr_int)
-        }
+        coated_diffuse_albedo(self.diffuse_reflectance, self.fdr_int, self.nonlinear)
     }
 
     fn probabilities(&self, cos_o: f32) -> (f32, f32) {

@@ -16,6 +16,7 @@
 
 use super::fresnel::{fresnel_dielectric, reflect_about};
 use super::microfacet::Microfacet;
+use super::plastic::{coated_diffuse_albedo, specular_sampling_weight};
 use super::BsdfSample;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
 use crate::sampling::sample_cosine_hemisphere_malley;
@@ -88,8 +89,6 @@ impl RoughPlastic {
         let h = 1.0 / (TABLE - 1) as f32;
         let integral: f32 =
             (0..TABLE).map(|k| internal[k] * mu(k) * if k == 0 || k == TABLE - 1 { 0.5 } else { 1.0 }).sum::<f32>() * h;
-        let d = diffuse_reflectance.element_sum() / 3.0;
-        let s = specular_reflectance.element_sum() / 3.0;
         RoughPlastic {
             distribution,
             diffuse_reflectance,
@@ -98,7 +97,7 @@ impl RoughPlastic {
             nonlinear,
             external_transmittance,
             internal_reflectance: (1.0 - 2.0 * integral).clamp(0.0, 1.0),
-            specular_weight: if s + d > 0.0 { s / (s + d) } else { 0.5 },
+            specular_weight: specular_sampling_weight(diffuse_reflectance, specular_reflectance),
         }
     }
 
@@ -122,11 +121,7 @@ impl RoughPlastic {
     }
 
     fn diffuse_albedo(&self) -> Rgb {
-        if self.nonlinear {
-            self.diffuse_reflectance / (Rgb::ONE - self.diffuse_reflectance * self.internal_reflectance)
-        } else {
-            self.diffuse_reflectance / (1.0 - self.internal_reflectance)
-        }
+        coated_diffuse_albedo(self.diffuse_reflectance, self.internal_reflectance, self.nonlinear)
     }
 
     /// `f cos θᵢ` (specular + diffuse).
