@@ -143,8 +143,12 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
             (w, w)
         }
     };
-    if w == 0 || h == 0 || w > 65536 || h > 65536 {
+    if w == 0 || h == 0 {
         return Err(bad());
+    }
+    // The film keeps ~52 bytes per pixel: cap it well below this machine's memory.
+    if w > 16384 || h > 16384 || (w as u64) * (h as u64) > 1 << 26 {
+        return Err(format!("resolution {w}x{h} is too large (at most 16384 per side and 67 million pixels)"));
     }
     Ok((w, h))
 }
@@ -193,9 +197,14 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     }
     let time_budget = match a.time {
         None => None,
-        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
-        Some(t) => return Err(usage(format!("--time must be a positive number of seconds, got {t}"))),
+        Some(t) => match Duration::try_from_secs_f64(t) {
+            Ok(d) if t > 0.0 => Some(d),
+            _ => return Err(usage(format!("--time must be a positive number of seconds, got {t}"))),
+        },
     };
+    if !a.exposure.is_finite() {
+        return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
+    }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
     Format::from_path(&output).map_err(usage)?;
 
