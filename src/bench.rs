@@ -24,11 +24,11 @@ pub struct BenchArgs {
     #[arg(long)]
     pub mesh: Option<PathBuf>,
     /// Triangles in the generated mesh.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub triangles: usize,
+    #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(8..))]
+    pub triangles: u64,
     /// Rays per ray benchmark.
-    #[arg(long, default_value_t = 1 << 20)]
-    pub rays: usize,
+    #[arg(long, default_value_t = 1 << 20, value_parser = clap::value_parser!(u64).range(1..))]
+    pub rays: u64,
     /// Skip the Cornell box rendering benchmark.
     #[arg(long)]
     pub no_cbox: bool,
@@ -82,7 +82,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     let all = rayon::current_num_threads();
     let mesh = match &args.mesh {
         Some(path) => neumann::load::load_mesh(path)?,
-        None => displaced_sphere(args.triangles),
+        None => displaced_sphere(args.triangles as usize),
     };
     let name = args.mesh.as_ref().map_or("generated displaced sphere".to_string(), |p| p.display().to_string());
     println!("mesh: {name}, {} triangles", mesh.len());
@@ -113,13 +113,13 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     let b = scene.bvh().bounds();
     let (center, radius) = b.bounding_sphere();
     let mut rng = Pcg32::new(1, 1);
-    let side = (args.rays as f64).sqrt() as u32;
+    let side = ((args.rays as f64).sqrt() as u32).max(1);
     let to_world = Transform::look_at(center + Vec3::new(0.0, 0.3, 2.2) * radius, center, Vec3::Y).unwrap();
     let cam = Camera::perspective(to_world, 50.0, FovAxis::X, side, side)?;
     let primary: Vec<Ray> = (0..side * side)
         .map(|k| cam.generate_ray(Vec2::new((k % side) as f32 + 0.5, (k / side) as f32 + 0.5), Vec2::ZERO))
         .collect();
-    let incoherent: Vec<Ray> = (0..args.rays)
+    let incoherent: Vec<Ray> = (0..args.rays as usize)
         .map(|_| {
             let o = b.min + b.diagonal() * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
             Ray::new(o, sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value)

@@ -199,7 +199,7 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         None => None,
         Some(t) => match Duration::try_from_secs_f64(t) {
             Ok(d) if t > 0.0 => Some(d),
-            _ => return Err(usage(format!("--time must be a positive number of seconds, got {t}"))),
+            _ => return Err(usage(format!("--time must be a positive number of seconds, got {t:?}"))),
         },
     };
     if !a.exposure.is_finite() {
