@@ -59,7 +59,7 @@ impl Domain for Rect {
     }
 }
 
-/// The unit disk in the plane, area measure, parameterized by (r, φ) ∈ [0,1] × [0, 2π) with
+/// The unit disk in the plane, area measure, parameterized by (r, φ) ∈ \[0, 1\] × \[0, 2π) with
 /// Jacobian r.
 #[derive(Clone, Copy, Debug)]
 pub struct Disk;
@@ -130,7 +130,7 @@ impl Domain for SphericalCap {
     }
 }
 
-/// A triangle in 3D, area measure. Parameters (a, b) ∈ [0,1]² map to the barycentrics
+/// A triangle in 3D, area measure. Parameters (a, b) ∈ \[0, 1\]² map to the barycentrics
 /// `b1 = a (1 - b)`, `b2 = a b`, i.e. the point `p0 + b1 (p1 - p0) + b2 (p2 - p0)`: the unit
 /// square collapsed onto the triangle at `p0`, with Jacobian `2 A a` (A = triangle area).
 #[derive(Clone, Copy, Debug)]
