@@ -113,11 +113,16 @@ pub fn render(
     let prototype = settings.sampler.make(spp, settings.seed);
     let pixels = width as u64 * height as u64;
 
-    let bar = if settings.progress { ProgressBar::new(pixels * spp as u64) } else { ProgressBar::hidden() };
+    // With a time budget the bar measures time (milliseconds of the budget), else samples.
+    let bar_len = match settings.time_budget {
+        Some(b) => b.as_millis().max(1) as u64,
+        None => pixels * spp as u64,
+    };
+    let bar = if settings.progress { ProgressBar::new(bar_len) } else { ProgressBar::hidden() };
     if settings.progress {
         bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
         let template = if settings.time_budget.is_some() {
-            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} samples (at most; time-limited) {msg}"
+            "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}"
         } else {
             "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} samples, ETA {eta} {msg}"
         };
@@ -173,7 +178,10 @@ pub fn render(
                     }
                     let n = (w * h * pass) as u64;
                     let total = samples_done.fetch_add(n, Ordering::Relaxed) + n;
-                    bar.inc(n);
+                    match settings.time_budget {
+                        Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
+                        None => bar.inc(n),
+                    }
                     let secs = start.elapsed().as_secs_f64().max(1e-9);
                     bar.set_message(format!("{:.2} Msamples/s", total as f64 / secs / 1e6));
                     Some(tile)
