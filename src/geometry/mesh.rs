@@ -147,7 +147,12 @@ impl TriangleMesh {
     /// Geometric normal of triangle `i` (unit, front side).
     #[inline]
     pub fn face_normal(&self, i: usize) -> Vec3 {
-        let p = self.triangle(i);
+        self.normal_of(&self.triangle(i))
+    }
+
+    /// Geometric normal (unit, front side) of this mesh's triangle with vertices `p`.
+    #[inline]
+    pub fn normal_of(&self, p: &[Vec3; 3]) -> Vec3 {
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
         if self.flip_normals {
             -n
@@ -190,8 +195,8 @@ impl TriangleMesh {
         let p = self.triangle(i);
         let x = p[0] * b.x + p[1] * b.y + p[2] * b.z;
         let err = crate::math::float::gamma(6) * ((b.x * p[0]).abs() + (b.y * p[1]).abs() + (b.z * p[2]).abs());
-        let ng = self.face_normal(i);
-        let (ns, _) = self.shading(i, [b.x, b.y, b.z], ng);
+        let ng = self.normal_of(&p);
+        let ns = if self.normals.is_empty() { ng } else { self.shading(i, [b.x, b.y, b.z], ng).0 };
         Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area))
     }
 }

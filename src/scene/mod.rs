@@ -166,7 +166,7 @@ impl Scene {
             (HitKind::Triangle(h), Geometry::Mesh(m)) => {
                 let i = r.index as usize;
                 let p = m.triangle(i);
-                let ng = m.face_normal(i);
+                let ng = m.normal_of(&p);
                 let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
                 SurfaceInteraction {
                     p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
