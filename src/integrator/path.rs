@@ -54,10 +54,10 @@ impl Default for PathIntegrator {
 impl PathIntegrator {
     /// Weight of emission found by the path itself (not by light sampling). `prev` is the previous
     /// vertex (position, BSDF pdf of the direction taken, delta?), `None` for camera rays;
-    /// `pdf_light` computes the light-sampling density of the same direction (solid angle,
-    /// including the light selection probability).
+    /// `pdf_light(p_prev)` computes the light-sampling density of the same direction from the
+    /// previous vertex (solid angle, including the light selection probability).
     #[inline]
-    fn emission_weight(&self, prev: Option<(Vec3, f32, bool)>, pdf_light: impl FnOnce() -> f32) -> f32 {
+    fn emission_weight(&self, prev: Option<(Vec3, f32, bool)>, pdf_light: impl FnOnce(Vec3) -> f32) -> f32 {
         match prev {
             None => {
                 if self.hide_emitters {
@@ -67,10 +67,10 @@ impl PathIntegrator {
                 }
             }
             Some((_, _, true)) => 1.0,
-            Some((_, pdf_bsdf, false)) => match self.strategy {
+            Some((p_prev, pdf_bsdf, false)) => match self.strategy {
                 DirectStrategy::Bsdf => 1.0,
                 DirectStrategy::Light => 0.0,
-                DirectStrategy::Mis => power_heuristic(1, pdf_bsdf, 1, pdf_light()),
+                DirectStrategy::Mis => power_heuristic(1, pdf_bsdf, 1, pdf_light(p_prev)),
             },
         }
     }
@@ -102,7 +102,7 @@ impl Integrator for PathIntegrator {
                 let d = ray.d.normalize();
                 for &i in scene.infinite_lights() {
                     let light = &scene.lights()[i as usize];
-                    let weight = self.emission_weight(prev, || scene.light_pmf(i) * light.pdf_li_direction(d));
+                    let weight = self.emission_weight(prev, |_| scene.light_pmf(i) * light.pdf_li_direction(d));
                     l += beta * light.le_escaped(d) * weight;
                 }
                 break;
@@ -115,8 +115,7 @@ impl Integrator for PathIntegrator {
                 let le = scene.lights()[light_index as usize].le(si.ns, wo);
                 if le != Rgb::ZERO {
                     let light = &scene.lights()[light_index as usize];
-                    let weight = self.emission_weight(prev, || {
-                        let p_prev = prev.map_or(si.p, |p| p.0);
+                    let weight = self.emission_weight(prev, |p_prev| {
                         scene.light_pmf(light_index) * light.pdf_li(geometries, p_prev, si.p, si.ng)
                     });
                     l += beta * le * weight;

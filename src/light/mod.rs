@@ -246,14 +246,14 @@ impl Light {
     }
 
     /// Solid-angle density with which [`Light::sample_li`] from `p_ref` picks the point `p` (with
-    /// geometric normal `ng`) on this light; 0 for delta lights.
+    /// geometric normal `ng`) on this light; 0 for delta lights. For lights at infinity, `p`
+    /// only gives the direction (see [`Light::pdf_li_direction`]).
     #[inline]
     pub fn pdf_li(&self, shapes: &[Geometry], p_ref: Vec3, p: Vec3, ng: Vec3) -> f32 {
         match self {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
             Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => 0.0,
-            Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
-            Light::EnvMap { .. } => 0.0,
+            Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction((p - p_ref).normalize_or_zero()),
         }
     }
 

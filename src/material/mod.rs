@@ -122,8 +122,6 @@ impl Bsdf {
 
     /// Density of [`Bsdf::sample`] choosing `wi`, per unit solid angle; 0 for delta BSDFs.
     #[inline]
-    // No pdf reads a texture yet (textured roughness will), so `ctx` only flows to `twosided`.
-    #[allow(clippy::only_used_in_recursion)]
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
