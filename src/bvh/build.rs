@@ -11,7 +11,7 @@ use crate::math::{Bounds3, Vec3};
 pub struct BuildOptions {
     /// Largest leaf (primitives); larger sets are always split.
     pub max_leaf: usize,
-    /// SAH bins per axis.
+    /// SAH bins per axis (2 to 64).
     pub bins: usize,
     /// Subtrees with more primitives than this are built in parallel.
     pub parallel_threshold: usize,
@@ -77,7 +77,7 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
         Split::Leaf | Split::Median => median(items, cbounds.max_extent()),
         Split::At { axis, bin } => {
             let (lo, extent) = (cbounds.min[axis], cbounds.diagonal()[axis]);
-            let nb = opts.bins;
+            let nb = bin_count(opts);
             let mid = partition(items, |it| bin_of(it.centroid[axis], lo, extent, nb) < bin);
             if mid == 0 || mid == n {
                 median(items, axis)
@@ -95,6 +95,14 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
     (BuildNode::Interior { bounds, children: Box::new([l, r]) }, 1 + lc + rc)
 }
 
+/// Most SAH bins per axis (`BuildOptions::bins` is clamped to it).
+const MAX_BINS: usize = 64;
+
+/// The number of bins actually used, the same for finding and for applying a split.
+fn bin_count(opts: &BuildOptions) -> usize {
+    opts.bins.clamp(2, MAX_BINS)
+}
+
 enum Split {
     Leaf,
     Median,
@@ -108,14 +116,15 @@ fn bin_of(c: f32, lo: f32, extent: f32, nb: usize) -> usize {
 
 /// The SAH-best bin boundary over the three axes, or `Leaf` when no split beats a leaf.
 fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildOptions) -> Split {
-    let nb = opts.bins;
+    let nb = bin_count(opts);
     let n = items.len();
     let extent = cbounds.diagonal();
     if extent.max_element() <= 0.0 {
         return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
     }
-    let mut counts = vec![[0u32; 3]; nb];
-    let mut boxes = vec![[Bounds3::EMPTY; 3]; nb];
+    // Fixed-size bin arrays on the stack: no allocation per node.
+    let mut counts = [[0u32; 3]; MAX_BINS];
+    let mut boxes = [[Bounds3::EMPTY; 3]; MAX_BINS];
     for it in items {
         for axis in 0..3 {
             if extent[axis] > 0.0 {
@@ -127,8 +136,8 @@ fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildO
     }
     let parent_area = bounds.surface_area().max(1e-30);
     let mut best = (f32::INFINITY, 0usize, 0usize);
-    let mut right_area = vec![0.0f32; nb];
-    let mut right_count = vec![0u32; nb];
+    let mut right_area = [0.0f32; MAX_BINS];
+    let mut right_count = [0u32; MAX_BINS];
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
