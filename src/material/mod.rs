@@ -8,6 +8,7 @@
 //! are black, as in Mitsuba.
 
 mod conductor;
+mod conductor_presets;
 mod dielectric;
 mod diffuse;
 pub mod fresnel;
@@ -17,6 +18,7 @@ mod roughdielectric;
 mod roughplastic;
 
 pub use conductor::{Conductor, ConductorIor, RoughConductor};
+pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};

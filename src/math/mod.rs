@@ -12,6 +12,7 @@ pub mod float;
 pub mod frame;
 pub mod ray;
 pub mod special;
+pub mod spectrum;
 pub mod transform;
 
 pub use bounds::Bounds3;
