@@ -16,6 +16,7 @@
 use super::{Mat3, Rgb, Vec3};
 
 /// x̄, ȳ, z̄ and D65 (relative) every 5 nm from 360 to 830 nm.
+#[allow(clippy::excessive_precision)] // as printed by the generator script
 const CIE_5NM: [[f32; 4]; 95] = [
     [1.299000e-04, 3.917000e-06, 6.061000e-04, 4.711063e-01], // 360 nm
     [2.321000e-04, 6.965000e-06, 1.086000e-03, 4.986362e-01], // 365 nm
