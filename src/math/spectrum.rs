@@ -154,7 +154,7 @@ fn interpolate(samples: &[(f32, f32)], lambda: f32) -> f32 {
 fn xyz_to_srgb(xyz: Vec3) -> Rgb {
     let m = Mat3::from_cols(
         Vec3::new(3.240479, -0.969256, 0.055648),
-        Vec3::new(-1.537150, 1.875991, -0.204043),
+        Vec3::new(-1.53715, 1.875991, -0.204043),
         Vec3::new(-0.498535, 0.041556, 1.057311),
     );
     m * xyz
