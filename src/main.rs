@@ -7,6 +7,7 @@ use neumann::integrator::{DirectStrategy, PathIntegrator};
 use neumann::render::{render, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
 use neumann::scene::cornell;
+use neumann::scene::xml::load_scene_file;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -93,7 +94,7 @@ fn main() -> ExitCode {
 
 #[derive(clap::Args, Debug)]
 struct RenderArgs {
-    /// Scene to render: a built-in scene name (cbox).
+    /// Scene to render: a Mitsuba 3 XML file, or a built-in scene name (cbox, the default).
     scene: Option<String>,
     /// Output image; the extension picks the format (default: <scene>.png).
     #[arg(short, long)]
@@ -107,21 +108,22 @@ struct RenderArgs {
     /// Film resolution, W or WxH.
     #[arg(long)]
     res: Option<String>,
-    /// Seed of all random numbers.
-    #[arg(long, default_value_t = 0)]
-    seed: u64,
+    /// Seed of all random numbers (default: the scene's sampler seed, 0).
+    #[arg(long)]
+    seed: Option<u64>,
     /// Worker threads (default: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Render for this many seconds (whole passes), instead of a sample count.
     #[arg(long)]
     time: Option<f64>,
-    /// Scene parameter override name=value (the built-in Cornell box has res, spp, max_depth).
+    /// Scene parameter name=value: overrides the scene file's <default> of that name ($name);
+    /// the built-in Cornell box has res, spp, max_depth.
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     define: Vec<String>,
-    /// Sampler.
-    #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
-    sampler: SamplerArg,
+    /// Sampler (default: the scene's; independent for the built-in scene).
+    #[arg(long, value_enum)]
+    sampler: Option<SamplerArg>,
     /// Direct-light strategy of the path tracer.
     #[arg(long, value_enum, default_value_t = DirectArg::Mis)]
     direct: DirectArg,
@@ -153,21 +155,36 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-fn run_render(a: RenderArgs) -> Result<(), Failure> {
-    let name = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
-    if name != "cbox" {
-        return Err(Failure(
-            1,
-            format!("unknown scene '{name}': the built-in scenes are: cbox (scene files are not supported yet)"),
-        ));
-    }
-    // Scene parameters (as cbox.xml's <default> values), then -D overrides, then flags.
+/// A scene ready to render with its settings (from the built-in Cornell box or a file).
+struct Job {
+    name: String,
+    scene: neumann::scene::Scene,
+    integrator: PathIntegrator,
+    spp: u32,
+    sampler: SamplerKind,
+    seed: u64,
+    filter: neumann::film::filter::Filter,
+    window: Option<[u32; 4]>,
+}
+
+/// Parses the `-D name=value` list.
+fn parse_defines(defines: &[String]) -> Result<Vec<(String, String)>, Failure> {
+    defines
+        .iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.to_string())),
+            _ => Err(usage(format!("-D expects NAME=VALUE, got '{d}'"))),
+        })
+        .collect()
+}
+
+/// The built-in Cornell box with cbox.xml's parameters (res, spp, max_depth) from `-D`.
+fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Failure> {
     let (mut res, mut spp, mut max_depth) =
         ((cornell::DEFAULT_RES, cornell::DEFAULT_RES), cornell::DEFAULT_SPP, cornell::DEFAULT_MAX_DEPTH);
-    for d in &a.define {
-        let (k, v) = d.split_once('=').ok_or_else(|| usage(format!("-D expects NAME=VALUE, got '{d}'")))?;
+    for (k, v) in defines {
         let bad = |what: &str| usage(format!("-D {k}: expected {what}, got '{v}'"));
-        match k.trim() {
+        match k.as_str() {
             "res" => res = parse_res(v).map_err(usage)?,
             "spp" => spp = v.trim().parse().ok().filter(|&s: &u32| s > 0).ok_or_else(|| bad("a positive integer"))?,
             "max_depth" => {
@@ -180,21 +197,84 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
             }
         }
     }
+    Ok(Job {
+        name: name.to_string(),
+        scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?,
+        integrator: PathIntegrator { max_depth, ..Default::default() },
+        spp,
+        sampler: SamplerKind::Independent,
+        seed: 0,
+        filter: neumann::film::filter::Filter::Box,
+        window: None,
+    })
+}
+
+/// A Mitsuba XML scene file.
+fn file_job(path: &std::path::Path, defines: &[(String, String)]) -> Result<Job, Failure> {
+    let file = load_scene_file(path, defines).map_err(|e| Failure(1, e.to_string()))?;
+    for w in &file.warnings {
+        eprintln!("{w}");
+    }
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
+    Ok(Job {
+        name,
+        scene: file.scene,
+        integrator: file.integrator,
+        spp: file.spp,
+        sampler: file.sampler,
+        seed: file.seed,
+        filter: file.filter,
+        window: file.window,
+    })
+}
+
+fn run_render(a: RenderArgs) -> Result<(), Failure> {
+    let scene_arg = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
+    let defines = parse_defines(&a.define)?;
+    let mut job = if scene_arg == "cbox" {
+        builtin_job(&scene_arg, &defines)?
+    } else if scene_arg.to_ascii_lowercase().ends_with(".xml") || std::path::Path::new(&scene_arg).exists() {
+        file_job(std::path::Path::new(&scene_arg), &defines)?
+    } else {
+        return Err(Failure(
+            1,
+            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml scene file or a built-in scene name (cbox)"),
+        ));
+    };
+    // Command-line flags override the scene's settings.
     if let Some(r) = &a.res {
-        res = parse_res(r).map_err(usage)?;
+        let (w, h) = parse_res(r).map_err(usage)?;
+        let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+        job.scene.set_camera(camera);
+        job.window = None;
     }
     if let Some(s) = a.spp {
         if s == 0 {
             return Err(usage("--spp must be at least 1".into()));
         }
-        spp = s;
+        job.spp = s;
     }
     if let Some(d) = a.max_depth {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
-        max_depth = d;
+        job.integrator.max_depth = d;
     }
+    if let Some(s) = a.seed {
+        job.seed = s;
+    }
+    if let Some(s) = a.sampler {
+        job.sampler = match s {
+            SamplerArg::Independent => SamplerKind::Independent,
+            SamplerArg::Stratified => SamplerKind::Stratified,
+            SamplerArg::Sobol => SamplerKind::Sobol,
+        };
+    }
+    job.integrator.strategy = match a.direct {
+        DirectArg::Mis => DirectStrategy::Mis,
+        DirectArg::Light => DirectStrategy::Light,
+        DirectArg::Bsdf => DirectStrategy::Bsdf,
+    };
     let time_budget = match a.time {
         None => None,
         Some(t) => match Duration::try_from_secs_f64(t) {
@@ -205,30 +285,18 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     if !a.exposure.is_finite() {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
-    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
+    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
     Format::from_path(&output).map_err(usage)?;
 
-    let scene = cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?;
-    let integrator = PathIntegrator {
-        max_depth,
-        strategy: match a.direct {
-            DirectArg::Mis => DirectStrategy::Mis,
-            DirectArg::Light => DirectStrategy::Light,
-            DirectArg::Bsdf => DirectStrategy::Bsdf,
-        },
-        ..Default::default()
-    };
     let settings = RenderSettings {
-        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { spp },
+        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.spp },
         time_budget,
-        seed: a.seed,
+        seed: job.seed,
         threads: a.threads,
-        sampler: match a.sampler {
-            SamplerArg::Independent => SamplerKind::Independent,
-            SamplerArg::Stratified => SamplerKind::Stratified,
-            SamplerArg::Sobol => SamplerKind::Sobol,
-        },
+        sampler: job.sampler,
         progress: !a.quiet,
+        filter: job.filter.clone(),
+        window: job.window,
         ..Default::default()
     };
     let _ = ctrlc::set_handler(|| {
@@ -239,19 +307,21 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
             "\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)"
         );
     });
+    let cam = job.scene.camera();
+    let [_, _, width, height] = job.window.unwrap_or([0, 0, cam.width(), cam.height()]);
     println!(
-        "rendering {name} at {}x{}, {}, max_depth {max_depth}, {} threads",
-        res.0,
-        res.1,
+        "rendering {} at {width}x{height}, {}, max_depth {}, {} threads",
+        job.name,
         match a.time {
             Some(t) => format!("for {t} s"),
-            None => format!("{spp} spp"),
+            None => format!("{} spp", job.spp),
         },
+        job.integrator.max_depth,
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
-    let out = render(&scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    let out = render(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
     let (lo, hi) = out.film.spp_range();
-    write_image(&output, res.0, res.1, &out.film.image(), &ImageInfo { spp: lo, exposure: a.exposure })
+    write_image(&output, width, height, &out.film.image(), &ImageInfo { spp: lo, exposure: a.exposure })
         .map_err(|e| Failure(1, e))?;
     let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
     println!(

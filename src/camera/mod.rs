@@ -41,6 +41,8 @@ impl std::str::FromStr for FovAxis {
 #[derive(Clone, Debug)]
 pub struct Camera {
     to_world: Transform,
+    fov_deg: f32,
+    fov_axis: FovAxis,
     /// tan of half the horizontal / vertical field of view.
     tan_half: Vec2,
     width: u32,
@@ -83,6 +85,8 @@ impl Camera {
         };
         Ok(Camera {
             to_world,
+            fov_deg,
+            fov_axis,
             tan_half,
             width,
             height,
@@ -91,6 +95,13 @@ impl Camera {
             lens_radius: 0.0,
             focus_distance: 1.0,
         })
+    }
+
+    /// The same camera on a `width × height` film: the field of view along its axis is kept, the
+    /// other follows the new aspect ratio.
+    pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, String> {
+        let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
+        Ok(Camera { tan_half: c.tan_half, width, height, ..self.clone() })
     }
 
     /// Sets the near and far clip distances (along the view axis).

@@ -6,6 +6,7 @@
 //! tile accumulates its pixels' samples in sample-index order and tiles are merged in a fixed
 //! order, so images are bit-identical for a given seed whatever the number of threads.
 
+pub mod filter;
 pub mod output;
 
 use crate::math::Rgb;

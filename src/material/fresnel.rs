@@ -78,9 +78,9 @@ pub fn refract_about(wi: Vec3, m: Vec3, cos_theta_t: f32, eta_ti: f32) -> Vec3 {
 /// Mitsuba 3's named indices of refraction (at 589 nm).
 pub const NAMED_IORS: [(&str, f32); 23] = [
     ("vacuum", 1.0),
-    ("helium", 1.00004),
-    ("hydrogen", 1.00013),
-    ("air", 1.00028),
+    ("helium", 1.000036),
+    ("hydrogen", 1.000132),
+    ("air", 1.000277),
     ("carbon dioxide", 1.00045),
     ("water", 1.3330),
     ("acetone", 1.36),

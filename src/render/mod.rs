@@ -6,6 +6,7 @@
 //! after each pass. The image is therefore bit-identical for a given seed and sample count
 //! whatever the number of threads.
 
+use crate::film::filter::Filter;
 use crate::film::{Film, TileBuffer};
 use crate::integrator::Integrator;
 use crate::math::Vec2;
@@ -56,6 +57,11 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Whether to draw a progress bar on the terminal.
     pub progress: bool,
+    /// Pixel reconstruction filter (importance-sampled).
+    pub filter: Filter,
+    /// Crop window `[x0, y0, width, height]` of the camera's film to render (the output image is
+    /// the window; default: the whole film).
+    pub window: Option<[u32; 4]>,
 }
 
 impl Default for RenderSettings {
@@ -68,6 +74,8 @@ impl Default for RenderSettings {
             tile_size: 16,
             sampler: SamplerKind::Independent,
             progress: false,
+            filter: Filter::Box,
+            window: None,
         }
     }
 }
@@ -99,7 +107,18 @@ pub fn render(
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, String> {
     let cam = scene.camera();
-    let (width, height) = (cam.width(), cam.height());
+    let [wx, wy, width, height] = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    if width == 0
+        || height == 0
+        || wx as u64 + width as u64 > cam.width() as u64
+        || wy as u64 + height as u64 > cam.height() as u64
+    {
+        return Err(format!(
+            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
+            cam.width(),
+            cam.height()
+        ));
+    }
     let spp = settings.spp.max(1);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -168,8 +187,9 @@ pub fn render(
                     for y in y0..y0 + h {
                         for x in x0..x0 + w {
                             for i in done..done + pass {
-                                sampler.start_pixel_sample([x, y], i, 0);
-                                let film_pos = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                                sampler.start_pixel_sample([x + wx, y + wy], i, 0);
+                                let centre = Vec2::new((x + wx) as f32 + 0.5, (y + wy) as f32 + 0.5);
+                                let film_pos = centre + settings.filter.sample(sampler.next_2d());
                                 let u_lens = sampler.next_2d();
                                 let ray = cam.generate_ray(film_pos, u_lens);
                                 tile.add(x, y, integrator.li(scene, &ray, &mut sampler));

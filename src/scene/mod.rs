@@ -4,6 +4,7 @@
 
 mod builder;
 pub mod cornell;
+pub mod xml;
 
 pub use builder::SceneBuilder;
 

@@ -3,8 +3,9 @@
 //! Mitsuba 3's plugins: `bitmap` (an image; bilinear or nearest filtering; repeat, mirror or
 //! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`) and constant
 //! values. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
-//! Image convention: uv (0, 0) is the *bottom-left* corner of the image and (1, 1) the top-right
-//! (v grows upward, as on Mitsuba's rectangle).
+//! Image convention (Mitsuba 3's, checked against it): uv (0, 0) is the *top-left* corner of the
+//! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
+//! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
 
 use crate::load::image::Image;
 use crate::math::{Mat3, Rgb, Vec2};
@@ -86,11 +87,11 @@ impl Bitmap {
                 }
             }
         };
-        // Row 0 of the image is its top: v = 1.
-        self.image.get(wrap(x, w), h - 1 - wrap(y, h))
+        // Row 0 of the image is its top: v = 0.
+        self.image.get(wrap(x, w), wrap(y, h))
     }
 
-    /// The filtered value at `uv` (v up).
+    /// The filtered value at `uv` (v down the rows).
     pub fn eval(&self, uv: Vec2) -> Rgb {
         let (w, h) = (self.image.width as f32, self.image.height as f32);
         let (x, y) = (uv.x * w, uv.y * h);
@@ -163,15 +164,15 @@ mod tests {
     #[test]
     fn bitmap_orientation_filtering_and_wrapping() {
         let nearest = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Repeat };
-        assert_eq!(nearest.eval(Vec2::new(0.25, 0.75)), Rgb::X, "top-left texel at v near 1");
-        assert_eq!(nearest.eval(Vec2::new(0.25, 0.25)), Rgb::Z, "bottom-left texel at v near 0");
-        assert_eq!(nearest.eval(Vec2::new(1.25, -0.75)), Rgb::Z, "repeat");
+        assert_eq!(nearest.eval(Vec2::new(0.25, 0.25)), Rgb::X, "top-left texel at v near 0");
+        assert_eq!(nearest.eval(Vec2::new(0.25, 0.75)), Rgb::Z, "bottom-left texel at v near 1");
+        assert_eq!(nearest.eval(Vec2::new(1.25, -0.25)), Rgb::Z, "repeat");
         let bilinear = Bitmap { image: image(), filter: Filter::Bilinear, wrap: Wrap::Clamp };
-        assert_eq!(bilinear.eval(Vec2::new(0.25, 0.75)), Rgb::X, "texel centres are exact");
+        assert_eq!(bilinear.eval(Vec2::new(0.25, 0.25)), Rgb::X, "texel centres are exact");
         let mid = bilinear.eval(Vec2::new(0.5, 0.5));
         assert!((mid - Rgb::new(0.5, 0.5, 0.5)).abs().max_element() < 1e-6, "{mid}");
         let mirror = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Mirror };
-        assert_eq!(mirror.eval(Vec2::new(1.25, 0.75)), Rgb::Y, "mirrored copy");
+        assert_eq!(mirror.eval(Vec2::new(1.25, 0.25)), Rgb::Y, "mirrored copy");
     }
 
     #[test]

@@ -1,0 +1,137 @@
+//! Scene-file errors and warnings that point at the source: `file:line:col: message`, followed by
+//! the offending line and a caret under the column (the style of rustc and miette).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A scene file's text, kept to locate errors.
+#[derive(Debug)]
+pub struct SourceFile {
+    /// Path as given (relative paths stay relative, so messages do not name the user's home).
+    pub path: PathBuf,
+    /// The file's contents.
+    pub text: String,
+}
+
+/// A byte offset in a scene file.
+#[derive(Clone, Debug)]
+pub struct Loc {
+    /// The file.
+    pub file: Arc<SourceFile>,
+    /// Byte offset into its text.
+    pub offset: usize,
+}
+
+impl Loc {
+    /// 1-based line and column (in characters) of the offset.
+    pub fn line_col(&self) -> (usize, usize) {
+        let before = &self.file.text[..self.offset.min(self.file.text.len())];
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        (line, before[line_start..].chars().count() + 1)
+    }
+
+    /// The scene file's folder, against which relative paths resolve.
+    pub fn dir(&self) -> &Path {
+        self.file.path.parent().unwrap_or(Path::new(""))
+    }
+
+    /// `file:line:col`.
+    pub fn position(&self) -> String {
+        let (line, col) = self.line_col();
+        format!("{}:{line}:{col}", self.file.path.display())
+    }
+
+    /// The source line of the offset with a caret under its column.
+    fn snippet(&self) -> String {
+        let (line, col) = self.line_col();
+        let text = self.file.text.lines().nth(line - 1).unwrap_or("");
+        let gutter = line.to_string();
+        let pad = " ".repeat(gutter.len());
+        let caret_pad: String = text.chars().take(col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
+        format!("{pad} |\n{gutter} | {text}\n{pad} | {caret_pad}^")
+    }
+}
+
+/// An error in a scene: where (if known) and what was expected.
+#[derive(Clone, Debug)]
+pub struct SceneError {
+    /// Where the problem is.
+    pub loc: Option<Loc>,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+impl SceneError {
+    /// An error at `loc`.
+    pub fn at(loc: &Loc, message: impl Into<String>) -> SceneError {
+        SceneError { loc: Some(loc.clone()), message: message.into() }
+    }
+
+    /// An error without a position (e.g. a file that cannot be read).
+    pub fn new(message: impl Into<String>) -> SceneError {
+        SceneError { loc: None, message: message.into() }
+    }
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.loc {
+            Some(loc) => write!(f, "{}: {}\n{}", loc.position(), self.message, loc.snippet()),
+            None => write!(f, "{}", self.message),
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A warning at a position (unused parameters, ignored options), formatted like errors.
+pub fn warning(loc: &Loc, message: &str) -> String {
+    format!("{}: warning: {message}", loc.position())
+}
+
+/// The candidate closest to `name` by edit distance, if any is reasonably close: for "did you
+/// mean" hints on unknown plugins and parameters.
+pub fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
+    candidates
+        .into_iter()
+        .map(|c| (edit_distance(name, c), c))
+        .min()
+        .filter(|&(d, c)| d <= (c.len().max(name.len()) / 2).max(2))
+        .map(|(_, c)| c)
+}
+
+/// Levenshtein distance (case-insensitive).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.to_lowercase().chars().collect(), b.to_lowercase().chars().collect());
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn positions_snippets_and_suggestions() {
+        let file =
+            Arc::new(SourceFile { path: "scene.xml".into(), text: "<scene>\n  <bsdf type=\"difuse\"/>\n".into() });
+        let loc = Loc { file, offset: 10 };
+        assert_eq!(loc.line_col(), (2, 3));
+        let e = SceneError::at(&loc, "unknown BSDF").to_string();
+        assert!(e.starts_with("scene.xml:2:3: unknown BSDF\n"), "{e}");
+        assert!(e.contains("2 |   <bsdf type=\"difuse\"/>\n  |   ^"), "{e}");
+        assert_eq!(nearest("difuse", ["diffuse", "dielectric", "conductor"]), Some("diffuse"));
+        assert_eq!(nearest("roughplastik", ["plastic", "roughplastic"]), Some("roughplastic"));
+        assert_eq!(nearest("xyzzy", ["diffuse", "plastic"]), None);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+}

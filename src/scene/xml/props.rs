@@ -1,0 +1,240 @@
+//! Typed access to an object's properties, as Mitsuba's `Properties`: each getter marks the
+//! property as read (for the unused-parameter warnings) and reports a wrong type at the
+//! property's position.
+
+use super::error::{nearest, warning, SceneError};
+use super::parse::{Obj, Prop, SpectrumValue, Value};
+use crate::math::spectrum::{spectrum_to_rgb, SpectrumKind};
+use crate::math::{Rgb, Transform, Vec3};
+use std::rc::Rc;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+impl Obj {
+    /// The property `name`, marked as read.
+    pub fn get(&self, name: &str) -> Option<&Prop> {
+        let p = self.props.iter().find(|p| p.name == name)?;
+        p.used.set(true);
+        Some(p)
+    }
+
+    /// Whether the property is present (does not mark it read).
+    pub fn has(&self, name: &str) -> bool {
+        self.props.iter().any(|p| p.name == name)
+    }
+
+    fn wrong(&self, p: &Prop, expected: &str) -> SceneError {
+        SceneError::at(
+            &p.loc,
+            format!(
+                "parameter '{}' of {} '{}' must be {expected}, found <{}>",
+                p.name,
+                self.tag,
+                self.ty,
+                p.value.kind()
+            ),
+        )
+    }
+
+    /// An error at the property `name` (or at the object if it is absent).
+    pub fn error_at(&self, name: &str, message: impl Into<String>) -> SceneError {
+        let loc = self.props.iter().find(|p| p.name == name).map_or(&self.loc, |p| &p.loc);
+        SceneError::at(loc, format!("{} '{}': {}", self.tag, self.ty, message.into()))
+    }
+
+    /// An error at the object.
+    pub fn error(&self, message: impl Into<String>) -> SceneError {
+        SceneError::at(&self.loc, format!("{} '{}': {}", self.tag, self.ty, message.into()))
+    }
+
+    /// A float (integers are accepted).
+    pub fn float(&self, name: &str, default: f32) -> Result<f32> {
+        Ok(self.float_opt(name)?.unwrap_or(default))
+    }
+
+    /// A float if present.
+    pub fn float_opt(&self, name: &str) -> Result<Option<f32>> {
+        match self.get(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::Float(v) => Ok(Some(*v as f32)),
+                Value::Integer(v) => Ok(Some(*v as f32)),
+                _ => Err(self.wrong(p, "a <float>")),
+            },
+        }
+    }
+
+    /// A float that must satisfy `ok` (described by `what`).
+    pub fn float_checked(&self, name: &str, default: f32, ok: impl Fn(f32) -> bool, what: &str) -> Result<f32> {
+        let v = self.float(name, default)?;
+        if ok(v) {
+            Ok(v)
+        } else {
+            Err(self.error_at(name, format!("'{name}' must be {what}, got {v}")))
+        }
+    }
+
+    /// An integer.
+    pub fn int(&self, name: &str, default: i64) -> Result<i64> {
+        match self.get(name) {
+            None => Ok(default),
+            Some(p) => match &p.value {
+                Value::Integer(v) => Ok(*v),
+                _ => Err(self.wrong(p, "an <integer>")),
+            },
+        }
+    }
+
+    /// A boolean.
+    pub fn bool(&self, name: &str, default: bool) -> Result<bool> {
+        match self.get(name) {
+            None => Ok(default),
+            Some(p) => match &p.value {
+                Value::Bool(v) => Ok(*v),
+                _ => Err(self.wrong(p, "a <boolean>")),
+            },
+        }
+    }
+
+    /// A string if present.
+    pub fn string_opt(&self, name: &str) -> Result<Option<String>> {
+        match self.get(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::String(v) => Ok(Some(v.clone())),
+                _ => Err(self.wrong(p, "a <string>")),
+            },
+        }
+    }
+
+    /// A required string.
+    pub fn string(&self, name: &str) -> Result<String> {
+        self.string_opt(name)?.ok_or_else(|| self.error(format!("the parameter '{name}' (a <string>) is required")))
+    }
+
+    /// A string that must be one of `choices` (the first is the default).
+    pub fn choice(&self, name: &str, choices: &[&str]) -> Result<String> {
+        match self.string_opt(name)? {
+            None => Ok(choices[0].to_string()),
+            Some(v) if choices.contains(&v.as_str()) => Ok(v),
+            Some(v) => {
+                let hint =
+                    nearest(&v, choices.iter().copied()).map(|n| format!(" (did you mean '{n}'?)")).unwrap_or_default();
+                Err(self.error_at(name, format!("'{name}' must be one of {}, got '{v}'{hint}", choices.join(", "))))
+            }
+        }
+    }
+
+    /// A colour: `<rgb>`, `<spectrum>` (reduced to RGB as `kind`), or a `<float>` (grey).
+    pub fn rgb_opt(&self, name: &str, kind: SpectrumKind) -> Result<Option<Rgb>> {
+        match self.get(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::Rgb(c) => Ok(Some(*c)),
+                Value::Float(v) => Ok(Some(Rgb::splat(*v as f32))),
+                Value::Integer(v) => Ok(Some(Rgb::splat(*v as f32))),
+                Value::Spectrum(SpectrumValue::Constant(v)) => Ok(Some(match kind {
+                    SpectrumKind::Reflectance => Rgb::splat(*v),
+                    // Mitsuba: a constant emission spectrum is illuminant E times the value.
+                    SpectrumKind::Illuminant => spectrum_to_rgb(&[(360.0, *v), (830.0, *v)], kind),
+                })),
+                Value::Spectrum(SpectrumValue::Samples(s)) => Ok(Some(spectrum_to_rgb(s, kind))),
+                Value::Object(o) if o.tag == "texture" => Err(self.wrong(
+                    p,
+                    "a constant colour here (<rgb>, <spectrum> or <float>); textures are not supported for it",
+                )),
+                _ => Err(self.wrong(p, "a colour (<rgb>, <spectrum> or <float>)")),
+            },
+        }
+    }
+
+    /// A colour with a default.
+    pub fn rgb(&self, name: &str, default: Rgb, kind: SpectrumKind) -> Result<Rgb> {
+        let c = self.rgb_opt(name, kind)?.unwrap_or(default);
+        if !c.is_finite() || c.min_element() < 0.0 {
+            return Err(self.error_at(name, format!("'{name}' must be non-negative, got {c}")));
+        }
+        Ok(c)
+    }
+
+    /// A point (`<point>`), if present.
+    pub fn point_opt(&self, name: &str) -> Result<Option<Vec3>> {
+        match self.get(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::Point(v) | Value::Vector(v) => Ok(Some(*v)),
+                _ => Err(self.wrong(p, "a <point>")),
+            },
+        }
+    }
+
+    /// A transform (identity if absent).
+    pub fn transform(&self, name: &str) -> Result<Transform> {
+        match self.get(name) {
+            None => Ok(Transform::IDENTITY),
+            Some(p) => match &p.value {
+                Value::Transform(t) => Ok(*t),
+                _ => Err(self.wrong(p, "a <transform>")),
+            },
+        }
+    }
+
+    /// A named nested object of element `tag`, if present.
+    pub fn object_opt(&self, name: &str, tag: &str) -> Result<Option<Rc<Obj>>> {
+        match self.get(name) {
+            None => Ok(None),
+            Some(p) => match &p.value {
+                Value::Object(o) if o.tag == tag => Ok(Some(o.clone())),
+                _ => Err(self.wrong(p, &format!("a <{tag}>"))),
+            },
+        }
+    }
+
+    /// Nested objects of element `tag`: unnamed children and named properties, in order.
+    pub fn nested(&self, tag: &str) -> Vec<Rc<Obj>> {
+        let mut v: Vec<Rc<Obj>> = self.children.iter().filter(|c| c.tag == tag).cloned().collect();
+        for p in &self.props {
+            if let Value::Object(o) = &p.value {
+                if o.tag == tag {
+                    p.used.set(true);
+                    v.push(o.clone());
+                }
+            }
+        }
+        v
+    }
+
+    /// Rejects nested objects of element kinds the plugin does not take.
+    pub fn check_children(&self, allowed: &[&str]) -> Result<()> {
+        for c in &self.children {
+            if !allowed.contains(&c.tag.as_str()) {
+                return Err(SceneError::at(
+                    &c.loc,
+                    format!("a <{}> cannot be nested in {} '{}'", c.tag, self.tag, self.ty),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Warnings for parameters no plugin read, in objects that were built (recursively).
+    pub fn unused_warnings(&self, out: &mut Vec<String>, seen: &mut Vec<*const Obj>) {
+        if seen.contains(&(self as *const Obj)) {
+            return;
+        }
+        seen.push(self as *const Obj);
+        if self.built.get() {
+            for p in self.props.iter().filter(|p| !p.used.get()) {
+                out.push(warning(&p.loc, &format!("unused parameter '{}' of {} '{}'", p.name, self.tag, self.ty)));
+            }
+        }
+        for p in &self.props {
+            if let Value::Object(o) = &p.value {
+                o.unused_warnings(out, seen);
+            }
+        }
+        for c in &self.children {
+            c.unused_warnings(out, seen);
+        }
+    }
+}

@@ -1,0 +1,313 @@
+//! Loader tests: the shared scenes, every construct of the format, and the errors users meet.
+
+use super::*;
+use crate::geometry::Geometry;
+use crate::light::Light;
+use crate::material::Bsdf;
+use crate::math::{Ray, Rgb, Vec3};
+use std::path::PathBuf;
+
+fn shared(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(name)
+}
+
+fn load(text: &str) -> Result<SceneFile, SceneError> {
+    load_scene_text(Path::new("test.xml"), text, &[])
+}
+
+/// A minimal scene around `body` (camera at z = 5 looking at the origin).
+fn scene(body: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="40"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="24"/></film>
+    </sensor>
+{body}
+</scene>"#
+    )
+}
+
+fn err(text: &str) -> String {
+    match load(text) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn shared_cornell_box_matches_the_builtin() {
+    let file = load_scene_file(&shared("cbox.xml"), &[]).expect("cbox.xml loads");
+    assert!(file.warnings.is_empty(), "{:?}", file.warnings);
+    assert_eq!((file.scene.camera().width(), file.scene.camera().height()), (256, 256));
+    assert_eq!(file.spp, 64);
+    assert_eq!(file.integrator.max_depth, 65);
+    assert!(matches!(file.filter, Filter::Box));
+    let builtin = crate::scene::cornell::cornell_box(256, 256).unwrap();
+    assert_eq!(file.scene.primitive_count(), builtin.primitive_count());
+    assert_eq!(file.scene.lights().len(), builtin.lights().len());
+    // Same camera rays and same first hits over a grid of pixels.
+    for (x, y) in [(10.5, 10.5), (128.0, 128.0), (200.3, 40.7), (60.0, 230.0), (250.0, 250.0)] {
+        let film = crate::math::Vec2::new(x, y);
+        let u = crate::math::Vec2::splat(0.5);
+        let (a, b) = (file.scene.camera().generate_ray(film, u), builtin.camera().generate_ray(film, u));
+        assert!((a.o - b.o).length() < 1e-6 && (a.d - b.d).length() < 1e-6);
+        let (ha, hb) = (file.scene.intersect(&a).unwrap(), builtin.intersect(&b).unwrap());
+        assert!((ha.p - hb.p).length() < 1e-5, "{} vs {}", ha.p, hb.p);
+    }
+    // -D overrides.
+    let small =
+        load_scene_file(&shared("cbox.xml"), &[("res".into(), "64".into()), ("spp".into(), "4".into())]).unwrap();
+    assert_eq!((small.scene.camera().width(), small.spp), (64, 4));
+}
+
+#[test]
+fn shared_scenes_load() {
+    let spheres = load_scene_file(&shared("cbox_spheres.xml"), &[]).expect("cbox_spheres.xml loads");
+    assert!(spheres.warnings.is_empty(), "{:?}", spheres.warnings);
+    let kinds: Vec<&str> = spheres
+        .scene
+        .bsdfs()
+        .iter()
+        .map(|b| match b {
+            Bsdf::Conductor(_) => "conductor",
+            Bsdf::Dielectric(_) => "dielectric",
+            Bsdf::Diffuse(_) => "diffuse",
+            _ => "other",
+        })
+        .collect();
+    assert!(kinds.contains(&"conductor") && kinds.contains(&"dielectric"), "{kinds:?}");
+    let furnace = load_scene_file(&shared("furnace.xml"), &[("albedo".into(), "0.5".into())]).unwrap();
+    assert!(matches!(furnace.scene.lights()[0], Light::Constant { radiance, .. } if radiance == Rgb::ONE));
+    match &furnace.scene.bsdfs()[0] {
+        Bsdf::Diffuse(d) => assert_eq!(d.reflectance.mean(), Rgb::splat(0.5)),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn transforms_apply_in_document_order() {
+    // scale, then rotate 90° about z, then translate: the sphere's centre (1,0,0) → (2,0,0)
+    // → (0,2,0) → (0,2,1).
+    let f = load(&scene(
+        r#"<shape type="sphere"><point name="center" x="1" y="0" z="0"/><float name="radius" value="0.5"/>
+           <transform name="to_world"><scale value="2"/><rotate z="1" angle="90"/><translate value="0 0 1"/></transform>
+        </shape>"#,
+    ))
+    .unwrap();
+    match &f.scene.geometries()[0] {
+        Geometry::Sphere(s) => {
+            assert!((s.center - Vec3::new(0.0, 2.0, 1.0)).length() < 1e-5, "{}", s.center);
+            assert!((s.radius - 1.0).abs() < 1e-6);
+        }
+        g => panic!("{g:?}"),
+    }
+    // A row-major matrix equals the same translation.
+    let m = load(&scene(
+        r#"<shape type="sphere"><transform name="to_world">
+             <matrix value="1 0 0 3  0 1 0 0  0 0 1 0  0 0 0 1"/></transform></shape>"#,
+    ))
+    .unwrap();
+    match &m.scene.geometries()[0] {
+        Geometry::Sphere(s) => assert!((s.center - Vec3::new(3.0, 0.0, 0.0)).length() < 1e-6),
+        g => panic!("{g:?}"),
+    }
+    // Non-uniform scale of a sphere is refused.
+    let e = err(&scene(
+        r#"<shape type="sphere"><transform name="to_world"><scale x="1" y="2" z="1"/></transform></shape>"#,
+    ));
+    assert!(e.contains("uniformly"), "{e}");
+}
+
+#[test]
+fn defaults_references_spectra_and_plugins() {
+    let text = r#"<scene version="2.1.0">
+    <default name="spp" value="7"/>
+    <default name="col" value="0.25"/>
+    <integrator type="path"><integer name="max_depth" value="3"/><boolean name="hide_emitters" value="true"/></integrator>
+    <sensor type="thinlens">
+        <float name="fov" value="30"/><string name="fov_axis" value="y"/>
+        <float name="aperture_radius" value="0.1"/><float name="focus_distance" value="4"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0"/></transform>
+        <sampler type="ldsampler"><integer name="sample_count" value="$spp"/><integer name="seed" value="3"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/>
+            <integer name="crop_offset_x" value="5"/><integer name="crop_width" value="10"/>
+            <rfilter type="tent"><float name="radius" value="1.5"/></rfilter></film>
+    </sensor>
+    <texture type="checkerboard" id="checks"><rgb name="color0" value="$col"/></texture>
+    <bsdf type="diffuse" id="mat"><ref name="reflectance" id="checks"/></bsdf>
+    <bsdf type="roughconductor" id="gold"><string name="material" value="Au"/><string name="distribution" value="ggx"/>
+        <float name="alpha_u" value="0.05"/><float name="alpha_v" value="0.3"/></bsdf>
+    <shape type="rectangle"><ref id="mat"/></shape>
+    <shape type="disk"><ref id="gold"/><emitter type="area"><spectrum name="radiance" value="400:1, 700:1"/></emitter></shape>
+    <shape type="cube"><bsdf type="twosided"><bsdf type="plastic"><float name="int_ior" value="1.6"/></bsdf></bsdf></shape>
+    <shape type="sphere"><bsdf type="roughdielectric"><string name="int_ior" value="water"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="mask"><float name="opacity" value="0.3"/><bsdf type="conductor"/></bsdf></shape>
+    <shape type="sphere"><bsdf type="blendbsdf"><float name="weight" value="0.2"/>
+        <bsdf type="thindielectric"/><bsdf type="roughplastic"><string name="distribution" value="phong"/></bsdf></bsdf></shape>
+    <shape type="shapegroup" id="g"><shape type="sphere"><float name="radius" value="0.1"/></shape></shape>
+    <shape type="instance"><ref id="g"/><transform name="to_world"><translate x="2"/></transform></shape>
+    <shape type="instance"><ref id="g"/><transform name="to_world"><translate x="-2"/></transform></shape>
+    <emitter type="point"><point name="position" x="0" y="3" z="0"/><rgb name="intensity" value="5"/></emitter>
+    <emitter type="spot"><transform name="to_world"><lookat origin="0,3,0" target="0,0,0" up="1,0,0"/></transform></emitter>
+    <emitter type="directional"><vector name="direction" x="0" y="-1" z="0"/></emitter>
+    <emitter type="constant"><spectrum name="radiance" value="0.5"/></emitter>
+</scene>"#;
+    let f = load(text).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert_eq!((f.spp, f.sampler, f.seed), (7, SamplerKind::Sobol, 3));
+    assert_eq!(f.window, Some([5, 0, 10, 30]));
+    assert!(matches!(f.filter, Filter::Tent { radius } if radius == 1.5));
+    assert!(f.integrator.hide_emitters && f.integrator.max_depth == 3);
+    // Two instanced spheres at x = ±2.
+    let centres: Vec<Vec3> = f
+        .scene
+        .geometries()
+        .iter()
+        .filter_map(|g| match g {
+            Geometry::Sphere(s) if s.radius < 0.2 => Some(s.center),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(centres, vec![Vec3::new(2.0, 0.0, 0.0), Vec3::new(-2.0, 0.0, 0.0)]);
+    // The checkerboard reaches the diffuse BSDF with the substituted colour.
+    match &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] {
+        Bsdf::Diffuse(d) => assert_eq!(d.reflectance.mean(), Rgb::splat(0.5 * (0.25 + 0.2))),
+        b => panic!("{b:?}"),
+    }
+    // The emission spectrum is an illuminant (illuminant E is pinkish in sRGB), the constant
+    // environment too, as in Mitsuba.
+    let area = f.scene.lights().iter().find_map(|l| match l {
+        Light::Area { radiance, .. } => Some(*radiance),
+        _ => None,
+    });
+    let area = area.unwrap();
+    assert!(area.x > area.y && area.y > area.z, "{area}");
+    assert_eq!(f.scene.lights().len(), 5);
+    let spot_axis = f.scene.lights().iter().find_map(|l| match l {
+        Light::Spot { frame, .. } => Some(frame.to_world(Vec3::Z)),
+        _ => None,
+    });
+    assert!((spot_axis.unwrap() - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-5);
+    // The thin-lens camera is in place: the centre ray starts on the lens and aims at the focus.
+    let r: Ray = f.scene.camera().generate_ray(crate::math::Vec2::new(20.0, 15.0), crate::math::Vec2::splat(0.5));
+    assert!((r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-5);
+}
+
+#[test]
+fn includes_resolve_against_the_including_file() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-include-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    std::fs::write(
+        dir.join("parts/materials.xml"),
+        r#"<scene version="3.0.0"><bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("main.xml"),
+        scene(r#"<include filename="parts/materials.xml"/><shape type="sphere"><ref id="red"/></shape>"#),
+    )
+    .unwrap();
+    let f = load_scene_file(&dir.join("main.xml"), &[]).unwrap();
+    match &f.scene.bsdfs()[0] {
+        Bsdf::Diffuse(d) => assert_eq!(d.reflectance.mean(), Rgb::new(0.8, 0.1, 0.1)),
+        b => panic!("{b:?}"),
+    }
+    std::fs::write(dir.join("bad.xml"), scene(r#"<include filename="missing.xml"/>"#)).unwrap();
+    let e = load_scene_file(&dir.join("bad.xml"), &[]).unwrap_err().to_string();
+    assert!(e.contains("bad.xml:7:") && e.contains("missing.xml"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Each user mistake gives file:line:col, what was expected, and the source line.
+#[test]
+fn errors_name_the_place_and_the_expectation() {
+    let cases: &[(&str, &str, &str)] = &[
+        (r#"<shape type="sphere"><bsdf type="difuse"/></shape>"#, "test.xml:7:22:", "nearest is 'diffuse'"),
+        (r#"<shape type="sphere"><float name="radius" value="big"/></shape>"#, "test.xml:7:", "expected a number"),
+        (r#"<shape type="sphere"><string name="radius" value="1"/></shape>"#, "test.xml:7:22", "must be a <float>"),
+        (r#"<shape type="sphere"><ref id="nothing"/></shape>"#, "test.xml:7:22", "unknown id 'nothing'"),
+        (r#"<shape type="obj"><string name="filename" value="nope.obj"/></shape>"#, "test.xml:7:", "nope.obj"),
+        (
+            r#"<shape type="sphere"><float name="radius" value="$r"/></shape>"#,
+            "test.xml:7:",
+            "undefined parameter '$r'",
+        ),
+        (r#"<shape type="sphear"/>"#, "test.xml:7:1", "nearest is 'sphere'"),
+        (
+            r#"<shape type="sphere"><bsdf type="conductor"><string name="material" value="Gold"/></bsdf></shape>"#,
+            "test.xml:7:",
+            "unknown conductor material 'Gold'",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="dielectric"><string name="int_ior" value="glass"/></bsdf></shape>"#,
+            "test.xml:7:",
+            "unknown index of refraction",
+        ),
+        (r#"<shpe type="sphere"/>"#, "test.xml:7:1", "did you mean <shape>"),
+        (
+            r#"<shape type="sphere"><float name="radius" value="1"/><float name="radius" value="2"/></shape>"#,
+            "test.xml:7:",
+            "given twice",
+        ),
+        (r#"<emitter type="area"/>"#, "test.xml:7:1", "nested in the <shape>"),
+        (
+            r#"<shape type="sphere"><transform name="to_world"><rotate angle="30"/></transform></shape>"#,
+            "test.xml:7:",
+            "axis must be non-zero",
+        ),
+        (r#"<medium type="homogeneous"/>"#, "test.xml:7:1", "not supported yet"),
+    ];
+    for (body, position, expectation) in cases {
+        let e = err(&scene(body));
+        assert!(e.starts_with(position), "expected {position} in:\n{e}");
+        assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
+        assert!(e.contains("\n7 | "), "the source line is quoted:\n{e}");
+    }
+    // Malformed XML, wrong root, missing version, no sensor.
+    let e = err("<scene version=\"3.0.0\">\n  <shape type=\"sphere\">\n</scene>");
+    assert!(e.starts_with("test.xml:3:") && e.contains("malformed XML"), "{e}");
+    assert!(err("<bsdf type=\"diffuse\"/>").contains("expected a <scene> root"));
+    assert!(err("<scene><sensor type=\"perspective\"/></scene>").contains("version"));
+    assert!(err("<scene version=\"3.0.0\"/>").contains("no <sensor>"));
+}
+
+#[test]
+fn unused_parameters_are_reported() {
+    let f = load(&scene(
+        r#"<shape type="sphere"><float name="radius" value="1"/><float name="raduis" value="2"/></shape>"#,
+    ))
+    .unwrap();
+    assert_eq!(f.warnings.len(), 1, "{:?}", f.warnings);
+    assert!(f.warnings[0].starts_with("test.xml:7:") && f.warnings[0].contains("unused parameter 'raduis'"));
+}
+
+#[test]
+fn meshes_load_relative_to_the_scene_with_mitsuba_options() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    std::fs::write(
+        dir.join("meshes/quad.obj"),
+        "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 1/1/1 3/3/1 4/4/1\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("s.xml"),
+        scene(
+            r#"<shape type="obj"><string name="filename" value="meshes/quad.obj"/><boolean name="face_normals" value="true"/>
+               <boolean name="flip_normals" value="true"/></shape>"#,
+        ),
+    )
+    .unwrap();
+    let f = load_scene_file(&dir.join("s.xml"), &[]).unwrap();
+    match &f.scene.geometries()[0] {
+        Geometry::Mesh(m) => {
+            assert!(m.normals.is_empty() && m.flip_normals);
+            // OBJ's v-up coordinates are flipped to Mitsuba's row-down convention.
+            assert_eq!(m.uvs[0], crate::math::Vec2::new(0.0, 1.0));
+        }
+        g => panic!("{g:?}"),
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
