@@ -46,6 +46,21 @@ enum Command {
     /// Benchmarks: BVH build, ray throughput (primary, incoherent closest-hit and shadow rays) and
     /// path-tracing samples per second on the Cornell box.
     Bench(bench::BenchArgs),
+    /// Validate against Mitsuba 3: render the scenes of scenes/ at their references' settings and
+    /// compare with references/ (relMSE and mean against Mitsuba's own at equal spp).
+    Validate {
+        /// Scenes to validate (default: every scene in references.csv).
+        scenes: Vec<String>,
+        /// Folder of the scene files.
+        #[arg(long, default_value = "scenes")]
+        scene_dir: PathBuf,
+        /// Folder of the references (EXR images and references.csv).
+        #[arg(long, default_value = "references")]
+        reference_dir: PathBuf,
+        /// Seed of neumann's renders.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Monte Carlo estimator demos: estimate, exact value and RMSE over independent runs.
     Mc {
         /// Independent runs per row (for the RMSE).
@@ -74,6 +89,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e)),
+        Command::Validate { scenes, scene_dir, reference_dir, seed } => {
+            run_validate(&scenes, &scene_dir, &reference_dir, seed)
+        }
         Command::Mc { runs, seed, radiance } => {
             if radiance.is_finite() && radiance >= 0.0 {
                 mc_irradiance(runs, seed, radiance);
@@ -335,6 +353,43 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     }
     if out.film.dropped() > 0 {
         println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    Ok(())
+}
+
+fn run_validate(scenes: &[String], scene_dir: &std::path::Path, reference_dir: &std::path::Path, seed: u64) -> Result<(), Failure> {
+    use neumann::validate::{read_references, validate};
+    let refs = read_references(reference_dir).map_err(|e| Failure(1, e))?;
+    if let Some(s) = scenes.iter().find(|s| !refs.iter().any(|r| &r.scene == *s)) {
+        let names: Vec<&str> = refs.iter().map(|r| r.scene.as_str()).collect();
+        return Err(usage(format!("no reference for scene '{s}' (references exist for: {})", names.join(", "))));
+    }
+    println!(
+        "{:<14} {:>5} {:>6} {:>12} {:>12} {:>7} {:>9} {:>10} {:>10}  verdict",
+        "scene", "res", "spp", "relMSE", "Mitsuba", "ratio", "mean diff", "Msamp/s", "Mitsuba"
+    );
+    let mut failed = 0;
+    for r in refs.iter().filter(|r| scenes.is_empty() || scenes.contains(&r.scene)) {
+        let v = validate(scene_dir, reference_dir, r, seed).map_err(|e| Failure(1, e))?;
+        let ok = v.passed();
+        failed += usize::from(!ok);
+        println!(
+            "{:<14} {:>5} {:>6} {:>12.4e} {:>12.4e} {:>7.3} {:>+8.3}% {:>10.2} {:>10.2}  {}",
+            r.scene,
+            r.res,
+            r.test_spp,
+            v.relmse,
+            r.mitsuba_relmse,
+            v.relmse_ratio(),
+            100.0 * v.mean_difference(),
+            v.samples_per_second / 1e6,
+            r.mitsuba_samples_per_second / 1e6,
+            if ok { "ok" } else { "FAIL" }
+        );
+    }
+    println!("(pass: relMSE ≤ 1.5 × Mitsuba's at equal spp and |mean diff| ≤ 0.5 %; Mitsuba's speed as recorded with the references)");
+    if failed > 0 {
+        return Err(Failure(1, format!("{failed} scene(s) failed validation")));
     }
     Ok(())
 }

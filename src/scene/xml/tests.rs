@@ -8,7 +8,7 @@ use crate::math::{Ray, Rgb, Vec3};
 use std::path::PathBuf;
 
 fn shared(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes").join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
 }
 
 fn load(text: &str) -> Result<SceneFile, SceneError> {

@@ -1,0 +1,172 @@
+//! Validation against Mitsuba 3: render a scene of `scenes/` at the settings its reference was
+//! measured at, and compare with the committed Mitsuba reference (`references/<scene>.exr`) and
+//! Mitsuba's own error at the same sample count (`references/references.csv`, written by
+//! `tools/mitsuba/references.py`).
+//!
+//! Metrics, over all pixels and channels: `relMSE = mean((x - r)² / (r² + 10⁻²))` (the error
+//! relative to the reference value, softened near black), and the relative difference of the image
+//! means. Equal-spp relMSE within a small factor of Mitsuba's says neumann's estimator is as
+//! efficient per sample; the mean within 0.5 % catches a bias that noise would hide.
+
+use crate::load::image::load_image;
+use crate::math::Rgb;
+use crate::render::{render, RenderSettings};
+use crate::scene::xml::load_scene_file;
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+/// One row of `references/references.csv`.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// Scene name (`scenes/<name>.xml`, `references/<name>.exr`).
+    pub scene: String,
+    /// Square resolution.
+    pub res: u32,
+    /// Samples per pixel of the compared renders.
+    pub test_spp: u32,
+    /// Samples per pixel of the reference.
+    pub reference_spp: u32,
+    /// Mitsuba's relMSE at `test_spp` (mean over seeds).
+    pub mitsuba_relmse: f64,
+    /// Mean of the reference image.
+    pub reference_mean: f64,
+    /// Mitsuba's samples per second at `test_spp` on the machine that made the references.
+    pub mitsuba_samples_per_second: f64,
+}
+
+/// The outcome of validating one scene.
+#[derive(Clone, Debug)]
+pub struct Validation {
+    /// The reference row.
+    pub reference: Reference,
+    /// neumann's relMSE against the reference.
+    pub relmse: f64,
+    /// neumann's image mean.
+    pub mean: f64,
+    /// neumann's samples per second.
+    pub samples_per_second: f64,
+}
+
+impl Validation {
+    /// relMSE relative to Mitsuba's.
+    pub fn relmse_ratio(&self) -> f64 {
+        self.relmse / self.reference.mitsuba_relmse
+    }
+
+    /// Relative difference of the means, `(mean - ref) / ref`.
+    pub fn mean_difference(&self) -> f64 {
+        (self.mean - self.reference.reference_mean) / self.reference.reference_mean
+    }
+
+    /// Whether it passes: relMSE ≤ 1.5 × Mitsuba's and the mean within 0.5 %.
+    pub fn passed(&self) -> bool {
+        self.relmse_ratio() <= 1.5 && self.mean_difference().abs() <= 0.005
+    }
+}
+
+/// Reads `references.csv` in `dir`.
+pub fn read_references(dir: &Path) -> Result<Vec<Reference>, String> {
+    let path = dir.join("references.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut lines = text.lines().enumerate();
+    let header: Vec<&str> = lines.next().map(|(_, l)| l.split(',').collect()).unwrap_or_default();
+    let col = |name: &str| {
+        header.iter().position(|h| *h == name).ok_or_else(|| format!("{}: no column '{name}'", path.display()))
+    };
+    let (c_scene, c_res, c_spp, c_ref_spp, c_rel, c_mean, c_sps) = (
+        col("scene")?,
+        col("res")?,
+        col("test_spp")?,
+        col("reference_spp")?,
+        col("mitsuba_relmse")?,
+        col("reference_mean")?,
+        col("mitsuba_samples_per_second")?,
+    );
+    lines
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            let f: Vec<&str> = l.split(',').collect();
+            let bad = || format!("{}:{}: malformed row", path.display(), i + 1);
+            let num = |c: usize| f.get(c).and_then(|s| s.trim().parse::<f64>().ok()).ok_or_else(bad);
+            Ok(Reference {
+                scene: f.get(c_scene).ok_or_else(bad)?.to_string(),
+                res: num(c_res)? as u32,
+                test_spp: num(c_spp)? as u32,
+                reference_spp: num(c_ref_spp)? as u32,
+                mitsuba_relmse: num(c_rel)?,
+                reference_mean: num(c_mean)?,
+                mitsuba_samples_per_second: num(c_sps)?,
+            })
+        })
+        .collect()
+}
+
+/// `mean((x - r)² / (r² + 10⁻²))` over pixels and channels.
+pub fn relmse(image: &[Rgb], reference: &[Rgb]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .map(|(x, r)| {
+            (0..3)
+                .map(|c| {
+                    let (x, r) = (x[c] as f64, r[c] as f64);
+                    (x - r) * (x - r) / (r * r + 1e-2)
+                })
+                .sum::<f64>()
+        })
+        .sum();
+    sum / (3 * image.len().max(1)) as f64
+}
+
+/// Mean over pixels and channels.
+pub fn image_mean(image: &[Rgb]) -> f64 {
+    image.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * image.len().max(1)) as f64
+}
+
+/// Renders `scenes_dir/<scene>.xml` at the reference's settings (seed `seed`) and compares it with
+/// `references_dir/<scene>.exr`.
+pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u64) -> Result<Validation, String> {
+    let defines = [("res".to_string(), r.res.to_string()), ("spp".to_string(), r.test_spp.to_string())];
+    let file = load_scene_file(&scenes_dir.join(format!("{}.xml", r.scene)), &defines).map_err(|e| e.to_string())?;
+    let settings = RenderSettings {
+        spp: r.test_spp,
+        seed,
+        sampler: file.sampler,
+        filter: file.filter.clone(),
+        window: file.window,
+        ..Default::default()
+    };
+    let out = render(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))?;
+    let image = out.film.image();
+    let reference = load_image(&references_dir.join(format!("{}.exr", r.scene)), true)?;
+    if reference.pixels.len() != image.len() {
+        return Err(format!(
+            "reference {} is {}x{} but the render has {} pixels",
+            r.scene,
+            reference.width,
+            reference.height,
+            image.len()
+        ));
+    }
+    Ok(Validation {
+        reference: r.clone(),
+        relmse: relmse(&image, &reference.pixels),
+        mean: image_mean(&image),
+        samples_per_second: out.samples_per_second(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics() {
+        let r = vec![Rgb::splat(1.0), Rgb::splat(0.0)];
+        let x = vec![Rgb::splat(1.1), Rgb::splat(0.1)];
+        let expected = (0.01 / 1.01 + 0.01 / 0.01) / 2.0;
+        assert!((relmse(&x, &r) - expected).abs() < 1e-6);
+        assert!((image_mean(&x) - 0.6).abs() < 1e-6);
+        assert_eq!(relmse(&r, &r), 0.0);
+    }
+}

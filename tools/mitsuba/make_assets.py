@@ -1,0 +1,43 @@
+"""Writes the small procedural assets of neumann's validation scenes (scenes/assets/):
+- sky.exr: a 128x64 lat-long HDR sky (Mitsuba's convention: row 0 is up, +y): a blue gradient
+  above the horizon, a dark brown ground, and a small sun of radiance ~2000 (dynamic range ~10^4).
+- tiles.png: a 64x64 sRGB texture that is not symmetric (an 'F' of coloured blocks on a grid),
+  so a flipped or mirrored lookup shows.
+Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
+import math
+import numpy as np
+import mitsuba as mi
+
+mi.set_variant("scalar_rgb")
+
+w, h = 128, 64
+sky = np.zeros((h, w, 3), dtype=np.float32)
+sun_dir = np.array([0.55, 0.6, -0.58])
+sun_dir /= np.linalg.norm(sun_dir)
+for j in range(h):
+    theta = (j + 0.5) / h * math.pi  # from +y
+    for i in range(w):
+        phi = (i + 0.5) / w * 2 * math.pi
+        d = np.array([math.sin(phi) * math.sin(theta), math.cos(theta), -math.cos(phi) * math.sin(theta)])
+        up = math.cos(theta)
+        if up > 0:
+            sky[j, i] = np.array([0.35, 0.55, 1.0]) * (0.4 + 0.6 * up) + np.array([0.9, 0.8, 0.6]) * (1 - up) ** 4 * 0.6
+        else:
+            sky[j, i] = [0.12, 0.09, 0.06]
+        if np.dot(d, sun_dir) > math.cos(math.radians(4.0)):
+            sky[j, i] = [2200.0, 1900.0, 1500.0]
+mi.Bitmap(sky).write("scenes/assets/sky.exr")
+
+n = 64
+tex = np.zeros((n, n, 3), dtype=np.float32)
+for y in range(n):
+    for x in range(n):
+        c = 0.85 if ((x // 8) + (y // 8)) % 2 == 0 else 0.65
+        tex[y, x] = [c, c, c * 0.9]
+# An 'F': vertical bar on the left, two bars to the right at the top and middle (rows from the top).
+tex[8:56, 10:20] = [0.8, 0.1, 0.1]
+tex[8:18, 20:52] = [0.1, 0.2, 0.8]
+tex[28:36, 20:42] = [0.1, 0.6, 0.15]
+img = mi.Bitmap(tex).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
+img.write("scenes/assets/tiles.png")
+print("wrote scenes/assets/sky.exr and scenes/assets/tiles.png")

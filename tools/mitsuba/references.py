@@ -1,0 +1,104 @@
+"""Renders Mitsuba 3 references for neumann's validation scenes and measures Mitsuba's own error.
+
+For each scene in scenes/ (the three shared scenes, copied from ../shared/scenes, and neumann's
+own) this writes references/<scene>.exr, a long Mitsuba render (float32 RGB, small resolution),
+and records in references/references.json Mitsuba's relMSE and mean at the test sample count,
+averaged over independent seeds, with its render time. src/validation.rs renders the same scenes
+with neumann at the same settings and asserts relMSE <= 1.5x Mitsuba's and the mean within 0.5 %.
+
+Run from the repository root with Mitsuba in a venv outside the repository:
+    python3 -m venv ~/mitsuba-venv && ~/mitsuba-venv/bin/pip install mitsuba numpy
+    ~/mitsuba-venv/bin/python tools/mitsuba/make_assets.py      # once: scenes/assets
+    ~/mitsuba-venv/bin/python tools/mitsuba/references.py [scene ...]   # or --csv: rewrite the CSV
+Variant: scalar_rgb (llvm_ad_rgb needs libLLVM; set NEUMANN_MI_VARIANT to use it)."""
+import json
+import os
+import sys
+import time
+
+import numpy as np
+import mitsuba as mi
+
+mi.set_variant(os.environ.get("NEUMANN_MI_VARIANT", "scalar_rgb"))
+mi.set_log_level(mi.LogLevel.Warn)
+
+RES = 128
+# scene: (reference spp, test spp, extra parameters)
+SCENES = {
+    "cbox": (8192, 64, {}),
+    "cbox_spheres": (8192, 64, {}),
+    "furnace": (1024, 64, {}),
+    "veach_mis": (4096, 64, {}),
+    "envmap": (4096, 64, {}),
+    "caustics": (16384, 256, {}),
+    "textures": (4096, 64, {}),
+}
+SEEDS = 4
+
+
+def relmse(img, ref):
+    """Mean over pixels and channels of (img - ref)^2 / (ref^2 + 1e-2)."""
+    return float(np.mean((img - ref) ** 2 / (ref ** 2 + 1e-2)))
+
+
+def render(name, spp, seed, extra):
+    params = dict(res=str(RES), spp=str(spp), **extra)
+    scene = mi.load_file(f"scenes/{name}.xml", **params)
+    start = time.time()
+    img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float32)[:, :, :3]
+    return img, time.time() - start
+
+
+CSV_FIELDS = ("res", "test_spp", "reference_spp", "mitsuba_relmse", "reference_mean", "mitsuba_samples_per_second")
+
+
+def write_csv(db):
+    """The figures the Rust validation reads (references/references.csv)."""
+    with open("references/references.csv", "w") as f:
+        f.write("scene," + ",".join(CSV_FIELDS) + "\n")
+        for name in sorted(db):
+            f.write(name + "," + ",".join(f"{db[name][k]:.6g}" for k in CSV_FIELDS) + "\n")
+
+
+def main():
+    args = sys.argv[1:]
+    db_path = "references/references.json"
+    db = json.load(open(db_path)) if os.path.exists(db_path) else {}
+    if args == ["--csv"]:
+        write_csv(db)
+        return
+    names = args or list(SCENES)
+    for name in names:
+        ref_spp, test_spp, extra = SCENES[name]
+        ref, ref_time = render(name, ref_spp, 1_000_003, extra)
+        mi.Bitmap(ref).write(f"references/{name}.exr")
+        errors, means, times = [], [], []
+        for seed in range(SEEDS):
+            img, t = render(name, test_spp, seed, extra)
+            errors.append(relmse(img, ref))
+            means.append(float(img.mean()))
+            times.append(t)
+        db[name] = {
+            "res": RES,
+            "reference_spp": ref_spp,
+            "test_spp": test_spp,
+            "parameters": extra,
+            "mitsuba_relmse": float(np.mean(errors)),
+            "mitsuba_relmse_runs": errors,
+            "mitsuba_mean": float(np.mean(means)),
+            "reference_mean": float(ref.mean()),
+            "mitsuba_seconds": float(np.median(times)),
+            "mitsuba_samples_per_second": RES * RES * test_spp / float(np.median(times)),
+            "mitsuba_variant": mi.variant(),
+            "mitsuba_version": mi.__version__,
+        }
+        print(f"{name}: reference {ref_spp} spp in {ref_time:.1f} s; at {test_spp} spp relMSE "
+              f"{db[name]['mitsuba_relmse']:.4g} (runs {', '.join(f'{e:.3g}' for e in errors)}), "
+              f"{db[name]['mitsuba_samples_per_second'] / 1e6:.2f} M samples/s", flush=True)
+        with open(db_path, "w") as f:
+            json.dump(db, f, indent=1, sort_keys=True)
+        write_csv(db)
+
+
+if __name__ == "__main__":
+    main()
