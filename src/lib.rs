@@ -36,5 +36,5 @@ pub mod render;
 pub mod sampling;
 pub mod scene;
 pub mod testkit;
-pub mod validate;
 pub mod texture;
+pub mod validate;

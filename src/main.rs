@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, HemisphereStrategy};
 use neumann::film::output::{write_image, Format, ImageInfo};
-use neumann::integrator::{DirectStrategy, PathIntegrator};
+use neumann::integrator::{AnyIntegrator, DirectStrategy, PathIntegrator};
 use neumann::render::{render, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
 use neumann::scene::cornell;
@@ -142,9 +142,9 @@ struct RenderArgs {
     /// Sampler (default: the scene's; independent for the built-in scene).
     #[arg(long, value_enum)]
     sampler: Option<SamplerArg>,
-    /// Direct-light strategy of the path tracer.
-    #[arg(long, value_enum, default_value_t = DirectArg::Mis)]
-    direct: DirectArg,
+    /// Direct-light strategy of the path tracer (default: mis).
+    #[arg(long, value_enum)]
+    direct: Option<DirectArg>,
     /// Exposure in stops for PNG output (× 2^EV).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -177,7 +177,7 @@ fn parse_res(s: &str) -> Result<(u32, u32), String> {
 struct Job {
     name: String,
     scene: neumann::scene::Scene,
-    integrator: PathIntegrator,
+    integrator: AnyIntegrator,
     spp: u32,
     sampler: SamplerKind,
     seed: u64,
@@ -218,7 +218,7 @@ fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Failure>
     Ok(Job {
         name: name.to_string(),
         scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?,
-        integrator: PathIntegrator { max_depth, ..Default::default() },
+        integrator: AnyIntegrator::Path(PathIntegrator { max_depth, ..Default::default() }),
         spp,
         sampler: SamplerKind::Independent,
         seed: 0,
@@ -276,7 +276,12 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
-        job.integrator.max_depth = d;
+        match &mut job.integrator {
+            AnyIntegrator::Path(p) => p.max_depth = d,
+            AnyIntegrator::Direct(_) => {
+                return Err(usage("--max-depth applies to the path integrator; this scene uses 'direct'".into()))
+            }
+        }
     }
     if let Some(s) = a.seed {
         job.seed = s;
@@ -288,11 +293,20 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
             SamplerArg::Sobol => SamplerKind::Sobol,
         };
     }
-    job.integrator.strategy = match a.direct {
-        DirectArg::Mis => DirectStrategy::Mis,
-        DirectArg::Light => DirectStrategy::Light,
-        DirectArg::Bsdf => DirectStrategy::Bsdf,
-    };
+    if let Some(direct) = a.direct {
+        match &mut job.integrator {
+            AnyIntegrator::Path(p) => {
+                p.strategy = match direct {
+                    DirectArg::Mis => DirectStrategy::Mis,
+                    DirectArg::Light => DirectStrategy::Light,
+                    DirectArg::Bsdf => DirectStrategy::Bsdf,
+                }
+            }
+            AnyIntegrator::Direct(_) => {
+                return Err(usage("--direct applies to the path integrator; this scene uses 'direct' (set its emitter_samples / bsdf_samples)".into()))
+            }
+        }
+    }
     let time_budget = match a.time {
         None => None,
         Some(t) => match Duration::try_from_secs_f64(t) {
@@ -328,13 +342,17 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     let cam = job.scene.camera();
     let [_, _, width, height] = job.window.unwrap_or([0, 0, cam.width(), cam.height()]);
     println!(
-        "rendering {} at {width}x{height}, {}, max_depth {}, {} threads",
+        "rendering {} at {width}x{height}, {}, {}, {} threads",
         job.name,
         match a.time {
             Some(t) => format!("for {t} s"),
             None => format!("{} spp", job.spp),
         },
-        job.integrator.max_depth,
+        match &job.integrator {
+            AnyIntegrator::Path(p) => format!("path tracer, max_depth {}", p.max_depth),
+            AnyIntegrator::Direct(d) =>
+                format!("direct lighting, {} emitter + {} BSDF samples", d.emitter_samples, d.bsdf_samples),
+        },
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
     let out = render(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
@@ -357,7 +375,12 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn run_validate(scenes: &[String], scene_dir: &std::path::Path, reference_dir: &std::path::Path, seed: u64) -> Result<(), Failure> {
+fn run_validate(
+    scenes: &[String],
+    scene_dir: &std::path::Path,
+    reference_dir: &std::path::Path,
+    seed: u64,
+) -> Result<(), Failure> {
     use neumann::validate::{read_references, validate};
     let refs = read_references(reference_dir).map_err(|e| Failure(1, e))?;
     if let Some(s) = scenes.iter().find(|s| !refs.iter().any(|r| &r.scene == *s)) {

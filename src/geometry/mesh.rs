@@ -70,24 +70,29 @@ impl TriangleMesh {
         TriangleMesh::new(positions, vec![], uvs, vec![[0, 1, 2], [2, 3, 0]]).expect("valid rectangle")
     }
 
-    /// Mitsuba's `cube`: `[-1, 1]³` with outward faces, 4 vertices per face (flat shading).
+    /// Mitsuba's `cube`: `[-1, 1]³` with outward faces, 4 vertices per face (flat shading), with
+    /// Mitsuba's vertex order and texture coordinates (so textures land on the faces as in
+    /// Mitsuba): per face the corners carry uv (0,1), (1,1), (1,0), (0,0), triangles (0,1,2) and
+    /// (3,0,2).
     pub fn cube() -> TriangleMesh {
+        // Faces in Mitsuba's order: -y, +y, +x, +z, -x, -z; corners as sign triples.
+        const FACES: [[[f32; 3]; 4]; 6] = [
+            [[1., -1., -1.], [1., -1., 1.], [-1., -1., 1.], [-1., -1., -1.]],
+            [[1., 1., -1.], [-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.]],
+            [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+            [[1., -1., 1.], [1., 1., 1.], [-1., 1., 1.], [-1., -1., 1.]],
+            [[-1., -1., 1.], [-1., 1., 1.], [-1., 1., -1.], [-1., -1., -1.]],
+            [[1., 1., -1.], [1., -1., -1.], [-1., -1., -1.], [-1., 1., -1.]],
+        ];
+        let corner_uv = [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)];
         let mut positions = Vec::with_capacity(24);
         let mut uvs = Vec::with_capacity(24);
         let mut indices = Vec::with_capacity(12);
-        let axes = [Vec3::X, Vec3::Y, Vec3::Z];
-        for a in 0..3 {
-            for s in [1.0f32, -1.0] {
-                let c = axes[a] * s;
-                let (mut u, mut v) = (axes[(a + 1) % 3], axes[(a + 2) % 3]);
-                if s < 0.0 {
-                    std::mem::swap(&mut u, &mut v);
-                }
-                let base = positions.len() as u32;
-                positions.extend([c - u - v, c + u - v, c + u + v, c - u + v]);
-                uvs.extend([Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(1.0, 1.0), Vec2::new(0.0, 1.0)]);
-                indices.extend([[base, base + 1, base + 2], [base + 2, base + 3, base]]);
-            }
+        for face in FACES {
+            let base = positions.len() as u32;
+            positions.extend(face.map(Vec3::from_array));
+            uvs.extend(corner_uv);
+            indices.extend([[base, base + 1, base + 2], [base + 3, base, base + 2]]);
         }
         TriangleMesh::new(positions, vec![], uvs, indices).expect("valid cube")
     }

@@ -4,8 +4,10 @@
 //! camera ray; the render driver averages them per pixel. The path tracer samples the Neumann
 //! series `L = Σₖ Tᵏ Lₑ` term by term along one path per sample.
 
+pub mod direct;
 pub mod path;
 
+pub use direct::DirectIntegrator;
 pub use path::{DirectStrategy, PathIntegrator};
 
 use crate::math::{Ray, Rgb};
@@ -19,4 +21,36 @@ pub trait Integrator: Sync {
     /// One sample of the radiance arriving along `ray` (toward its origin). The sampler is
     /// positioned at the pixel sample; the integrator draws its dimensions in a fixed order.
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb;
+}
+
+/// One of neumann's integrators, chosen at run time (by the scene file or the command line).
+#[derive(Clone, Debug)]
+pub enum AnyIntegrator {
+    /// Mitsuba's `path`.
+    Path(PathIntegrator),
+    /// Mitsuba's `direct`.
+    Direct(DirectIntegrator),
+}
+
+impl Default for AnyIntegrator {
+    fn default() -> Self {
+        AnyIntegrator::Path(PathIntegrator::default())
+    }
+}
+
+impl Integrator for AnyIntegrator {
+    fn name(&self) -> &'static str {
+        match self {
+            AnyIntegrator::Path(i) => i.name(),
+            AnyIntegrator::Direct(i) => i.name(),
+        }
+    }
+
+    #[inline]
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb {
+        match self {
+            AnyIntegrator::Path(i) => i.li(scene, ray, sampler),
+            AnyIntegrator::Direct(i) => i.li(scene, ray, sampler),
+        }
+    }
 }

@@ -41,9 +41,14 @@ pub struct PathIntegrator {
     pub rr_depth: u32,
     /// Direct-light strategy.
     pub strategy: DirectStrategy,
-    /// Whether emitters seen directly by the camera are hidden.
+    /// Whether emitters seen directly by the camera are hidden: camera rays pass through emitting
+    /// shapes (as in Mitsuba 3) and environments are black to them; lighting is unchanged.
     pub hide_emitters: bool,
 }
+
+/// How many hidden emitters a camera ray may pass through before it gives up (a ray inside a
+/// stack of emitting shells).
+pub(crate) const MAX_HIDDEN_SKIPS: u32 = 64;
 
 impl Default for PathIntegrator {
     fn default() -> Self {
@@ -96,6 +101,7 @@ impl Integrator for PathIntegrator {
         // Product of the relative IORs crossed: radiance scales by η² at refractions, which
         // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
         let mut eta = 1.0f32;
+        let mut skipped = 0u32;
         loop {
             let Some(si) = scene.intersect(&ray) else {
                 // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
@@ -109,6 +115,15 @@ impl Integrator for PathIntegrator {
             };
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
+            // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
+            if depth == 0 && self.hide_emitters && shape.light.is_some() {
+                skipped += 1;
+                if skipped > MAX_HIDDEN_SKIPS {
+                    break;
+                }
+                ray = si.spawn_ray(ray.d);
+                continue;
+            }
 
             // Emission found by the path itself.
             if let Some(light_index) = shape.light {
@@ -354,6 +369,51 @@ mod tests {
             let (mean, se) = image_mean(&out.film);
             assert!((mean - expected).abs() <= 3.0 * se + 1e-4, "{name}: {mean} vs {expected} (±{se})");
             assert!(se < 0.01, "{name}: too noisy ({se})");
+        }
+    }
+
+    /// `hide_emitters` (Mitsuba 3): a camera ray passes through an emitting sphere and sees what
+    /// is behind it: the Lambertian floor under the sphere, whose radiance (lit by a sun and by
+    /// the sphere) is the same seen from a direction that misses the sphere. Without hiding the
+    /// camera sees the sphere's radiance.
+    #[test]
+    fn hidden_emitters_are_transparent_to_camera_rays() {
+        use crate::light::Light;
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        let mut floor = TriangleMesh::rectangle();
+        floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));
+        b.add_shape(Geometry::Mesh(floor), m, None);
+        let black = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::ZERO)));
+        let sphere = Sphere { center: Vec3::new(0.0, 0.5, -0.5), radius: 0.2, flip: false };
+        b.add_shape(Geometry::Sphere(sphere), black, Some(Rgb::splat(7.0)));
+        let d = Vec3::new(1.0, -1.0, 0.0).normalize();
+        b.add_light(Light::Directional { direction: d, irradiance: Rgb::ONE, center: Vec3::ZERO, radius: 0.0 });
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        // Mean over many samples of the radiance along a ray from `o` to the floor's origin.
+        let radiance = |o: Vec3, hide: bool, direct: bool| {
+            let ray = Ray::new(o, (Vec3::ZERO - o).normalize());
+            let path = PathIntegrator { max_depth: 2, hide_emitters: hide, ..Default::default() };
+            let dir = super::super::DirectIntegrator { hide_emitters: hide, ..Default::default() };
+            let mut sampler = SamplerKind::Independent.make(4096, 0);
+            let n = 4096;
+            (0..n)
+                .map(|i| {
+                    sampler.start_pixel_sample([0, 0], i, 0);
+                    (if direct { dir.li(&scene, &ray, &mut sampler) } else { path.li(&scene, &ray, &mut sampler) }).x
+                        as f64
+                })
+                .sum::<f64>()
+                / n as f64
+        };
+        let through_sphere = Vec3::new(0.0, 1.0, -1.0);
+        let clear = Vec3::new(0.0, 1.0, 1.0);
+        for direct in [false, true] {
+            let seen = radiance(clear, false, direct);
+            let hidden = radiance(through_sphere, true, direct);
+            assert!((hidden - seen).abs() < 0.01 * seen, "direct={direct}: hidden {hidden} vs floor {seen}");
+            assert_eq!(radiance(through_sphere, false, direct), 7.0);
         }
     }
 

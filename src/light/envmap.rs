@@ -1,13 +1,17 @@
 //! Mitsuba's `envmap`: radiance from every direction given by a latitude-longitude image,
-//! importance-sampled with a piecewise-constant 2D distribution.
+//! importance-sampled with a piecewise-constant 2D (marginal/conditional) distribution.
 //!
 //! Mapping (Mitsuba 3, local frame with +y up): a direction `d` has image coordinates
 //! `u = atan2(d.x, -d.z) / 2π` (wrapped to [0, 1)) and `v = acos(d.y) / π`, so row 0 is the
-//! zenith. Texels are looked up without interpolation, and the sampling distribution is the
-//! texel luminance times `sin θ` at the texel centre, so that the density is proportional to
-//! the radiance up to the `sin θ` variation within a texel. A density `p(u, v)` on the image
-//! square becomes `p(ω) = p(u, v) / (2π² sin θ)` per solid angle (the Jacobian of
-//! `(u, v) ↦ ω`, since `dω = sin θ dθ dφ = 2π² sin θ du dv`).
+//! zenith. The radiance is Mitsuba's continuous interpolant of the W × H image: texel (i, j)
+//! sits at `u = (i + ½)/W` (periodic in u) and `v = j/(H - 1)` (the first and last rows lie on
+//! the poles), and radiance between these points is bilinear. The sampling distribution is
+//! piecewise constant over the same bilinear cells, each cell weighted by the largest luminance
+//! of its four corners times the largest `sin θ` over the cell: an upper envelope of
+//! `luminance × sin θ`, so every direction with radiance has a positive density (the estimator
+//! stays unbiased whatever the envelope's looseness). A density `p(u, v)` on the image square
+//! becomes `p(ω) = p(u, v) / (2π² sin θ)` per solid angle (the Jacobian of `(u, v) ↦ ω`, since
+//! `dω = sin θ dθ dφ = 2π² sin θ du dv`).
 //!
 //! Parameters (Mitsuba): `filename`, `scale` (default 1), `to_world` (rotation).
 
@@ -21,6 +25,8 @@ use std::sync::Arc;
 pub struct EnvMap {
     image: Arc<Image>,
     distribution: Arc<PiecewiseConstant2D>,
+    /// `∫ luminance dω` of the unscaled map.
+    integral: f32,
     scale: f32,
     to_world: Transform,
     to_local: Transform,
@@ -38,19 +44,32 @@ impl EnvMap {
         if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
             return Err(format!("environment map pixel {i} is negative or not finite"));
         }
+        if image.height < 2 {
+            return Err("environment map must be at least 2 pixels high".into());
+        }
         let (w, h) = (image.width as usize, image.height as usize);
-        let mut func = Vec::with_capacity(w * h);
-        for y in 0..h {
-            let sin_theta = (PI * (y as f32 + 0.5) / h as f32).sin();
+        let lum = |x: usize, y: usize| luminance(image.pixels[y * w + x % w]);
+        let theta = |y: usize| PI * y as f32 / (h - 1) as f32;
+        let mut func = Vec::with_capacity(w * (h - 1));
+        let mut integral = 0.0f64;
+        for y in 0..h - 1 {
+            let (t0, t1) = (theta(y), theta(y + 1));
+            let sin_max = if t0 <= 0.5 * PI && t1 >= 0.5 * PI { 1.0 } else { t0.sin().max(t1.sin()) };
+            let sin_mid = (0.5 * (t0 + t1)).sin();
             for x in 0..w {
-                func.push(luminance(image.pixels[y * w + x]) * sin_theta);
+                let c = [lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1)];
+                func.push(c.iter().fold(0.0f32, |a, &b| a.max(b)) * sin_max);
+                integral += (c.iter().sum::<f32>() * 0.25 * sin_mid) as f64;
             }
         }
-        let distribution = PiecewiseConstant2D::new(&func, w, h)
+        let distribution = PiecewiseConstant2D::new(&func, w, h - 1)
             .ok_or("environment map is black: nothing to sample (use no emitter instead)")?;
+        // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
+        let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
         Ok(EnvMap {
             image: Arc::new(image),
             distribution: Arc::new(distribution),
+            integral,
             scale,
             to_world,
             to_local: to_world.inverse(),
@@ -75,11 +94,35 @@ impl EnvMap {
         (Vec3::new(sin_theta * sin_phi, cos_theta, -sin_theta * cos_phi), sin_theta)
     }
 
+    /// Half a texel in u: the offset between image coordinates and the bilinear cell grid.
+    #[inline]
+    fn half_texel(&self) -> f32 {
+        0.5 / self.image.width as f32
+    }
+
+    /// Bilinear interpolation of the texels around image coordinates `uv`.
     #[inline]
     fn lookup(&self, uv: Vec2) -> Rgb {
-        let x = (uv.x * self.image.width as f32) as i64;
-        let y = (uv.y * self.image.height as f32) as i64;
-        self.image.get(x, y) * self.scale
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        let mut u = uv.x - self.half_texel();
+        u -= u.floor();
+        let x = u * w as f32;
+        let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
+        let (i, j) = ((x as i64).min(w - 1), (y as i64).min(h - 2));
+        let (fx, fy) = (x - i as f32, y - j as f32);
+        let (i1, j1) = ((i + 1) % w, j + 1);
+        let px = |a: i64, b: i64| self.image.pixels[(b * w + a) as usize];
+        let top = px(i, j) * (1.0 - fx) + px(i1, j) * fx;
+        let bottom = px(i, j1) * (1.0 - fx) + px(i1, j1) * fx;
+        (top * (1.0 - fy) + bottom * fy) * self.scale
+    }
+
+    /// Cell-grid coordinates (the distribution's domain) of image coordinates.
+    #[inline]
+    fn to_grid(&self, uv: Vec2) -> Vec2 {
+        let mut u = uv.x - self.half_texel();
+        u -= u.floor();
+        Vec2::new(u.min(crate::math::ONE_MINUS_EPSILON), uv.y)
     }
 
     /// Radiance arriving from world direction `d` (unit).
@@ -93,12 +136,16 @@ impl EnvMap {
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
         let s = self.distribution.sample(u);
-        let (d, sin_theta) = Self::direction(s.value);
+        let mut uv = Vec2::new(s.value.x + self.half_texel(), s.value.y);
+        if uv.x >= 1.0 {
+            uv.x -= 1.0;
+        }
+        let (d, sin_theta) = Self::direction(uv);
         if sin_theta <= 0.0 || s.pdf <= 0.0 {
             return None;
         }
         let pdf = s.pdf / (2.0 * PI * PI * sin_theta);
-        Some((self.to_world.apply_vector(d).normalize(), self.lookup(s.value), pdf))
+        Some((self.to_world.apply_vector(d).normalize(), self.lookup(uv), pdf))
     }
 
     /// Solid-angle density of [`EnvMap::sample`] for world direction `d`.
@@ -109,12 +156,12 @@ impl EnvMap {
         if sin_theta <= 0.0 {
             return 0.0;
         }
-        self.distribution.pdf(Self::uv(local)) / (2.0 * PI * PI * sin_theta)
+        self.distribution.pdf(self.to_grid(Self::uv(local))) / (2.0 * PI * PI * sin_theta)
     }
 
     /// `∫ luminance(L) dω` over the sphere (W m⁻² sr⁻¹ · sr), for power estimates.
     pub fn integral_luminance(&self) -> f32 {
-        self.distribution.integral() * 2.0 * PI * PI * self.scale
+        self.integral * self.scale
     }
 }
 
@@ -129,7 +176,7 @@ mod tests {
         for y in 0..h {
             for x in 0..w {
                 let sun = x == w / 3 && y == h / 4;
-                let black = y == h / 2;
+                let black = y == h / 2 || y == h / 2 + 1;
                 let base = Rgb::new(0.2 + x as f32 / w as f32, 0.3, 0.5 + y as f32 / h as f32);
                 pixels.push(if black {
                     Rgb::ZERO
@@ -155,6 +202,33 @@ mod tests {
         assert!(EnvMap::uv(-Vec3::Z).x < 1e-6);
     }
 
+    /// Mitsuba's texel placement: texel (i, j) at u = (i + ½)/W, v = j/(H - 1), bilinear between,
+    /// periodic in u; and the power estimate agrees with a Monte Carlo integral.
+    #[test]
+    fn texels_sit_where_mitsuba_puts_them() {
+        let img = test_sky(16, 8);
+        let env = EnvMap::new(img.clone(), 1.0, Transform::IDENTITY).unwrap();
+        for (i, j) in [(0usize, 0usize), (5, 3), (15, 7), (15, 2)] {
+            let l = env.lookup(Vec2::new((i as f32 + 0.5) / 16.0, j as f32 / 7.0));
+            assert!((l - img.pixels[j * 16 + i]).abs().max_element() < 1e-3 * l.max_element().max(1.0), "{i},{j}");
+        }
+        // Halfway between the last and the first column: their average (periodic).
+        let mid = env.lookup(Vec2::new(0.999_99, 2.0 / 7.0));
+        let expected = 0.5 * (img.pixels[2 * 16 + 15] + img.pixels[2 * 16]);
+        assert!((mid - expected).abs().max_element() < 1e-3, "{mid} vs {expected}");
+        let mut rng = crate::sampling::Pcg32::new(3, 4);
+        let n = 400_000;
+        let mc: f64 = (0..n)
+            .map(|_| {
+                let s = crate::sampling::sample_uniform_sphere(u2(&mut rng));
+                (luminance(env.eval(s.value)) / s.pdf) as f64
+            })
+            .sum::<f64>()
+            / n as f64;
+        let rel = (env.integral_luminance() as f64 - mc).abs() / mc;
+        assert!(rel < 0.03, "power estimate {} vs Monte Carlo {mc}", env.integral_luminance());
+    }
+
     #[test]
     fn sampling_matches_pdf_and_eval() {
         let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
@@ -174,8 +248,8 @@ mod tests {
             assert!((pdf - env.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", env.pdf(d));
             assert!((l - env.eval(d)).abs().max_element() <= 1e-3 * l.max_element().max(1.0));
         }
-        // The black band is never sampled and has zero pdf.
-        let (band, _) = EnvMap::direction(Vec2::new(0.3, 4.5 / 8.0));
+        // Between two black rows the radiance is zero: never sampled, zero pdf.
+        let (band, _) = EnvMap::direction(Vec2::new(0.3, 4.5 / 7.0));
         assert_eq!(env.pdf(to_world.apply_vector(band)), 0.0);
     }
 

@@ -1,6 +1,8 @@
 """Writes the small procedural assets of neumann's validation scenes (scenes/assets/):
 - sky.exr: a 128x64 lat-long HDR sky (Mitsuba's convention: row 0 is up, +y): a blue gradient
-  above the horizon, a dark brown ground, and a small sun of radiance ~2000 (dynamic range ~10^4).
+  above the horizon, a dark brown ground, and a sun of 10 degrees radius and radiance ~300 (dynamic range ~10^3; a smaller,
+  brighter sun makes the caustics of the spheres on the ground fireflies that swamp a
+  short-render comparison).
 - tiles.png: a 64x64 sRGB texture that is not symmetric (an 'F' of coloured blocks on a grid),
   so a flipped or mirrored lookup shows.
 Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
@@ -24,8 +26,8 @@ for j in range(h):
             sky[j, i] = np.array([0.35, 0.55, 1.0]) * (0.4 + 0.6 * up) + np.array([0.9, 0.8, 0.6]) * (1 - up) ** 4 * 0.6
         else:
             sky[j, i] = [0.12, 0.09, 0.06]
-        if np.dot(d, sun_dir) > math.cos(math.radians(4.0)):
-            sky[j, i] = [2200.0, 1900.0, 1500.0]
+        if np.dot(d, sun_dir) > math.cos(math.radians(10.0)):
+            sky[j, i] = [330.0, 290.0, 230.0]
 mi.Bitmap(sky).write("scenes/assets/sky.exr")
 
 n = 64

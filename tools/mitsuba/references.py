@@ -28,7 +28,7 @@ SCENES = {
     "cbox": (8192, 64, {}),
     "cbox_spheres": (8192, 64, {}),
     "furnace": (1024, 64, {}),
-    "veach_mis": (4096, 64, {}),
+    "veach_mis": (16384, 1024, {}),  # the smallest light's highlights make the mean noisy: many spp
     "envmap": (4096, 64, {}),
     "caustics": (16384, 256, {}),
     "textures": (4096, 64, {}),

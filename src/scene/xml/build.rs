@@ -8,7 +8,7 @@ use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
 use crate::geometry::{Disk, Geometry, Sphere, TriangleMesh};
-use crate::integrator::PathIntegrator;
+use crate::integrator::{AnyIntegrator, DirectIntegrator, PathIntegrator};
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
 use crate::material::fresnel::lookup_ior;
@@ -44,7 +44,7 @@ const BSDFS: &[&str] = &[
     "mask",
 ];
 const EMITTERS: &[&str] = &["area", "point", "spot", "directional", "constant", "envmap"];
-const INTEGRATORS: &[&str] = &["path"];
+const INTEGRATORS: &[&str] = &["path", "direct"];
 const SAMPLERS: &[&str] = &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const TEXTURES: &[&str] = &["bitmap", "checkerboard"];
@@ -60,12 +60,13 @@ pub struct Builder {
     sb: SceneBuilder,
     bsdf_index: HashMap<*const Obj, u32>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
-    default_bsdf: Option<u32>,
+    /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
+    default_bsdf: [Option<u32>; 2],
 }
 
 impl Builder {
     pub fn new() -> Builder {
-        Builder { sb: SceneBuilder::new(), bsdf_index: HashMap::new(), images: HashMap::new(), default_bsdf: None }
+        Builder { sb: SceneBuilder::new(), bsdf_index: HashMap::new(), images: HashMap::new(), default_bsdf: [None; 2] }
     }
 
     /// Builds everything under `root` (a `<scene>`).
@@ -124,7 +125,7 @@ impl Builder {
         })
     }
 
-    fn integrator(&mut self, o: &Obj) -> Result<PathIntegrator> {
+    fn integrator(&mut self, o: &Obj) -> Result<AnyIntegrator> {
         o.built.set(true);
         o.check_children(&[])?;
         match o.ty.as_str() {
@@ -139,12 +140,32 @@ impl Builder {
                 if !(1..=u32::MAX as i64).contains(&rr_depth) {
                     return Err(o.error_at("rr_depth", format!("rr_depth must be ≥ 1, got {rr_depth}")));
                 }
-                Ok(PathIntegrator {
+                Ok(AnyIntegrator::Path(PathIntegrator {
                     max_depth: max_depth as i32,
                     rr_depth: rr_depth as u32,
                     hide_emitters: o.bool("hide_emitters", false)?,
                     ..Default::default()
-                })
+                }))
+            }
+            "direct" => {
+                let count = |name: &str, default: i64| -> Result<u32> {
+                    let v = o.int(name, default)?;
+                    if (0..=1024).contains(&v) {
+                        Ok(v as u32)
+                    } else {
+                        Err(o.error_at(name, format!("'{name}' must be between 0 and 1024, got {v}")))
+                    }
+                };
+                let shading = count("shading_samples", 1)?;
+                let d = DirectIntegrator {
+                    emitter_samples: count("emitter_samples", shading as i64)?,
+                    bsdf_samples: count("bsdf_samples", shading as i64)?,
+                    hide_emitters: o.bool("hide_emitters", false)?,
+                };
+                if d.emitter_samples + d.bsdf_samples == 0 {
+                    return Err(o.error("needs at least one emitter or BSDF sample"));
+                }
+                Ok(AnyIntegrator::Direct(d))
             }
             _ => Err(unknown(o, INTEGRATORS)),
         }
@@ -353,22 +374,6 @@ impl Builder {
             }
             _ => return Err(unknown(o, SHAPES)),
         };
-        // BSDF: nested or referenced; Mitsuba's default is diffuse with reflectance 0.5.
-        let bsdfs = o.nested("bsdf");
-        if bsdfs.len() > 1 {
-            return Err(SceneError::at(&bsdfs[1].loc, "a shape takes one <bsdf>"));
-        }
-        let bsdf = match bsdfs.first() {
-            Some(b) => self.bsdf_index(b)?,
-            None => match self.default_bsdf {
-                Some(i) => i,
-                None => {
-                    let i = self.sb.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-                    self.default_bsdf = Some(i);
-                    i
-                }
-            },
-        };
         let emitters = o.nested("emitter");
         if emitters.len() > 1 {
             return Err(SceneError::at(&emitters[1].loc, "a shape takes one <emitter>"));
@@ -381,6 +386,27 @@ impl Builder {
                 Some(e.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)?)
             }
             Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
+        };
+        // BSDF: nested or referenced. Mitsuba's default is diffuse with reflectance 0.5, except on
+        // emitters, which are black (they only emit).
+        let bsdfs = o.nested("bsdf");
+        if bsdfs.len() > 1 {
+            return Err(SceneError::at(&bsdfs[1].loc, "a shape takes one <bsdf>"));
+        }
+        let bsdf = match bsdfs.first() {
+            Some(b) => self.bsdf_index(b)?,
+            None => {
+                let black = emission.is_some();
+                match self.default_bsdf[usize::from(black)] {
+                    Some(i) => i,
+                    None => {
+                        let albedo = if black { 0.0 } else { 0.5 };
+                        let i = self.sb.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(albedo))));
+                        self.default_bsdf[usize::from(black)] = Some(i);
+                        i
+                    }
+                }
+            }
         };
         self.sb.add_shape(geometry, bsdf, emission);
         Ok(())

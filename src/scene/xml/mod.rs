@@ -13,7 +13,7 @@ mod props;
 pub use error::SceneError;
 
 use crate::film::filter::Filter;
-use crate::integrator::PathIntegrator;
+use crate::integrator::AnyIntegrator;
 use crate::render::SamplerKind;
 use crate::scene::Scene;
 use std::path::Path;
@@ -23,8 +23,8 @@ use std::path::Path;
 pub struct SceneFile {
     /// The scene (camera included).
     pub scene: Scene,
-    /// The integrator (`path`; the default when the file names none).
-    pub integrator: PathIntegrator,
+    /// The integrator (`path` or `direct`; `path` when the file names none).
+    pub integrator: AnyIntegrator,
     /// Samples per pixel (the sampler's `sample_count`).
     pub spp: u32,
     /// Sampler kind (`independent`; `stratified`, `multijitter`, `orthogonal` → stratified;

@@ -42,7 +42,7 @@ fn shared_cornell_box_matches_the_builtin() {
     assert!(file.warnings.is_empty(), "{:?}", file.warnings);
     assert_eq!((file.scene.camera().width(), file.scene.camera().height()), (256, 256));
     assert_eq!(file.spp, 64);
-    assert_eq!(file.integrator.max_depth, 65);
+    assert!(matches!(file.integrator, crate::integrator::AnyIntegrator::Path(p) if p.max_depth == 65));
     assert!(matches!(file.filter, Filter::Box));
     let builtin = crate::scene::cornell::cornell_box(256, 256).unwrap();
     assert_eq!(file.scene.primitive_count(), builtin.primitive_count());
@@ -159,7 +159,7 @@ fn defaults_references_spectra_and_plugins() {
     assert_eq!((f.spp, f.sampler, f.seed), (7, SamplerKind::Sobol, 3));
     assert_eq!(f.window, Some([5, 0, 10, 30]));
     assert!(matches!(f.filter, Filter::Tent { radius } if radius == 1.5));
-    assert!(f.integrator.hide_emitters && f.integrator.max_depth == 3);
+    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.hide_emitters && p.max_depth == 3));
     // Two instanced spheres at x = ±2.
     let centres: Vec<Vec3> = f
         .scene
@@ -310,4 +310,21 @@ fn meshes_load_relative_to_the_scene_with_mitsuba_options() {
         g => panic!("{g:?}"),
     }
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Mitsuba's default BSDFs: diffuse 0.5 on plain shapes, black on emitters (a light source that
+/// reflected light would add a bounce Mitsuba does not have).
+#[test]
+fn default_bsdfs_follow_mitsuba() {
+    let f = load(&scene(
+        r#"<shape type="sphere"/>
+           <shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#,
+    ))
+    .unwrap();
+    let albedo = |shape: usize| match &f.scene.bsdfs()[f.scene.shapes()[shape].bsdf as usize] {
+        Bsdf::Diffuse(d) => d.reflectance.mean(),
+        b => panic!("{b:?}"),
+    };
+    assert_eq!(albedo(0), Rgb::splat(0.5));
+    assert_eq!(albedo(1), Rgb::ZERO);
 }
