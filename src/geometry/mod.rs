@@ -4,6 +4,7 @@
 //! All geometry is stored in world space (transforms are applied when a shape is built), so
 //! the BVH intersects world-space rays directly.
 
+pub mod cylinder;
 pub mod disk;
 pub mod interaction;
 pub mod mesh;
@@ -11,6 +12,7 @@ pub mod shape;
 pub mod sphere;
 pub mod triangle;
 
+pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;

@@ -1,6 +1,6 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
-use super::{Disk, Sphere, TriangleMesh};
+use super::{Cylinder, Disk, Sphere, TriangleMesh};
 use crate::math::{Bounds3, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
@@ -13,6 +13,8 @@ pub enum Geometry {
     Sphere(Sphere),
     /// Analytic disk.
     Disk(Disk),
+    /// Analytic open cylinder.
+    Cylinder(Cylinder),
 }
 
 /// A point sampled on a shape as seen from a reference point.
@@ -37,6 +39,7 @@ impl Geometry {
             Geometry::Mesh(m) => m.area(),
             Geometry::Sphere(s) => s.area(),
             Geometry::Disk(d) => d.area(),
+            Geometry::Cylinder(c) => c.area(),
         }
     }
 
@@ -66,6 +69,7 @@ impl Geometry {
                 }
                 b
             }
+            Geometry::Cylinder(c) => c.bounds(),
         }
     }
 
@@ -90,6 +94,10 @@ impl Geometry {
             Geometry::Mesh(m) => m.sample_area(u)?,
             Geometry::Disk(d) => {
                 let (sp, pdf) = d.sample_area(u);
+                (sp, sp.n, pdf)
+            }
+            Geometry::Cylinder(c) => {
+                let (sp, pdf) = c.sample_area(u);
                 (sp, sp.n, pdf)
             }
         };

@@ -98,6 +98,7 @@ impl SceneBuilder {
                 Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
                 Geometry::Sphere(s) => Primitive::Sphere(*s),
                 Geometry::Disk(_) => Primitive::Disk,
+                Geometry::Cylinder(_) => Primitive::Cylinder,
             })
             .collect();
         // Infinite lights need the scene's extent.

@@ -33,6 +33,7 @@ enum Primitive {
     Triangle([Vec3; 3]),
     Sphere(Sphere),
     Disk,
+    Cylinder,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -47,6 +48,7 @@ enum HitKind {
     Triangle(TriangleHit),
     Sphere,
     Disk(Vec2),
+    Cylinder(Vec3),
 }
 
 /// A scene ready to render.
@@ -153,6 +155,15 @@ impl Scene {
                             }
                         }
                     }
+                    Primitive::Cylinder => {
+                        let r = self.refs[k as usize];
+                        if let Geometry::Cylinder(c) = &self.geometries[r.shape as usize] {
+                            if let Some((t, q)) = c.intersect(ray, *t_max) {
+                                *t_max = t;
+                                best = Some((k, t, HitKind::Cylinder(q)));
+                            }
+                        }
+                    }
                 }
             }
         });
@@ -188,6 +199,10 @@ impl Scene {
                 let (sp, uv) = d.surface(q);
                 SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
             }
+            (HitKind::Cylinder(q), Geometry::Cylinder(c)) => {
+                let (sp, uv) = c.surface(q);
+                SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
+            }
             _ => unreachable!("primitive kind and shape geometry always agree"),
         }
     }
@@ -202,6 +217,10 @@ impl Scene {
                 Primitive::Sphere(s) => s.intersect(ray, t_max).is_some(),
                 Primitive::Disk => match &self.geometries[self.refs[k as usize].shape as usize] {
                     Geometry::Disk(d) => d.intersect(ray, t_max).is_some(),
+                    _ => false,
+                },
+                Primitive::Cylinder => match &self.geometries[self.refs[k as usize].shape as usize] {
+                    Geometry::Cylinder(c) => c.intersect(ray, t_max).is_some(),
                     _ => false,
                 },
             })

@@ -7,7 +7,7 @@ use super::parse::{resolve, Obj, Value};
 use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
-use crate::geometry::{Disk, Geometry, Sphere, TriangleMesh};
+use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
 use crate::integrator::{AnyIntegrator, DirectIntegrator, PathIntegrator};
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
@@ -29,7 +29,7 @@ use std::sync::Arc;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
-const SHAPES: &[&str] = &["obj", "ply", "rectangle", "disk", "cube", "sphere", "shapegroup", "instance"];
+const SHAPES: &[&str] = &["obj", "ply", "rectangle", "disk", "cube", "sphere", "cylinder", "shapegroup", "instance"];
 const BSDFS: &[&str] = &[
     "diffuse",
     "conductor",
@@ -371,6 +371,17 @@ impl Builder {
                     o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly")
                 })?;
                 Geometry::Sphere(Sphere { center: c, radius: r, flip })
+            }
+            "cylinder" => {
+                let p0 = o.point_opt("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = o.point_opt("p1")?.unwrap_or(Vec3::Z);
+                let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
+                Geometry::Cylinder(Cylinder::new(p0, p1, radius, to_world, flip).ok_or_else(|| {
+                    o.error_at(
+                        "to_world",
+                        "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
+                    )
+                })?)
             }
             _ => return Err(unknown(o, SHAPES)),
         };
