@@ -2,7 +2,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, HemisphereStrategy};
-use neumann::film::output::{write_image, Format, ImageInfo};
+use neumann::film::output::{write_image_alpha, Format, ImageInfo};
 use neumann::integrator::{AnyIntegrator, DirectStrategy, PathIntegrator};
 use neumann::render::{render, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
@@ -183,6 +183,7 @@ struct Job {
     seed: u64,
     filter: neumann::film::filter::Filter,
     window: Option<[u32; 4]>,
+    alpha: bool,
 }
 
 /// Parses the `-D name=value` list.
@@ -224,6 +225,7 @@ fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Failure>
         seed: 0,
         filter: neumann::film::filter::Filter::Box,
         window: None,
+        alpha: false,
     })
 }
 
@@ -243,6 +245,7 @@ fn file_job(path: &std::path::Path, defines: &[(String, String)]) -> Result<Job,
         seed: file.seed,
         filter: file.filter,
         window: file.window,
+        alpha: file.alpha,
     })
 }
 
@@ -318,7 +321,12 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
-    Format::from_path(&output).map_err(usage)?;
+    if Format::from_path(&output).map_err(usage)? == Format::Pfm && job.alpha {
+        return Err(usage(format!(
+            "the scene asks for an alpha channel (pixel_format rgba), which PFM cannot hold: write {}.exr or .png",
+            job.name
+        )));
+    }
 
     let settings = RenderSettings {
         spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.spp },
@@ -329,6 +337,7 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         progress: !a.quiet,
         filter: job.filter.clone(),
         window: job.window,
+        alpha: job.alpha,
         ..Default::default()
     };
     let _ = ctrlc::set_handler(|| {
@@ -357,8 +366,9 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     );
     let out = render(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
     let (lo, hi) = out.film.spp_range();
-    write_image(&output, width, height, &out.film.image(), &ImageInfo { spp: lo, exposure: a.exposure })
-        .map_err(|e| Failure(1, e))?;
+    let alpha = job.alpha.then(|| out.film.alpha());
+    let info = ImageInfo { spp: lo, exposure: a.exposure };
+    write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info).map_err(|e| Failure(1, e))?;
     let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
     println!(
         "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",

@@ -25,6 +25,7 @@ pub struct TileBuffer {
     sum: Vec<[f64; 3]>,
     sum_sq: Vec<[f64; 3]>,
     count: Vec<u32>,
+    alpha: Vec<f32>,
     dropped: u64,
 }
 
@@ -40,8 +41,16 @@ impl TileBuffer {
             sum: vec![[0.0; 3]; n],
             sum_sq: vec![[0.0; 3]; n],
             count: vec![0; n],
+            alpha: vec![0.0; n],
             dropped: 0,
         }
+    }
+
+    /// Adds a coverage sample (1: the camera ray hit a surface, 0: it escaped) to pixel `(x, y)`.
+    #[inline]
+    pub fn add_alpha(&mut self, x: u32, y: u32, a: f32) {
+        let i = ((y - self.y0) * self.width + (x - self.x0)) as usize;
+        self.alpha[i] += a;
     }
 
     /// Adds a radiance sample to pixel `(x, y)` (image coordinates, inside the tile). Samples
@@ -77,6 +86,7 @@ pub struct Film {
     sum: Vec<[f64; 3]>,
     sum_sq: Vec<[f64; 3]>,
     count: Vec<u32>,
+    alpha: Vec<f64>,
     dropped: u64,
 }
 
@@ -84,7 +94,15 @@ impl Film {
     /// An empty `width × height` film.
     pub fn new(width: u32, height: u32) -> Film {
         let n = (width as usize) * (height as usize);
-        Film { width, height, sum: vec![[0.0; 3]; n], sum_sq: vec![[0.0; 3]; n], count: vec![0; n], dropped: 0 }
+        Film {
+            width,
+            height,
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+            count: vec![0; n],
+            alpha: vec![0.0; n],
+            dropped: 0,
+        }
     }
 
     /// Width in pixels.
@@ -108,6 +126,7 @@ impl Film {
                     self.sum_sq[fi][c] += tile.sum_sq[ti][c];
                 }
                 self.count[fi] += tile.count[ti];
+                self.alpha[fi] += tile.alpha[ti] as f64;
             }
         }
         self.dropped += tile.dropped;
@@ -139,6 +158,12 @@ impl Film {
             .map(|(s, &n)| if n == 0 { Rgb::ZERO } else { Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32) / n as f32 })
             .map(|c| if c.is_finite() { c } else { Rgb::ZERO })
             .collect()
+    }
+
+    /// Per-pixel coverage (alpha): the fraction of the pixel's samples whose camera ray hit a
+    /// surface, if the renderer recorded it (0 otherwise).
+    pub fn alpha(&self) -> Vec<f32> {
+        self.alpha.iter().zip(&self.count).map(|(&a, &n)| if n == 0 { 0.0 } else { (a / n as f64) as f32 }).collect()
     }
 
     /// Estimated variance of each pixel's mean, `s² / n` per channel (0 with fewer than two

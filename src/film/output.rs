@@ -1,5 +1,5 @@
-//! Image files: OpenEXR (float32 RGB, linear), PNG (8-bit sRGB-encoded, with exposure) and PFM
-//! (float32 RGB, linear), chosen by the file extension.
+//! Image files: OpenEXR (float32 RGB or RGBA, linear), PNG (8-bit sRGB-encoded, with exposure;
+//! RGB or RGBA) and PFM (float32 RGB, linear), chosen by the file extension.
 
 use crate::math::color::srgb_encode;
 use crate::math::Rgb;
@@ -44,11 +44,30 @@ impl Format {
 /// Writes `pixels` (row-major from the top-left, linear radiance) to `path` in the format its
 /// extension names. Non-finite values are written as 0.
 pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+    write_image_alpha(path, width, height, pixels, None, info)
+}
+
+/// [`write_image`] with an optional alpha channel (coverage in [0, 1], not premultiplied into
+/// the colours), written as the A channel of EXR and PNG; PFM has no alpha and refuses it.
+pub fn write_image_alpha(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Rgb],
+    alpha: Option<&[f32]>,
+    info: &ImageInfo,
+) -> Result<(), String> {
     assert_eq!(pixels.len(), (width * height) as usize);
+    if let Some(a) = alpha {
+        assert_eq!(a.len(), pixels.len());
+    }
     let fail = |e: String| format!("cannot write '{}': {e}", path.display());
     match Format::from_path(path)? {
-        Format::Exr => write_exr(path, width, height, pixels, info).map_err(fail),
-        Format::Png => write_png(path, width, height, pixels, info).map_err(fail),
+        Format::Exr => write_exr(path, width, height, pixels, alpha, info).map_err(fail),
+        Format::Png => write_png(path, width, height, pixels, alpha, info).map_err(fail),
+        Format::Pfm if alpha.is_some() => {
+            Err(fail("PFM has no alpha channel: write .exr or .png for pixel_format rgba".into()))
+        }
         Format::Pfm => write_pfm(path, width, height, pixels).map_err(fail),
     }
 }
@@ -61,33 +80,67 @@ fn clean(c: Rgb) -> Rgb {
     )
 }
 
-fn write_exr(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Rgb],
+    alpha: Option<&[f32]>,
+    info: &ImageInfo,
+) -> Result<(), String> {
     use exr::prelude::*;
     let w = width as usize;
-    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
-        let c = clean(pixels[pos.y() * w + pos.x()]);
-        (c.x, c.y, c.z)
-    });
     let mut attributes = LayerAttributes::named("");
     attributes.software_name = Some(Text::from("neumann"));
-    let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
-    let mut image = Image::from_layer(layer);
-    image.attributes.other.insert(Text::from("spp"), exr::meta::attribute::AttributeValue::I32(info.spp as i32));
-    image.write().to_file(path).map_err(|e| e.to_string())
+    let spp = (Text::from("spp"), exr::meta::attribute::AttributeValue::I32(info.spp as i32));
+    match alpha {
+        None => {
+            let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+                let c = clean(pixels[pos.y() * w + pos.x()]);
+                (c.x, c.y, c.z)
+            });
+            let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
+            let mut image = Image::from_layer(layer);
+            image.attributes.other.insert(spp.0, spp.1);
+            image.write().to_file(path).map_err(|e| e.to_string())
+        }
+        Some(a) => {
+            let channels = SpecificChannels::rgba(|pos: Vec2<usize>| {
+                let i = pos.y() * w + pos.x();
+                let c = clean(pixels[i]);
+                (c.x, c.y, c.z, if a[i].is_finite() { a[i].clamp(0.0, 1.0) } else { 0.0 })
+            });
+            let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
+            let mut image = Image::from_layer(layer);
+            image.attributes.other.insert(spp.0, spp.1);
+            image.write().to_file(path).map_err(|e| e.to_string())
+        }
+    }
 }
 
-fn write_png(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Rgb],
+    alpha: Option<&[f32]>,
+    info: &ImageInfo,
+) -> Result<(), String> {
     let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
     let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    enc.set_color(png::ColorType::Rgb);
+    enc.set_color(if alpha.is_some() { png::ColorType::Rgba } else { png::ColorType::Rgb });
     enc.set_depth(png::BitDepth::Eight);
     enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
     let scale = 2f32.powf(info.exposure);
+    let encode = |v: f32| (srgb_encode(v.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8;
     let data: Vec<u8> = pixels
         .iter()
-        .flat_map(|&c| {
+        .enumerate()
+        .flat_map(|(i, &c)| {
             let c = clean(c) * scale;
-            [c.x, c.y, c.z].map(|v| (srgb_encode(v.clamp(0.0, 1.0)) * 255.0 + 0.5) as u8)
+            let rgb = [c.x, c.y, c.z].map(encode);
+            let a = alpha.map(|a| (a[i].clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
+            rgb.into_iter().chain(a)
         })
         .collect();
     let mut writer = enc.write_header().map_err(|e| e.to_string())?;
@@ -161,6 +214,34 @@ pub fn read_pfm(path: &Path) -> Result<(u32, u32, Vec<Rgb>), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// RGBA output: PNG gets an 8-bit alpha channel, EXR an A channel; PFM refuses alpha.
+    #[test]
+    fn alpha_channel_is_written() {
+        let dir = std::env::temp_dir().join(format!("neumann-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px = vec![Rgb::new(0.2, 0.4, 0.6); 2];
+        let alpha = [1.0f32, 0.25];
+        let info = ImageInfo::default();
+        write_image_alpha(&dir.join("a.png"), 2, 1, &px, Some(&alpha), &info).unwrap();
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.join("a.png")).unwrap()));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let frame = reader.next_frame(&mut buf).unwrap();
+        assert_eq!(frame.color_type, png::ColorType::Rgba);
+        assert_eq!((buf[3], buf[7]), (255, 64));
+        write_image_alpha(&dir.join("a.exr"), 2, 1, &px, Some(&alpha), &info).unwrap();
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            dir.join("a.exr"),
+            |res, _| vec![[0.0f32; 4]; res.width() * res.height()],
+            |buf: &mut Vec<[f32; 4]>, pos, (r, g, b, a): (f32, f32, f32, f32)| buf[pos.x()] = [r, g, b, a],
+        )
+        .unwrap();
+        let pixels = &image.layer_data.channel_data.pixels;
+        assert_eq!(pixels[1], [0.2, 0.4, 0.6, 0.25]);
+        assert!(write_image_alpha(&dir.join("a.pfm"), 2, 1, &px, Some(&alpha), &info).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn formats_by_extension_and_round_trips() {

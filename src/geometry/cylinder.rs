@@ -38,7 +38,9 @@ impl Cylinder {
         let (ex, ey, ez) = (t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z));
         let r = ex.length();
         let tol = 1e-4 * r;
-        if (ey.length() - r).abs() > tol || ex.dot(ey).abs() > tol * r || ex.dot(ez).abs() > tol * ez.length()
+        if (ey.length() - r).abs() > tol
+            || ex.dot(ey).abs() > tol * r
+            || ex.dot(ez).abs() > tol * ez.length()
             || ey.dot(ez).abs() > tol * ez.length()
         {
             return None;
@@ -164,7 +166,8 @@ mod tests {
     #[test]
     fn area_sampling_is_uniform_chi2() {
         use crate::testkit::{chi2_2d, u2, Chi2Config, Rect};
-        let t = Transform::rotate(Vec3::new(1.0, 2.0, 0.5), 35.0).unwrap() * Transform::scale(Vec3::splat(1.7)).unwrap();
+        let t =
+            Transform::rotate(Vec3::new(1.0, 2.0, 0.5), 35.0).unwrap() * Transform::scale(Vec3::splat(1.7)).unwrap();
         let c = Cylinder::new(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.4, -0.2, 1.5), 0.6, t, false).unwrap();
         let out = chi2_2d(
             &Rect::UNIT,

@@ -62,6 +62,9 @@ pub struct RenderSettings {
     /// Crop window `[x0, y0, width, height]` of the camera's film to render (the output image is
     /// the window; default: the whole film).
     pub window: Option<[u32; 4]>,
+    /// Record per-pixel coverage (alpha; one extra intersection per sample): the fraction of
+    /// camera rays that hit a surface.
+    pub alpha: bool,
 }
 
 impl Default for RenderSettings {
@@ -76,6 +79,7 @@ impl Default for RenderSettings {
             progress: false,
             filter: Filter::Box,
             window: None,
+            alpha: false,
         }
     }
 }
@@ -192,6 +196,9 @@ pub fn render(
                                 let film_pos = centre + settings.filter.sample(sampler.next_2d());
                                 let u_lens = sampler.next_2d();
                                 let ray = cam.generate_ray(film_pos, u_lens);
+                                if settings.alpha {
+                                    tile.add_alpha(x, y, f32::from(u8::from(scene.intersect(&ray).is_some())));
+                                }
                                 tile.add(x, y, integrator.li(scene, &ray, &mut sampler));
                             }
                         }
@@ -244,6 +251,28 @@ mod tests {
         let other_seed =
             render(&scene, &integrator, &RenderSettings { spp: 4, seed: 8, ..Default::default() }, &never).unwrap();
         assert_ne!(other_seed.film.image(), images[0]);
+    }
+
+    /// Alpha is the fraction of camera rays that hit something: 1 inside a sphere's image, 0
+    /// outside, fractional on its silhouette.
+    #[test]
+    fn alpha_records_coverage() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, Sphere};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Rgb, Transform, Vec3};
+        let mut b = crate::scene::SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, flip: false }), m, None);
+        b.add_point_light(Vec3::ZERO, Rgb::ONE);
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 9, 9).unwrap());
+        let scene = b.build().unwrap();
+        let settings = RenderSettings { spp: 64, alpha: true, ..Default::default() };
+        let out = render(&scene, &PathIntegrator::default(), &settings, &AtomicBool::new(false)).unwrap();
+        let alpha = out.film.alpha();
+        assert_eq!(alpha[4 * 9 + 4], 1.0, "centre");
+        assert_eq!(alpha[0], 0.0, "corner");
+        assert!(alpha.iter().any(|&a| a > 0.0 && a < 1.0), "silhouette pixels are partly covered");
     }
 
     #[test]

@@ -55,6 +55,17 @@ fn unknown(o: &Obj, supported: &[&str]) -> SceneError {
     o.error(format!("unsupported {} plugin (supported: {}{hint})", o.tag, supported.join(", ")))
 }
 
+/// What the sensor with its film and sampler asks for.
+struct SensorSettings {
+    camera: Camera,
+    spp: u32,
+    sampler: SamplerKind,
+    seed: u64,
+    filter: Filter,
+    window: Option<[u32; 4]>,
+    alpha: bool,
+}
+
 /// Builds the scene from the parsed root object.
 pub struct Builder {
     sb: SceneBuilder,
@@ -108,7 +119,7 @@ impl Builder {
             }
         }
         let sensor = sensor.ok_or_else(|| SceneError::at(&root.loc, "the scene has no <sensor> (camera)"))?;
-        let (camera, spp, sampler, seed, filter, window) = self.sensor(&sensor)?;
+        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha } = self.sensor(&sensor)?;
         self.sb.set_camera(camera);
         let scene = self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
         let mut warnings = Vec::new();
@@ -121,6 +132,7 @@ impl Builder {
             seed,
             filter,
             window,
+            alpha,
             warnings,
         })
     }
@@ -171,8 +183,7 @@ impl Builder {
         }
     }
 
-    #[allow(clippy::type_complexity)]
-    fn sensor(&mut self, o: &Obj) -> Result<(Camera, u32, SamplerKind, u64, Filter, Option<[u32; 4]>)> {
+    fn sensor(&mut self, o: &Obj) -> Result<SensorSettings> {
         o.built.set(true);
         o.check_children(&["film", "sampler"])?;
         if !matches!(o.ty.as_str(), "perspective" | "thinlens") {
@@ -182,6 +193,7 @@ impl Builder {
         let films = o.nested("film");
         let film = films.first();
         let (mut width, mut height, mut filter, mut window) = (768u32, 576u32, Filter::gaussian(0.5).unwrap(), None);
+        let mut alpha = false;
         if let Some(f) = film {
             f.built.set(true);
             f.check_children(&["rfilter"])?;
@@ -201,11 +213,7 @@ impl Builder {
             if (width as u64) * (height as u64) > 1 << 26 {
                 return Err(f.error(format!("film {width}x{height} is too large (at most 67 million pixels)")));
             }
-            let pf = f.choice("pixel_format", &["rgb", "rgba"])?;
-            if pf == "rgba" {
-                // The alpha channel is not produced: say so rather than write a wrong one.
-                return Err(f.error_at("pixel_format", "pixel_format 'rgba' (alpha) is not supported yet; use 'rgb'"));
-            }
+            alpha = f.choice("pixel_format", &["rgb", "rgba"])? == "rgba";
             f.choice("component_format", &["float16", "float32", "uint32"])?;
             f.choice("file_format", &["openexr", "pfm", "png"])?;
             f.bool("sample_border", false)?;
@@ -302,7 +310,7 @@ impl Builder {
             let d = o.float_opt("focus_distance")?.ok_or_else(|| o.error("'focus_distance' is required"))?;
             camera = camera.with_thin_lens(r, d).map_err(|e| o.error_at("aperture_radius", e))?;
         }
-        Ok((camera, spp, kind, seed, filter, window))
+        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha })
     }
 
     // ---------------------------------------------------------------- shapes

@@ -36,6 +36,8 @@ pub struct SceneFile {
     pub filter: Filter,
     /// Crop window `[x, y, w, h]`, if the film has one.
     pub window: Option<[u32; 4]>,
+    /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
+    pub alpha: bool,
     /// Warnings (unused parameters), formatted with their positions.
     pub warnings: Vec<String>,
 }
