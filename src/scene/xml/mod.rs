@@ -1,7 +1,7 @@
 //! Mitsuba 3 XML scene files: `neumann render scene.xml`.
 //!
 //! [`load_scene_file`] parses the file ([`parse`]: defaults, `$` substitution, includes, ids and
-//! references, transforms, typed properties with positions) and builds the plugins ([`build`]).
+//! references, transforms, typed properties with positions) and builds the plugins (`build.rs`).
 //! Every problem is a [`SceneError`] naming `file:line:col` with the source line; parameters that
 //! no plugin read come back as warnings, like pbrt's unused-parameter check.
 
