@@ -84,3 +84,38 @@ fn interrupt_writes_what_was_rendered() {
     assert!(stdout.contains("interrupted"), "{stdout}");
     assert!(std::fs::metadata(&out).unwrap().len() > 0);
 }
+
+/// A Mitsuba XML scene renders with -D overrides; a broken one fails with exit code 1 and a
+/// `file:line:col` message quoting the line; unused parameters are warned about.
+#[test]
+fn scene_files_render_and_bad_ones_fail_with_their_position() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox.xml");
+    let out = temp("xml.png");
+    let r =
+        neumann().arg("render").arg(&scene).args(["-Dres=10", "-Dspp=2", "--quiet", "-o"]).arg(&out).output().unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("at 10x10") && stdout.contains("2 spp"), "{stdout}");
+
+    let bad = temp("bad.xml");
+    std::fs::write(
+        &bad,
+        "<scene version=\"3.0.0\">\n  <sensor type=\"perspective\"/>\n  <shape type=\"sphere\">\n    <bsdf type=\"difuse\"/>\n  </shape>\n</scene>\n",
+    )
+    .unwrap();
+    let r = neumann().arg("render").arg(&bad).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("bad.xml:4:5:") && err.contains("'diffuse'") && err.contains("4 |     <bsdf"), "{err}");
+
+    let warn = temp("warn.xml");
+    std::fs::write(
+        &warn,
+        "<scene version=\"3.0.0\">\n  <sensor type=\"perspective\">\n    <film type=\"hdrfilm\"><integer name=\"width\" value=\"4\"/><integer name=\"height\" value=\"4\"/></film>\n  </sensor>\n  <shape type=\"sphere\"><float name=\"raidus\" value=\"2\"/></shape>\n</scene>\n",
+    )
+    .unwrap();
+    let r = neumann().arg("render").arg(&warn).args(["--quiet", "-o"]).arg(temp("warn.png")).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(err.contains("warn.xml:5:") && err.contains("unused parameter 'raidus'"), "{err}");
+}
