@@ -37,6 +37,18 @@ enum DirectArg {
     Light,
     /// BSDF sampling only.
     Bsdf,
+    /// Uniform hemisphere sampling of directions, traced to emitters.
+    Uniform,
+    /// Cosine-weighted hemisphere sampling of directions, traced to emitters.
+    Cosine,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum MisArg {
+    /// Balance heuristic.
+    Balance,
+    /// Power heuristic (exponent 2).
+    Power,
 }
 
 #[derive(Subcommand, Debug)]
@@ -145,6 +157,9 @@ struct RenderArgs {
     /// Direct-light strategy of the path tracer (default: mis).
     #[arg(long, value_enum)]
     direct: Option<DirectArg>,
+    /// MIS heuristic of the mis strategy (default: power).
+    #[arg(long, value_enum)]
+    mis: Option<MisArg>,
     /// Exposure in stops for PNG output (× 2^EV).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
@@ -303,11 +318,32 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
                     DirectArg::Mis => DirectStrategy::Mis,
                     DirectArg::Light => DirectStrategy::Light,
                     DirectArg::Bsdf => DirectStrategy::Bsdf,
+                    DirectArg::Uniform => DirectStrategy::Uniform,
+                    DirectArg::Cosine => DirectStrategy::Cosine,
+                };
+                if matches!(direct, DirectArg::Uniform | DirectArg::Cosine)
+                    && job.scene.lights().iter().any(|l| l.is_delta())
+                {
+                    eprintln!(
+                        "warning: --direct {direct:?} samples directions, which never hit point, spot or directional lights: \
+                         they contribute nothing with this strategy"
+                    );
                 }
             }
             AnyIntegrator::Direct(_) => {
                 return Err(usage("--direct applies to the path integrator; this scene uses 'direct' (set its emitter_samples / bsdf_samples)".into()))
             }
+        }
+    }
+    if let Some(m) = a.mis {
+        match &mut job.integrator {
+            AnyIntegrator::Path(p) => {
+                p.heuristic = match m {
+                    MisArg::Balance => neumann::integrator::MisHeuristic::Balance,
+                    MisArg::Power => neumann::integrator::MisHeuristic::Power,
+                }
+            }
+            AnyIntegrator::Direct(_) => return Err(usage("--mis applies to the path integrator".into())),
         }
     }
     let time_budget = match a.time {

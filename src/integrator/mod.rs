@@ -8,7 +8,7 @@ pub mod direct;
 pub mod path;
 
 pub use direct::DirectIntegrator;
-pub use path::{DirectStrategy, PathIntegrator};
+pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
 
 use crate::math::{Ray, Rgb};
 use crate::sampling::Sampler;

@@ -15,21 +15,40 @@
 //! Parameters (Mitsuba): `max_depth` (default -1), `rr_depth` (5), `hide_emitters` (false).
 
 use super::Integrator;
-use crate::material::BsdfContext;
-use crate::math::{Ray, Rgb, Vec3};
-use crate::sampling::{power_heuristic, Sampler};
+use crate::material::{Bsdf, BsdfContext};
+use crate::math::{Frame, Ray, Rgb, Vec3};
+use crate::sampling::{
+    balance_heuristic, power_heuristic, sample_cosine_hemisphere_malley, sample_uniform_hemisphere,
+    sample_uniform_sphere, Sampler,
+};
 use crate::scene::Scene;
 
 /// How direct light is estimated at each vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DirectStrategy {
-    /// Light sampling and BSDF sampling combined by the power heuristic.
+    /// Light sampling and BSDF sampling combined by MIS (power heuristic by default).
     Mis,
-    /// Light sampling only (emitters hit by BSDF-sampled rays after a non-specular bounce do
-    /// not count).
+    /// Light (emitter area) sampling only: emitters hit by BSDF-sampled rays after a
+    /// non-specular bounce do not count.
     Light,
     /// BSDF sampling only (no next-event estimation).
     Bsdf,
+    /// A direction sampled uniformly over the hemisphere (pdf `1/2π`; the sphere, `1/4π`, for
+    /// BSDFs that transmit) and traced to whatever emitter it hits; emitters hit by the path's
+    /// own BSDF-sampled rays do not count. The lecture's first estimator of direct light.
+    Uniform,
+    /// As `Uniform` but cosine-weighted (pdf `cos θ / π`, Malley's method; `|cos θ| / 2π` over
+    /// the sphere for BSDFs that transmit).
+    Cosine,
+}
+
+/// The MIS heuristic combining light and BSDF sampling.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MisHeuristic {
+    /// Veach's balance heuristic `w_a = p_a / (p_a + p_b)`.
+    Balance,
+    /// Veach's power heuristic with exponent 2, `w_a = p_a² / (p_a² + p_b²)`.
+    Power,
 }
 
 /// Unidirectional path tracer.
@@ -41,6 +60,8 @@ pub struct PathIntegrator {
     pub rr_depth: u32,
     /// Direct-light strategy.
     pub strategy: DirectStrategy,
+    /// MIS heuristic (used by the `Mis` strategy).
+    pub heuristic: MisHeuristic,
     /// Whether emitters seen directly by the camera are hidden: camera rays pass through emitting
     /// shapes (as in Mitsuba 3) and environments are black to them; lighting is unchanged.
     pub hide_emitters: bool,
@@ -52,11 +73,26 @@ pub(crate) const MAX_HIDDEN_SKIPS: u32 = 64;
 
 impl Default for PathIntegrator {
     fn default() -> Self {
-        PathIntegrator { max_depth: -1, rr_depth: 5, strategy: DirectStrategy::Mis, hide_emitters: false }
+        PathIntegrator {
+            max_depth: -1,
+            rr_depth: 5,
+            strategy: DirectStrategy::Mis,
+            heuristic: MisHeuristic::Power,
+            hide_emitters: false,
+        }
     }
 }
 
 impl PathIntegrator {
+    /// MIS weight of a sample of density `a` against the other strategy's density `b`.
+    #[inline]
+    fn mis(&self, a: f32, b: f32) -> f32 {
+        match self.heuristic {
+            MisHeuristic::Power => power_heuristic(1, a, 1, b),
+            MisHeuristic::Balance => balance_heuristic(1, a, 1, b),
+        }
+    }
+
     /// Weight of emission found by the path itself (not by light sampling). `prev` is the previous
     /// vertex (position, BSDF pdf of the direction taken, delta?), `None` for camera rays;
     /// `pdf_light(p_prev)` computes the light-sampling density of the same direction from the
@@ -74,23 +110,75 @@ impl PathIntegrator {
             Some((_, _, true)) => 1.0,
             Some((p_prev, pdf_bsdf, false)) => match self.strategy {
                 DirectStrategy::Bsdf => 1.0,
-                DirectStrategy::Light => 0.0,
-                DirectStrategy::Mis => power_heuristic(1, pdf_bsdf, 1, pdf_light(p_prev)),
+                DirectStrategy::Light | DirectStrategy::Uniform | DirectStrategy::Cosine => 0.0,
+                DirectStrategy::Mis => self.mis(pdf_bsdf, pdf_light(p_prev)),
             },
         }
     }
-}
 
-impl Integrator for PathIntegrator {
-    fn name(&self) -> &'static str {
-        "path"
+    /// Direct light at a vertex by sampling a direction independently of lights and BSDF
+    /// (uniform or cosine-weighted about the shading normal, on `wo`'s side, or over the whole
+    /// sphere for BSDFs that transmit) and tracing it to an emitter.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn direct_by_direction(
+        &self,
+        scene: &Scene,
+        si: &crate::geometry::SurfaceInteraction,
+        frame: &Frame,
+        bsdf: &Bsdf,
+        ctx: &BsdfContext,
+        wo_local: Vec3,
+        u: crate::math::Vec2,
+    ) -> Rgb {
+        let (mut w, mut pdf) = if bsdf.transmits() {
+            match self.strategy {
+                DirectStrategy::Uniform => {
+                    let s = sample_uniform_sphere(u);
+                    (s.value, s.pdf)
+                }
+                _ => {
+                    // Cosine-weighted on a random side: reuse u.x to choose it.
+                    let (side, ux) = if u.x < 0.5 { (1.0, 2.0 * u.x) } else { (-1.0, 2.0 * u.x - 1.0) };
+                    let s = sample_cosine_hemisphere_malley(crate::math::Vec2::new(ux.min(0.999_999_9), u.y));
+                    (Vec3::new(s.value.x, s.value.y, side * s.value.z), 0.5 * s.pdf)
+                }
+            }
+        } else {
+            let s = match self.strategy {
+                DirectStrategy::Uniform => sample_uniform_hemisphere(u),
+                _ => sample_cosine_hemisphere_malley(u),
+            };
+            let side = if wo_local.z < 0.0 { -1.0 } else { 1.0 };
+            (Vec3::new(s.value.x, s.value.y, side * s.value.z), s.pdf)
+        };
+        if pdf <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let f = bsdf.eval(ctx, wo_local, w);
+        if f == Rgb::ZERO {
+            return Rgb::ZERO;
+        }
+        w = frame.to_world(w).normalize();
+        let le = match scene.intersect(&si.spawn_ray(w)) {
+            Some(hit) => match scene.shapes()[hit.shape as usize].light {
+                Some(i) => scene.lights()[i as usize].le(hit.ns, -w),
+                None => Rgb::ZERO,
+            },
+            None => scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(w)).sum(),
+        };
+        pdf = pdf.max(f32::MIN_POSITIVE);
+        f * le / pdf
     }
 
-    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
+    /// One sample of the radiance along `camera_ray`, handing each contribution to `record`
+    /// with the number of path segments it took (`k`: the term `Tᵏ⁻¹ Lₑ` of the Neumann
+    /// series, k = 1 for emitters seen directly). [`Integrator::li`] sums them in order.
+    #[inline]
+    pub fn trace(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, mut record: impl FnMut(u32, Rgb)) {
         let max_depth = if self.max_depth < 0 { u32::MAX } else { self.max_depth as u32 };
-        let mut l = Rgb::ZERO;
         if max_depth == 0 {
-            return l;
+            return;
         }
         let geometries = scene.geometries();
         let mut beta = Rgb::ONE;
@@ -109,7 +197,7 @@ impl Integrator for PathIntegrator {
                 for &i in scene.infinite_lights() {
                     let light = &scene.lights()[i as usize];
                     let weight = self.emission_weight(prev, |_| scene.light_pmf(i) * light.pdf_li_direction(d));
-                    l += beta * light.le_escaped(d) * weight;
+                    record(depth + 1, beta * light.le_escaped(d) * weight);
                 }
                 break;
             };
@@ -133,7 +221,7 @@ impl Integrator for PathIntegrator {
                     let weight = self.emission_weight(prev, |p_prev| {
                         scene.light_pmf(light_index) * light.pdf_li(geometries, p_prev, si.p, si.ng)
                     });
-                    l += beta * le * weight;
+                    record(depth + 1, beta * le * weight);
                 }
             }
             if depth + 1 >= max_depth {
@@ -145,30 +233,41 @@ impl Integrator for PathIntegrator {
             let wo_local = frame.to_local(wo);
             let ctx = BsdfContext { uv: si.uv };
 
-            // Next-event estimation (its random numbers are drawn whether used or not, so that
-            // every vertex consumes the same sampler dimensions).
+            // Direct light (its random numbers are drawn whether used or not, so that every
+            // vertex consumes the same sampler dimensions).
             let u_light = sampler.next_1d();
             let u_light2 = sampler.next_2d();
-            if self.strategy != DirectStrategy::Bsdf && !bsdf.is_delta() {
-                if let Some((light_index, pmf)) = scene.sample_light(u_light) {
-                    let light = &scene.lights()[light_index as usize];
-                    if let Some(ls) = light.sample_li(geometries, si.p, u_light2) {
-                        let wi_local = frame.to_local(ls.wi);
-                        let f = bsdf.eval(&ctx, wo_local, wi_local);
-                        if f != Rgb::ZERO && !scene.occluded(&si.spawn_ray_to(ls.p, ls.n, ls.p_error)) {
-                            let contribution = if ls.delta {
-                                f * ls.li / pmf
-                            } else {
-                                let pdf_light = pmf * ls.pdf;
-                                let w = match self.strategy {
-                                    DirectStrategy::Mis => {
-                                        power_heuristic(1, pdf_light, 1, bsdf.pdf(&ctx, wo_local, wi_local))
-                                    }
-                                    _ => 1.0,
-                                };
-                                f * ls.li * (w / pdf_light)
-                            };
-                            l += beta * contribution;
+            if !bsdf.is_delta() {
+                match self.strategy {
+                    DirectStrategy::Bsdf => {}
+                    DirectStrategy::Uniform | DirectStrategy::Cosine => {
+                        let c = self.direct_by_direction(scene, &si, &frame, bsdf, &ctx, wo_local, u_light2);
+                        if c != Rgb::ZERO {
+                            record(depth + 2, beta * c);
+                        }
+                    }
+                    DirectStrategy::Mis | DirectStrategy::Light => {
+                        if let Some((light_index, pmf)) = scene.sample_light(u_light) {
+                            let light = &scene.lights()[light_index as usize];
+                            if let Some(ls) = light.sample_li(geometries, si.p, u_light2) {
+                                let wi_local = frame.to_local(ls.wi);
+                                let f = bsdf.eval(&ctx, wo_local, wi_local);
+                                if f != Rgb::ZERO && !scene.occluded(&si.spawn_ray_to(ls.p, ls.n, ls.p_error)) {
+                                    let contribution = if ls.delta {
+                                        f * ls.li / pmf
+                                    } else {
+                                        let pdf_light = pmf * ls.pdf;
+                                        let w = match self.strategy {
+                                            DirectStrategy::Mis => {
+                                                self.mis(pdf_light, bsdf.pdf(&ctx, wo_local, wi_local))
+                                            }
+                                            _ => 1.0,
+                                        };
+                                        f * ls.li * (w / pdf_light)
+                                    };
+                                    record(depth + 2, beta * contribution);
+                                }
+                            }
                         }
                     }
                 }
@@ -199,6 +298,18 @@ impl Integrator for PathIntegrator {
                 beta /= q;
             }
         }
+    }
+}
+
+impl Integrator for PathIntegrator {
+    fn name(&self) -> &'static str {
+        "path"
+    }
+
+    #[inline]
+    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
+        let mut l = Rgb::ZERO;
+        self.trace(scene, camera_ray, sampler, |_, c| l += c);
         l
     }
 }
@@ -318,20 +429,68 @@ mod tests {
     fn strategies_agree_on_the_cornell_box() {
         let scene = crate::scene::cornell::cornell_box(24, 24).unwrap();
         let mut means = Vec::new();
-        for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate()
-        {
-            let integrator = PathIntegrator { max_depth: 6, strategy, ..Default::default() };
-            let spp = if strategy == DirectStrategy::Bsdf { 1024 } else { 256 };
+        let cases = [
+            (DirectStrategy::Mis, MisHeuristic::Power, 256),
+            (DirectStrategy::Mis, MisHeuristic::Balance, 256),
+            (DirectStrategy::Light, MisHeuristic::Power, 256),
+            (DirectStrategy::Bsdf, MisHeuristic::Power, 1024),
+            (DirectStrategy::Cosine, MisHeuristic::Power, 1024),
+            (DirectStrategy::Uniform, MisHeuristic::Power, 1024),
+        ];
+        for (k, (strategy, heuristic, spp)) in cases.into_iter().enumerate() {
+            let integrator = PathIntegrator { max_depth: 6, strategy, heuristic, ..Default::default() };
             let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
-            means.push((strategy, image_mean(&out.film)));
+            means.push((strategy, heuristic, image_mean(&out.film)));
         }
-        let (_, (m0, s0)) = means[0];
+        let (_, _, (m0, s0)) = means[0];
         assert!(s0 < 0.01 * m0, "MIS estimate too noisy: {s0} of {m0}");
-        for &(strategy, (m, s)) in &means[1..] {
+        for &(strategy, heuristic, (m, s)) in &means[1..] {
             let tol = 3.0 * (s0 * s0 + s * s).sqrt();
-            assert!((m - m0).abs() <= tol, "{strategy:?}: {m} vs MIS {m0} (±{tol})");
+            assert!((m - m0).abs() <= tol, "{strategy:?}/{heuristic:?}: {m} vs MIS {m0} (±{tol})");
         }
+    }
+
+    /// Direct light on a diffuse floor from a small square light: every strategy is unbiased,
+    /// and their variances rank as theory says — light sampling aims at the light, cosine
+    /// sampling at least follows the cosine, uniform sampling follows nothing — with margin.
+    #[test]
+    fn direct_strategies_rank_by_variance_on_a_small_light() {
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7))));
+        let mut floor = TriangleMesh::rectangle();
+        floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(3.0)).unwrap()));
+        b.add_shape(Geometry::Mesh(floor), m, None);
+        let mut light = TriangleMesh::rectangle();
+        light.transform(
+            &(Transform::translate(Vec3::new(0.0, 1.5, 0.0))
+                * Transform::rotate(Vec3::X, 90.0).unwrap()
+                * Transform::scale(Vec3::splat(0.15)).unwrap()),
+        );
+        b.add_shape(Geometry::Mesh(light), m, Some(Rgb::splat(20.0)));
+        let to_world = Transform::look_at(Vec3::new(0.0, 2.5, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 40.0, FovAxis::X, 12, 12).unwrap());
+        let scene = b.build().unwrap();
+        let mut results = Vec::new();
+        for (k, strategy) in
+            [DirectStrategy::Light, DirectStrategy::Cosine, DirectStrategy::Uniform].into_iter().enumerate()
+        {
+            let integrator = PathIntegrator { max_depth: 2, strategy, hide_emitters: true, ..Default::default() };
+            let settings = RenderSettings { spp: 2048, seed: 7 + k as u64, ..Default::default() };
+            let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
+            let var = out.film.variance_of_mean();
+            // Per-sample variance, averaged over pixels and channels.
+            let v = var.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / (3 * var.len()) as f64 * 2048.0;
+            results.push((strategy, image_mean(&out.film), v));
+        }
+        let (_, (m0, s0), _) = results[0];
+        for &(strategy, (m, s), _) in &results[1..] {
+            let tol = 3.0 * (s0 * s0 + s * s).sqrt();
+            assert!((m - m0).abs() <= tol, "{strategy:?}: {m} vs light sampling {m0} (±{tol})");
+        }
+        let (vl, vc, vu) = (results[0].2, results[1].2, results[2].2);
+        println!("per-sample variance: light {vl:.4e}, cosine {vc:.4e}, uniform {vu:.4e}");
+        assert!(vl * 100.0 < vc && vc * 1.3 < vu, "variances light {vl}, cosine {vc}, uniform {vu}");
     }
 
     /// White furnace: a sphere inside a constant environment of radiance 1, filling the view.

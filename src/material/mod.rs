@@ -90,6 +90,18 @@ pub enum Bsdf {
     TwoSided(Box<[Bsdf; 2]>),
 }
 
+impl Bsdf {
+    /// Whether the BSDF can scatter light to the other side of the surface (transmission or a
+    /// null lobe), so that direct light may arrive from the whole sphere.
+    pub fn transmits(&self) -> bool {
+        match self {
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Mask { .. } => true,
+            Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
+            _ => false,
+        }
+    }
+}
+
 /// Flips a local direction to the other side (z → -z).
 #[inline]
 fn flip(w: Vec3) -> Vec3 {
