@@ -166,6 +166,12 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Also write the terms of the Neumann series to this folder: term0.exr = Lₑ seen directly,
+    /// term1.exr = T Lₑ (direct light), term2.exr = T² Lₑ, …, up to max_depth (8 terms when
+    /// unlimited, the last holding all longer paths), sum.exr (= the render) and terms.png, a
+    /// contact sheet of the terms and their sum side by side.
+    #[arg(long, value_name = "DIR")]
+    bounces_out: Option<PathBuf>,
 }
 
 /// Parses `W` or `WxH`.
@@ -364,6 +370,17 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         )));
     }
 
+    let term_count = match (&a.bounces_out, &job.integrator) {
+        (None, _) => 0,
+        (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.max_depth) => p.max_depth as usize,
+        (Some(_), AnyIntegrator::Path(_)) => 8,
+        (Some(_), AnyIntegrator::Direct(_)) => {
+            return Err(usage("--bounces-out needs the path integrator; this scene uses 'direct'".into()))
+        }
+    };
+    if let Some(dir) = &a.bounces_out {
+        std::fs::create_dir_all(dir).map_err(|e| Failure(1, format!("cannot create '{}': {e}", dir.display())))?;
+    }
     let settings = RenderSettings {
         spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.spp },
         time_budget,
@@ -374,6 +391,7 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         filter: job.filter.clone(),
         window: job.window,
         alpha: job.alpha,
+        terms: term_count,
         ..Default::default()
     };
     let _ = ctrlc::set_handler(|| {
@@ -405,6 +423,10 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     let alpha = job.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
     write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info).map_err(|e| Failure(1, e))?;
+    if let Some(dir) = &a.bounces_out {
+        write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e))?;
+        println!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
+    }
     let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
     println!(
         "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",
@@ -419,6 +441,38 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
     }
     Ok(())
+}
+
+/// Writes each Neumann-series term, the sum and a contact sheet (terms then sum, left to right).
+fn write_terms(
+    dir: &std::path::Path,
+    film: &neumann::film::Film,
+    w: u32,
+    h: u32,
+    info: &ImageInfo,
+) -> Result<(), String> {
+    let mut panels = Vec::new();
+    for k in 0..film.term_count() {
+        let image = film.term_image(k);
+        write_image_alpha(&dir.join(format!("term{k}.exr")), w, h, &image, None, info)?;
+        panels.push(image);
+    }
+    let sum = film.image();
+    write_image_alpha(&dir.join("sum.exr"), w, h, &sum, None, info)?;
+    panels.push(sum);
+    // Contact sheet: panels separated by 2-pixel white gaps.
+    let gap = 2u32;
+    let sheet_w = panels.len() as u32 * (w + gap) - gap;
+    let mut sheet = vec![neumann::math::Rgb::ONE; (sheet_w * h) as usize];
+    for (p, panel) in panels.iter().enumerate() {
+        let x0 = p as u32 * (w + gap);
+        for y in 0..h {
+            for x in 0..w {
+                sheet[(y * sheet_w + x0 + x) as usize] = panel[(y * w + x) as usize];
+            }
+        }
+    }
+    write_image_alpha(&dir.join("terms.png"), sheet_w, h, &sheet, None, info)
 }
 
 fn run_validate(

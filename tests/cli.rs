@@ -119,3 +119,21 @@ fn scene_files_render_and_bad_ones_fail_with_their_position() {
     assert!(r.status.success(), "{err}");
     assert!(err.contains("warn.xml:5:") && err.contains("unused parameter 'raidus'"), "{err}");
 }
+
+/// `--bounces-out` writes one image per Neumann-series term, their sum and a contact sheet.
+#[test]
+fn bounces_out_writes_the_terms() {
+    let dir = temp("terms");
+    let r = neumann()
+        .args(["render", "--res", "8", "--spp", "2", "--max-depth", "3", "--quiet", "-o"])
+        .arg(temp("terms.png"))
+        .arg("--bounces-out")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    for f in ["term0.exr", "term1.exr", "term2.exr", "sum.exr", "terms.png"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    assert!(!dir.join("term3.exr").exists(), "max_depth 3 has three terms");
+}

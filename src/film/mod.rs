@@ -26,6 +26,9 @@ pub struct TileBuffer {
     sum_sq: Vec<[f64; 3]>,
     count: Vec<u32>,
     alpha: Vec<f32>,
+    /// Per-pixel sums of the Neumann-series terms, `term_count` per pixel.
+    terms: Vec<[f64; 3]>,
+    term_count: usize,
     dropped: u64,
 }
 
@@ -42,7 +45,31 @@ impl TileBuffer {
             sum_sq: vec![[0.0; 3]; n],
             count: vec![0; n],
             alpha: vec![0.0; n],
+            terms: Vec::new(),
+            term_count: 0,
             dropped: 0,
+        }
+    }
+
+    /// The same tile keeping `count` Neumann-series terms per pixel.
+    pub fn with_terms(mut self, count: usize) -> TileBuffer {
+        self.terms = vec![[0.0; 3]; self.count.len() * count];
+        self.term_count = count;
+        self
+    }
+
+    /// Adds a sample's terms to pixel `(x, y)` (dropped, like [`TileBuffer::add`], if any
+    /// component is not finite: call with the sample's total).
+    #[inline]
+    pub fn add_terms(&mut self, x: u32, y: u32, total: Rgb, terms: &[Rgb]) {
+        if !total.is_finite() || self.term_count == 0 {
+            return;
+        }
+        let i = ((y - self.y0) * self.width + (x - self.x0)) as usize * self.term_count;
+        for (k, t) in terms.iter().take(self.term_count).enumerate() {
+            for c in 0..3 {
+                self.terms[i + k][c] += t[c] as f64;
+            }
         }
     }
 
@@ -87,6 +114,8 @@ pub struct Film {
     sum_sq: Vec<[f64; 3]>,
     count: Vec<u32>,
     alpha: Vec<f64>,
+    terms: Vec<[f64; 3]>,
+    term_count: usize,
     dropped: u64,
 }
 
@@ -101,8 +130,39 @@ impl Film {
             sum_sq: vec![[0.0; 3]; n],
             count: vec![0; n],
             alpha: vec![0.0; n],
+            terms: Vec::new(),
+            term_count: 0,
             dropped: 0,
         }
+    }
+
+    /// The same film keeping `count` Neumann-series terms per pixel.
+    pub fn with_terms(mut self, count: usize) -> Film {
+        self.terms = vec![[0.0; 3]; self.count.len() * count];
+        self.term_count = count;
+        self
+    }
+
+    /// Number of Neumann-series terms kept.
+    pub fn term_count(&self) -> usize {
+        self.term_count
+    }
+
+    /// The image of term `k` (0-based: `Tᵏ Lₑ`), averaged over each pixel's samples.
+    pub fn term_image(&self, k: usize) -> Vec<Rgb> {
+        assert!(k < self.term_count, "term {k} of {}", self.term_count);
+        self.count
+            .iter()
+            .enumerate()
+            .map(|(i, &n)| {
+                let s = self.terms[i * self.term_count + k];
+                if n == 0 {
+                    Rgb::ZERO
+                } else {
+                    Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32) / n as f32
+                }
+            })
+            .collect()
     }
 
     /// Width in pixels.
@@ -127,6 +187,12 @@ impl Film {
                 }
                 self.count[fi] += tile.count[ti];
                 self.alpha[fi] += tile.alpha[ti] as f64;
+                for k in 0..self.term_count.min(tile.term_count) {
+                    let (a, b) = (fi * self.term_count + k, ti * tile.term_count + k);
+                    for c in 0..3 {
+                        self.terms[a][c] += tile.terms[b][c];
+                    }
+                }
             }
         }
         self.dropped += tile.dropped;

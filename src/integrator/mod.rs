@@ -21,6 +21,20 @@ pub trait Integrator: Sync {
     /// One sample of the radiance arriving along `ray` (toward its origin). The sampler is
     /// positioned at the pixel sample; the integrator draws its dimensions in a fixed order.
     fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb;
+
+    /// Whether [`Integrator::li_terms`] separates the Neumann-series terms.
+    fn has_terms(&self) -> bool {
+        false
+    }
+
+    /// [`Integrator::li`], also adding each contribution to `terms[k - 1]` where k is the
+    /// number of path segments it took (`terms[0]`: `Lₑ` seen directly, `terms[1]`: `T Lₑ`,
+    /// …; the last entry collects all longer paths). Returns the same value, bit for bit, as
+    /// `li` with the same sampler state.
+    fn li_terms(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
+        let _ = terms;
+        self.li(scene, ray, sampler)
+    }
 }
 
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
@@ -51,6 +65,17 @@ impl Integrator for AnyIntegrator {
         match self {
             AnyIntegrator::Path(i) => i.li(scene, ray, sampler),
             AnyIntegrator::Direct(i) => i.li(scene, ray, sampler),
+        }
+    }
+
+    fn has_terms(&self) -> bool {
+        matches!(self, AnyIntegrator::Path(_))
+    }
+
+    fn li_terms(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
+        match self {
+            AnyIntegrator::Path(i) => i.li_terms(scene, ray, sampler, terms),
+            AnyIntegrator::Direct(i) => i.li_terms(scene, ray, sampler, terms),
         }
     }
 }

@@ -312,6 +312,22 @@ impl Integrator for PathIntegrator {
         self.trace(scene, camera_ray, sampler, |_, c| l += c);
         l
     }
+
+    fn has_terms(&self) -> bool {
+        true
+    }
+
+    fn li_terms(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
+        let mut l = Rgb::ZERO;
+        let last = terms.len().saturating_sub(1);
+        self.trace(scene, camera_ray, sampler, |k, c| {
+            l += c;
+            if let Some(t) = terms.get_mut((k as usize - 1).min(last)) {
+                *t += c;
+            }
+        });
+        l
+    }
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 use crate::film::filter::Filter;
 use crate::film::{Film, TileBuffer};
 use crate::integrator::Integrator;
-use crate::math::Vec2;
+use crate::math::{Rgb, Vec2};
 use crate::sampling::sampler::{IndependentSampler, SobolSampler, StratifiedSampler};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -65,6 +65,9 @@ pub struct RenderSettings {
     /// Record per-pixel coverage (alpha; one extra intersection per sample): the fraction of
     /// camera rays that hit a surface.
     pub alpha: bool,
+    /// Keep this many Neumann-series terms per pixel (`Lₑ`, `T Lₑ`, …; the last collects all
+    /// longer paths), if the integrator separates them; 0: off.
+    pub terms: usize,
 }
 
 impl Default for RenderSettings {
@@ -80,6 +83,7 @@ impl Default for RenderSettings {
             filter: Filter::Box,
             window: None,
             alpha: false,
+            terms: 0,
         }
     }
 }
@@ -153,7 +157,11 @@ pub fn render(
     }
 
     let start = Instant::now();
-    let mut film = Film::new(width, height);
+    let terms = if integrator.has_terms() { settings.terms } else { 0 };
+    if settings.terms > 0 && terms == 0 {
+        return Err(format!("the {} integrator does not separate the terms of the Neumann series", integrator.name()));
+    }
+    let mut film = Film::new(width, height).with_terms(terms);
     let mut done = 0u32; // complete passes' samples per pixel
     let mut interrupted = false;
     let samples_done = AtomicU64::new(0);
@@ -187,7 +195,8 @@ pub fn render(
                         return None;
                     }
                     let mut sampler = prototype.clone();
-                    let mut tile = TileBuffer::new(x0, y0, w, h);
+                    let mut tile = TileBuffer::new(x0, y0, w, h).with_terms(terms);
+                    let mut sample_terms = vec![Rgb::ZERO; terms];
                     for y in y0..y0 + h {
                         for x in x0..x0 + w {
                             for i in done..done + pass {
@@ -199,7 +208,14 @@ pub fn render(
                                 if settings.alpha {
                                     tile.add_alpha(x, y, f32::from(u8::from(scene.intersect(&ray).is_some())));
                                 }
-                                tile.add(x, y, integrator.li(scene, &ray, &mut sampler));
+                                if terms == 0 {
+                                    tile.add(x, y, integrator.li(scene, &ray, &mut sampler));
+                                } else {
+                                    sample_terms.fill(Rgb::ZERO);
+                                    let l = integrator.li_terms(scene, &ray, &mut sampler, &mut sample_terms);
+                                    tile.add(x, y, l);
+                                    tile.add_terms(x, y, l, &sample_terms);
+                                }
                             }
                         }
                     }
@@ -273,6 +289,36 @@ mod tests {
         assert_eq!(alpha[4 * 9 + 4], 1.0, "centre");
         assert_eq!(alpha[0], 0.0, "corner");
         assert!(alpha.iter().any(|&a| a > 0.0 && a < 1.0), "silhouette pixels are partly covered");
+    }
+
+    /// The Neumann-series terms: the total of a render that keeps them is bit-identical to a
+    /// normal render with the same seed, the terms add up to it, `Lₑ` is the light seen directly,
+    /// and a depth-limited render has no longer terms.
+    #[test]
+    fn neumann_terms_sum_to_the_render() {
+        let scene = cornell_box(16, 16).unwrap();
+        let integrator = PathIntegrator { max_depth: 6, ..Default::default() };
+        let never = AtomicBool::new(false);
+        let plain =
+            render(&scene, &integrator, &RenderSettings { spp: 8, seed: 4, ..Default::default() }, &never).unwrap();
+        let settings = RenderSettings { spp: 8, seed: 4, terms: 6, ..Default::default() };
+        let split = render(&scene, &integrator, &settings, &never).unwrap();
+        assert!(split.film.image() == plain.film.image(), "total differs from the plain render");
+        let total = split.film.image();
+        let terms: Vec<Vec<crate::math::Rgb>> = (0..6).map(|k| split.film.term_image(k)).collect();
+        for (i, t) in total.iter().enumerate() {
+            let sum: crate::math::Rgb = terms.iter().map(|im| im[i]).sum();
+            assert!((sum - *t).abs().max_element() <= 1e-5 * t.max_element().max(1.0), "pixel {i}: {sum} vs {t}");
+        }
+        // Lₑ: only the light's pixels (radiance (18.4, 14.0, 6.75)) are non-zero.
+        let lit: Vec<usize> = (0..total.len()).filter(|&i| terms[0][i].max_element() > 0.0).collect();
+        assert!(!lit.is_empty() && lit.len() < 16, "{} light pixels", lit.len());
+        assert!(terms[1].iter().filter(|c| c.max_element() > 0.0).count() > total.len() / 2, "direct light");
+        assert!(terms[2].iter().any(|c| c.max_element() > 0.0), "one bounce");
+        let direct = PathIntegrator { max_depth: 2, ..Default::default() };
+        let two = render(&scene, &direct, &RenderSettings { spp: 4, terms: 4, ..Default::default() }, &never).unwrap();
+        assert!((2..4).all(|k| two.film.term_image(k).iter().all(|c| *c == crate::math::Rgb::ZERO)));
+        assert!(two.film.term_image(1).iter().any(|c| c.max_element() > 0.0));
     }
 
     #[test]
