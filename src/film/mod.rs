@@ -11,6 +11,39 @@ pub mod output;
 
 use crate::math::Rgb;
 
+/// Per-pixel sums shared by tiles and the film: radiance and its square (f64), sample counts,
+/// coverage (alpha) and, optionally, the Neumann-series terms.
+#[derive(Clone, Debug)]
+struct Pixels {
+    sum: Vec<[f64; 3]>,
+    sum_sq: Vec<[f64; 3]>,
+    count: Vec<u32>,
+    alpha: Vec<f64>,
+    /// `term_count` sums per pixel.
+    terms: Vec<[f64; 3]>,
+    term_count: usize,
+    dropped: u64,
+}
+
+impl Pixels {
+    fn new(n: usize) -> Pixels {
+        Pixels {
+            sum: vec![[0.0; 3]; n],
+            sum_sq: vec![[0.0; 3]; n],
+            count: vec![0; n],
+            alpha: vec![0.0; n],
+            terms: Vec::new(),
+            term_count: 0,
+            dropped: 0,
+        }
+    }
+
+    fn keep_terms(&mut self, count: usize) {
+        self.terms = vec![[0.0; 3]; self.count.len() * count];
+        self.term_count = count;
+    }
+}
+
 /// Accumulated samples of a rectangle of pixels.
 #[derive(Clone, Debug)]
 pub struct TileBuffer {
@@ -22,39 +55,18 @@ pub struct TileBuffer {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-    sum: Vec<[f64; 3]>,
-    sum_sq: Vec<[f64; 3]>,
-    count: Vec<u32>,
-    alpha: Vec<f32>,
-    /// Per-pixel sums of the Neumann-series terms, `term_count` per pixel.
-    terms: Vec<[f64; 3]>,
-    term_count: usize,
-    dropped: u64,
+    px: Pixels,
 }
 
 impl TileBuffer {
     /// An empty tile.
     pub fn new(x0: u32, y0: u32, width: u32, height: u32) -> TileBuffer {
-        let n = (width * height) as usize;
-        TileBuffer {
-            x0,
-            y0,
-            width,
-            height,
-            sum: vec![[0.0; 3]; n],
-            sum_sq: vec![[0.0; 3]; n],
-            count: vec![0; n],
-            alpha: vec![0.0; n],
-            terms: Vec::new(),
-            term_count: 0,
-            dropped: 0,
-        }
+        TileBuffer { x0, y0, width, height, px: Pixels::new((width * height) as usize) }
     }
 
     /// The same tile keeping `count` Neumann-series terms per pixel.
     pub fn with_terms(mut self, count: usize) -> TileBuffer {
-        self.terms = vec![[0.0; 3]; self.count.len() * count];
-        self.term_count = count;
+        self.px.keep_terms(count);
         self
     }
 
@@ -62,13 +74,13 @@ impl TileBuffer {
     /// component is not finite: call with the sample's total).
     #[inline]
     pub fn add_terms(&mut self, x: u32, y: u32, total: Rgb, terms: &[Rgb]) {
-        if !total.is_finite() || self.term_count == 0 {
+        if !total.is_finite() || self.px.term_count == 0 {
             return;
         }
-        let i = ((y - self.y0) * self.width + (x - self.x0)) as usize * self.term_count;
-        for (k, t) in terms.iter().take(self.term_count).enumerate() {
+        let i = ((y - self.y0) * self.width + (x - self.x0)) as usize * self.px.term_count;
+        for (k, t) in terms.iter().take(self.px.term_count).enumerate() {
             for c in 0..3 {
-                self.terms[i + k][c] += t[c] as f64;
+                self.px.terms[i + k][c] += t[c] as f64;
             }
         }
     }
@@ -77,7 +89,7 @@ impl TileBuffer {
     #[inline]
     pub fn add_alpha(&mut self, x: u32, y: u32, a: f32) {
         let i = ((y - self.y0) * self.width + (x - self.x0)) as usize;
-        self.alpha[i] += a;
+        self.px.alpha[i] += a as f64;
     }
 
     /// Adds a radiance sample to pixel `(x, y)` (image coordinates, inside the tile). Samples
@@ -85,23 +97,23 @@ impl TileBuffer {
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Rgb) {
         if !l.is_finite() {
-            self.dropped += 1;
+            self.px.dropped += 1;
             return;
         }
         let i = ((y - self.y0) * self.width + (x - self.x0)) as usize;
-        let s = &mut self.sum[i];
-        let q = &mut self.sum_sq[i];
+        let s = &mut self.px.sum[i];
+        let q = &mut self.px.sum_sq[i];
         for c in 0..3 {
             let v = l[c] as f64;
             s[c] += v;
             q[c] += v * v;
         }
-        self.count[i] += 1;
+        self.px.count[i] += 1;
     }
 
     /// Non-finite samples dropped so far.
     pub fn dropped(&self) -> u64 {
-        self.dropped
+        self.px.dropped
     }
 }
 
@@ -110,52 +122,35 @@ impl TileBuffer {
 pub struct Film {
     width: u32,
     height: u32,
-    sum: Vec<[f64; 3]>,
-    sum_sq: Vec<[f64; 3]>,
-    count: Vec<u32>,
-    alpha: Vec<f64>,
-    terms: Vec<[f64; 3]>,
-    term_count: usize,
-    dropped: u64,
+    px: Pixels,
 }
 
 impl Film {
     /// An empty `width × height` film.
     pub fn new(width: u32, height: u32) -> Film {
-        let n = (width as usize) * (height as usize);
-        Film {
-            width,
-            height,
-            sum: vec![[0.0; 3]; n],
-            sum_sq: vec![[0.0; 3]; n],
-            count: vec![0; n],
-            alpha: vec![0.0; n],
-            terms: Vec::new(),
-            term_count: 0,
-            dropped: 0,
-        }
+        Film { width, height, px: Pixels::new((width as usize) * (height as usize)) }
     }
 
     /// The same film keeping `count` Neumann-series terms per pixel.
     pub fn with_terms(mut self, count: usize) -> Film {
-        self.terms = vec![[0.0; 3]; self.count.len() * count];
-        self.term_count = count;
+        self.px.keep_terms(count);
         self
     }
 
     /// Number of Neumann-series terms kept.
     pub fn term_count(&self) -> usize {
-        self.term_count
+        self.px.term_count
     }
 
     /// The image of term `k` (0-based: `Tᵏ Lₑ`), averaged over each pixel's samples.
     pub fn term_image(&self, k: usize) -> Vec<Rgb> {
-        assert!(k < self.term_count, "term {k} of {}", self.term_count);
-        self.count
+        assert!(k < self.px.term_count, "term {k} of {}", self.px.term_count);
+        self.px
+            .count
             .iter()
             .enumerate()
             .map(|(i, &n)| {
-                let s = self.terms[i * self.term_count + k];
+                let s = self.px.terms[i * self.px.term_count + k];
                 if n == 0 {
                     Rgb::ZERO
                 } else {
@@ -182,45 +177,46 @@ impl Film {
                 let ti = (ty * tile.width + tx) as usize;
                 let fi = ((tile.y0 + ty) * self.width + tile.x0 + tx) as usize;
                 for c in 0..3 {
-                    self.sum[fi][c] += tile.sum[ti][c];
-                    self.sum_sq[fi][c] += tile.sum_sq[ti][c];
+                    self.px.sum[fi][c] += tile.px.sum[ti][c];
+                    self.px.sum_sq[fi][c] += tile.px.sum_sq[ti][c];
                 }
-                self.count[fi] += tile.count[ti];
-                self.alpha[fi] += tile.alpha[ti] as f64;
-                for k in 0..self.term_count.min(tile.term_count) {
-                    let (a, b) = (fi * self.term_count + k, ti * tile.term_count + k);
+                self.px.count[fi] += tile.px.count[ti];
+                self.px.alpha[fi] += tile.px.alpha[ti];
+                for k in 0..self.px.term_count.min(tile.px.term_count) {
+                    let (a, b) = (fi * self.px.term_count + k, ti * tile.px.term_count + k);
                     for c in 0..3 {
-                        self.terms[a][c] += tile.terms[b][c];
+                        self.px.terms[a][c] += tile.px.terms[b][c];
                     }
                 }
             }
         }
-        self.dropped += tile.dropped;
+        self.px.dropped += tile.px.dropped;
     }
 
     /// Non-finite samples dropped.
     pub fn dropped(&self) -> u64 {
-        self.dropped
+        self.px.dropped
     }
 
     /// Smallest and largest number of samples over the pixels.
     pub fn spp_range(&self) -> (u32, u32) {
-        let min = self.count.iter().copied().min().unwrap_or(0);
-        let max = self.count.iter().copied().max().unwrap_or(0);
+        let min = self.px.count.iter().copied().min().unwrap_or(0);
+        let max = self.px.count.iter().copied().max().unwrap_or(0);
         (min, max)
     }
 
     /// Total samples accumulated.
     pub fn total_samples(&self) -> u64 {
-        self.count.iter().map(|&c| c as u64).sum()
+        self.px.count.iter().map(|&c| c as u64).sum()
     }
 
     /// The pixel estimates (mean radiance per pixel; 0 where there is no sample), row-major from
     /// the top-left.
     pub fn image(&self) -> Vec<Rgb> {
-        self.sum
+        self.px
+            .sum
             .iter()
-            .zip(&self.count)
+            .zip(&self.px.count)
             .map(|(s, &n)| if n == 0 { Rgb::ZERO } else { Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32) / n as f32 })
             .map(|c| if c.is_finite() { c } else { Rgb::ZERO })
             .collect()
@@ -229,16 +225,34 @@ impl Film {
     /// Per-pixel coverage (alpha): the fraction of the pixel's samples whose camera ray hit a
     /// surface, if the renderer recorded it (0 otherwise).
     pub fn alpha(&self) -> Vec<f32> {
-        self.alpha.iter().zip(&self.count).map(|(&a, &n)| if n == 0 { 0.0 } else { (a / n as f64) as f32 }).collect()
+        self.px
+            .alpha
+            .iter()
+            .zip(&self.px.count)
+            .map(|(&a, &n)| if n == 0 { 0.0 } else { (a / n as f64) as f32 })
+            .collect()
+    }
+
+    /// Mean over all pixels and channels of the image, and the standard error of that mean
+    /// from the per-pixel variances. The channels of one pixel are correlated, so the variance
+    /// of their sum is bounded by `(σ_r + σ_g + σ_b)²` (exact when they move together).
+    pub fn mean_and_std_error(&self) -> (f64, f64) {
+        let img = self.image();
+        let var = self.variance_of_mean();
+        let n = (img.len() * 3) as f64;
+        let mean = img.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / n;
+        let v = var.iter().map(|c| (c.x.sqrt() + c.y.sqrt() + c.z.sqrt()).powi(2) as f64).sum::<f64>() / (n * n);
+        (mean, v.sqrt())
     }
 
     /// Estimated variance of each pixel's mean, `s² / n` per channel (0 with fewer than two
     /// samples).
     pub fn variance_of_mean(&self) -> Vec<Rgb> {
-        self.sum
+        self.px
+            .sum
             .iter()
-            .zip(&self.sum_sq)
-            .zip(&self.count)
+            .zip(&self.px.sum_sq)
+            .zip(&self.px.count)
             .map(|((s, q), &n)| {
                 if n < 2 {
                     return Rgb::ZERO;

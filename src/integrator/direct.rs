@@ -173,12 +173,7 @@ mod tests {
         let out =
             render(scene, integrator, &RenderSettings { spp, seed, ..Default::default() }, &AtomicBool::new(false))
                 .unwrap();
-        let img = out.film.image();
-        let var = out.film.variance_of_mean();
-        let n = (img.len() * 3) as f64;
-        let mean = img.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / n;
-        let v = var.iter().map(|c| (c.x.sqrt() + c.y.sqrt() + c.z.sqrt()).powi(2) as f64).sum::<f64>() / (n * n);
-        (mean, v.sqrt())
+        out.film.mean_and_std_error()
     }
 
     /// Every (emitter_samples, bsdf_samples) split estimates the same direct lighting as the path

@@ -341,16 +341,9 @@ mod tests {
     use crate::scene::SceneBuilder;
     use std::sync::atomic::AtomicBool;
 
-    /// Mean over all pixels and channels of the image, and the standard error of that mean
-    /// (from the per-pixel variances; the channels of one pixel are correlated, so the variance
-    /// of their sum is bounded by `(σ_r + σ_g + σ_b)²`, exact when they move together).
+    /// Image mean and its standard error.
     fn image_mean(film: &crate::film::Film) -> (f64, f64) {
-        let img = film.image();
-        let var = film.variance_of_mean();
-        let n = (img.len() * 3) as f64;
-        let mean = img.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>() / n;
-        let v = var.iter().map(|c| (c.x.sqrt() + c.y.sqrt() + c.z.sqrt()).powi(2) as f64).sum::<f64>() / (n * n);
-        (mean, v.sqrt())
+        film.mean_and_std_error()
     }
 
     /// A point light of intensity I at the centre of a closed diffuse sphere (albedo ρ, radius
