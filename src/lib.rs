@@ -24,6 +24,7 @@
 
 pub mod bvh;
 pub mod camera;
+pub mod converge;
 pub mod estimators;
 pub mod film;
 pub mod geometry;

@@ -73,6 +73,10 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Convergence of estimators: render at 1, 2, 4, … spp with each direct-light strategy and
+    /// sampler, measure MSE against a reference, fit the log-log slope, time it, and write a CSV
+    /// and log-log plots (MSE vs spp and vs seconds; SVG and PNG).
+    Converge(ConvergeArgs),
     /// Monte Carlo estimator demos: estimate, exact value and RMSE over independent runs.
     Mc {
         /// Independent runs per row (for the RMSE).
@@ -101,6 +105,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e)),
+        Command::Converge(args) => run_converge(args),
         Command::Validate { scenes, scene_dir, reference_dir, seed } => {
             run_validate(&scenes, &scene_dir, &reference_dir, seed)
         }
@@ -172,6 +177,145 @@ struct RenderArgs {
     /// contact sheet of the terms and their sum side by side.
     #[arg(long, value_name = "DIR")]
     bounces_out: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
+struct ConvergeArgs {
+    /// Scene: a Mitsuba 3 XML file or a built-in scene (cbox, the default).
+    scene: Option<String>,
+    /// Reference image (EXR or PFM of the same size); default: render one with MIS at 16 × the
+    /// largest spp.
+    #[arg(long = "ref", value_name = "REF")]
+    reference: Option<PathBuf>,
+    /// Direct-light strategies to compare (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "mis,light,bsdf")]
+    direct: Vec<DirectArg>,
+    /// Samplers to compare (comma-separated).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "independent")]
+    sampler: Vec<SamplerArg>,
+    /// Largest samples per pixel (levels 1, 2, 4, … up to it).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    max_spp: u32,
+    /// Film resolution, W or WxH (default: 64, small enough for many renders).
+    #[arg(long, default_value = "64")]
+    res: String,
+    /// Longest path in segments (2: direct light only).
+    #[arg(long, allow_negative_numbers = true)]
+    max_depth: Option<i32>,
+    /// Scene parameter name=value.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
+    /// Output folder for convergence.csv, convergence.svg, convergence.png (and reference.exr).
+    #[arg(long, default_value = "converge")]
+    out: PathBuf,
+    /// Seed of the measured renders.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
+fn sampler_kind(s: SamplerArg) -> SamplerKind {
+    match s {
+        SamplerArg::Independent => SamplerKind::Independent,
+        SamplerArg::Stratified => SamplerKind::Stratified,
+        SamplerArg::Sobol => SamplerKind::Sobol,
+    }
+}
+
+fn direct_strategy(d: DirectArg) -> DirectStrategy {
+    match d {
+        DirectArg::Mis => DirectStrategy::Mis,
+        DirectArg::Light => DirectStrategy::Light,
+        DirectArg::Bsdf => DirectStrategy::Bsdf,
+        DirectArg::Uniform => DirectStrategy::Uniform,
+        DirectArg::Cosine => DirectStrategy::Cosine,
+    }
+}
+
+fn run_converge(a: ConvergeArgs) -> Result<(), Failure> {
+    use neumann::converge::{measure, plot, spp_levels, write_csv};
+    let scene_arg = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
+    let defines = parse_defines(&a.define)?;
+    let mut job = if scene_arg == "cbox" {
+        builtin_job(&scene_arg, &defines)?
+    } else {
+        file_job(std::path::Path::new(&scene_arg), &defines)?
+    };
+    let (w, h) = parse_res(&a.res).map_err(usage)?;
+    let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+    job.scene.set_camera(camera);
+    let base = match &job.integrator {
+        AnyIntegrator::Path(p) => p.clone(),
+        AnyIntegrator::Direct(_) => {
+            return Err(usage("converge compares the path tracer's strategies; this scene uses 'direct'".into()))
+        }
+    };
+    let max_depth = a.max_depth.unwrap_or(base.max_depth);
+    if max_depth < -1 {
+        return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {max_depth}")));
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| Failure(1, format!("cannot create '{}': {e}", a.out.display())))?;
+    let reference = match &a.reference {
+        Some(path) => {
+            let img = neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e))?;
+            if (img.width, img.height) != (w, h) {
+                return Err(Failure(
+                    1,
+                    format!("the reference is {}x{} but the renders are {w}x{h} (use --res)", img.width, img.height),
+                ));
+            }
+            img.pixels
+        }
+        None => {
+            let spp = a.max_spp.saturating_mul(16).min(1 << 16);
+            println!(
+                "no --ref: rendering a reference with MIS at {spp} spp (seed {}), written to reference.exr",
+                a.seed + 1_000_003
+            );
+            let integrator = PathIntegrator { max_depth, strategy: DirectStrategy::Mis, ..base.clone() };
+            let settings = RenderSettings {
+                spp,
+                seed: a.seed + 1_000_003,
+                threads: a.threads,
+                progress: true,
+                ..Default::default()
+            };
+            let out = render(&job.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+            let image = out.film.image();
+            write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0 })
+                .map_err(|e| Failure(1, e))?;
+            image
+        }
+    };
+    let levels = spp_levels(a.max_spp);
+    let mut curves = Vec::new();
+    println!("{:<24} {:>8} {:>12} {:>10} {:>12}", "estimator", "slope", "MSE (max)", "seconds", "1/(MSE·s)");
+    for &d in &a.direct {
+        for &s in &a.sampler {
+            let name = if a.sampler.len() > 1 { format!("{d:?} / {s:?}") } else { format!("{d:?}") }.to_lowercase();
+            let integrator = PathIntegrator { max_depth, strategy: direct_strategy(d), ..base.clone() };
+            let base =
+                RenderSettings { sampler: sampler_kind(s), seed: a.seed, threads: a.threads, ..Default::default() };
+            let curve =
+                measure(&name, &job.scene, &integrator, &reference, &levels, &base).map_err(|e| Failure(1, e))?;
+            let last = curve.points.last().copied().expect("at least one level");
+            println!(
+                "{name:<24} {:>8.3} {:>12.4e} {:>10.3} {:>12.4e}",
+                curve.slope().unwrap_or(f64::NAN),
+                last.mse,
+                last.seconds,
+                curve.efficiency().unwrap_or(0.0)
+            );
+            curves.push(curve);
+        }
+    }
+    write_csv(&a.out.join("convergence.csv"), &curves).map_err(|e| Failure(1, e))?;
+    let title = format!("{} {w}x{h}, max_depth {max_depth}: MSE against a reference", job.name);
+    plot(&a.out.join("convergence.svg"), &a.out.join("convergence.png"), &title, &curves).map_err(|e| Failure(1, e))?;
+    println!("wrote convergence.csv, convergence.svg and convergence.png to {}", a.out.display());
+    Ok(())
 }
 
 /// Parses `W` or `WxH`.

@@ -137,3 +137,22 @@ fn bounces_out_writes_the_terms() {
     }
     assert!(!dir.join("term3.exr").exists(), "max_depth 3 has three terms");
 }
+
+/// `converge` measures each strategy, fits slopes and writes the CSV and both plots.
+#[test]
+fn converge_writes_csv_and_plots() {
+    let dir = temp("converge");
+    let r = neumann()
+        .args(["converge", "--res", "8", "--max-spp", "4", "--max-depth", "2", "--direct", "mis,bsdf", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("no --ref") && stdout.contains("bsdf"), "{stdout}");
+    for f in ["convergence.csv", "convergence.svg", "convergence.png", "reference.exr"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 2 * 3, "{csv}");
+}
