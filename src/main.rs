@@ -3,8 +3,9 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, HemisphereStrategy};
 use neumann::film::output::{write_image_alpha, Format, ImageInfo};
-use neumann::integrator::{AnyIntegrator, DirectStrategy, PathIntegrator};
-use neumann::render::{render, RenderSettings, SamplerKind};
+use neumann::integrator::radiosity::{self, Method};
+use neumann::integrator::{AnyIntegrator, DirectIntegrator, DirectStrategy, LightTracer, PathIntegrator};
+use neumann::render::{render, render_integrator, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
 use neumann::scene::cornell;
 use neumann::scene::xml::load_scene_file;
@@ -41,6 +42,28 @@ enum DirectArg {
     Uniform,
     /// Cosine-weighted hemisphere sampling of directions, traced to emitters.
     Cosine,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum IntegratorArg {
+    /// Path tracing with next-event estimation and MIS (backward, from the camera).
+    Path,
+    /// Direct lighting only (Mitsuba's `direct`).
+    Direct,
+    /// Light tracing (forward, from the emitters; Mitsuba's `ptracer`).
+    Ptracer,
+    /// Radiosity: finite elements for diffuse scenes, solved then displayed.
+    Radiosity,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum RadiosityMethodArg {
+    /// Jacobi iteration, B ← E + ρ F B (the Neumann series term by term).
+    Jacobi,
+    /// Gauss–Seidel iteration (updated values used at once).
+    GaussSeidel,
+    /// Progressive refinement: shoot the largest unshot power first.
+    Shooting,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -171,6 +194,28 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(long)]
     quiet: bool,
+    /// Integrator (default: the scene's; path for the built-in scene). Settings it shares with
+    /// the scene's integrator (max_depth, rr_depth, hide_emitters) are kept.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Radiosity: longest patch edge in world units (default 0.1; the Cornell box is 2 wide).
+    #[arg(long, value_name = "SIZE")]
+    patch_size: Option<f32>,
+    /// Radiosity: Monte Carlo form-factor rays per patch (default 512).
+    #[arg(long, value_name = "N")]
+    ff_rays: Option<u32>,
+    /// Radiosity: linear solver (default gauss-seidel).
+    #[arg(long, value_enum)]
+    radiosity_method: Option<RadiosityMethodArg>,
+    /// Radiosity: stop when the relative residual falls below this (default 1e-4).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Radiosity: smooth shading (vertex radiosities interpolated) instead of flat patches.
+    #[arg(long)]
+    smooth: bool,
+    /// Radiosity: write the per-patch solution (area, centroid, ρ, emission, radiosity) as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    patches_out: Option<PathBuf>,
     /// Also write the terms of the Neumann series to this folder: term0.exr = Lₑ seen directly,
     /// term1.exr = T Lₑ (direct light), term2.exr = T² Lₑ, …, up to max_depth (8 terms when
     /// unlimited, the last holding all longer paths), sum.exr (= the render) and terms.png, a
@@ -248,8 +293,11 @@ fn run_converge(a: ConvergeArgs) -> Result<(), Failure> {
     job.scene.set_camera(camera);
     let base = match &job.integrator {
         AnyIntegrator::Path(p) => p.clone(),
-        AnyIntegrator::Direct(_) => {
-            return Err(usage("converge compares the path tracer's strategies; this scene uses 'direct'".into()))
+        other => {
+            return Err(usage(format!(
+                "converge compares the path tracer's strategies; this scene uses '{}'",
+                other.name()
+            )))
         }
     };
     let max_depth = a.max_depth.unwrap_or(base.max_depth);
@@ -440,14 +488,19 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         }
         job.spp = s;
     }
+    select_integrator(&mut job.integrator, &a)?;
     if let Some(d) = a.max_depth {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
         match &mut job.integrator {
             AnyIntegrator::Path(p) => p.max_depth = d,
-            AnyIntegrator::Direct(_) => {
-                return Err(usage("--max-depth applies to the path integrator; this scene uses 'direct'".into()))
+            AnyIntegrator::Ptracer(t) => t.max_depth = d,
+            other => {
+                return Err(usage(format!(
+                    "--max-depth applies to the path and ptracer integrators, not '{}'",
+                    other.name()
+                )))
             }
         }
     }
@@ -480,8 +533,11 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
                     );
                 }
             }
-            AnyIntegrator::Direct(_) => {
-                return Err(usage("--direct applies to the path integrator; this scene uses 'direct' (set its emitter_samples / bsdf_samples)".into()))
+            other => {
+                return Err(usage(format!(
+                    "--direct applies to the path integrator, not '{}' (the direct integrator sets emitter_samples / bsdf_samples)",
+                    other.name()
+                )))
             }
         }
     }
@@ -493,7 +549,7 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
                     MisArg::Power => neumann::integrator::MisHeuristic::Power,
                 }
             }
-            AnyIntegrator::Direct(_) => return Err(usage("--mis applies to the path integrator".into())),
+            other => return Err(usage(format!("--mis applies to the path integrator, not '{}'", other.name()))),
         }
     }
     let time_budget = match a.time {
@@ -518,8 +574,8 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         (None, _) => 0,
         (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.max_depth) => p.max_depth as usize,
         (Some(_), AnyIntegrator::Path(_)) => 8,
-        (Some(_), AnyIntegrator::Direct(_)) => {
-            return Err(usage("--bounces-out needs the path integrator; this scene uses 'direct'".into()))
+        (Some(_), other) => {
+            return Err(usage(format!("--bounces-out needs the path integrator, not '{}'", other.name())))
         }
     };
     if let Some(dir) = &a.bounces_out {
@@ -555,14 +611,13 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
             Some(t) => format!("for {t} s"),
             None => format!("{} spp", job.spp),
         },
-        match &job.integrator {
-            AnyIntegrator::Path(p) => format!("path tracer, max_depth {}", p.max_depth),
-            AnyIntegrator::Direct(d) =>
-                format!("direct lighting, {} emitter + {} BSDF samples", d.emitter_samples, d.bsdf_samples),
-        },
+        job.integrator.describe(),
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
-    let out = render(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    let out = render_integrator(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    if let Some(sol) = &out.radiosity {
+        report_radiosity(sol, a.patches_out.as_deref())?;
+    }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
@@ -583,6 +638,103 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
     }
     if out.film.dropped() > 0 {
         println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    Ok(())
+}
+
+/// Applies `--integrator` and the radiosity flags to the scene's integrator. Settings the old
+/// and new integrator share (max_depth, rr_depth, hide_emitters) carry over.
+fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), Failure> {
+    let (max_depth, rr_depth, hide_emitters) = match current {
+        AnyIntegrator::Path(p) => (p.max_depth, p.rr_depth, p.hide_emitters),
+        AnyIntegrator::Ptracer(t) => (t.max_depth, t.rr_depth, t.hide_emitters),
+        AnyIntegrator::Direct(d) => (-1, 5, d.hide_emitters),
+        AnyIntegrator::Radiosity(_) => (-1, 5, false),
+    };
+    if let Some(kind) = a.integrator {
+        let same = current.name() == format!("{kind:?}").to_ascii_lowercase();
+        if !same {
+            *current = match kind {
+                IntegratorArg::Path => {
+                    AnyIntegrator::Path(PathIntegrator { max_depth, rr_depth, hide_emitters, ..Default::default() })
+                }
+                IntegratorArg::Direct => {
+                    AnyIntegrator::Direct(DirectIntegrator { hide_emitters, ..Default::default() })
+                }
+                IntegratorArg::Ptracer => AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters }),
+                IntegratorArg::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
+            };
+        }
+    }
+    let radiosity_flags = a.patch_size.is_some()
+        || a.ff_rays.is_some()
+        || a.radiosity_method.is_some()
+        || a.tolerance.is_some()
+        || a.smooth
+        || a.patches_out.is_some();
+    match current {
+        AnyIntegrator::Radiosity(o) => {
+            if let Some(s) = a.patch_size {
+                if !(s > 0.0 && s.is_finite()) {
+                    return Err(usage(format!("--patch-size must be a positive length, got {s}")));
+                }
+                o.patch_size = s;
+            }
+            if let Some(n) = a.ff_rays {
+                if n == 0 {
+                    return Err(usage("--ff-rays must be at least 1".into()));
+                }
+                o.rays_per_patch = n;
+            }
+            if let Some(t) = a.tolerance {
+                if !(t > 0.0 && t < 1.0) {
+                    return Err(usage(format!("--tolerance must be in (0, 1), got {t}")));
+                }
+                o.tolerance = t;
+            }
+            if let Some(m) = a.radiosity_method {
+                o.method = match m {
+                    RadiosityMethodArg::Jacobi => Method::Jacobi,
+                    RadiosityMethodArg::GaussSeidel => Method::GaussSeidel,
+                    RadiosityMethodArg::Shooting => Method::Shooting,
+                };
+            }
+            o.smooth |= a.smooth;
+        }
+        other if radiosity_flags => {
+            return Err(usage(format!(
+                "--patch-size, --ff-rays, --radiosity-method, --tolerance, --smooth and --patches-out apply to the radiosity integrator, not '{}' (add --integrator radiosity)",
+                other.name()
+            )))
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Prints the radiosity solve (patches, form factors, iterations and residuals, power) and
+/// writes the per-patch CSV if asked.
+fn report_radiosity(sol: &radiosity::Radiosity, csv: Option<&std::path::Path>) -> Result<(), Failure> {
+    println!(
+        "radiosity: {} patches, {} non-zero form factors, {} iterations, residual {:.2e}; emitted {:.4} W, reflected {:.4} W (luminance)",
+        sol.b.len(),
+        sol.form_factor_entries,
+        sol.history.last().map_or(0, |h| h.0),
+        sol.history.last().map_or(0.0, |h| h.1),
+        sol.emitted_power(),
+        sol.reflected_power()
+    );
+    let shown: Vec<String> = sol
+        .history
+        .iter()
+        .filter(|(k, _)| k.is_power_of_two() || *k == sol.history.last().map_or(0, |h| h.0))
+        .map(|(k, r)| format!("{k}: {r:.2e}"))
+        .collect();
+    println!("  residual by iteration: {}", shown.join(", "));
+    if let Some(path) = csv {
+        std::fs::write(path, sol.to_csv())
+            .map_err(|e| Failure(1, format!("cannot write '{}': {e}", path.display())))?;
+        println!("wrote the per-patch solution to {}", path.display());
     }
     Ok(())
 }

@@ -10,7 +10,7 @@
 
 use crate::load::image::load_image;
 use crate::math::Rgb;
-use crate::render::{render, RenderSettings};
+use crate::render::{render_integrator, RenderSettings};
 use crate::scene::xml::load_scene_file;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -136,7 +136,7 @@ pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u
         window: file.window,
         ..Default::default()
     };
-    let out = render(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))?;
+    let out = render_integrator(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))?;
     let image = out.film.image();
     let reference = load_image(&references_dir.join(format!("{}.exr", r.scene)), true)?;
     if reference.pixels.len() != image.len() {

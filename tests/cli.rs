@@ -156,3 +156,50 @@ fn converge_writes_csv_and_plots() {
     let csv = std::fs::read_to_string(dir.join("convergence.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 2 * 3, "{csv}");
 }
+
+#[test]
+fn the_three_solvers_run_from_the_command_line() {
+    let csv = temp("patches.csv");
+    for (integrator, extra) in
+        [("ptracer", vec![]), ("radiosity", vec!["--patch-size", "0.5", "--smooth", "--patches-out"])]
+    {
+        let out = temp(&format!("{integrator}.pfm"));
+        let mut cmd = neumann();
+        cmd.args(["render", "--res", "16x12", "--spp", "4", "--quiet", "--integrator", integrator]).args(&extra);
+        if integrator == "radiosity" {
+            cmd.arg(&csv);
+        }
+        let r = cmd.arg("-o").arg(&out).output().unwrap();
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        assert!(r.status.success(), "{integrator}: {stdout} {}", String::from_utf8_lossy(&r.stderr));
+        let (w, h, px) = neumann::film::output::read_pfm(&out).unwrap();
+        assert_eq!((w, h), (16, 12));
+        assert!(px.iter().any(|c| c.x > 0.0) && px.iter().all(|c| c.is_finite()), "{integrator}: image");
+        if integrator == "radiosity" {
+            assert!(stdout.contains("patches") && stdout.contains("residual"), "{stdout}");
+        }
+    }
+    let table = std::fs::read_to_string(&csv).unwrap();
+    assert!(table.starts_with("patch,shape,area") && table.lines().count() > 100, "{}", &table[..200.min(table.len())]);
+    // Radiosity flags without radiosity, and a bad patch size: usage errors.
+    for args in [vec!["render", "--smooth"], vec!["render", "--integrator", "radiosity", "--patch-size", "0"]] {
+        let r = neumann().args(&args).output().unwrap();
+        assert_eq!(r.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&r.stderr).contains("radiosity")
+                || String::from_utf8_lossy(&r.stderr).contains("patch")
+        );
+    }
+    // Radiosity refuses non-diffuse scenes with a clear error.
+    let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/caustics.xml");
+    let r = neumann()
+        .args(["render", "--res", "8", "--spp", "1", "--quiet", "--integrator", "radiosity"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(temp("x.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("radiosity"), "{err}");
+}

@@ -167,6 +167,72 @@ impl Camera {
     }
 }
 
+/// A connection from a scene point to the camera ([`Camera::sample_wi`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    /// Film position (pixels, continuous) the connection lands on.
+    pub film: Vec2,
+    /// Point on the lens (world; the centre of projection for a pinhole).
+    pub p_lens: Vec3,
+    /// Unit direction from the scene point toward `p_lens`.
+    pub wi: Vec3,
+    /// Distance from the scene point to `p_lens`.
+    pub dist: f32,
+    /// `Wₑ cos θ_c / (r² p_lens)`: the camera's importance for this connection times the
+    /// geometry at the camera end, divided by the lens-position pdf, normalised so that a
+    /// pixel's value is the sum of its splats over all light paths divided by the
+    /// number of paths per pixel. Equals `1 / (A cos³θ_c r²)` with `A` the film's area on the
+    /// plane at unit distance, `θ_c` the angle to the view axis and `r` the distance. The
+    /// surface cosine at the scene point is not included.
+    pub weight: f32,
+}
+
+impl Camera {
+    /// Connects the world point `p` to the camera (light tracing): a lens position (uniform
+    /// on the aperture disk from `u_lens`; the centre for a pinhole), the film position whose
+    /// camera ray through that lens point passes through `p`, and the importance weight.
+    /// `None` if `p` is behind the camera, outside the clip range, or projects off the film.
+    ///
+    /// Derivation: a pixel's value is `(1/A_pix)(1/A_lens) ∫∫ L dA_film dA_lens` with the film
+    /// on the plane at unit distance; the camera ray's solid angle is `dω = cos³θ dA_film`, and
+    /// from the scene point's side `dω = |cos θ_y| dA_y / r²`.
+    pub fn sample_wi(&self, p: Vec3, u_lens: Vec2) -> Option<CameraSample> {
+        let local = self.to_world.inverse().apply_point(p);
+        if !(local.z >= self.near_clip && local.z <= self.far_clip) {
+            return None;
+        }
+        let lens = if self.lens_radius > 0.0 {
+            let q = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
+            Vec3::new(q.x, q.y, 0.0)
+        } else {
+            Vec3::ZERO
+        };
+        // Direction (plane z = 1) of the pinhole ray that meets the lens ray in the focal plane.
+        let to_p = local - lens;
+        let d = if self.lens_radius > 0.0 {
+            let focus = lens + to_p * (self.focus_distance / to_p.z);
+            focus / self.focus_distance
+        } else {
+            to_p / to_p.z
+        };
+        let ndc = Vec2::new(-d.x / self.tan_half.x, -d.y / self.tan_half.y);
+        let film = Vec2::new((ndc.x + 1.0) * 0.5 * self.width as f32, (ndc.y + 1.0) * 0.5 * self.height as f32);
+        if !(film.x >= 0.0 && film.x < self.width as f32 && film.y >= 0.0 && film.y < self.height as f32) {
+            return None;
+        }
+        let p_lens = self.to_world.apply_point(lens);
+        let w = p_lens - p;
+        let dist = w.length();
+        if dist <= 0.0 || dist.is_nan() {
+            return None;
+        }
+        let cos = to_p.z / to_p.length();
+        let area = 4.0 * self.tan_half.x * self.tan_half.y;
+        let weight = 1.0 / (area * cos * cos * cos * dist * dist);
+        weight.is_finite().then_some(CameraSample { film, p_lens, wi: w / dist, dist, weight })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -193,6 +193,20 @@ impl Film {
         self.px.dropped += tile.px.dropped;
     }
 
+    /// Adds one sample to every pixel: a whole image (row-major, this film's size), as the
+    /// light tracer produces per pass. Counts `dropped` non-finite splats left out of it.
+    pub fn add_pass(&mut self, image: &[[f64; 3]], dropped: u64) {
+        assert_eq!(image.len(), self.px.sum.len(), "pass image size");
+        for (i, v) in image.iter().enumerate() {
+            for (c, x) in v.iter().enumerate() {
+                self.px.sum[i][c] += x;
+                self.px.sum_sq[i][c] += x * x;
+            }
+            self.px.count[i] += 1;
+        }
+        self.px.dropped += dropped;
+    }
+
     /// Non-finite samples dropped.
     pub fn dropped(&self) -> u64 {
         self.px.dropped

@@ -82,6 +82,27 @@ impl Geometry {
         }
     }
 
+    /// A uniformly distributed point on the surface; `pdf` is per unit **area** (`1 / area`).
+    /// `None` for a mesh whose sampling was not prepared.
+    pub fn sample_area(&self, u: Vec2) -> Option<ShapeSample> {
+        let (sp, ns, pdf) = match self {
+            Geometry::Mesh(m) => m.sample_area(u)?,
+            Geometry::Sphere(s) => {
+                let (sp, pdf) = s.sample_area(u);
+                (sp, sp.n, pdf)
+            }
+            Geometry::Disk(d) => {
+                let (sp, pdf) = d.sample_area(u);
+                (sp, sp.n, pdf)
+            }
+            Geometry::Cylinder(c) => {
+                let (sp, pdf) = c.sample_area(u);
+                (sp, sp.n, pdf)
+            }
+        };
+        Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
+    }
+
     /// A point on the shape for direct lighting at `p_ref`, with its solid-angle pdf. Spheres
     /// sample the cone they subtend; meshes and disks sample area uniformly and convert
     /// (`p_ω = p_A r² / |cos θ|`). `None` if nothing can be sampled (grazing or degenerate).

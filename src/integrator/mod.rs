@@ -6,9 +6,12 @@
 
 pub mod direct;
 pub mod path;
+pub mod ptracer;
+pub mod radiosity;
 
 pub use direct::DirectIntegrator;
 pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
+pub use ptracer::LightTracer;
 
 use crate::math::{Ray, Rgb};
 use crate::sampling::Sampler;
@@ -38,12 +41,17 @@ pub trait Integrator: Sync {
 }
 
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
+/// Render it with [`crate::render::render_integrator`].
 #[derive(Clone, Debug)]
 pub enum AnyIntegrator {
     /// Mitsuba's `path`.
     Path(PathIntegrator),
     /// Mitsuba's `direct`.
     Direct(DirectIntegrator),
+    /// Mitsuba's `ptracer` (light tracing).
+    Ptracer(LightTracer),
+    /// neumann's `radiosity` (finite elements; solved before rendering).
+    Radiosity(radiosity::Options),
 }
 
 impl Default for AnyIntegrator {
@@ -52,30 +60,33 @@ impl Default for AnyIntegrator {
     }
 }
 
-impl Integrator for AnyIntegrator {
-    fn name(&self) -> &'static str {
+impl AnyIntegrator {
+    /// Plugin name.
+    pub fn name(&self) -> &'static str {
         match self {
-            AnyIntegrator::Path(i) => i.name(),
-            AnyIntegrator::Direct(i) => i.name(),
+            AnyIntegrator::Path(_) => "path",
+            AnyIntegrator::Direct(_) => "direct",
+            AnyIntegrator::Ptracer(_) => "ptracer",
+            AnyIntegrator::Radiosity(_) => "radiosity",
         }
     }
 
-    #[inline]
-    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb {
+    /// One line describing the integrator and its main settings.
+    pub fn describe(&self) -> String {
+        let depth = |d: i32| if d < 0 { "unlimited".to_string() } else { d.to_string() };
         match self {
-            AnyIntegrator::Path(i) => i.li(scene, ray, sampler),
-            AnyIntegrator::Direct(i) => i.li(scene, ray, sampler),
-        }
-    }
-
-    fn has_terms(&self) -> bool {
-        matches!(self, AnyIntegrator::Path(_))
-    }
-
-    fn li_terms(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
-        match self {
-            AnyIntegrator::Path(i) => i.li_terms(scene, ray, sampler, terms),
-            AnyIntegrator::Direct(i) => i.li_terms(scene, ray, sampler, terms),
+            AnyIntegrator::Path(p) => format!("path tracer, max_depth {}", depth(p.max_depth)),
+            AnyIntegrator::Direct(d) => {
+                format!("direct lighting, {} emitter + {} BSDF samples", d.emitter_samples, d.bsdf_samples)
+            }
+            AnyIntegrator::Ptracer(t) => format!("light tracer, max_depth {}", depth(t.max_depth)),
+            AnyIntegrator::Radiosity(o) => format!(
+                "radiosity, patch size {}, {} form-factor rays per patch, {:?}{}",
+                o.patch_size,
+                o.rays_per_patch,
+                o.method,
+                if o.smooth { ", smooth" } else { ", flat" }
+            ),
         }
     }
 }

@@ -100,6 +100,39 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// A ray of light leaving an emitter, sampled for light tracing ([`Light::sample_le`]).
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    /// Origin on the light (for lights at infinity: on a disk outside the scene's bounding
+    /// sphere, facing it).
+    pub p: Vec3,
+    /// Error bound of `p`.
+    pub p_error: Vec3,
+    /// Geometric normal at `p` (zero for points and lights at infinity).
+    pub n: Vec3,
+    /// Unit direction the light travels in.
+    pub d: Vec3,
+    /// `Lₑ |cos θ| / (p_A(p) p_ω(d))`: the power the ray carries (W per channel), for one
+    /// sample. For point and spot lights `I(d) / p_ω(d)`.
+    pub weight: Rgb,
+}
+
+/// Emission from a light toward a given point, without a direction sampled
+/// ([`Light::sample_le_position`]): what light tracing connects straight to the camera.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionPosition {
+    /// Point on the light.
+    pub p: Vec3,
+    /// Error bound of `p`.
+    pub p_error: Vec3,
+    /// Geometric normal at `p` (zero for point lights).
+    pub ng: Vec3,
+    /// Shading normal (which side emits).
+    pub ns: Vec3,
+    /// `1 / p_A(p)` (area lights) or 1 (point lights): divides the emitted radiance or intensity.
+    pub inv_pdf: f32,
+}
+
 /// A distance from `p_ref` that reaches past everything in the scene (bounding sphere `center`,
 /// `radius`): where shadow rays toward lights at infinity end.
 #[inline]
@@ -265,6 +298,115 @@ impl Light {
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
             Light::EnvMap { map, .. } => map.pdf(wi),
             _ => 0.0,
+        }
+    }
+
+    /// Samples a ray leaving the light (light tracing): a position (by area on area lights),
+    /// then a direction (cosine-weighted about the front normal for area lights, uniform over
+    /// the sphere for points, uniform in the cutoff cone for spots). Lights at infinity send
+    /// parallel rays from a disk of the scene's bounding radius facing the sampled direction.
+    /// `u_pos` chooses the position, `u_dir` the direction. `None` if nothing is emitted.
+    pub fn sample_le(&self, shapes: &[Geometry], u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
+        use crate::sampling::{
+            sample_cosine_hemisphere_malley, sample_uniform_cone, sample_uniform_disk_concentric, sample_uniform_sphere,
+        };
+        let parallel = |d: Vec3, center: Vec3, radius: f32| {
+            // Origin on a disk of radius R perpendicular to d, one radius before the sphere.
+            let frame = crate::math::Frame::from_z(d);
+            let q = sample_uniform_disk_concentric(u_pos).value * radius;
+            (center + frame.to_world(Vec3::new(q.x, q.y, -2.0 * radius)), PI * radius * radius)
+        };
+        let s = match self {
+            Light::Area { shape, radiance } => {
+                let ps = shapes[*shape as usize].sample_area(u_pos)?;
+                let local = sample_cosine_hemisphere_malley(u_dir);
+                if local.pdf <= 0.0 || ps.pdf <= 0.0 {
+                    return None;
+                }
+                let d = crate::math::Frame::from_z(ps.ns).to_world(local.value);
+                // Le cos θ / (p_A · cos θ / π) = π Le / p_A.
+                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: *radiance * (PI / ps.pdf) }
+            }
+            Light::Point { position, intensity } => {
+                let d = sample_uniform_sphere(u_dir);
+                EmissionSample {
+                    p: *position,
+                    p_error: Vec3::ZERO,
+                    n: Vec3::ZERO,
+                    d: d.value,
+                    weight: *intensity / d.pdf,
+                }
+            }
+            Light::Spot { position, frame, intensity, cutoff, beam } => {
+                let d = sample_uniform_cone(u_dir, cutoff.cos());
+                let falloff = Self::spot_falloff(d.value.z, *cutoff, *beam);
+                if falloff == 0.0 || d.pdf <= 0.0 {
+                    return None;
+                }
+                let weight = *intensity * (falloff / d.pdf);
+                EmissionSample { p: *position, p_error: Vec3::ZERO, n: Vec3::ZERO, d: frame.to_world(d.value), weight }
+            }
+            Light::Directional { direction, irradiance, center, radius } => {
+                let (p, area) = parallel(*direction, *center, *radius);
+                EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: *direction, weight: *irradiance * area }
+            }
+            Light::Constant { radiance, center, radius } => {
+                let wi = sample_uniform_sphere(u_dir);
+                let (p, area) = parallel(-wi.value, *center, *radius);
+                EmissionSample {
+                    p,
+                    p_error: Vec3::ZERO,
+                    n: Vec3::ZERO,
+                    d: -wi.value,
+                    weight: *radiance * (area / wi.pdf),
+                }
+            }
+            Light::EnvMap { map, center, radius } => {
+                let (wi, li, pdf) = map.sample(u_dir)?;
+                let (p, area) = parallel(-wi, *center, *radius);
+                EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
+            }
+        };
+        (s.weight.is_finite() && s.weight.max_element() > 0.0).then_some(s)
+    }
+
+    /// A position on the light for connecting it straight to the camera (the emitter vertex of
+    /// a light path seen directly): by area for area lights, the position of point and spot
+    /// lights; `None` for lights at infinity and directional lights, which no pinhole or
+    /// thin-lens camera can be connected to.
+    pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
+        match self {
+            Light::Area { shape, .. } => {
+                let s = shapes[*shape as usize].sample_area(u_pos)?;
+                (s.pdf > 0.0).then(|| EmissionPosition {
+                    p: s.p,
+                    p_error: s.p_error,
+                    ng: s.ng,
+                    ns: s.ns,
+                    inv_pdf: 1.0 / s.pdf,
+                })
+            }
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition {
+                p: *position,
+                p_error: Vec3::ZERO,
+                ng: Vec3::ZERO,
+                ns: Vec3::ZERO,
+                inv_pdf: 1.0,
+            }),
+            _ => None,
+        }
+    }
+
+    /// What a light emits from `pos` toward the unit direction `d` (world): radiance for area
+    /// lights (front side only), intensity (W sr⁻¹) for point and spot lights.
+    pub fn emitted_toward(&self, pos: &EmissionPosition, d: Vec3) -> Rgb {
+        match self {
+            Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => *radiance,
+            Light::Point { intensity, .. } => *intensity,
+            Light::Spot { frame, intensity, cutoff, beam, .. } => {
+                *intensity * Self::spot_falloff(frame.to_local(d).z, *cutoff, *beam)
+            }
+            _ => Rgb::ZERO,
         }
     }
 

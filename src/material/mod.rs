@@ -85,6 +85,9 @@ pub enum Bsdf {
         /// The BSDF of the opaque part.
         bsdf: Box<Bsdf>,
     },
+    /// Mitsuba's `null`: no surface at all, light passes straight through (a delta lobe
+    /// `wi = -wo` of weight 1). Marks index-matched boundaries of participating media.
+    Null,
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided(Box<[Bsdf; 2]>),
@@ -95,7 +98,11 @@ impl Bsdf {
     /// null lobe), so that direct light may arrive from the whole sphere.
     pub fn transmits(&self) -> bool {
         match self {
-            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Mask { .. } => true,
+            Bsdf::Dielectric(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::Mask { .. }
+            | Bsdf::Null => true,
             Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
             _ => false,
         }
@@ -118,7 +125,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(wo, wi),
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => Rgb::ZERO,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].eval(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval(ctx, wo, wi) * w
@@ -143,7 +150,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => 0.0,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].pdf(ctx, wo, wi) * (1.0 - w) + bsdfs[1].pdf(ctx, wo, wi) * w
@@ -171,6 +178,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.sample(wo, u1, u),
             Bsdf::RoughPlastic(b) => b.sample(wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
+            Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 // Choose a component with its blend probability and reuse u1 for its own choice.
@@ -203,6 +211,27 @@ impl Bsdf {
         }
     }
 
+    /// Relative index of refraction `η_it` crossed between `wo`'s side and `wi`'s side (local
+    /// frame): 1 unless the BSDF refracts and the directions lie on opposite sides. Light
+    /// tracing multiplies radiance-mode values by `η_it²` to get the adjoint (importance) BSDF,
+    /// which lacks the `1/η²` radiance scaling of refraction.
+    pub fn eta_crossed(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z * wi.z >= 0.0 {
+            return 1.0;
+        }
+        let eta = match self {
+            Bsdf::Dielectric(b) => b.eta,
+            Bsdf::RoughDielectric(b) => b.eta,
+            Bsdf::Blend { bsdfs, .. } => return bsdfs[0].eta_crossed(wo, wi) * bsdfs[1].eta_crossed(wo, wi),
+            _ => return 1.0,
+        };
+        if wo.z > 0.0 {
+            eta
+        } else {
+            1.0 / eta
+        }
+    }
+
     /// Whether the BSDF has only delta lobes (light sampling is useless on it).
     #[inline]
     pub fn is_delta(&self) -> bool {
@@ -212,7 +241,7 @@ impl Bsdf {
             | Bsdf::RoughDielectric(_)
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_) => false,
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => true,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
         }

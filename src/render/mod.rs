@@ -6,9 +6,14 @@
 //! after each pass. The image is therefore bit-identical for a given seed and sample count
 //! whatever the number of threads.
 
+mod splat;
+
+pub use splat::render_light_paths;
+
 use crate::film::filter::Filter;
 use crate::film::{Film, TileBuffer};
-use crate::integrator::Integrator;
+use crate::integrator::radiosity::{Radiosity, RadiosityIntegrator};
+use crate::integrator::{AnyIntegrator, Integrator};
 use crate::math::{Rgb, Vec2};
 use crate::sampling::sampler::{IndependentSampler, SobolSampler, StratifiedSampler};
 use crate::sampling::Sampler;
@@ -97,12 +102,40 @@ pub struct RenderOutcome {
     pub interrupted: bool,
     /// Wall-clock time spent.
     pub elapsed: Duration,
+    /// The radiosity solution, when the radiosity integrator rendered (its solve time is
+    /// included in `elapsed`).
+    pub radiosity: Option<Box<Radiosity>>,
 }
 
 impl RenderOutcome {
     /// Samples per second over the whole render.
     pub fn samples_per_second(&self) -> f64 {
         self.film.total_samples() as f64 / self.elapsed.as_secs_f64().max(1e-9)
+    }
+}
+
+/// Renders `scene` with any of neumann's integrators: camera-ray integrators through
+/// [`render`], the light tracer through [`render_light_paths`], radiosity by solving first and
+/// then displaying the solution through [`render`].
+pub fn render_integrator(
+    scene: &Scene,
+    integrator: &AnyIntegrator,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+) -> Result<RenderOutcome, String> {
+    match integrator {
+        AnyIntegrator::Path(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::Ptracer(t) => render_light_paths(scene, t, settings, cancel),
+        AnyIntegrator::Radiosity(opts) => {
+            let start = Instant::now();
+            let solution = Radiosity::solve(scene, opts)?;
+            let display = RadiosityIntegrator { solution };
+            let mut out = render(scene, &display, settings, cancel)?;
+            out.elapsed = start.elapsed();
+            out.radiosity = Some(Box::new(display.solution));
+            Ok(out)
+        }
     }
 }
 
@@ -242,7 +275,7 @@ pub fn render(
         done += pass;
     }
     bar.finish_and_clear();
-    Ok(RenderOutcome { film, interrupted, elapsed: start.elapsed() })
+    Ok(RenderOutcome { film, interrupted, elapsed: start.elapsed(), radiosity: None })
 }
 
 #[cfg(test)]

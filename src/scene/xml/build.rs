@@ -8,7 +8,7 @@ use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
 use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
-use crate::integrator::{AnyIntegrator, DirectIntegrator, PathIntegrator};
+use crate::integrator::{radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator};
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
 use crate::material::fresnel::lookup_ior;
@@ -42,9 +42,10 @@ const BSDFS: &[&str] = &[
     "twosided",
     "blendbsdf",
     "mask",
+    "null",
 ];
 const EMITTERS: &[&str] = &["area", "point", "spot", "directional", "constant", "envmap"];
-const INTEGRATORS: &[&str] = &["path", "direct"];
+const INTEGRATORS: &[&str] = &["path", "direct", "ptracer", "radiosity"];
 const SAMPLERS: &[&str] = &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const TEXTURES: &[&str] = &["bitmap", "checkerboard"];
@@ -141,7 +142,7 @@ impl Builder {
         o.built.set(true);
         o.check_children(&[])?;
         match o.ty.as_str() {
-            "path" => {
+            "path" | "ptracer" => {
                 let max_depth = o.int("max_depth", -1)?;
                 if max_depth < -1 || max_depth > i32::MAX as i64 {
                     return Err(
@@ -152,11 +153,46 @@ impl Builder {
                 if !(1..=u32::MAX as i64).contains(&rr_depth) {
                     return Err(o.error_at("rr_depth", format!("rr_depth must be ≥ 1, got {rr_depth}")));
                 }
-                Ok(AnyIntegrator::Path(PathIntegrator {
-                    max_depth: max_depth as i32,
-                    rr_depth: rr_depth as u32,
-                    hide_emitters: o.bool("hide_emitters", false)?,
-                    ..Default::default()
+                let (max_depth, rr_depth, hide_emitters) =
+                    (max_depth as i32, rr_depth as u32, o.bool("hide_emitters", false)?);
+                Ok(if o.ty == "path" {
+                    AnyIntegrator::Path(PathIntegrator { max_depth, rr_depth, hide_emitters, ..Default::default() })
+                } else {
+                    AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters })
+                })
+            }
+            "radiosity" => {
+                let d = radiosity::Options::default();
+                let patch_size =
+                    o.float_checked("patch_size", d.patch_size, |v| v > 0.0 && v.is_finite(), "a positive length")?;
+                let rays = o.int("rays_per_patch", d.rays_per_patch as i64)?;
+                if !(1..=1 << 24).contains(&rays) {
+                    return Err(
+                        o.error_at("rays_per_patch", format!("rays_per_patch must be between 1 and 2^24, got {rays}"))
+                    );
+                }
+                let tolerance =
+                    o.float_checked("tolerance", d.tolerance as f32, |v| v > 0.0 && v < 1.0, "a number in (0, 1)")?;
+                let max_iterations = o.int("max_iterations", d.max_iterations as i64)?;
+                if !(1..=1_000_000).contains(&max_iterations) {
+                    return Err(o.error_at(
+                        "max_iterations",
+                        format!("max_iterations must be between 1 and 10⁶, got {max_iterations}"),
+                    ));
+                }
+                let method = match o.choice("method", &["gauss_seidel", "jacobi", "shooting"])?.as_str() {
+                    "jacobi" => radiosity::Method::Jacobi,
+                    "shooting" => radiosity::Method::Shooting,
+                    _ => radiosity::Method::GaussSeidel,
+                };
+                Ok(AnyIntegrator::Radiosity(radiosity::Options {
+                    patch_size,
+                    rays_per_patch: rays as u32,
+                    method,
+                    tolerance: tolerance as f64,
+                    max_iterations: max_iterations as usize,
+                    smooth: o.bool("smooth", false)?,
+                    seed: o.int("seed", 0)?.max(0) as u64,
                 }))
             }
             "direct" => {
@@ -592,6 +628,7 @@ impl Builder {
                 let [a, c]: [Bsdf; 2] = b.try_into().expect("two");
                 Bsdf::Blend { weight, bsdfs: Box::new([a, c]) }
             }
+            "null" => Bsdf::Null,
             "mask" => {
                 let opacity = self.texture(o, "opacity", Rgb::splat(0.5))?;
                 let mut b = self.nested_bsdfs(o, 1..=1)?;

@@ -63,7 +63,7 @@ fn shared_cornell_box_matches_the_builtin() {
     // The same picture, bit for bit, from the file and from the built-in scene.
     let settings = crate::render::RenderSettings { spp: 4, seed: 9, ..Default::default() };
     let never = std::sync::atomic::AtomicBool::new(false);
-    let from_file = crate::render::render(&small.scene, &small.integrator, &settings, &never).unwrap();
+    let from_file = crate::render::render_integrator(&small.scene, &small.integrator, &settings, &never).unwrap();
     let builtin_small = crate::scene::cornell::cornell_box(24, 24).unwrap();
     let integrator = crate::integrator::PathIntegrator { max_depth: 65, ..Default::default() };
     let from_builtin = crate::render::render(&builtin_small, &integrator, &settings, &never).unwrap();
@@ -373,4 +373,31 @@ fn mangled_scenes_never_panic() {
         }
     }
     assert!(checked > 500, "{checked}");
+}
+
+#[test]
+fn ptracer_and_radiosity_integrators() {
+    use crate::integrator::{radiosity::Method, AnyIntegrator};
+    let f = load(&scene(r#"<integrator type="ptracer"><integer name="max_depth" value="3"/><boolean name="hide_emitters" value="true"/></integrator>"#)).unwrap();
+    assert!(
+        matches!(f.integrator, AnyIntegrator::Ptracer(t) if t.max_depth == 3 && t.hide_emitters && t.rr_depth == 5)
+    );
+    let f = load(&scene(
+        r#"<integrator type="radiosity">
+            <float name="patch_size" value="0.2"/><string name="method" value="shooting"/>
+            <integer name="rays_per_patch" value="64"/><boolean name="smooth" value="true"/>
+            <float name="tolerance" value="1e-3"/>
+        </integrator>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let AnyIntegrator::Radiosity(o) = f.integrator else { panic!("radiosity expected") };
+    assert_eq!((o.patch_size, o.method, o.rays_per_patch, o.smooth), (0.2, Method::Shooting, 64, true));
+    assert!((o.tolerance - 1e-3).abs() < 1e-9);
+    let e = err(&scene(r#"<integrator type="radiosity"><string name="method" value="gauss-seidel"/></integrator>"#));
+    assert!(e.contains("test.xml:") && e.contains("did you mean 'gauss_seidel'"), "{e}");
+    let e = err(&scene(r#"<integrator type="radiosity"><float name="patch_size" value="0"/></integrator>"#));
+    assert!(e.contains("patch_size"), "{e}");
+    let e = err(&scene(r#"<integrator type="ptracr"/>"#));
+    assert!(e.contains("ptracer"), "{e}");
 }

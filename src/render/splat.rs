@@ -1,0 +1,193 @@
+//! The light tracer's render driver: passes of `W × H` light paths (one per pixel of the whole
+//! film, so a pass adds one sample per pixel), traced in fixed-size chunks over rayon and
+//! splatted through the reconstruction filter.
+//!
+//! Determinism: chunk `c` of pass `k` draws its random numbers from its own PCG stream
+//! `(seed, k·2³² + c)`, records its splats in order, and the chunks' records are added to the
+//! pass image in chunk order, so the image is bit-identical for a seed whatever the number
+//! of threads. Each pass is added to the film as one sample per pixel (its per-pixel variance
+//! is then the variance between passes).
+
+use super::{RenderOutcome, RenderSettings};
+use crate::film::filter::Filter;
+use crate::film::Film;
+use crate::integrator::LightTracer;
+use crate::math::{Rgb, Vec2};
+use crate::sampling::Pcg32;
+use crate::scene::Scene;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// A chunk's splats `(pixel, value)` in order, and its count of non-finite splats dropped.
+type ChunkSplats = (Vec<(u32, Rgb)>, u64);
+
+/// Light paths per parallel work item.
+const CHUNK: u64 = 4096;
+
+/// Where a splat at film position `film` lands: `(pixel index in the window, weight)` for every
+/// pixel whose filter support covers it, the weights being the filter normalised to unit
+/// integral (so the splat's total over pixels is its value, as filter importance sampling's).
+struct Splatter {
+    filter: Filter,
+    radius: f32,
+    /// `1 / (∫ f₁)²`.
+    norm: f32,
+    window: [u32; 4],
+}
+
+impl Splatter {
+    fn new(filter: &Filter, window: [u32; 4]) -> Splatter {
+        let radius = filter.radius();
+        let n = 4096;
+        let integral: f64 =
+            (0..n).map(|i| filter.eval_1d(-radius + (i as f32 + 0.5) * 2.0 * radius / n as f32) as f64).sum::<f64>()
+                * (2.0 * radius as f64 / n as f64);
+        Splatter { filter: filter.clone(), radius, norm: (1.0 / (integral * integral)) as f32, window }
+    }
+
+    fn splat(&self, film: Vec2, value: Rgb, out: &mut Vec<(u32, Rgb)>) {
+        let [wx, wy, w, h] = self.window;
+        if let Filter::Box = self.filter {
+            let (x, y) = (film.x.floor() as i64 - wx as i64, film.y.floor() as i64 - wy as i64);
+            if x >= 0 && y >= 0 && x < w as i64 && y < h as i64 {
+                out.push(((y as u32) * w + x as u32, value));
+            }
+            return;
+        }
+        // Pixel centres (x + ½) within the radius.
+        let x0 = (film.x - self.radius - 0.5).ceil().max(wx as f32) as i64;
+        let x1 = (film.x + self.radius - 0.5).floor().min((wx + w) as f32 - 1.0) as i64;
+        let y0 = (film.y - self.radius - 0.5).ceil().max(wy as f32) as i64;
+        let y1 = (film.y + self.radius - 0.5).floor().min((wy + h) as f32 - 1.0) as i64;
+        for y in y0..=y1 {
+            let fy = self.filter.eval_1d(y as f32 + 0.5 - film.y);
+            if fy == 0.0 {
+                continue;
+            }
+            for x in x0..=x1 {
+                let f = fy * self.filter.eval_1d(x as f32 + 0.5 - film.x) * self.norm;
+                if f > 0.0 {
+                    out.push((((y - wy as i64) as u32) * w + (x - wx as i64) as u32, value * f));
+                }
+            }
+        }
+    }
+}
+
+/// Renders `scene` by light tracing. Settings as for [`super::render`]; `spp` counts passes of
+/// `W × H` light paths (`W × H` the whole film, also with a crop window). The sampler choice is
+/// ignored (light paths use independent PCG streams).
+pub fn render_light_paths(
+    scene: &Scene,
+    tracer: &LightTracer,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+) -> Result<RenderOutcome, String> {
+    let cam = scene.camera();
+    let window = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    let [wx, wy, width, height] = window;
+    if width == 0
+        || height == 0
+        || wx as u64 + width as u64 > cam.width() as u64
+        || wy as u64 + height as u64 > cam.height() as u64
+    {
+        return Err(format!(
+            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
+            cam.width(),
+            cam.height()
+        ));
+    }
+    if settings.terms > 0 {
+        return Err("the ptracer integrator does not separate the terms of the Neumann series".into());
+    }
+    if scene.lights().is_empty() {
+        return Err("light tracing needs at least one emitter".into());
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()
+        .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
+    let splatter = Splatter::new(&settings.filter, window);
+    let paths_per_pass = cam.width() as u64 * cam.height() as u64;
+    let chunks = paths_per_pass.div_ceil(CHUNK);
+    let spp = settings.spp.max(1);
+
+    let bar_len = match settings.time_budget {
+        Some(b) => b.as_millis().max(1) as u64,
+        None => paths_per_pass * spp as u64,
+    };
+    let bar = if settings.progress { ProgressBar::new(bar_len) } else { ProgressBar::hidden() };
+    if settings.progress {
+        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+        let template = if settings.time_budget.is_some() {
+            "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}"
+        } else {
+            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} light paths, ETA {eta} {msg}"
+        };
+        bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
+    }
+
+    let start = Instant::now();
+    let mut film = Film::new(width, height);
+    let mut interrupted = false;
+    let mut image = vec![[0.0f64; 3]; (width * height) as usize];
+    for pass in 0..spp {
+        if let Some(budget) = settings.time_budget {
+            let elapsed = start.elapsed();
+            // Start a pass only if it fits at the rate measured so far.
+            if pass > 0 && elapsed + elapsed / pass > budget {
+                break;
+            }
+        }
+        let records: Vec<Option<ChunkSplats>> = pool.install(|| {
+            (0..chunks)
+                .into_par_iter()
+                .map(|c| {
+                    if cancel.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                    let mut rng = Pcg32::new(settings.seed, ((pass as u64) << 32) | c);
+                    let mut out = Vec::new();
+                    let mut dropped = 0u64;
+                    let n = CHUNK.min(paths_per_pass - c * CHUNK);
+                    for _ in 0..n {
+                        tracer.trace(scene, &mut rng, &mut |film, value| {
+                            if value.is_finite() {
+                                splatter.splat(film, value, &mut out);
+                            } else {
+                                dropped += 1;
+                            }
+                        });
+                    }
+                    match settings.time_budget {
+                        Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
+                        None => bar.inc(n),
+                    }
+                    Some((out, dropped))
+                })
+                .collect()
+        });
+        if records.iter().any(Option::is_none) {
+            interrupted = true;
+            break;
+        }
+        image.fill([0.0; 3]);
+        let mut dropped = 0;
+        for (out, d) in records.into_iter().flatten() {
+            dropped += d;
+            for (i, v) in out {
+                let px = &mut image[i as usize];
+                for c in 0..3 {
+                    px[c] += v[c] as f64;
+                }
+            }
+        }
+        film.add_pass(&image, dropped);
+        let secs = start.elapsed().as_secs_f64().max(1e-9);
+        bar.set_message(format!("{:.2} M paths/s", (pass as u64 + 1) as f64 * paths_per_pass as f64 / secs / 1e6));
+    }
+    bar.finish_and_clear();
+    Ok(RenderOutcome { film, interrupted, elapsed: start.elapsed(), radiosity: None })
+}
