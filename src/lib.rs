@@ -33,6 +33,7 @@ pub mod light;
 pub mod load;
 pub mod material;
 pub mod math;
+pub mod medium;
 pub mod render;
 pub mod sampling;
 pub mod scene;

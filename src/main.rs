@@ -4,7 +4,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, HemisphereStrategy};
 use neumann::film::output::{write_image_alpha, Format, ImageInfo};
 use neumann::integrator::radiosity::{self, Method};
-use neumann::integrator::{AnyIntegrator, DirectIntegrator, DirectStrategy, LightTracer, PathIntegrator};
+use neumann::integrator::{
+    AnyIntegrator, DirectIntegrator, DirectStrategy, LightTracer, PathIntegrator, VolPathIntegrator,
+};
 use neumann::render::{render, render_integrator, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
 use neumann::scene::cornell;
@@ -54,6 +56,8 @@ enum IntegratorArg {
     Ptracer,
     /// Radiosity: finite elements for diffuse scenes, solved then displayed.
     Radiosity,
+    /// Volumetric path tracing: participating media (Mitsuba's `volpath`).
+    Volpath,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -489,6 +493,12 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         job.spp = s;
     }
     select_integrator(&mut job.integrator, &a)?;
+    if job.scene.has_media() && !matches!(job.integrator, AnyIntegrator::VolPath(_)) {
+        eprintln!(
+            "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
+            job.integrator.name()
+        );
+    }
     if let Some(d) = a.max_depth {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
@@ -496,9 +506,10 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
         match &mut job.integrator {
             AnyIntegrator::Path(p) => p.max_depth = d,
             AnyIntegrator::Ptracer(t) => t.max_depth = d,
+            AnyIntegrator::VolPath(v) => v.max_depth = d,
             other => {
                 return Err(usage(format!(
-                    "--max-depth applies to the path and ptracer integrators, not '{}'",
+                    "--max-depth applies to the path, volpath and ptracer integrators, not '{}'",
                     other.name()
                 )))
             }
@@ -648,6 +659,7 @@ fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), 
     let (max_depth, rr_depth, hide_emitters) = match current {
         AnyIntegrator::Path(p) => (p.max_depth, p.rr_depth, p.hide_emitters),
         AnyIntegrator::Ptracer(t) => (t.max_depth, t.rr_depth, t.hide_emitters),
+        AnyIntegrator::VolPath(v) => (v.max_depth, v.rr_depth, v.hide_emitters),
         AnyIntegrator::Direct(d) => (-1, 5, d.hide_emitters),
         AnyIntegrator::Radiosity(_) => (-1, 5, false),
     };
@@ -663,6 +675,9 @@ fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), 
                 }
                 IntegratorArg::Ptracer => AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters }),
                 IntegratorArg::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
+                IntegratorArg::Volpath => {
+                    AnyIntegrator::VolPath(VolPathIntegrator { max_depth, rr_depth, hide_emitters })
+                }
             };
         }
     }

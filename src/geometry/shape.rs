@@ -107,29 +107,19 @@ impl Geometry {
     /// sample the cone they subtend; meshes and disks sample area uniformly and convert
     /// (`p_ω = p_A r² / |cos θ|`). `None` if nothing can be sampled (grazing or degenerate).
     pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<ShapeSample> {
-        let (sp, ns, pdf_area) = match self {
-            Geometry::Sphere(s) => {
-                let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;
-                return Some(ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf });
-            }
-            Geometry::Mesh(m) => m.sample_area(u)?,
-            Geometry::Disk(d) => {
-                let (sp, pdf) = d.sample_area(u);
-                (sp, sp.n, pdf)
-            }
-            Geometry::Cylinder(c) => {
-                let (sp, pdf) = c.sample_area(u);
-                (sp, sp.n, pdf)
-            }
-        };
-        let d = sp.p - p_ref;
+        if let Geometry::Sphere(s) = self {
+            let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;
+            return Some(ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf });
+        }
+        let ShapeSample { p, ng, ns, p_error, pdf: pdf_area } = self.sample_area(u)?;
+        let d = p - p_ref;
         let dist2 = d.length_squared();
         if dist2 == 0.0 {
             return None;
         }
-        let cos = sp.n.dot(d).abs() / dist2.sqrt();
+        let cos = ng.dot(d).abs() / dist2.sqrt();
         let pdf = area_to_solid_angle(pdf_area, dist2, cos);
-        (pdf > 0.0 && pdf.is_finite()).then_some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
+        (pdf > 0.0 && pdf.is_finite()).then_some(ShapeSample { p, ng, ns, p_error, pdf })
     }
 
     /// Solid-angle density of [`Geometry::sample_solid_angle`] from `p_ref` for the point `p` with

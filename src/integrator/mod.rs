@@ -8,10 +8,12 @@ pub mod direct;
 pub mod path;
 pub mod ptracer;
 pub mod radiosity;
+pub mod volpath;
 
 pub use direct::DirectIntegrator;
 pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
 pub use ptracer::LightTracer;
+pub use volpath::VolPathIntegrator;
 
 use crate::math::{Ray, Rgb};
 use crate::sampling::Sampler;
@@ -52,6 +54,8 @@ pub enum AnyIntegrator {
     Ptracer(LightTracer),
     /// neumann's `radiosity` (finite elements; solved before rendering).
     Radiosity(radiosity::Options),
+    /// Mitsuba's `volpath` (path tracing with participating media).
+    VolPath(VolPathIntegrator),
 }
 
 impl Default for AnyIntegrator {
@@ -68,6 +72,7 @@ impl AnyIntegrator {
             AnyIntegrator::Direct(_) => "direct",
             AnyIntegrator::Ptracer(_) => "ptracer",
             AnyIntegrator::Radiosity(_) => "radiosity",
+            AnyIntegrator::VolPath(_) => "volpath",
         }
     }
 
@@ -80,6 +85,7 @@ impl AnyIntegrator {
                 format!("direct lighting, {} emitter + {} BSDF samples", d.emitter_samples, d.bsdf_samples)
             }
             AnyIntegrator::Ptracer(t) => format!("light tracer, max_depth {}", depth(t.max_depth)),
+            AnyIntegrator::VolPath(v) => format!("volumetric path tracer, max_depth {}", depth(v.max_depth)),
             AnyIntegrator::Radiosity(o) => format!(
                 "radiosity, patch size {}, {} form-factor rays per patch, {:?}{}",
                 o.patch_size,

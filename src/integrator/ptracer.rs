@@ -3,13 +3,13 @@
 //! A light path starts on an emitter chosen by power: a position by area and a direction
 //! (cosine-weighted for area lights, [`Light::sample_le`]), carrying power
 //! `β₀ = Lₑ |cos θ| / (p_light p_A p_ω)`. Every vertex `y` it reaches is connected to the camera
-//! ([`Camera::sample_wi`]) and adds `β f(y) |cos θ_y| Wₑ G / p` to the pixel it projects to
+//! ([`crate::camera::Camera::sample_wi`]) and adds `β f(y) |cos θ_y| Wₑ G / p` to the pixel it projects to
 //! (splatting); the path then continues by BSDF sampling with Russian roulette. The emitter
 //! itself is connected too (what the camera sees directly), unless `hide_emitters`.
 //!
 //! Transport mode: light tracing transports importance, so BSDF values are those of the
 //! adjoint BSDF. For refraction that removes the `1/η²` radiance scaling
-//! ([`Bsdf::eta_crossed`]), and shading normals get Veach's correction
+//! ([`crate::material::Bsdf::eta_crossed`]), and shading normals get Veach's correction
 //! `|ωₚ·nₛ| |ωₙ·n_g| / (|ωₚ·n_g| |ωₙ·nₛ|)` (ωₚ toward the previous vertex, ωₙ the next one).
 //!
 //! As in Mitsuba, vertices on purely specular surfaces cannot be connected (their BSDF is a

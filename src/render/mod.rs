@@ -114,6 +114,27 @@ impl RenderOutcome {
     }
 }
 
+/// The progress bar (hidden unless `settings.progress`) and its length: with a time budget it
+/// measures milliseconds of the budget, else `work` items named `unit`.
+fn progress_bar(settings: &RenderSettings, work: u64, unit: &str) -> (ProgressBar, u64) {
+    let len = match settings.time_budget {
+        Some(b) => b.as_millis().max(1) as u64,
+        None => work,
+    };
+    if !settings.progress {
+        return (ProgressBar::hidden(), len);
+    }
+    let bar = ProgressBar::new(len);
+    bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+    let template = if settings.time_budget.is_some() {
+        "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}".to_string()
+    } else {
+        format!("{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}")
+    };
+    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
+    (bar, len)
+}
+
 /// Renders `scene` with any of neumann's integrators: camera-ray integrators through
 /// [`render`], the light tracer through [`render_light_paths`], radiosity by solving first and
 /// then displaying the solution through [`render`].
@@ -127,6 +148,7 @@ pub fn render_integrator(
         AnyIntegrator::Path(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Ptracer(t) => render_light_paths(scene, t, settings, cancel),
+        AnyIntegrator::VolPath(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
             let solution = Radiosity::solve(scene, opts)?;
@@ -173,21 +195,7 @@ pub fn render(
     let prototype = settings.sampler.make(spp, settings.seed);
     let pixels = width as u64 * height as u64;
 
-    // With a time budget the bar measures time (milliseconds of the budget), else samples.
-    let bar_len = match settings.time_budget {
-        Some(b) => b.as_millis().max(1) as u64,
-        None => pixels * spp as u64,
-    };
-    let bar = if settings.progress { ProgressBar::new(bar_len) } else { ProgressBar::hidden() };
-    if settings.progress {
-        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
-        let template = if settings.time_budget.is_some() {
-            "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}"
-        } else {
-            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} samples, ETA {eta} {msg}"
-        };
-        bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
-    }
+    let (bar, bar_len) = progress_bar(settings, pixels * spp as u64, "samples");
 
     let start = Instant::now();
     let terms = if integrator.has_terms() { settings.terms } else { 0 };

@@ -15,7 +15,6 @@ use crate::integrator::LightTracer;
 use crate::math::{Rgb, Vec2};
 use crate::sampling::Pcg32;
 use crate::scene::Scene;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -114,20 +113,7 @@ pub fn render_light_paths(
     let chunks = paths_per_pass.div_ceil(CHUNK);
     let spp = settings.spp.max(1);
 
-    let bar_len = match settings.time_budget {
-        Some(b) => b.as_millis().max(1) as u64,
-        None => paths_per_pass * spp as u64,
-    };
-    let bar = if settings.progress { ProgressBar::new(bar_len) } else { ProgressBar::hidden() };
-    if settings.progress {
-        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
-        let template = if settings.time_budget.is_some() {
-            "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}"
-        } else {
-            "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} light paths, ETA {eta} {msg}"
-        };
-        bar.set_style(ProgressStyle::with_template(template).expect("valid template"));
-    }
+    let (bar, bar_len) = super::progress_bar(settings, paths_per_pass * spp as u64, "light paths");
 
     let start = Instant::now();
     let mut film = Film::new(width, height);

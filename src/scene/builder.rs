@@ -18,6 +18,8 @@ pub struct SceneBuilder {
     bsdfs: Vec<Bsdf>,
     lights: Vec<Light>,
     camera: Option<Camera>,
+    media: Vec<crate::medium::Medium>,
+    camera_medium: Option<u32>,
 }
 
 impl SceneBuilder {
@@ -40,9 +42,27 @@ impl SceneBuilder {
             self.lights.push(Light::Area { shape: index, radiance });
             self.lights.len() as u32 - 1
         });
-        self.shapes.push(Shape { bsdf, light });
+        self.shapes.push(Shape { bsdf, light, interior: None, exterior: None });
         self.geometries.push(geometry);
         index
+    }
+
+    /// Adds a participating medium and returns its index.
+    pub fn add_medium(&mut self, medium: crate::medium::Medium) -> u32 {
+        self.media.push(medium);
+        self.media.len() as u32 - 1
+    }
+
+    /// Sets the media inside and outside shape `shape` (indices from [`SceneBuilder::add_medium`]).
+    pub fn set_shape_media(&mut self, shape: u32, interior: Option<u32>, exterior: Option<u32>) {
+        let s = &mut self.shapes[shape as usize];
+        s.interior = interior;
+        s.exterior = exterior;
+    }
+
+    /// Sets the medium the camera sits in.
+    pub fn set_camera_medium(&mut self, medium: Option<u32>) {
+        self.camera_medium = medium;
     }
 
     /// Adds a constant environment (Mitsuba's `constant` emitter) of radiance `radiance`.
@@ -72,6 +92,12 @@ impl SceneBuilder {
         for (i, s) in self.shapes.iter().enumerate() {
             if s.bsdf as usize >= self.bsdfs.len() {
                 return Err(format!("shape {i} refers to BSDF {} but only {} exist", s.bsdf, self.bsdfs.len()));
+            }
+        }
+        let n_media = self.media.len() as u32;
+        for (i, s) in self.shapes.iter().enumerate() {
+            if s.interior.iter().chain(&s.exterior).chain(&self.camera_medium).any(|&m| m >= n_media) {
+                return Err(format!("shape {i} or the camera refers to a medium that does not exist"));
             }
         }
         for l in &self.lights {
@@ -126,6 +152,8 @@ impl SceneBuilder {
             lights: self.lights,
             light_distribution,
             infinite_lights,
+            media: self.media,
+            camera_medium: self.camera_medium,
             bvh,
             prims,
             refs,

@@ -25,6 +25,10 @@ pub struct Shape {
     pub bsdf: u32,
     /// Index into [`Scene::lights`] if the shape emits.
     pub light: Option<u32>,
+    /// Medium inside the shape (behind its front face), index into [`Scene::media`].
+    pub interior: Option<u32>,
+    /// Medium outside the shape (in front of its front face).
+    pub exterior: Option<u32>,
 }
 
 /// Primitive data in BVH leaf order, compact for the traversal loop.
@@ -60,6 +64,8 @@ pub struct Scene {
     lights: Vec<Light>,
     light_distribution: Option<AliasTable>,
     infinite_lights: Vec<u32>,
+    media: Vec<crate::medium::Medium>,
+    camera_medium: Option<u32>,
     bvh: Bvh,
     prims: Vec<Primitive>,
     refs: Vec<PrimRef>,
@@ -67,6 +73,21 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The participating media.
+    pub fn media(&self) -> &[crate::medium::Medium] {
+        &self.media
+    }
+
+    /// The medium the camera sits in (Mitsuba's sensor medium), if any.
+    pub fn camera_medium(&self) -> Option<u32> {
+        self.camera_medium
+    }
+
+    /// Whether any participating medium is present.
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
+    }
+
     /// The camera.
     pub fn camera(&self) -> &Camera {
         &self.camera

@@ -32,6 +32,7 @@ SCENES = {
     "envmap": (4096, 64, {}),
     "caustics": (16384, 256, {}),
     "textures": (4096, 64, {}),
+    "volume": (4096, 128, {}),
 }
 SEEDS = 4
 

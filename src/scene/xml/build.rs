@@ -8,7 +8,7 @@ use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
 use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
-use crate::integrator::{radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator};
+use crate::integrator::{radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator, VolPathIntegrator};
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
 use crate::material::fresnel::lookup_ior;
@@ -19,6 +19,7 @@ use crate::material::{
 };
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Mat3, Rgb, Transform, Vec3};
+use crate::medium::{Medium, PhaseFunction};
 use crate::render::SamplerKind;
 use crate::scene::SceneBuilder;
 use crate::texture::{Bitmap, Filter as TexFilter, Texture, Wrap};
@@ -45,7 +46,7 @@ const BSDFS: &[&str] = &[
     "null",
 ];
 const EMITTERS: &[&str] = &["area", "point", "spot", "directional", "constant", "envmap"];
-const INTEGRATORS: &[&str] = &["path", "direct", "ptracer", "radiosity"];
+const INTEGRATORS: &[&str] = &["path", "direct", "ptracer", "radiosity", "volpath"];
 const SAMPLERS: &[&str] = &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
 const FILTERS: &[&str] = &["box", "tent", "gaussian"];
 const TEXTURES: &[&str] = &["bitmap", "checkerboard"];
@@ -74,11 +75,18 @@ pub struct Builder {
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
     default_bsdf: [Option<u32>; 2],
+    medium_index: HashMap<*const Obj, u32>,
 }
 
 impl Builder {
     pub fn new() -> Builder {
-        Builder { sb: SceneBuilder::new(), bsdf_index: HashMap::new(), images: HashMap::new(), default_bsdf: [None; 2] }
+        Builder {
+            sb: SceneBuilder::new(),
+            bsdf_index: HashMap::new(),
+            images: HashMap::new(),
+            default_bsdf: [None; 2],
+            medium_index: HashMap::new(),
+        }
     }
 
     /// Builds everything under `root` (a `<scene>`).
@@ -108,9 +116,10 @@ impl Builder {
                 "texture" => {
                     self.texture_obj(c)?;
                 }
-                "medium" | "phase" => {
-                    return Err(c.error("participating media are not supported yet (they need the volpath integrator)"))
+                "medium" => {
+                    self.medium_index(c)?;
                 }
+                "phase" => return Err(c.error("a <phase> must be nested in a <medium>")),
                 other => {
                     return Err(SceneError::at(
                         &c.loc,
@@ -142,7 +151,7 @@ impl Builder {
         o.built.set(true);
         o.check_children(&[])?;
         match o.ty.as_str() {
-            "path" | "ptracer" => {
+            "path" | "ptracer" | "volpath" => {
                 let max_depth = o.int("max_depth", -1)?;
                 if max_depth < -1 || max_depth > i32::MAX as i64 {
                     return Err(
@@ -157,6 +166,8 @@ impl Builder {
                     (max_depth as i32, rr_depth as u32, o.bool("hide_emitters", false)?);
                 Ok(if o.ty == "path" {
                     AnyIntegrator::Path(PathIntegrator { max_depth, rr_depth, hide_emitters, ..Default::default() })
+                } else if o.ty == "volpath" {
+                    AnyIntegrator::VolPath(VolPathIntegrator { max_depth, rr_depth, hide_emitters })
                 } else {
                     AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters })
                 })
@@ -221,7 +232,15 @@ impl Builder {
 
     fn sensor(&mut self, o: &Obj) -> Result<SensorSettings> {
         o.built.set(true);
-        o.check_children(&["film", "sampler"])?;
+        o.check_children(&["film", "sampler", "medium"])?;
+        let media = o.nested("medium");
+        if media.len() > 1 {
+            return Err(SceneError::at(&media[1].loc, "a sensor sits in one <medium>"));
+        }
+        if let Some(m) = media.first() {
+            let i = self.medium_index(m)?;
+            self.sb.set_camera_medium(Some(i));
+        }
         if !matches!(o.ty.as_str(), "perspective" | "thinlens") {
             return Err(unknown(o, &["perspective", "thinlens"]));
         }
@@ -379,6 +398,8 @@ impl Builder {
             _ => {}
         }
         o.check_children(&["bsdf", "emitter"])?;
+        let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
+        let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let to_world = *outer * o.transform("to_world")?;
         let flip = o.bool("flip_normals", false)?;
         let geometry = match o.ty.as_str() {
@@ -463,8 +484,58 @@ impl Builder {
                 }
             }
         };
-        self.sb.add_shape(geometry, bsdf, emission);
+        let index = self.sb.add_shape(geometry, bsdf, emission);
+        self.sb.set_shape_media(index, interior, exterior);
         Ok(())
+    }
+
+    // ---------------------------------------------------------------- media
+
+    /// Mitsuba's `homogeneous` medium: `sigma_t` (m⁻¹, default 1) × `scale` (default 1),
+    /// `albedo` (default 0.75), and a nested `<phase>` (`isotropic`, the default, or `hg` with
+    /// `g`, default 0.8).
+    fn medium_index(&mut self, o: &Rc<Obj>) -> Result<u32> {
+        let key = Rc::as_ptr(o);
+        if let Some(&i) = self.medium_index.get(&key) {
+            return Ok(i);
+        }
+        o.built.set(true);
+        o.check_children(&["phase"])?;
+        if o.ty != "homogeneous" {
+            return Err(unknown(o, &["homogeneous"]));
+        }
+        let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
+        let sigma_t = o.rgb("sigma_t", Rgb::ONE, SpectrumKind::Illuminant)? * scale;
+        if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
+            return Err(o.error_at("sigma_t", format!("sigma_t must be non-negative, got {sigma_t}")));
+        }
+        let albedo = o.rgb("albedo", Rgb::splat(0.75), SpectrumKind::Reflectance)?;
+        if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
+            return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
+        }
+        let phases = o.nested("phase");
+        if phases.len() > 1 {
+            return Err(SceneError::at(&phases[1].loc, "a medium takes one <phase>"));
+        }
+        let phase = match phases.first() {
+            None => PhaseFunction::Isotropic,
+            Some(p) => {
+                p.built.set(true);
+                p.check_children(&[])?;
+                match p.ty.as_str() {
+                    "isotropic" => PhaseFunction::Isotropic,
+                    "hg" => {
+                        let g = p.float_checked("g", 0.8, |g| g > -1.0 && g < 1.0, "a number in (-1, 1)")?;
+                        PhaseFunction::HenyeyGreenstein { g }
+                    }
+                    _ => return Err(unknown(p, &["isotropic", "hg"])),
+                }
+            }
+        };
+        let medium = Medium::new(sigma_t, albedo, phase).ok_or_else(|| o.error("invalid medium parameters"))?;
+        let i = self.sb.add_medium(medium);
+        self.medium_index.insert(key, i);
+        Ok(i)
     }
 
     // ---------------------------------------------------------------- BSDFs

@@ -265,7 +265,7 @@ fn errors_name_the_place_and_the_expectation() {
             "test.xml:7:",
             "axis must be non-zero",
         ),
-        (r#"<medium type="homogeneous"/>"#, "test.xml:7:1", "not supported yet"),
+        (r#"<medium type="homogeneous"><float name="albedo" value="-1"/></medium>"#, "test.xml:7:", "albedo"),
     ];
     for (body, position, expectation) in cases {
         let e = err(&scene(body));
@@ -400,4 +400,49 @@ fn ptracer_and_radiosity_integrators() {
     assert!(e.contains("patch_size"), "{e}");
     let e = err(&scene(r#"<integrator type="ptracr"/>"#));
     assert!(e.contains("ptracer"), "{e}");
+}
+
+#[test]
+fn media_on_shapes_and_the_sensor() {
+    use crate::medium::PhaseFunction;
+    let text = r#"<scene version="3.0.0">
+    <integrator type="volpath"><integer name="max_depth" value="7"/></integrator>
+    <medium type="homogeneous" id="fog">
+        <rgb name="sigma_t" value="0.5, 1, 0.25"/><float name="scale" value="2"/>
+        <float name="albedo" value="0.9"/>
+        <phase type="hg"><float name="g" value="0.3"/></phase>
+    </medium>
+    <sensor type="perspective">
+        <ref id="fog"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film>
+    </sensor>
+    <shape type="sphere">
+        <bsdf type="null"/>
+        <ref name="exterior" id="fog"/>
+        <medium type="homogeneous" name="interior"><float name="sigma_t" value="3"/></medium>
+    </shape>
+</scene>"#;
+    let f = load(text).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::VolPath(v) if v.max_depth == 7));
+    let s = &f.scene;
+    assert_eq!(s.media().len(), 2);
+    assert_eq!(s.camera_medium(), Some(0));
+    assert_eq!(s.media()[0].sigma_t, Rgb::new(1.0, 2.0, 0.5));
+    assert_eq!(s.media()[0].phase, PhaseFunction::HenyeyGreenstein { g: 0.3 });
+    assert_eq!(s.media()[1].albedo, Rgb::splat(0.75), "Mitsuba's default albedo");
+    assert_eq!(s.media()[1].phase, PhaseFunction::Isotropic);
+    assert_eq!((s.shapes()[0].interior, s.shapes()[0].exterior), (Some(1), Some(0)));
+    assert!(matches!(s.bsdfs()[s.shapes()[0].bsdf as usize], Bsdf::Null));
+    for (bad, what) in [
+        (r#"<medium type="heterogeneous" id="m"/>"#, "homogeneous"),
+        (r#"<medium type="homogeneous" id="m"><float name="albedo" value="1.5"/></medium>"#, "albedo"),
+        (r#"<medium type="homogeneous" id="m"><phase type="hg"><float name="g" value="1"/></phase></medium>"#, "'g'"),
+        (r#"<medium type="homogeneous" id="m"><phase type="rayleigh"/></medium>"#, "isotropic"),
+        (r#"<phase type="hg"/>"#, "nested in a <medium>"),
+    ] {
+        let e = err(&scene(bad));
+        assert!(e.contains("test.xml:") && e.contains(what), "{bad}: {e}");
+    }
 }
