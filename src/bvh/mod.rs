@@ -152,7 +152,15 @@ impl Bvh {
                     }
                     if n > 0 {
                         let hits = &mut hits[..n];
-                        hits.sort_unstable_by(|a, b| b.2.total_cmp(&a.2));
+                        // Farthest first; insertion sort of at most four (inlined, unlike
+                        // the library sort, which showed up in profiles).
+                        for i in 1..n {
+                            let mut j = i;
+                            while j > 0 && hits[j - 1].2 < hits[j].2 {
+                                hits.swap(j - 1, j);
+                                j -= 1;
+                            }
+                        }
                         for h in &hits[..n - 1] {
                             stack[sp].write(*h);
                             sp += 1;
