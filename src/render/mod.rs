@@ -114,6 +114,25 @@ impl RenderOutcome {
     }
 }
 
+/// The crop window `[x0, y0, width, height]` of `settings` (default: the whole film), checked
+/// against the camera's film.
+fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result<[u32; 4], String> {
+    let window = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    let [wx, wy, width, height] = window;
+    if width == 0
+        || height == 0
+        || wx as u64 + width as u64 > cam.width() as u64
+        || wy as u64 + height as u64 > cam.height() as u64
+    {
+        return Err(format!(
+            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
+            cam.width(),
+            cam.height()
+        ));
+    }
+    Ok(window)
+}
+
 /// The progress bar (hidden unless `settings.progress`) and its length: with a time budget it
 /// measures milliseconds of the budget, else `work` items named `unit`.
 fn progress_bar(settings: &RenderSettings, work: u64, unit: &str) -> (ProgressBar, u64) {
@@ -170,18 +189,7 @@ pub fn render(
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, String> {
     let cam = scene.camera();
-    let [wx, wy, width, height] = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
-    if width == 0
-        || height == 0
-        || wx as u64 + width as u64 > cam.width() as u64
-        || wy as u64 + height as u64 > cam.height() as u64
-    {
-        return Err(format!(
-            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
-            cam.width(),
-            cam.height()
-        ));
-    }
+    let [wx, wy, width, height] = crop_window(settings, cam)?;
     let spp = settings.spp.max(1);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)

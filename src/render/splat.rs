@@ -85,19 +85,8 @@ pub fn render_light_paths(
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, String> {
     let cam = scene.camera();
-    let window = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
-    let [wx, wy, width, height] = window;
-    if width == 0
-        || height == 0
-        || wx as u64 + width as u64 > cam.width() as u64
-        || wy as u64 + height as u64 > cam.height() as u64
-    {
-        return Err(format!(
-            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
-            cam.width(),
-            cam.height()
-        ));
-    }
+    let window = super::crop_window(settings, cam)?;
+    let [_, _, width, height] = window;
     if settings.terms > 0 {
         return Err("the ptracer integrator does not separate the terms of the Neumann series".into());
     }
