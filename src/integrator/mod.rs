@@ -42,6 +42,26 @@ pub trait Integrator: Sync {
     }
 }
 
+/// Russian roulette for camera paths from `rr_depth` on: survival probability
+/// `q = min(max(β) η², 0.95)` and `β /= q` (η: product of the relative IORs crossed, undoing the
+/// η² radiance scaling of refraction), drawn with `u`. Returns false when the path ends, also
+/// when `β` is zero or NaN at any depth.
+#[inline]
+pub(crate) fn russian_roulette(beta: &mut Rgb, eta: f32, depth: u32, rr_depth: u32, u: f32) -> bool {
+    let m = beta.max_element();
+    if m <= 0.0 || m.is_nan() {
+        return false;
+    }
+    if depth >= rr_depth {
+        let q = (m * eta * eta).min(0.95);
+        if u >= q {
+            return false;
+        }
+        *beta /= q;
+    }
+    true
+}
+
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
 /// Render it with [`crate::render::render_integrator`].
 #[derive(Clone, Debug)]

@@ -285,17 +285,8 @@ impl PathIntegrator {
             depth += 1;
 
             // Russian roulette.
-            let u_rr = sampler.next_1d();
-            let beta_max = beta.max_element();
-            if beta_max <= 0.0 || beta_max.is_nan() {
+            if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
                 break;
-            }
-            if depth >= self.rr_depth {
-                let q = (beta_max * eta * eta).min(0.95);
-                if u_rr >= q {
-                    break;
-                }
-                beta /= q;
             }
         }
     }

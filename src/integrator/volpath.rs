@@ -143,25 +143,6 @@ impl VolPathIntegrator {
     }
 }
 
-impl VolPathIntegrator {
-    /// Russian roulette from `rr_depth` on (survival `min(max(β) η², 0.95)`); false: the path ends.
-    #[inline]
-    fn roulette(&self, beta: &mut Rgb, eta: f32, depth: u32, u: f32) -> bool {
-        let m = beta.max_element();
-        if m <= 0.0 || m.is_nan() {
-            return false;
-        }
-        if depth >= self.rr_depth {
-            let q = (m * eta * eta).min(0.95);
-            if u >= q {
-                return false;
-            }
-            *beta /= q;
-        }
-        true
-    }
-}
-
 impl Integrator for VolPathIntegrator {
     fn name(&self) -> &'static str {
         "volpath"
@@ -220,7 +201,7 @@ impl Integrator for VolPathIntegrator {
                         ray = Ray::new(p, s.value);
                         depth += 1;
                         crossings = 0;
-                        if !self.roulette(&mut beta, eta, depth, sampler.next_1d()) {
+                        if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
                             break;
                         }
                         continue;
@@ -304,7 +285,7 @@ impl Integrator for VolPathIntegrator {
             ray = si.spawn_ray(wi);
             depth += 1;
             crossings = 0;
-            if !self.roulette(&mut beta, eta, depth, sampler.next_1d()) {
+            if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
                 break;
             }
         }
