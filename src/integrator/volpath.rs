@@ -155,7 +155,9 @@ impl Integrator for VolPathIntegrator {
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut eta = 1.0f32;
-        let mut ray = Ray::new(camera_ray.o, camera_ray.d.normalize());
+        // Unit direction (free-flight distances are lengths), keeping the camera's clip range.
+        let len = camera_ray.d.length();
+        let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len);
         let mut medium = scene.camera_medium();
         let mut prev: Option<(Vec3, f32, bool)> = None;
         let mut depth = 0u32;
@@ -392,6 +394,23 @@ mod tests {
             println!("channel {c}: {got:.5} vs Beer–Lambert {want:.5} ± {se:.5}");
             assert!((got - want).abs() < 3.0 * se + 2e-4 * want, "channel {c}: {got} vs {want}");
         }
+    }
+
+    /// The camera's far clip bounds camera rays as in the path tracer: with everything beyond
+    /// it (and no environment), the image is black.
+    #[test]
+    fn camera_rays_respect_the_far_clip() {
+        let mut scene = crate::scene::cornell::cornell_box(8, 8).unwrap();
+        let cam = scene.camera().clone().with_clip(0.01, 0.5).unwrap();
+        scene.set_camera(cam);
+        let out = render(
+            &scene,
+            &VolPathIntegrator::default(),
+            &RenderSettings { spp: 4, ..Default::default() },
+            &AtomicBool::new(false),
+        )
+        .unwrap();
+        assert!(out.film.image().iter().all(|c| *c == Rgb::ZERO));
     }
 
     /// Without media, volpath is the path tracer: the same Cornell box mean within noise.
