@@ -23,6 +23,7 @@
 //! (`spp × W × H` paths in all), a pixel's value is the sum of its splats divided by `spp`
 //! (see [`crate::render::render_light_paths`]).
 
+use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::Light;
 use crate::material::BsdfContext;
 use crate::math::float::offset_ray_origin;
@@ -90,7 +91,7 @@ impl LightTracer {
                         } else {
                             offset_ray_origin(pos.p, pos.p_error, pos.ng, cs.wi)
                         };
-                        if !scene.occluded(&Ray::bounded(o, cs.p_lens - o, 1.0 - 1e-4)) {
+                        if !scene.occluded(&Ray::bounded(o, cs.p_lens - o, 1.0 - SHADOW_EPSILON)) {
                             splat(cs.film, value);
                         }
                     }
