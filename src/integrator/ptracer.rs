@@ -288,6 +288,55 @@ mod tests {
         assert!(err / noise < 1.25, "pixel error {err:.4e} vs noise {noise:.4e}");
     }
 
+    /// Through rough glass (seen directly and casting light on a floor) the light tracer must
+    /// use the adjoint BSDF: without removing refraction's 1/η² radiance scaling the sphere
+    /// would come out 1.5² times too dark or bright. Means agree with the path tracer.
+    #[test]
+    fn rough_glass_uses_the_adjoint_bsdf() {
+        let text = r#"<scene version="3.0.0">
+            <sensor type="perspective">
+                <float name="fov" value="35"/>
+                <transform name="to_world"><lookat origin="0, 2, 5" target="0, 0.6, 0" up="0, 1, 0"/></transform>
+                <film type="hdrfilm"><integer name="width" value="20"/><integer name="height" value="16"/><rfilter type="box"/></film>
+            </sensor>
+            <shape type="rectangle">
+                <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="3"/></transform>
+                <emitter type="area"><rgb name="radiance" value="20, 20, 20"/></emitter>
+            </shape>
+            <shape type="sphere">
+                <point name="center" x="0" y="0.8" z="0"/><float name="radius" value="0.8"/>
+                <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf>
+            </shape>
+            <shape type="rectangle">
+                <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
+                <bsdf type="diffuse"/>
+            </shape>
+        </scene>"#;
+        let file = crate::scene::xml::load_scene_text(std::path::Path::new("glass.xml"), text, &[]).unwrap();
+        let scene = file.scene;
+        let never = AtomicBool::new(false);
+        let reference = render(
+            &scene,
+            &PathIntegrator::default(),
+            &RenderSettings { spp: 4096, seed: 7, ..Default::default() },
+            &never,
+        )
+        .unwrap();
+        let light = render_light_paths(
+            &scene,
+            &LightTracer::default(),
+            &RenderSettings { spp: 4096, seed: 8, ..Default::default() },
+            &never,
+        )
+        .unwrap();
+        let (m_ref, se_ref) = reference.film.mean_and_std_error();
+        let (m_lt, se_lt) = light.film.mean_and_std_error();
+        let sigma = (se_lt * se_lt + se_ref * se_ref).sqrt();
+        println!("rough glass: ptracer {m_lt:.5} ± {se_lt:.5}, path {m_ref:.5} ± {se_ref:.5}");
+        assert!(sigma < 0.01 * m_ref, "too noisy: ± {sigma}");
+        assert!((m_lt - m_ref).abs() < 4.0 * sigma, "ptracer {m_lt} vs path {m_ref} (± {sigma})");
+    }
+
     /// The same seed gives the same image whatever the number of threads.
     #[test]
     fn deterministic_across_thread_counts() {

@@ -502,4 +502,88 @@ mod tests {
         assert_eq!(l.pdf_li(&[], Vec3::ZERO, Vec3::Z, Vec3::Z), 0.0);
         assert!((l.power(&[]) - 4.0 * PI * 8.0).abs() < 1e-3);
     }
+
+    /// `sample_le` carries each light's whole flux: the mean of its weights equals the
+    /// emitted power (per channel) — `π A Lₑ` (area), `4π I` (point), `I ∫ falloff dω` (spot,
+    /// by quadrature over θ), `E π R²` (directional), `4π L · π R²` (constant) — and its rays
+    /// leave the right way: area rays from the front, parallel rays from outside the scene's
+    /// bounding sphere along the light's direction, passing within R of its centre.
+    #[test]
+    fn sample_le_carries_the_emitted_power() {
+        use crate::math::Frame;
+        use crate::sampling::Pcg32;
+        let mut rect = TriangleMesh::rectangle();
+        rect.transform(&Transform::scale(Vec3::new(0.5, 2.0, 1.0)).unwrap());
+        let mut rect = Geometry::Mesh(rect);
+        assert!(rect.prepare_sampling());
+        let shapes = [rect];
+        let (center, radius) = (Vec3::new(1.0, 0.0, -1.0), 3.0);
+        let (cutoff, beam) = (0.5f32, 0.3f32);
+        // ∫ falloff dω = 2π ∫ falloff(cos θ) sin θ dθ.
+        let spot_integral = {
+            let n = 20_000;
+            let h = cutoff as f64 / n as f64;
+            (0..n)
+                .map(|i| {
+                    let t = (i as f64 + 0.5) * h;
+                    Light::spot_falloff(t.cos() as f32, cutoff, beam) as f64 * t.sin() * h
+                })
+                .sum::<f64>()
+                * 2.0
+                * std::f64::consts::PI
+        };
+        let lights = [
+            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0) }, PI as f64 * 4.0 * 0.5 * 2.0),
+            (Light::Point { position: Vec3::ONE, intensity: Rgb::new(1.0, 2.0, 3.0) }, 4.0 * PI as f64),
+            (
+                Light::Spot {
+                    position: Vec3::ONE,
+                    frame: Frame::from_z(Vec3::new(0.3, -1.0, 0.2).normalize()),
+                    intensity: Rgb::new(1.0, 2.0, 3.0),
+                    cutoff,
+                    beam,
+                },
+                spot_integral,
+            ),
+            (
+                Light::Directional {
+                    direction: Vec3::new(1.0, -2.0, 0.5).normalize(),
+                    irradiance: Rgb::new(1.0, 2.0, 3.0),
+                    center,
+                    radius,
+                },
+                (PI * radius * radius) as f64,
+            ),
+            (
+                Light::Constant { radiance: Rgb::new(1.0, 2.0, 3.0), center, radius },
+                (4.0 * PI * PI * radius * radius) as f64,
+            ),
+        ];
+        for (k, (light, flux_per_unit)) in lights.iter().enumerate() {
+            let mut rng = Pcg32::new(4, k as u64);
+            let n = 200_000;
+            let mut sum = [0.0f64; 3];
+            for _ in 0..n {
+                let s = light.sample_le(&shapes, u2(&mut rng), u2(&mut rng)).expect("emits");
+                assert!((s.d.length() - 1.0).abs() < 1e-4, "light {k}: unit direction");
+                match light {
+                    Light::Area { .. } => assert!(s.d.dot(s.n) > 0.0, "area light emits from its front"),
+                    Light::Directional { direction, .. } => assert!((s.d - *direction).length() < 1e-5),
+                    Light::Constant { .. } => {
+                        assert!((s.p - center).length() > radius, "origin outside the bounding sphere");
+                        let closest = s.p + s.d * (center - s.p).dot(s.d);
+                        assert!((closest - center).length() <= radius * (1.0 + 1e-4), "ray misses the scene");
+                    }
+                    _ => {}
+                }
+                for (c, total) in sum.iter_mut().enumerate() {
+                    *total += s.weight[c] as f64;
+                }
+            }
+            for (c, total) in sum.iter().enumerate() {
+                let (mean, want) = (total / n as f64, flux_per_unit * (c + 1) as f64);
+                assert!((mean - want).abs() < 0.01 * want, "light {k}, channel {c}: {mean} vs {want}");
+            }
+        }
+    }
 }
