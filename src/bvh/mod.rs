@@ -18,7 +18,7 @@ pub use build::BuildOptions;
 /// structure-of-arrays form (`bounds[0]` = lower corners, `bounds[1]` = upper corners, each as x,
 /// y, z lane vectors), so one SIMD slab test checks all four; and per child either a leaf
 /// (`count > 0` primitives from `child`) or an interior node (`count == 0`, node index `child`).
-/// Unused slots have `child == u32::MAX`.
+/// Unused slots have `child == u32::MAX` and an empty box (min +∞, max -∞) that no ray hits.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node4 {
@@ -29,7 +29,11 @@ pub struct Node4 {
 
 impl Node4 {
     pub(crate) fn empty() -> Node4 {
-        Node4 { bounds: [[Vec4::ZERO; 3]; 2], child: [u32::MAX; 4], count: [0; 4] }
+        Node4 {
+            bounds: [[Vec4::splat(f32::INFINITY); 3], [Vec4::splat(f32::NEG_INFINITY); 3]],
+            child: [u32::MAX; 4],
+            count: [0; 4],
+        }
     }
 
     pub(crate) fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u32) {
@@ -121,54 +125,69 @@ impl Bvh {
     /// Finds the closest hit. `leaf(first, count, t_max)` intersects leaf primitives
     /// `first .. first + count` (in [`Bvh::order`] positions) and lowers `t_max` to the closest hit
     /// found; traversal then culls everything farther. The children of a node are tested at
-    /// once, visited nearest first, and postponed ones are skipped when a closer hit was found
-    /// meanwhile.
+    /// once and visited nearest first; postponed ones are skipped when a closer hit was found
+    /// meanwhile. One or two hit children (the common cases) are handled without a sort.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
         if self.nodes.is_empty() {
             return;
         }
         let r = SlabRay::new(ray);
-        // Stack of (node or leaf, entry distance); leaves carry their count.
-        // Binary depth ≤ 60 bounds the wide depth by 60; ≤ 3 postponed children per level.
-        let mut stack = [std::mem::MaybeUninit::<(u32, u32, f32)>::uninit(); 192];
+        // Postponed children: (node or leaf, count, entry distance). Binary depth ≤ 60 bounds the
+        // wide depth by 60, with at most three postponed children per level.
+        let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); 192];
         let mut sp = 0usize;
-        let mut current = Some((0u32, 0u32));
+        let (mut child, mut count) = (0u32, 0u32);
         loop {
-            if let Some((child, count)) = current.take() {
-                if count > 0 {
-                    leaf(child, count, &mut t_max);
-                } else {
-                    let node = unsafe { self.nodes.get_unchecked(child as usize) };
-                    let (mask, t_near) = r.test4(node, t_max);
-                    // Collect hit children, then push all but the nearest, farthest first.
-                    let mut hits = [(0u32, 0u32, 0.0f32); 4];
-                    let mut n = 0;
-                    for (slot, &t) in t_near.iter().enumerate() {
-                        if mask & (1 << slot) != 0 {
-                            hits[n] = (node.child[slot], node.count[slot], t);
-                            n += 1;
-                        }
-                    }
-                    if n > 0 {
-                        let hits = &mut hits[..n];
-                        // Farthest first; insertion sort of at most four (inlined, unlike
-                        // the library sort, which showed up in profiles).
-                        for i in 1..n {
-                            let mut j = i;
-                            while j > 0 && hits[j - 1].2 < hits[j].2 {
-                                hits.swap(j - 1, j);
-                                j -= 1;
-                            }
-                        }
-                        for h in &hits[..n - 1] {
-                            stack[sp].write(*h);
-                            sp += 1;
-                        }
-                        let nearest = hits[n - 1];
-                        current = Some((nearest.0, nearest.1));
+            if count > 0 {
+                leaf(child, count, &mut t_max);
+            } else {
+                // SAFETY: interior children index `nodes` (built together).
+                let node = unsafe { self.nodes.get_unchecked(child as usize) };
+                let (mut mask, t_near) = r.test4(node, t_max);
+                if mask != 0 {
+                    let a = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        (child, count) = (node.child[a], node.count[a]);
                         continue;
                     }
+                    let b = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        let (near, far) = if t_near[a] <= t_near[b] { (a, b) } else { (b, a) };
+                        stack[sp].write((node.child[far], node.count[far], t_near[far]));
+                        sp += 1;
+                        (child, count) = (node.child[near], node.count[near]);
+                        continue;
+                    }
+                    // Three or four: push all, sort them farthest first, continue with the nearest.
+                    let base = sp;
+                    for slot in [a, b] {
+                        stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
+                        sp += 1;
+                    }
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
+                        sp += 1;
+                    }
+                    // SAFETY: slots base..sp were just written.
+                    let pushed =
+                        unsafe { &mut *(&mut stack[base..sp] as *mut [std::mem::MaybeUninit<Entry>] as *mut [Entry]) };
+                    for i in 1..pushed.len() {
+                        let mut j = i;
+                        while j > 0 && pushed[j - 1].2 < pushed[j].2 {
+                            pushed.swap(j - 1, j);
+                            j -= 1;
+                        }
+                    }
+                    sp -= 1;
+                    // SAFETY: written above.
+                    let nearest = unsafe { stack[sp].assume_init() };
+                    (child, count) = (nearest.0, nearest.1);
+                    continue;
                 }
             }
             // Pop the next postponed child that can still hold a closer hit.
@@ -178,9 +197,9 @@ impl Bvh {
                 }
                 sp -= 1;
                 // SAFETY: slot `sp` was written before `sp` was incremented past it.
-                let (child, count, t_entry) = unsafe { stack[sp].assume_init() };
+                let (c, n, t_entry) = unsafe { stack[sp].assume_init() };
                 if t_entry <= t_max {
-                    current = Some((child, count));
+                    (child, count) = (c, n);
                     break;
                 }
             }
@@ -208,18 +227,23 @@ impl Bvh {
                 }
                 continue;
             }
+            // SAFETY: interior children index `nodes` (built together).
             let node = unsafe { self.nodes.get_unchecked(child as usize) };
-            let (mask, _) = r.test4(node, t_max);
-            for slot in 0..4 {
-                if mask & (1 << slot) != 0 {
-                    stack[sp].write((node.child[slot], node.count[slot]));
-                    sp += 1;
-                }
+            let (mut mask, _) = r.test4(node, t_max);
+            while mask != 0 {
+                let slot = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack[sp].write((node.child[slot], node.count[slot]));
+                sp += 1;
             }
         }
         false
     }
 }
+
+/// A traversal stack entry: node index (or first primitive), primitive count (0 for a node),
+/// entry distance.
+type Entry = (u32, u32, f32);
 
 /// A ray prepared for 4-wide SIMD slab tests: origin and reciprocal direction splatted per axis,
 /// and which corner is the near one on each axis.
@@ -250,13 +274,8 @@ impl SlabRay {
         let tf = |a: usize| (b[1 - self.near[a]][a] - self.o[a]) * self.inv_d[a];
         let t_near = tn(0).max(tn(1)).max(tn(2)).max(Vec4::ZERO);
         let t_far = (tf(0).min(tf(1)).min(tf(2)) * (1.0 + 2.0 * gamma(3))).min(Vec4::splat(t_max));
-        let mut mask = t_near.cmple(t_far).bitmask();
-        for slot in 0..4 {
-            if !node.valid(slot) {
-                mask &= !(1 << slot);
-            }
-        }
-        (mask, t_near.to_array())
+        // Unused slots hold empty boxes (min +∞, max -∞), which no ray enters.
+        (t_near.cmple(t_far).bitmask(), t_near.to_array())
     }
 }
 
