@@ -96,6 +96,23 @@ impl Bvh {
         }
     }
 
+    /// Re-encodes every leaf's payload: `f(first, count)` gets the leaf's primitive range (in
+    /// [`Bvh::order`] positions) and returns the `(child, count)` stored in its place, which the
+    /// traversal closures then receive. `count` must stay non-zero (zero marks interior nodes).
+    /// Lets a caller replace primitive ranges by its own packed blocks; [`Bvh::stats`] reads the
+    /// counts, so take statistics before.
+    pub fn remap_leaves(&mut self, mut f: impl FnMut(u32, u32) -> (u32, u32)) {
+        for node in &mut self.nodes {
+            for slot in 0..4 {
+                if node.valid(slot) && node.count[slot] > 0 {
+                    let (child, count) = f(node.child[slot], node.count[slot]);
+                    assert!(count > 0, "a leaf's count must stay non-zero");
+                    (node.child[slot], node.count[slot]) = (child, count);
+                }
+            }
+        }
+    }
+
     /// Node count, leaf count, depth and SAH cost.
     pub fn stats(&self) -> BvhStats {
         let mut s = BvhStats { nodes: self.nodes.len(), ..Default::default() };

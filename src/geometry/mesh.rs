@@ -170,6 +170,10 @@ impl TriangleMesh {
     /// normal `ng`.
     #[inline]
     pub fn shading(&self, i: usize, b: [f32; 3], ng: Vec3) -> (Vec3, Vec2) {
+        if self.normals.is_empty() && self.uvs.is_empty() {
+            // No vertex data to interpolate: no need to fetch the indices.
+            return (ng, Vec2::new(b[1] + b[2], b[2]));
+        }
         let [a, bb, c] = self.indices[i].map(|v| v as usize);
         let ns = if self.normals.is_empty() {
             ng

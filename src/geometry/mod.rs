@@ -11,6 +11,7 @@ pub mod mesh;
 pub mod shape;
 pub mod sphere;
 pub mod triangle;
+pub mod triangle4;
 
 pub use cylinder::Cylinder;
 pub use disk::Disk;

@@ -21,6 +21,10 @@ pub struct RayPrecomp {
     mx: Vec3,
     my: Vec3,
     mz: Vec3,
+    /// The permutation `(kx, ky, kz)` (kz: dominant direction axis).
+    pub(crate) k: [usize; 3],
+    /// Shear `(Sx, Sy)` = `(d[kx] / d[kz], d[ky] / d[kz])` and scale `Sz = 1 / d[kz]`.
+    pub(crate) s: Vec3,
 }
 
 impl RayPrecomp {
@@ -57,7 +61,8 @@ impl RayPrecomp {
         let ez = unit(kz, 1.0);
         let mx = unit(kx, 1.0) - ez * (d.dot(unit(kx, 1.0)) * sz);
         let my = unit(ky, 1.0) - ez * (d.dot(unit(ky, 1.0)) * sz);
-        RayPrecomp { o: ray.o, mx, my, mz: unit(kz, sz) }
+        let s = Vec3::new(d[kx] * sz, d[ky] * sz, sz);
+        RayPrecomp { o: ray.o, mx, my, mz: unit(kz, sz), k: [kx, ky, kz], s }
     }
 }
 

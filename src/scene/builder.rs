@@ -1,9 +1,10 @@
 //! Assembles a [`Scene`]: collects shapes, BSDFs and emitters, then builds the BVH and the
 //! light distribution.
 
-use super::{PrimRef, Primitive, Scene, Shape};
-use crate::bvh::{BuildOptions, Bvh};
+use super::{LeafPrim, PrimRef, Primitive, Scene, Shape, TRIANGLE_BLOCKS};
+use crate::bvh::Bvh;
 use crate::camera::Camera;
+use crate::geometry::triangle4::Triangle4;
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Bsdf;
@@ -116,17 +117,34 @@ impl SceneBuilder {
                 bounds.push(g.primitive_bounds(i));
             }
         }
-        let bvh = Bvh::build(&bounds, &BuildOptions::default());
+        let mut bvh = Bvh::build(&bounds, &super::BVH_OPTIONS);
         let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[k as usize]).collect();
-        let prims = refs
-            .iter()
-            .map(|r| match &self.geometries[r.shape as usize] {
-                Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
-                Geometry::Sphere(s) => Primitive::Sphere(*s),
-                Geometry::Disk(_) => Primitive::Disk,
-                Geometry::Cylinder(_) => Primitive::Cylinder,
-            })
-            .collect();
+        // Leaves of triangles only become blocks of four; the others keep a primitive list.
+        let (mut blocks, mut prims) = (Vec::new(), Vec::new());
+        let geometries = &self.geometries;
+        let triangle = |k: u32| match &geometries[refs[k as usize].shape as usize] {
+            Geometry::Mesh(m) => Some(m.triangle(refs[k as usize].index as usize)),
+            _ => None,
+        };
+        bvh.remap_leaves(|first, count| {
+            let tris: Option<Vec<([Vec3; 3], u32)>> = (first..first + count).map(|k| Some((triangle(k)?, k))).collect();
+            if let Some(tris) = tris {
+                let start = blocks.len() as u32;
+                blocks.extend(tris.chunks(4).map(Triangle4::new));
+                return (start, (blocks.len() as u32 - start) | TRIANGLE_BLOCKS);
+            }
+            let start = prims.len() as u32;
+            prims.extend((first..first + count).map(|k| {
+                let prim = match &geometries[refs[k as usize].shape as usize] {
+                    Geometry::Mesh(m) => Primitive::Triangle(m.triangle(refs[k as usize].index as usize)),
+                    Geometry::Sphere(s) => Primitive::Sphere(*s),
+                    Geometry::Disk(_) => Primitive::Disk,
+                    Geometry::Cylinder(_) => Primitive::Cylinder,
+                };
+                LeafPrim { prim, r: k }
+            }));
+            (start, count)
+        });
         // Infinite lights need the scene's extent.
         let (center, radius) = bvh.bounds().bounding_sphere();
         for l in &mut self.lights {
@@ -155,6 +173,7 @@ impl SceneBuilder {
             media: self.media,
             camera_medium: self.camera_medium,
             bvh,
+            blocks,
             prims,
             refs,
             camera,

@@ -8,9 +8,10 @@ pub mod xml;
 
 pub use builder::SceneBuilder;
 
-use crate::bvh::Bvh;
+use crate::bvh::{BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
+use crate::geometry::triangle4::Triangle4;
 use crate::geometry::{Geometry, Sphere, SurfaceInteraction};
 use crate::light::Light;
 use crate::material::Bsdf;
@@ -31,7 +32,23 @@ pub struct Shape {
     pub exterior: Option<u32>,
 }
 
-/// Primitive data in BVH leaf order, compact for the traversal loop.
+/// How scenes build their BVH: SAH with leaves charged per block of four triangles (the
+/// [`Triangle4`] test), at most eight primitives per leaf.
+pub const BVH_OPTIONS: BuildOptions =
+    BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0, leaf_group: 4 };
+
+/// Leaf payload flag: the leaf holds `count & !TRIANGLE_BLOCKS` [`Triangle4`] blocks from
+/// `Scene::blocks[first]`; without it, `count` primitives from `Scene::prims[first]`.
+const TRIANGLE_BLOCKS: u32 = 1 << 31;
+
+/// A primitive of a leaf that does not hold triangles only, with its index into `Scene::refs`.
+#[derive(Clone, Copy, Debug)]
+struct LeafPrim {
+    prim: Primitive,
+    r: u32,
+}
+
+/// Primitive data of mixed leaves, compact for the traversal loop.
 #[derive(Clone, Copy, Debug)]
 enum Primitive {
     Triangle([Vec3; 3]),
@@ -49,10 +66,14 @@ struct PrimRef {
 
 #[derive(Clone, Copy, Debug)]
 enum HitKind {
-    Triangle(TriangleHit),
-    Sphere,
-    Disk(Vec2),
-    Cylinder(Vec3),
+    /// Lane `.2` of block `.1`.
+    Block(TriangleHit, u32, usize),
+    /// A triangle of a mixed leaf, `Scene::prims[.1]`.
+    Triangle(TriangleHit, u32),
+    /// The analytic shapes carry their index into `Scene::refs`.
+    Sphere(u32),
+    Disk(Vec2, u32),
+    Cylinder(Vec3, u32),
 }
 
 /// A scene ready to render.
@@ -67,7 +88,11 @@ pub struct Scene {
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
     bvh: Bvh,
-    prims: Vec<Primitive>,
+    /// Triangles of all-triangle leaves, four per block.
+    blocks: Vec<Triangle4>,
+    /// Primitives of the other leaves.
+    prims: Vec<LeafPrim>,
+    /// Every primitive's shape and index, in BVH order.
     refs: Vec<PrimRef>,
     camera: Camera,
 }
@@ -130,7 +155,7 @@ impl Scene {
 
     /// Number of primitives (triangles, spheres, disks).
     pub fn primitive_count(&self) -> usize {
-        self.prims.len()
+        self.refs.len()
     }
 
     /// Chooses a light with probability proportional to its power: the light index and its
@@ -151,81 +176,85 @@ impl Scene {
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let pre = RayPrecomp::new(ray);
-        let mut best: Option<(u32, f32, HitKind)> = None;
+        let mut best: Option<(f32, HitKind)> = None;
         self.bvh.closest_hit(ray, ray.t_max, |first, count, t_max| {
+            if count & TRIANGLE_BLOCKS != 0 {
+                for b in first..first + (count & !TRIANGLE_BLOCKS) {
+                    // SAFETY: leaf payloads index `blocks` (built together).
+                    let block = unsafe { self.blocks.get_unchecked(b as usize) };
+                    if let Some((lane, h)) = block.intersect(&pre, *t_max) {
+                        *t_max = h.t;
+                        best = Some((h.t, HitKind::Block(h, b, lane)));
+                    }
+                }
+                return;
+            }
             for k in first..first + count {
-                match unsafe { self.prims.get_unchecked(k as usize) } {
+                // SAFETY: leaf payloads index `prims` (built together).
+                let lp = unsafe { self.prims.get_unchecked(k as usize) };
+                let hit = match &lp.prim {
                     Primitive::Triangle(p) => {
-                        if let Some(h) = intersect_triangle(&pre, p, *t_max) {
-                            *t_max = h.t;
-                            best = Some((k, h.t, HitKind::Triangle(h)));
-                        }
+                        intersect_triangle(&pre, p, *t_max).map(|h| (h.t, HitKind::Triangle(h, k)))
                     }
-                    Primitive::Sphere(s) => {
-                        if let Some(h) = s.intersect(ray, *t_max) {
-                            *t_max = h.t;
-                            best = Some((k, h.t, HitKind::Sphere));
-                        }
-                    }
-                    Primitive::Disk => {
-                        let r = self.refs[k as usize];
-                        if let Geometry::Disk(d) = &self.geometries[r.shape as usize] {
-                            if let Some((t, q)) = d.intersect(ray, *t_max) {
-                                *t_max = t;
-                                best = Some((k, t, HitKind::Disk(q)));
-                            }
-                        }
-                    }
-                    Primitive::Cylinder => {
-                        let r = self.refs[k as usize];
-                        if let Geometry::Cylinder(c) = &self.geometries[r.shape as usize] {
-                            if let Some((t, q)) = c.intersect(ray, *t_max) {
-                                *t_max = t;
-                                best = Some((k, t, HitKind::Cylinder(q)));
-                            }
-                        }
-                    }
+                    Primitive::Sphere(s) => s.intersect(ray, *t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
+                    Primitive::Disk => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
+                        Geometry::Disk(d) => d.intersect(ray, *t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
+                        _ => None,
+                    },
+                    Primitive::Cylinder => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
+                        Geometry::Cylinder(c) => c.intersect(ray, *t_max).map(|(t, q)| (t, HitKind::Cylinder(q, lp.r))),
+                        _ => None,
+                    },
+                };
+                if let Some((t, kind)) = hit {
+                    *t_max = t;
+                    best = Some((t, kind));
                 }
             }
         });
-        let (k, t, kind) = best?;
-        Some(self.interaction(ray, k, t, kind))
+        let (t, kind) = best?;
+        Some(self.interaction(ray, t, kind))
     }
 
-    fn interaction(&self, ray: &Ray, k: u32, t: f32, kind: HitKind) -> SurfaceInteraction {
-        let r = self.refs[k as usize];
-        let geometry = &self.geometries[r.shape as usize];
-        match (kind, geometry) {
-            (HitKind::Triangle(h), Geometry::Mesh(m)) => {
-                let i = r.index as usize;
-                let p = m.triangle(i);
-                let ng = m.normal_of(&p);
-                let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
-                SurfaceInteraction {
-                    p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
-                    p_error: triangle_point_error(&p, &h),
-                    t,
-                    ng,
-                    ns,
-                    uv,
-                    shape: r.shape,
-                    prim: r.index,
-                }
+    fn interaction(&self, ray: &Ray, t: f32, kind: HitKind) -> SurfaceInteraction {
+        let (h, p, r) = match kind {
+            HitKind::Block(h, b, lane) => {
+                let block = &self.blocks[b as usize];
+                (h, block.triangle(lane), block.id[lane])
             }
-            (HitKind::Sphere, Geometry::Sphere(s)) => {
-                let (sp, uv) = s.surface(ray, t);
-                SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
+            HitKind::Triangle(h, k) => match self.prims[k as usize] {
+                LeafPrim { prim: Primitive::Triangle(p), r } => (h, p, r),
+                _ => unreachable!("HitKind::Triangle names a triangle"),
+            },
+            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) => {
+                return self.analytic_interaction(ray, t, kind, self.refs[r as usize]);
             }
-            (HitKind::Disk(q), Geometry::Disk(d)) => {
-                let (sp, uv) = d.surface(q);
-                SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
-            }
-            (HitKind::Cylinder(q), Geometry::Cylinder(c)) => {
-                let (sp, uv) = c.surface(q);
-                SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
-            }
-            _ => unreachable!("primitive kind and shape geometry always agree"),
+        };
+        let r = self.refs[r as usize];
+        let Geometry::Mesh(m) = &self.geometries[r.shape as usize] else { unreachable!("triangles belong to meshes") };
+        let i = r.index as usize;
+        let ng = m.normal_of(&p);
+        let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
+        SurfaceInteraction {
+            p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
+            p_error: triangle_point_error(&p, &h),
+            t,
+            ng,
+            ns,
+            uv,
+            shape: r.shape,
+            prim: r.index,
         }
+    }
+
+    fn analytic_interaction(&self, ray: &Ray, t: f32, kind: HitKind, r: PrimRef) -> SurfaceInteraction {
+        let (sp, uv) = match (kind, &self.geometries[r.shape as usize]) {
+            (HitKind::Sphere(_), Geometry::Sphere(s)) => s.surface(ray, t),
+            (HitKind::Disk(q, _), Geometry::Disk(d)) => d.surface(q),
+            (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => c.surface(q),
+            _ => unreachable!("primitive kind and shape geometry always agree"),
+        };
+        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
     }
 
     /// Whether anything blocks `ray` within `(0, ray.t_max)`.
@@ -233,18 +262,92 @@ impl Scene {
     pub fn occluded(&self, ray: &Ray) -> bool {
         let pre = RayPrecomp::new(ray);
         self.bvh.any_hit(ray, ray.t_max, |first, count, t_max| {
-            (first..first + count).any(|k| match unsafe { self.prims.get_unchecked(k as usize) } {
-                Primitive::Triangle(p) => intersect_triangle(&pre, p, t_max).is_some(),
-                Primitive::Sphere(s) => s.intersect(ray, t_max).is_some(),
-                Primitive::Disk => match &self.geometries[self.refs[k as usize].shape as usize] {
-                    Geometry::Disk(d) => d.intersect(ray, t_max).is_some(),
-                    _ => false,
-                },
-                Primitive::Cylinder => match &self.geometries[self.refs[k as usize].shape as usize] {
-                    Geometry::Cylinder(c) => c.intersect(ray, t_max).is_some(),
-                    _ => false,
-                },
+            if count & TRIANGLE_BLOCKS != 0 {
+                // SAFETY: leaf payloads index `blocks` (built together).
+                return (first..first + (count & !TRIANGLE_BLOCKS))
+                    .any(|b| unsafe { self.blocks.get_unchecked(b as usize) }.occludes(&pre, t_max));
+            }
+            (first..first + count).any(|k| {
+                // SAFETY: leaf payloads index `prims` (built together).
+                let lp = unsafe { self.prims.get_unchecked(k as usize) };
+                match &lp.prim {
+                    Primitive::Triangle(p) => intersect_triangle(&pre, p, t_max).is_some(),
+                    Primitive::Sphere(s) => s.intersect(ray, t_max).is_some(),
+                    Primitive::Disk => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
+                        Geometry::Disk(d) => d.intersect(ray, t_max).is_some(),
+                        _ => false,
+                    },
+                    Primitive::Cylinder => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
+                        Geometry::Cylinder(c) => c.intersect(ray, t_max).is_some(),
+                        _ => false,
+                    },
+                }
             })
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::FovAxis;
+    use crate::geometry::TriangleMesh;
+    use crate::material::Diffuse;
+    use crate::math::{Rgb, Transform};
+    use crate::sampling::{sample_uniform_sphere, Pcg32};
+
+    /// A triangle soup with spheres among the triangles: leaves of triangles only (SIMD blocks)
+    /// and mixed leaves (primitive lists) both occur, and both answer like brute force.
+    #[test]
+    fn intersect_and_occluded_match_brute_force() {
+        let mut rng = Pcg32::new(9, 9);
+        let v = |rng: &mut Pcg32, s: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s - s / 2.0;
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..600u32 {
+            let c = v(&mut rng, 8.0);
+            positions.extend([c + v(&mut rng, 1.0), c + v(&mut rng, 1.0), c + v(&mut rng, 1.0)]);
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = TriangleMesh::new(positions, vec![], vec![], indices).unwrap();
+        let tris: Vec<[Vec3; 3]> = (0..mesh.len()).map(|i| mesh.triangle(i)).collect();
+        let spheres: Vec<Sphere> = (0..40)
+            .map(|_| Sphere { center: v(&mut rng, 8.0), radius: 0.1 + 0.3 * rng.next_f32(), flip: false })
+            .collect();
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        b.add_shape(Geometry::Mesh(mesh), m, None);
+        for s in &spheres {
+            b.add_shape(Geometry::Sphere(*s), m, None);
+        }
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        assert!(!scene.blocks.is_empty(), "no triangle-only leaves");
+        assert!(scene.prims.iter().any(|p| matches!(p.prim, Primitive::Triangle(_))), "no mixed leaves");
+        let mut hits = 0;
+        for _ in 0..5000 {
+            let ray =
+                Ray::new(v(&mut rng, 10.0), sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value);
+            let pre = RayPrecomp::new(&ray);
+            let tri = tris
+                .iter()
+                .enumerate()
+                .filter_map(|(i, p)| intersect_triangle(&pre, p, f32::INFINITY).map(|h| (h.t, 0, i as u32)));
+            let sph = spheres
+                .iter()
+                .enumerate()
+                .filter_map(|(i, s)| s.intersect(&ray, f32::INFINITY).map(|h| (h.t, i as u32 + 1, 0)));
+            let brute = tri.chain(sph).min_by(|a, b| a.0.total_cmp(&b.0));
+            let got = scene.intersect(&ray).map(|si| (si.t, si.shape, si.prim));
+            assert_eq!(got, brute);
+            if let Some((t, _, _)) = brute {
+                hits += 1;
+                assert!(scene.occluded(&Ray::bounded(ray.o, ray.d, t * 1.001)));
+                assert!(!scene.occluded(&Ray::bounded(ray.o, ray.d, t * 0.999)));
+            } else {
+                assert!(!scene.occluded(&ray));
+            }
+        }
+        assert!(hits > 1000, "{hits}");
     }
 }
