@@ -15,14 +15,14 @@ use glam::Vec4;
 pub use build::BuildOptions;
 
 /// A 4-wide node (128 bytes, cache-line aligned): the bounds of up to four children in
-/// structure-of-arrays form (`bounds[0]` = lower corners, `bounds[1]` = upper corners, each as x,
-/// y, z lane vectors), so one SIMD slab test checks all four; and per child either a leaf
+/// structure-of-arrays form (`bounds[0..3]` = lower corners' x, y, z, `bounds[3..6]` = upper
+/// corners' x, y, z, one lane per child), so one SIMD slab test checks all four; and per child either a leaf
 /// (`count > 0` primitives from `child`) or an interior node (`count == 0`, node index `child`).
 /// Unused slots have `child == u32::MAX` and an empty box (min +∞, max -∞) that no ray hits.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct Node4 {
-    bounds: [[Vec4; 3]; 2],
+    bounds: [Vec4; 6],
     child: [u32; 4],
     count: [u32; 4],
 }
@@ -30,7 +30,14 @@ pub struct Node4 {
 impl Node4 {
     pub(crate) fn empty() -> Node4 {
         Node4 {
-            bounds: [[Vec4::splat(f32::INFINITY); 3], [Vec4::splat(f32::NEG_INFINITY); 3]],
+            bounds: [
+                Vec4::INFINITY,
+                Vec4::INFINITY,
+                Vec4::INFINITY,
+                Vec4::NEG_INFINITY,
+                Vec4::NEG_INFINITY,
+                Vec4::NEG_INFINITY,
+            ],
             child: [u32::MAX; 4],
             count: [0; 4],
         }
@@ -38,8 +45,8 @@ impl Node4 {
 
     pub(crate) fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u32) {
         for axis in 0..3 {
-            self.bounds[0][axis][slot] = b.min[axis];
-            self.bounds[1][axis][slot] = b.max[axis];
+            self.bounds[axis][slot] = b.min[axis];
+            self.bounds[3 + axis][slot] = b.max[axis];
         }
         self.child[slot] = child;
         self.count[slot] = count;
@@ -50,8 +57,8 @@ impl Node4 {
     }
 
     fn child_bounds(&self, slot: usize) -> Bounds3 {
-        let v = |c: usize| Vec3::new(self.bounds[c][0][slot], self.bounds[c][1][slot], self.bounds[c][2][slot]);
-        Bounds3 { min: v(0), max: v(1) }
+        let v = |c: usize| Vec3::new(self.bounds[c][slot], self.bounds[c + 1][slot], self.bounds[c + 2][slot]);
+        Bounds3 { min: v(0), max: v(3) }
     }
 }
 
@@ -263,11 +270,12 @@ impl Bvh {
 type Entry = (u32, u32, f32);
 
 /// A ray prepared for 4-wide SIMD slab tests: origin and reciprocal direction splatted per axis,
-/// and which corner is the near one on each axis.
+/// and per axis the index in [`Node4::bounds`] of the near and the far plane.
 struct SlabRay {
     o: [Vec4; 3],
     inv_d: [Vec4; 3],
     near: [usize; 3],
+    far: [usize; 3],
 }
 
 impl SlabRay {
@@ -277,7 +285,8 @@ impl SlabRay {
         SlabRay {
             o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
             inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near: [(inv.x < 0.0) as usize, (inv.y < 0.0) as usize, (inv.z < 0.0) as usize],
+            near: std::array::from_fn(|a| a + 3 * (inv[a] < 0.0) as usize),
+            far: std::array::from_fn(|a| a + 3 * (1 - (inv[a] < 0.0) as usize)),
         }
     }
 
@@ -287,8 +296,8 @@ impl SlabRay {
     #[inline(always)]
     fn test4(&self, node: &Node4, t_max: f32) -> (u32, [f32; 4]) {
         let b = &node.bounds;
-        let tn = |a: usize| (b[self.near[a]][a] - self.o[a]) * self.inv_d[a];
-        let tf = |a: usize| (b[1 - self.near[a]][a] - self.o[a]) * self.inv_d[a];
+        let tn = |a: usize| (b[self.near[a]] - self.o[a]) * self.inv_d[a];
+        let tf = |a: usize| (b[self.far[a]] - self.o[a]) * self.inv_d[a];
         let t_near = tn(0).max(tn(1)).max(tn(2)).max(Vec4::ZERO);
         let t_far = (tf(0).min(tf(1)).min(tf(2)) * (1.0 + 2.0 * gamma(3))).min(Vec4::splat(t_max));
         // Unused slots hold empty boxes (min +∞, max -∞), which no ray enters.

@@ -9,30 +9,33 @@
 
 use crate::math::float::gamma;
 use crate::math::{Ray, Vec3};
+use glam::Vec4;
 
-/// Per-ray data of the watertight test, computed once per ray: the permutation and shear as
-/// three row vectors, so that transforming a vertex is three dot products. Each row has one
-/// entry 1 (or `sz`), at most one other non-zero entry and zeros elsewhere, so the dot products
-/// round exactly like the permuted scalar expressions of Woop et al. and stay watertight.
+/// Per-ray data of the watertight test, computed once per ray: the permutation `(kx, ky, kz)`
+/// that makes the ray's largest direction component z, the shear that makes it point along
+/// +z, and the permuted origin (also splatted for the four lanes of [`super::triangle4`]).
+/// Scalar and SIMD tests evaluate the same expressions, so they agree bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPrecomp {
     /// Ray origin.
     pub o: Vec3,
-    mx: Vec3,
-    my: Vec3,
-    mz: Vec3,
     /// The permutation `(kx, ky, kz)` (kz: dominant direction axis).
     pub(crate) k: [usize; 3],
+    /// Origin permuted: `(o[kx], o[ky], o[kz])`.
+    pub(crate) op: [f32; 3],
     /// Shear `(Sx, Sy)` = `(d[kx] / d[kz], d[ky] / d[kz])` and scale `Sz = 1 / d[kz]`.
-    pub(crate) s: Vec3,
+    pub(crate) s: [f32; 3],
+    /// `op` and `s` splatted over four lanes.
+    pub(crate) op4: [Vec4; 3],
+    pub(crate) s4: [Vec4; 3],
 }
 
 impl RayPrecomp {
     /// Precomputes the permutation and shear for `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> RayPrecomp {
-        let d = ray.d;
-        let a = d.abs();
+        let d = ray.d.to_array();
+        let a = ray.d.abs();
         // kz: the dominant axis; (kx, ky) the other two in cyclic order, swapped when d[kz] < 0
         // to keep the winding of the projected triangle.
         let kz = if a.x > a.y {
@@ -46,23 +49,23 @@ impl RayPrecomp {
         } else {
             2
         };
-        let (dz, (kx, ky)) = match kz {
-            0 => (d.x, (1, 2)),
-            1 => (d.y, (2, 0)),
-            _ => (d.z, (0, 1)),
-        };
-        let (kx, ky) = if dz < 0.0 { (ky, kx) } else { (kx, ky) };
-        let sz = 1.0 / dz;
-        let unit = |k: usize, v: f32| match k {
-            0 => Vec3::new(v, 0.0, 0.0),
-            1 => Vec3::new(0.0, v, 0.0),
-            _ => Vec3::new(0.0, 0.0, v),
-        };
-        let ez = unit(kz, 1.0);
-        let mx = unit(kx, 1.0) - ez * (d.dot(unit(kx, 1.0)) * sz);
-        let my = unit(ky, 1.0) - ez * (d.dot(unit(ky, 1.0)) * sz);
-        let s = Vec3::new(d[kx] * sz, d[ky] * sz, sz);
-        RayPrecomp { o: ray.o, mx, my, mz: unit(kz, sz), k: [kx, ky, kz], s }
+        let (kx, ky) = [(1, 2), (2, 0), (0, 1)][kz];
+        let (kx, ky) = if d[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
+        let sz = 1.0 / d[kz];
+        let o = ray.o.to_array();
+        let op = [o[kx], o[ky], o[kz]];
+        let s = [d[kx] * sz, d[ky] * sz, sz];
+        RayPrecomp { o: ray.o, k: [kx, ky, kz], op, s, op4: op.map(Vec4::splat), s4: s.map(Vec4::splat) }
+    }
+
+    /// Vertex `v` in the ray's frame: relative to the origin, permuted, sheared (x, y) and
+    /// scaled (z).
+    #[inline(always)]
+    fn transform(&self, v: Vec3) -> (f32, f32, f32) {
+        let v = v.to_array();
+        let [kx, ky, kz] = self.k;
+        let (x, y, z) = (v[kx] - self.op[0], v[ky] - self.op[1], v[kz] - self.op[2]);
+        (x - self.s[0] * z, y - self.s[1] * z, self.s[2] * z)
     }
 }
 
@@ -82,13 +85,9 @@ pub struct TriangleHit {
 /// Intersects the precomputed ray with the triangle `p` within `(0, t_max)`.
 #[inline(always)]
 pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<TriangleHit> {
-    let p0 = p[0] - r.o;
-    let p1 = p[1] - r.o;
-    let p2 = p[2] - r.o;
-    // Permute and shear (x, y), and scale z.
-    let (p0x, p0y, z0) = (p0.dot(r.mx), p0.dot(r.my), p0.dot(r.mz));
-    let (p1x, p1y, z1) = (p1.dot(r.mx), p1.dot(r.my), p1.dot(r.mz));
-    let (p2x, p2y, z2) = (p2.dot(r.mx), p2.dot(r.my), p2.dot(r.mz));
+    let (p0x, p0y, z0) = r.transform(p[0]);
+    let (p1x, p1y, z1) = r.transform(p[1]);
+    let (p2x, p2y, z2) = r.transform(p[2]);
     // Edge functions.
     let mut e0 = p1x * p2y - p1y * p2x;
     let mut e1 = p2x * p0y - p2y * p0x;

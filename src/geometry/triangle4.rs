@@ -69,9 +69,8 @@ impl Triangle4 {
     #[inline(always)]
     fn lanes(&self, r: &RayPrecomp, t_max: f32) -> Option<Lanes> {
         let [kx, ky, kz] = r.k;
-        let (o, s) = (r.o, r.s);
-        let (ox, oy, oz) = (Vec4::splat(o[kx]), Vec4::splat(o[ky]), Vec4::splat(o[kz]));
-        let (sx, sy, sz) = (Vec4::splat(s.x), Vec4::splat(s.y), Vec4::splat(s.z));
+        let [ox, oy, oz] = r.op4;
+        let [sx, sy, sz] = r.s4;
         // Vertices relative to the origin, permuted, sheared (x, y) and scaled (z).
         let p = |vertex: usize| {
             let v = &self.v[vertex];

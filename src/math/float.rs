@@ -51,16 +51,27 @@ pub fn offset_ray_origin(p: Vec3, p_err: Vec3, n: Vec3, w: Vec3) -> Vec3 {
         offset = -offset;
     }
     let po = p + offset;
-    let round = |c: f32, o: f32| {
-        if o > 0.0 {
-            next_float_up(c)
-        } else if o < 0.0 {
-            next_float_down(c)
-        } else {
-            c
-        }
-    };
-    Vec3::new(round(po.x, offset.x), round(po.y, offset.y), round(po.z, offset.z))
+    Vec3::new(step_toward_sign(po.x, offset.x), step_toward_sign(po.y, offset.y), step_toward_sign(po.z, offset.z))
+}
+
+/// `c` moved one ulp in the direction of `o`'s sign (up for `o > 0`, down for `o < 0`); `c`
+/// itself for `o = 0` and for infinite or NaN `c`. The same as [`next_float_up`] /
+/// [`next_float_down`] on finite values, without branches (the signs are unpredictable).
+#[inline(always)]
+fn step_toward_sign(c: f32, o: f32) -> f32 {
+    const SIGN: u32 = 0x8000_0000;
+    let (cb, ob) = (c.to_bits(), o.to_bits());
+    let mag = cb & !SIGN;
+    // Away from zero when c and o share a sign (or c is ±0, which takes o's sign); else toward.
+    let grow = mag == 0 || (cb ^ ob) & SIGN == 0;
+    let new_mag = if grow { mag + 1 } else { mag - 1 };
+    let sign = if mag == 0 { ob & SIGN } else { cb & SIGN };
+    let stepped = f32::from_bits(sign | new_mag);
+    if o == 0.0 || mag >= 0x7f80_0000 {
+        c
+    } else {
+        stepped
+    }
 }
 
 #[cfg(test)]
@@ -80,6 +91,27 @@ mod tests {
         assert_eq!(next_float_up(f32::INFINITY), f32::INFINITY);
         assert_eq!(next_float_down(f32::NEG_INFINITY), f32::NEG_INFINITY);
         assert_eq!(next_float_up(f32::MAX), f32::INFINITY);
+    }
+
+    #[test]
+    fn branchless_step_matches_next_float() {
+        let mut rng = Pcg32::new(4, 4);
+        let mut values = vec![0.0f32, -0.0, 1.0, -1.0, f32::MIN_POSITIVE, -f32::from_bits(1), f32::MAX, -f32::MAX];
+        values.extend((0..10_000).map(|_| f32::from_bits(rng.next_u32() & 0xff7f_ffff)));
+        for c in values {
+            for o in [1e-3f32, -2.5, 0.0, -0.0] {
+                let expected = if o > 0.0 {
+                    next_float_up(c)
+                } else if o < 0.0 {
+                    next_float_down(c)
+                } else {
+                    c
+                };
+                assert_eq!(step_toward_sign(c, o).to_bits(), expected.to_bits(), "{c:e} toward {o}");
+            }
+        }
+        assert_eq!(step_toward_sign(f32::INFINITY, 1.0), f32::INFINITY);
+        assert!(step_toward_sign(f32::NAN, 1.0).is_nan());
     }
 
     #[test]
