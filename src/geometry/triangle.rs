@@ -10,6 +10,7 @@
 use crate::math::float::gamma;
 use crate::math::{Ray, Vec3};
 use glam::Vec4;
+use std::ops::{Add, Mul};
 
 /// Per-ray data of the watertight test, computed once per ray: the permutation `(kx, ky, kz)`
 /// that makes the ray's largest direction component z, the shear that makes it point along
@@ -115,19 +116,56 @@ pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<T
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
     // Conservative check that t is really positive (pbrt-v4 §6.8.7).
-    let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
-    let delta_z = gamma(3) * max_zt;
-    let max_xt = p0x.abs().max(p1x.abs()).max(p2x.abs());
-    let max_yt = p0y.abs().max(p1y.abs()).max(p2y.abs());
-    let delta_x = gamma(5) * (max_xt + max_zt);
-    let delta_y = gamma(5) * (max_yt + max_zt);
-    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-    let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
-    if t <= delta_t {
+    if t <= t_error_bound([p0x, p1x, p2x], [p0y, p1y, p2y], [z0, z1, z2], [e0, e1, e2], inv_det) {
         return None;
     }
     Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
+}
+
+/// Arithmetic shared by one `f32` and four SIMD lanes (`Vec4`), so that the scalar and the
+/// 4-wide triangle tests evaluate their error bound with one piece of code.
+pub(crate) trait Lane: Copy + Add<Output = Self> + Mul<Output = Self> {
+    fn abs(self) -> Self;
+    fn max(self, other: Self) -> Self;
+}
+
+impl Lane for f32 {
+    #[inline(always)]
+    fn abs(self) -> f32 {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: f32) -> f32 {
+        f32::max(self, other)
+    }
+}
+
+impl Lane for Vec4 {
+    #[inline(always)]
+    fn abs(self) -> Vec4 {
+        Vec4::abs(self)
+    }
+    #[inline(always)]
+    fn max(self, other: Vec4) -> Vec4 {
+        Vec4::max(self, other)
+    }
+}
+
+/// Bound `δt` on the error of the hit's `t` (pbrt-v4 §6.8.7): a hit is certain to lie in front
+/// of the origin only when `t > δt`. Takes the transformed vertices' x, y and z, the edge
+/// functions and `1 / det`.
+#[inline(always)]
+pub(crate) fn t_error_bound<T: Lane>(x: [T; 3], y: [T; 3], z: [T; 3], e: [T; 3], inv_det: T) -> T
+where
+    f32: Mul<T, Output = T>,
+{
+    let max3 = |v: [T; 3]| v[0].abs().max(v[1].abs()).max(v[2].abs());
+    let (max_xt, max_yt, max_zt, max_e) = (max3(x), max3(y), max3(z), max3(e));
+    let delta_z = gamma(3) * max_zt;
+    let delta_x = gamma(5) * (max_xt + max_zt);
+    let delta_y = gamma(5) * (max_yt + max_zt);
+    let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs()
 }
 
 /// Absolute error bound of the hit point `b0 p0 + b1 p1 + b2 p2` (pbrt-v4 §6.8.5).

@@ -6,8 +6,7 @@
 //! shared edges stay watertight. The rare lane whose edge function is exactly zero in single
 //! precision is decided by the scalar test (which re-evaluates it in double precision).
 
-use super::triangle::{intersect_triangle, RayPrecomp, TriangleHit};
-use crate::math::float::gamma;
+use super::triangle::{intersect_triangle, t_error_bound, RayPrecomp, TriangleHit};
 use crate::math::Vec3;
 use glam::{BVec4A, Vec4};
 
@@ -100,15 +99,7 @@ impl Triangle4 {
         let inv_det = det.recip();
         let t = t_scaled * inv_det;
         // Conservative check that t is really positive (pbrt-v4 §6.8.7), per lane.
-        let max_zt = z0.abs().max(z1.abs()).max(z2.abs());
-        let delta_z = gamma(3) * max_zt;
-        let max_xt = p0x.abs().max(p1x.abs()).max(p2x.abs());
-        let max_yt = p0y.abs().max(p1y.abs()).max(p2y.abs());
-        let delta_x = gamma(5) * (max_xt + max_zt);
-        let delta_y = gamma(5) * (max_yt + max_zt);
-        let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-        let max_e = e0.abs().max(e1.abs()).max(e2.abs());
-        let delta_t = 3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv_det.abs();
+        let delta_t = t_error_bound([p0x, p1x, p2x], [p0y, p1y, p2y], [z0, z1, z2], [e0, e1, e2], inv_det);
         let valid = valid & t.cmpgt(delta_t);
         valid.any().then_some(Lanes { valid, t, inv_det, e: [e0, e1, e2] })
     }
