@@ -18,8 +18,6 @@ use std::ops::{Add, Mul};
 /// Scalar and SIMD tests evaluate the same expressions, so they agree bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPrecomp {
-    /// Ray origin.
-    pub o: Vec3,
     /// The permutation `(kx, ky, kz)` (kz: dominant direction axis).
     pub(crate) k: [usize; 3],
     /// Origin permuted: `(o[kx], o[ky], o[kz])`.
@@ -56,7 +54,7 @@ impl RayPrecomp {
         let o = ray.o.to_array();
         let op = [o[kx], o[ky], o[kz]];
         let s = [d[kx] * sz, d[ky] * sz, sz];
-        RayPrecomp { o: ray.o, k: [kx, ky, kz], op, s, op4: op.map(Vec4::splat), s4: s.map(Vec4::splat) }
+        RayPrecomp { k: [kx, ky, kz], op, s, op4: op.map(Vec4::splat), s4: s.map(Vec4::splat) }
     }
 
     /// Vertex `v` in the ray's frame: relative to the origin, permuted, sheared (x, y) and

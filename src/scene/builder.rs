@@ -122,27 +122,31 @@ impl SceneBuilder {
         // Leaves of triangles only become blocks of four; the others keep a primitive list.
         let (mut blocks, mut prims) = (Vec::new(), Vec::new());
         let geometries = &self.geometries;
-        let triangle = |k: u32| match &geometries[refs[k as usize].shape as usize] {
-            Geometry::Mesh(m) => Some(m.triangle(refs[k as usize].index as usize)),
-            _ => None,
+        let primitive = |k: u32| {
+            let r = refs[k as usize];
+            match &geometries[r.shape as usize] {
+                Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
+                Geometry::Sphere(s) => Primitive::Sphere(*s),
+                Geometry::Disk(_) => Primitive::Disk,
+                Geometry::Cylinder(_) => Primitive::Cylinder,
+            }
         };
         bvh.remap_leaves(|first, count| {
-            let tris: Option<Vec<([Vec3; 3], u32)>> = (first..first + count).map(|k| Some((triangle(k)?, k))).collect();
+            let leaf: Vec<LeafPrim> = (first..first + count).map(|k| LeafPrim { prim: primitive(k), r: k }).collect();
+            let tris: Option<Vec<([Vec3; 3], u32)>> = leaf
+                .iter()
+                .map(|lp| match lp.prim {
+                    Primitive::Triangle(p) => Some((p, lp.r)),
+                    _ => None,
+                })
+                .collect();
             if let Some(tris) = tris {
                 let start = blocks.len() as u32;
                 blocks.extend(tris.chunks(4).map(Triangle4::new));
                 return (start, (blocks.len() as u32 - start) | TRIANGLE_BLOCKS);
             }
             let start = prims.len() as u32;
-            prims.extend((first..first + count).map(|k| {
-                let prim = match &geometries[refs[k as usize].shape as usize] {
-                    Geometry::Mesh(m) => Primitive::Triangle(m.triangle(refs[k as usize].index as usize)),
-                    Geometry::Sphere(s) => Primitive::Sphere(*s),
-                    Geometry::Disk(_) => Primitive::Disk,
-                    Geometry::Cylinder(_) => Primitive::Cylinder,
-                };
-                LeafPrim { prim, r: k }
-            }));
+            prims.extend(leaf);
             (start, count)
         });
         // Infinite lights need the scene's extent.

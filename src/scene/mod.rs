@@ -190,23 +190,7 @@ impl Scene {
                 return;
             }
             for k in first..first + count {
-                // SAFETY: leaf payloads index `prims` (built together).
-                let lp = unsafe { self.prims.get_unchecked(k as usize) };
-                let hit = match &lp.prim {
-                    Primitive::Triangle(p) => {
-                        intersect_triangle(&pre, p, *t_max).map(|h| (h.t, HitKind::Triangle(h, k)))
-                    }
-                    Primitive::Sphere(s) => s.intersect(ray, *t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
-                    Primitive::Disk => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
-                        Geometry::Disk(d) => d.intersect(ray, *t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
-                        _ => None,
-                    },
-                    Primitive::Cylinder => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
-                        Geometry::Cylinder(c) => c.intersect(ray, *t_max).map(|(t, q)| (t, HitKind::Cylinder(q, lp.r))),
-                        _ => None,
-                    },
-                };
-                if let Some((t, kind)) = hit {
+                if let Some((t, kind)) = self.intersect_prim(k, ray, &pre, *t_max) {
                     *t_max = t;
                     best = Some((t, kind));
                 }
@@ -214,6 +198,26 @@ impl Scene {
         });
         let (t, kind) = best?;
         Some(self.interaction(ray, t, kind))
+    }
+
+    /// Intersects primitive `k` of a mixed leaf (`Scene::prims[k]`) within `(0, t_max)`.
+    #[inline]
+    fn intersect_prim(&self, k: u32, ray: &Ray, pre: &RayPrecomp, t_max: f32) -> Option<(f32, HitKind)> {
+        // SAFETY: leaf payloads index `prims` (built together).
+        let lp = unsafe { self.prims.get_unchecked(k as usize) };
+        let geometry = || &self.geometries[self.refs[lp.r as usize].shape as usize];
+        match &lp.prim {
+            Primitive::Triangle(p) => intersect_triangle(pre, p, t_max).map(|h| (h.t, HitKind::Triangle(h, k))),
+            Primitive::Sphere(s) => s.intersect(ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
+            Primitive::Disk => match geometry() {
+                Geometry::Disk(d) => d.intersect(ray, t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
+                _ => None,
+            },
+            Primitive::Cylinder => match geometry() {
+                Geometry::Cylinder(c) => c.intersect(ray, t_max).map(|(t, q)| (t, HitKind::Cylinder(q, lp.r))),
+                _ => None,
+            },
+        }
     }
 
     fn interaction(&self, ray: &Ray, t: f32, kind: HitKind) -> SurfaceInteraction {
@@ -267,22 +271,7 @@ impl Scene {
                 return (first..first + (count & !TRIANGLE_BLOCKS))
                     .any(|b| unsafe { self.blocks.get_unchecked(b as usize) }.occludes(&pre, t_max));
             }
-            (first..first + count).any(|k| {
-                // SAFETY: leaf payloads index `prims` (built together).
-                let lp = unsafe { self.prims.get_unchecked(k as usize) };
-                match &lp.prim {
-                    Primitive::Triangle(p) => intersect_triangle(&pre, p, t_max).is_some(),
-                    Primitive::Sphere(s) => s.intersect(ray, t_max).is_some(),
-                    Primitive::Disk => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
-                        Geometry::Disk(d) => d.intersect(ray, t_max).is_some(),
-                        _ => false,
-                    },
-                    Primitive::Cylinder => match &self.geometries[self.refs[lp.r as usize].shape as usize] {
-                        Geometry::Cylinder(c) => c.intersect(ray, t_max).is_some(),
-                        _ => false,
-                    },
-                }
-            })
+            (first..first + count).any(|k| self.intersect_prim(k, ray, &pre, t_max).is_some())
         })
     }
 }
