@@ -103,7 +103,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         .collect();
     for threads in [1, all] {
         let t = Instant::now();
-        let bvh = pool(threads).install(|| Bvh::build(&bounds, &neumann::scene::BVH_OPTIONS));
+        let bvh = pool(threads).install(|| Bvh::build(&bounds, &neumann::scene::bvh_options(bounds.len())));
         let s = bvh.stats();
         println!(
             "BVH build ({threads} thread{}): {:.3} s  ({} nodes, {} leaves, depth {}, SAH cost {:.1})",

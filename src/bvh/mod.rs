@@ -282,11 +282,13 @@ impl SlabRay {
     #[inline(always)]
     fn new(ray: &Ray) -> SlabRay {
         let inv = ray.d.recip();
+        // Bit a set: the ray goes down axis a, so it enters through the upper plane.
+        let neg = inv.cmplt(Vec3::ZERO).bitmask() as usize;
         SlabRay {
             o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
             inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near: std::array::from_fn(|a| a + 3 * (inv[a] < 0.0) as usize),
-            far: std::array::from_fn(|a| a + 3 * (1 - (inv[a] < 0.0) as usize)),
+            near: [3 * (neg & 1), 1 + 3 * (neg >> 1 & 1), 2 + 3 * (neg >> 2)],
+            far: [3 - 3 * (neg & 1), 4 - 3 * (neg >> 1 & 1), 5 - 3 * (neg >> 2)],
         }
     }
 

@@ -120,7 +120,7 @@ impl Cylinder {
 
     /// Uniform point on the surface; pdf `1 / area` per unit area.
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
-        let (s, c) = (2.0 * PI * u.x).sin_cos();
+        let (s, c) = crate::math::sin_cos_2pi(u.x);
         (self.surface(Vec3::new(c, s, u.y)).0, 1.0 / self.area)
     }
 }

@@ -21,6 +21,9 @@ pub struct TriangleMesh {
     /// Triangle-by-area distribution, built by [`TriangleMesh::prepare_sampling`].
     area_distribution: Option<AliasTable>,
     total_area: f32,
+    /// Unit geometric normal of every triangle, kept for sampling (emitters): the same values as
+    /// [`TriangleMesh::normal_of`].
+    face_normals: Vec<Vec3>,
 }
 
 impl TriangleMesh {
@@ -54,6 +57,7 @@ impl TriangleMesh {
             flip_normals: false,
             area_distribution: None,
             total_area: 0.0,
+            face_normals: Vec::new(),
         })
     }
 
@@ -113,6 +117,7 @@ impl TriangleMesh {
             }
         }
         self.area_distribution = None;
+        self.face_normals.clear();
     }
 
     /// Number of triangles.
@@ -146,6 +151,7 @@ impl TriangleMesh {
         let areas: Vec<f32> = (0..self.len()).map(|i| crate::sampling::triangle_area(self.triangle(i))).collect();
         self.total_area = areas.iter().map(|&a| a as f64).sum::<f64>() as f32;
         self.area_distribution = AliasTable::new(&areas);
+        self.face_normals = (0..self.len()).map(|i| self.face_normal(i)).collect();
         self.area_distribution.is_some()
     }
 
@@ -204,7 +210,7 @@ impl TriangleMesh {
         let p = self.triangle(i);
         let x = p[0] * b.x + p[1] * b.y + p[2] * b.z;
         let err = crate::math::float::gamma(6) * ((b.x * p[0]).abs() + (b.y * p[1]).abs() + (b.z * p[2]).abs());
-        let ng = self.normal_of(&p);
+        let ng = self.face_normals[i];
         let ns = if self.normals.is_empty() { ng } else { self.shading(i, [b.x, b.y, b.z], ng).0 };
         Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area))
     }

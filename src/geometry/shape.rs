@@ -2,7 +2,6 @@
 
 use super::{Cylinder, Disk, Sphere, TriangleMesh};
 use crate::math::{Bounds3, Vec2, Vec3};
-use crate::sampling::area_to_solid_angle;
 
 /// A shape's geometry (world space).
 #[derive(Clone, Debug)]
@@ -114,11 +113,8 @@ impl Geometry {
         let ShapeSample { p, ng, ns, p_error, pdf: pdf_area } = self.sample_area(u)?;
         let d = p - p_ref;
         let dist2 = d.length_squared();
-        if dist2 == 0.0 {
-            return None;
-        }
-        let cos = ng.dot(d).abs() / dist2.sqrt();
-        let pdf = area_to_solid_angle(pdf_area, dist2, cos);
+        // p_ω = p_A r² / |cos θ| = p_A r³ / |n·d|: one square root, one division.
+        let pdf = pdf_area * dist2 * dist2.sqrt() / ng.dot(d).abs();
         (pdf > 0.0 && pdf.is_finite()).then_some(ShapeSample { p, ng, ns, p_error, pdf })
     }
 
@@ -130,9 +126,11 @@ impl Geometry {
         }
         let d = p - p_ref;
         let dist2 = d.length_squared();
-        if dist2 == 0.0 {
-            return 0.0;
+        let pdf = dist2 * dist2.sqrt() / (self.area() * ng.dot(d).abs());
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
         }
-        area_to_solid_angle(1.0 / self.area(), dist2, ng.dot(d).abs() / dist2.sqrt())
     }
 }

@@ -37,18 +37,13 @@ impl RayPrecomp {
         let a = ray.d.abs();
         // kz: the dominant axis; (kx, ky) the other two in cyclic order, swapped when d[kz] < 0
         // to keep the winding of the projected triangle.
-        let kz = if a.x > a.y {
-            if a.x > a.z {
-                0
-            } else {
-                2
-            }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let (kx, ky) = [(1, 2), (2, 0), (0, 1)][kz];
+        // Branch-free (the directions of incoherent rays make these branches unpredictable):
+        // x wins if it beats both, y if it beats z and x does not beat y, else z.
+        let x_beats_y = a.x > a.y;
+        let x_wins = x_beats_y && a.x > a.z;
+        let y_wins = !x_beats_y && a.y > a.z;
+        let kz = 2 - 2 * x_wins as usize - y_wins as usize;
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
         let (kx, ky) = if d[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
         let sz = 1.0 / d[kz];
         let o = ray.o.to_array();

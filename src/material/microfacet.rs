@@ -149,7 +149,7 @@ impl Microfacet {
             MicrofacetType::BlinnPhong(n) => {
                 let cos_theta = sample_power(u.x, n + 1.0).value;
                 let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-                let (s, c) = (2.0 * PI * u.y).sin_cos();
+                let (s, c) = crate::math::sin_cos_2pi(u.y);
                 Vec3::new(sin_theta * c, sin_theta * s, cos_theta)
             }
         };
@@ -191,7 +191,7 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
     if cos_theta_i > 0.9999 {
         // Normal incidence: the slope distribution is a 2D Gaussian.
         let r = safe_sqrt(-(-u.x).ln_1p());
-        let (s, c) = (2.0 * PI * u.y).sin_cos();
+        let (s, c) = crate::math::sin_cos_2pi(u.y);
         return (r * c, r * s);
     }
     let sin_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i);

@@ -14,6 +14,7 @@ pub mod ray;
 pub mod special;
 pub mod spectrum;
 pub mod transform;
+pub mod trig;
 
 pub use bounds::Bounds3;
 pub use color::{luminance, Rgb};
@@ -21,6 +22,7 @@ pub use frame::Frame;
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use ray::Ray;
 pub use transform::Transform;
+pub use trig::{sin_cos_2pi, sin_cos_quarter};
 
 /// π as `f32`.
 pub const PI: f32 = std::f32::consts::PI;

@@ -7,7 +7,7 @@
 //! rejection version lives in [`super::rejection`].
 
 use super::Sample;
-use crate::math::{Vec2, INV_PI, PI};
+use crate::math::{sin_cos_quarter, Vec2, INV_PI, PI};
 use std::f32::consts::FRAC_PI_4;
 
 /// Polar mapping: `r = √u.x`, `φ = 2π u.y`. Domain `u ∈ [0,1)²`; value: point of the unit
@@ -15,7 +15,7 @@ use std::f32::consts::FRAC_PI_4;
 #[inline]
 pub fn sample_uniform_disk_polar(u: Vec2) -> Sample<Vec2> {
     let r = u.x.sqrt();
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     Sample::area(Vec2::new(r * c, r * s), INV_PI)
 }
 
@@ -38,13 +38,16 @@ pub fn sample_uniform_disk_concentric(u: Vec2) -> Sample<Vec2> {
     if a.x == 0.0 && a.y == 0.0 {
         return Sample::area(Vec2::ZERO, INV_PI);
     }
-    let (r, theta) = if a.x.abs() > a.y.abs() {
-        (a.x, FRAC_PI_4 * (a.y / a.x))
+    // θ = π/4 · (a.y / a.x) in the wedges around ±x; θ = π/2 - π/4 · (a.x / a.y) around ±y,
+    // whose sine and cosine are the cosine and sine of π/4 · (a.x / a.y).
+    let (r, sin_theta, cos_theta) = if a.x.abs() > a.y.abs() {
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (a.y / a.x));
+        (a.x, s, c)
     } else {
-        (a.y, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (a.x / a.y))
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * (a.x / a.y));
+        (a.y, c, s)
     };
-    let (s, c) = theta.sin_cos();
-    Sample::area(Vec2::new(r * c, r * s), INV_PI)
+    Sample::area(Vec2::new(r * cos_theta, r * sin_theta), INV_PI)
 }
 
 /// Inverse of [`sample_uniform_disk_concentric`].

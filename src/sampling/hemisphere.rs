@@ -11,7 +11,7 @@
 
 use super::disk::{invert_uniform_disk_concentric, sample_uniform_disk_concentric};
 use super::Sample;
-use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, INV_PI, ONE_MINUS_EPSILON, PI};
+use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, INV_PI, ONE_MINUS_EPSILON};
 
 /// Uniform hemisphere: `z = cos θ = 1 - u.x`, `φ = 2π u.y`. Domain `u ∈ [0,1)²`; value: unit
 /// direction with z > 0; pdf `1/(2π)`, solid-angle measure.
@@ -19,7 +19,7 @@ use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, INV_PI, ONE_MIN
 pub fn sample_uniform_hemisphere(u: Vec2) -> Sample<Vec3> {
     let z = 1.0 - u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     Sample::solid_angle(Vec3::new(r * c, r * s, z), INV_2PI)
 }
 
@@ -63,7 +63,7 @@ pub fn invert_cosine_hemisphere_malley(w: Vec3) -> Vec2 {
 pub fn sample_cosine_hemisphere_inversion(u: Vec2) -> Sample<Vec3> {
     let sin_theta = u.x.sqrt();
     let cos_theta = safe_sqrt(1.0 - u.x);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     Sample::solid_angle(Vec3::new(sin_theta * c, sin_theta * s, cos_theta), cos_theta * INV_PI)
 }
 

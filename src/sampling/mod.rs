@@ -52,7 +52,7 @@ pub use piecewise1d::PiecewiseConstant1D;
 pub use piecewise2d::PiecewiseConstant2D;
 pub use power::*;
 pub use rejection::{sample_rejection, sample_uniform_disk_rejection, RejectionSample};
-pub use rng::Pcg32;
+pub use rng::{Pcg32, Stride};
 pub use sampler::Sampler;
 pub use sphere::*;
 pub use triangle::*;

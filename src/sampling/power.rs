@@ -8,7 +8,7 @@
 //! microfacet normals (`cos θ_h = ξ^(1/(n+2))` is the case `n → n+1` of the same law).
 
 use super::Sample;
-use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, ONE_MINUS_EPSILON, PI};
+use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, ONE_MINUS_EPSILON};
 
 /// `x = u^(1/(n+1))` on `[0, 1]` for exponent `n > -1`. Domain `u ∈ [0,1)`; pdf `(n+1) xⁿ`,
 /// length measure.
@@ -40,7 +40,7 @@ pub fn invert_power(x: f32, n: f32) -> f32 {
 pub fn sample_power_cosine_hemisphere(u: Vec2, n: f32) -> Sample<Vec3> {
     let cos_theta = u.x.powf(1.0 / (n + 1.0));
     let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     let w = Vec3::new(sin_theta * c, sin_theta * s, cos_theta);
     Sample::solid_angle(w, power_cosine_hemisphere_pdf(w, n))
 }

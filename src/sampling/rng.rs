@@ -81,8 +81,31 @@ impl Pcg32 {
     /// Skips `delta` outputs in O(log delta) (Brown, "Random Number Generation with Arbitrary
     /// Strides", 1994). Negative strides wrap around the period.
     pub fn advance(&mut self, delta: i64) {
+        self.jump(&Stride::new(delta));
+    }
+
+    /// Skips the outputs of a precomputed [`Stride`] in O(1).
+    #[inline]
+    pub fn jump(&mut self, s: &Stride) {
+        self.state = s.mult.wrapping_mul(self.state).wrapping_add(s.plus.wrapping_mul(self.inc));
+    }
+}
+
+/// A jump of a fixed number of outputs, valid on every stream: skipping `delta` steps of the LCG
+/// `s ← MULT·s + inc` is the affine map `s ← mult·s + plus·inc`, whose coefficients do not
+/// depend on the stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Stride {
+    mult: u64,
+    plus: u64,
+}
+
+impl Stride {
+    /// The jump over `delta` outputs (negative: backwards around the period), by binary
+    /// exponentiation of the affine map.
+    pub const fn new(delta: i64) -> Stride {
         let mut delta = delta as u64;
-        let (mut cur_mult, mut cur_plus) = (MULT, self.inc);
+        let (mut cur_mult, mut cur_plus) = (MULT, 1u64);
         let (mut acc_mult, mut acc_plus) = (1u64, 0u64);
         while delta > 0 {
             if delta & 1 != 0 {
@@ -93,7 +116,7 @@ impl Pcg32 {
             cur_mult = cur_mult.wrapping_mul(cur_mult);
             delta >>= 1;
         }
-        self.state = acc_mult.wrapping_mul(self.state).wrapping_add(acc_plus);
+        Stride { mult: acc_mult, plus: acc_plus }
     }
 }
 
@@ -123,6 +146,16 @@ mod tests {
         assert_eq!(a, b);
         b.advance(-1000);
         assert_eq!(b, Pcg32::new(5, 9));
+        // A precomputed stride is the same jump on any stream.
+        let s = Stride::new(1 << 16);
+        for stream in [0u64, 3, 1 << 40] {
+            let (mut a, mut b) = (Pcg32::new(8, stream), Pcg32::new(8, stream));
+            a.advance(1 << 16);
+            b.jump(&s);
+            b.jump(&s);
+            a.advance(1 << 16);
+            assert_eq!(a, b);
+        }
     }
 
     #[test]

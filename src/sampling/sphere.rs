@@ -13,7 +13,7 @@ use crate::math::{safe_sqrt, spherical_phi, Vec2, Vec3, INV_2PI, INV_4PI, ONE_MI
 pub fn sample_uniform_sphere(u: Vec2) -> Sample<Vec3> {
     let z = 1.0 - 2.0 * u.x;
     let r = safe_sqrt(1.0 - z * z);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     Sample::solid_angle(Vec3::new(r * c, r * s, z), INV_4PI)
 }
 
@@ -36,7 +36,7 @@ pub fn invert_uniform_sphere(w: Vec3) -> Vec2 {
 pub fn sample_uniform_cone(u: Vec2, cos_theta_max: f32) -> Sample<Vec3> {
     let cos_theta = 1.0 - u.x * (1.0 - cos_theta_max);
     let sin_theta = safe_sqrt(1.0 - cos_theta * cos_theta);
-    let (s, c) = (2.0 * PI * u.y).sin_cos();
+    let (s, c) = crate::math::sin_cos_2pi(u.y);
     Sample::solid_angle(Vec3::new(sin_theta * c, sin_theta * s, cos_theta), uniform_cone_pdf_inside(cos_theta_max))
 }
 

@@ -117,7 +117,7 @@ impl SceneBuilder {
                 bounds.push(g.primitive_bounds(i));
             }
         }
-        let mut bvh = Bvh::build(&bounds, &super::BVH_OPTIONS);
+        let mut bvh = Bvh::build(&bounds, &super::bvh_options(bounds.len()));
         let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[k as usize]).collect();
         // Leaves of triangles only become blocks of four; the others keep a primitive list.
         let (mut blocks, mut prims) = (Vec::new(), Vec::new());

@@ -33,9 +33,29 @@ pub struct Shape {
 }
 
 /// How scenes build their BVH: SAH with leaves charged per block of four triangles (the
-/// [`Triangle4`] test), at most eight primitives per leaf.
+/// [`Triangle4`] test), at most eight primitives per leaf. The traversal cost (per binary node,
+/// relative to one block test) depends on the scene's size, see [`bvh_options`].
 pub const BVH_OPTIONS: BuildOptions =
     BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0, leaf_group: 4 };
+
+/// Scenes with at most this many primitives count as cache-resident: their triangle blocks and
+/// nodes take at most about 200 bytes per primitive (a block of one triangle is 160 bytes), 400 KB,
+/// within a 1 MiB L2 cache.
+pub const SMALL_SCENE_PRIMITIVES: usize = 2048;
+
+/// BVH options for a scene of `primitives` primitives. A small scene stays in cache, so a node
+/// visit costs only its arithmetic, about 0.3 block tests per binary level (one 4-wide node
+/// replaces two binary levels; its slab test is a third of a block test), and the SAH separates
+/// big triangles into tight leaves (Cornell box: 11 % fewer instructions per sample than with
+/// 1.0). A large scene is bound by memory latency: every node visited is a dependent cache miss,
+/// so fewer, fuller leaves win (100k-triangle mesh: 10–15 % fewer rays/s with 0.3).
+pub fn bvh_options(primitives: usize) -> BuildOptions {
+    if primitives <= SMALL_SCENE_PRIMITIVES {
+        BuildOptions { traversal_cost: 0.3, ..BVH_OPTIONS }
+    } else {
+        BVH_OPTIONS
+    }
+}
 
 /// Leaf payload flag: the leaf holds `count & !TRIANGLE_BLOCKS` [`Triangle4`] blocks from
 /// `Scene::blocks[first]`; without it, `count` primitives from `Scene::prims[first]`.
