@@ -102,20 +102,26 @@ impl Geometry {
         Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
     }
 
-    /// A point on the shape for direct lighting at `p_ref`, with its solid-angle pdf. Spheres
-    /// sample the cone they subtend; meshes and disks sample area uniformly and convert
-    /// (`p_ω = p_A r² / |cos θ|`). `None` if nothing can be sampled (grazing or degenerate).
-    pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<ShapeSample> {
+    /// A point on the shape for direct lighting at `p_ref`, with its solid-angle pdf, and the
+    /// unit direction from `p_ref` to it. Spheres sample the cone they subtend; meshes and
+    /// disks sample area uniformly and convert (`p_ω = p_A r² / |cos θ|`). `None` if nothing
+    /// can be sampled (grazing or degenerate).
+    pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<(ShapeSample, Vec3)> {
         if let Geometry::Sphere(s) = self {
             let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;
-            return Some(ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf });
+            let wi = (sp.p - p_ref).normalize_or_zero();
+            return (wi != Vec3::ZERO)
+                .then_some((ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf }, wi));
         }
         let ShapeSample { p, ng, ns, p_error, pdf: pdf_area } = self.sample_area(u)?;
         let d = p - p_ref;
         let dist2 = d.length_squared();
-        // p_ω = p_A r² / |cos θ| = p_A r³ / |n·d|: one square root, one division.
-        let pdf = pdf_area * dist2 * dist2.sqrt() / ng.dot(d).abs();
-        (pdf > 0.0 && pdf.is_finite()).then_some(ShapeSample { p, ng, ns, p_error, pdf })
+        // p_ω = p_A r² / |cos θ| = p_A r³ / |n·d|; ω = d / r. The two divisions only wait for
+        // the square root, not for each other (a shorter dependency chain than normalizing first).
+        let dist = dist2.sqrt();
+        let wi = d / dist;
+        let pdf = pdf_area * dist2 * dist / ng.dot(d).abs();
+        (pdf > 0.0 && pdf.is_finite()).then_some((ShapeSample { p, ng, ns, p_error, pdf }, wi))
     }
 
     /// Solid-angle density of [`Geometry::sample_solid_angle`] from `p_ref` for the point `p` with

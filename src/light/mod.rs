@@ -198,10 +198,8 @@ impl Light {
     pub fn sample_li(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
             Light::Area { shape, radiance } => {
-                let s = shapes[*shape as usize].sample_solid_angle(p_ref, u)?;
-                let d = s.p - p_ref;
-                let wi = d.normalize_or_zero();
-                if wi == Vec3::ZERO || s.ns.dot(-wi) <= 0.0 {
+                let (s, wi) = shapes[*shape as usize].sample_solid_angle(p_ref, u)?;
+                if s.ns.dot(wi) >= 0.0 {
                     return None; // one-sided: the back does not emit
                 }
                 Some(LightSample { wi, li: *radiance, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
