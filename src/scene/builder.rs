@@ -113,7 +113,11 @@ impl SceneBuilder {
         let mut bounds = Vec::new();
         for (s, g) in self.geometries.iter().enumerate() {
             for i in 0..g.primitive_count() {
-                refs.push(PrimRef { shape: s as u32, index: i as u32 });
+                let ng = match g {
+                    Geometry::Mesh(m) => m.face_normal(i),
+                    _ => Vec3::ZERO,
+                };
+                refs.push(PrimRef { shape: s as u32, index: i as u32, ng });
                 bounds.push(g.primitive_bounds(i));
             }
         }
