@@ -151,6 +151,8 @@ impl Bvh {
     /// found; traversal then culls everything farther. The children of a node are tested at
     /// once and visited nearest first; postponed ones are skipped when a closer hit was found
     /// meanwhile. One or two hit children (the common cases) are handled without a sort.
+    /// Postponed children are not prefetched (unlike [`Bvh::any_hit`]): many are culled by a
+    /// closer hit before their turn, and prefetching them measured slower.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
         if self.nodes.is_empty() {
@@ -231,9 +233,17 @@ impl Bvh {
     }
 
     /// Whether anything is hit within `(0, t_max)`. `leaf(first, count, t_max)` returns `true` as
-    /// soon as one of the leaf's primitives is hit.
+    /// soon as one of the leaf's primitives is hit. Children are visited in no particular order;
+    /// those waiting on the stack are prefetched when pushed (nodes here, leaf data through
+    /// `prefetch_leaf(first, count)`), so that their cache misses overlap.
     #[inline]
-    pub fn any_hit(&self, ray: &Ray, t_max: f32, mut leaf: impl FnMut(u32, u32, f32) -> bool) -> bool {
+    pub fn any_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut leaf: impl FnMut(u32, u32, f32) -> bool,
+        prefetch_leaf: impl Fn(u32, u32),
+    ) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -257,12 +267,41 @@ impl Bvh {
             while mask != 0 {
                 let slot = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
+                self.prefetch_child(node, slot, &prefetch_leaf);
                 stack[sp].write((node.child[slot], node.count[slot]));
                 sp += 1;
             }
         }
         false
     }
+
+    /// Prefetches child `slot` of `node`: both cache lines of an interior node, or the leaf's data.
+    #[inline(always)]
+    fn prefetch_child(&self, node: &Node4, slot: usize, prefetch_leaf: &impl Fn(u32, u32)) {
+        if node.count[slot] == 0 {
+            prefetch(self.nodes.as_ptr().wrapping_add(node.child[slot] as usize), size_of::<Node4>());
+        } else {
+            prefetch_leaf(node.child[slot], node.count[slot]);
+        }
+    }
+}
+
+/// Asks the cache for the `bytes` bytes at `p` ahead of their use (a hint: it never faults,
+/// whatever the address; a no-op off x86-64). Traversals use it for nodes and leaves that wait
+/// on the stack, so that the misses of sibling subtrees overlap instead of following each other.
+#[inline(always)]
+pub fn prefetch<T>(p: *const T, bytes: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = p as *const i8;
+        for line in (0..bytes).step_by(64) {
+            // SAFETY: prefetch instructions do not access memory architecturally and never fault.
+            unsafe { _mm_prefetch(p.wrapping_add(line), _MM_HINT_T0) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (p, bytes);
 }
 
 /// A traversal stack entry: node index (or first primitive), primitive count (0 for a node),
@@ -356,14 +395,24 @@ mod tests {
             });
             assert_eq!(best, brute);
             let limit = if brute.is_finite() { brute * 0.999 } else { 1e30 };
-            let any = bvh.any_hit(&ray, limit, |first, count, t_max| {
-                (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
-            });
+            let any = bvh.any_hit(
+                &ray,
+                limit,
+                |first, count, t_max| {
+                    (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
+                },
+                |_, _| {},
+            );
             assert!(!any, "any-hit found something before the closest hit");
             if brute.is_finite() {
-                assert!(bvh.any_hit(&ray, brute * 1.001, |first, count, t_max| {
-                    (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
-                }));
+                assert!(bvh.any_hit(
+                    &ray,
+                    brute * 1.001,
+                    |first, count, t_max| {
+                        (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
+                    },
+                    |_, _| {},
+                ));
             }
         }
         let s = bvh.stats();
@@ -373,7 +422,7 @@ mod tests {
     #[test]
     fn degenerate_inputs() {
         let empty = Bvh::build(&[], &BuildOptions::default());
-        assert!(!empty.any_hit(&Ray::new(Vec3::ZERO, Vec3::X), 1.0, |_, _, _| true));
+        assert!(!empty.any_hit(&Ray::new(Vec3::ZERO, Vec3::X), 1.0, |_, _, _| true, |_, _| {}));
         // Many primitives with identical bounds (centroid bounds of zero size) still build.
         let same = vec![Bounds3::new(Vec3::ZERO, Vec3::ONE); 1000];
         let bvh = Bvh::build(&same, &BuildOptions::default());

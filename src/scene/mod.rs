@@ -8,7 +8,7 @@ pub mod xml;
 
 pub use builder::SceneBuilder;
 
-use crate::bvh::{BuildOptions, Bvh};
+use crate::bvh::{prefetch, BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
 use crate::geometry::triangle4::Triangle4;
@@ -288,14 +288,30 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         let pre = RayPrecomp::new(ray);
-        self.bvh.any_hit(ray, ray.t_max, |first, count, t_max| {
-            if count & TRIANGLE_BLOCKS != 0 {
-                // SAFETY: leaf payloads index `blocks` (built together).
-                return (first..first + (count & !TRIANGLE_BLOCKS))
-                    .any(|b| unsafe { self.blocks.get_unchecked(b as usize) }.occludes(&pre, t_max));
-            }
-            (first..first + count).any(|k| self.intersect_prim(k, ray, &pre, t_max).is_some())
-        })
+        self.bvh.any_hit(
+            ray,
+            ray.t_max,
+            |first, count, t_max| {
+                if count & TRIANGLE_BLOCKS != 0 {
+                    // SAFETY: leaf payloads index `blocks` (built together).
+                    return (first..first + (count & !TRIANGLE_BLOCKS))
+                        .any(|b| unsafe { self.blocks.get_unchecked(b as usize) }.occludes(&pre, t_max));
+                }
+                (first..first + count).any(|k| self.intersect_prim(k, ray, &pre, t_max).is_some())
+            },
+            |first, count| self.prefetch_leaf(first, count),
+        )
+    }
+
+    /// Prefetches a leaf's data (at most its first two triangle blocks or primitives).
+    #[inline(always)]
+    fn prefetch_leaf(&self, first: u32, count: u32) {
+        if count & TRIANGLE_BLOCKS != 0 {
+            let n = (count & !TRIANGLE_BLOCKS).min(2) as usize;
+            prefetch(self.blocks.as_ptr().wrapping_add(first as usize), n * size_of::<Triangle4>());
+        } else {
+            prefetch(self.prims.as_ptr().wrapping_add(first as usize), count.min(2) as usize * size_of::<LeafPrim>());
+        }
     }
 }
 
