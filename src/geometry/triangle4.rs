@@ -6,7 +6,7 @@
 //! shared edges stay watertight. The rare lane whose edge function is exactly zero in single
 //! precision is decided by the scalar test (which re-evaluates it in double precision).
 
-use super::triangle::{intersect_triangle, t_error_bound, RayPrecomp, TriangleHit};
+use super::triangle::{intersect_triangle, t_error_bound, t_error_scaled, RayPrecomp, TriangleHit};
 use crate::math::Vec3;
 use glam::{BVec4A, Vec4};
 
@@ -42,7 +42,19 @@ impl Triangle4 {
     /// The closest hit among the four triangles within `(0, t_max)`: lane and hit.
     #[inline(always)]
     pub fn intersect(&self, r: &RayPrecomp, t_max: f32) -> Option<(usize, TriangleHit)> {
-        let l = self.lanes(r, t_max)?;
+        let l = self.edges(
+            r,
+            t_max,
+            |c| {
+                let inv_det = c.det.recip();
+                let t = c.t_scaled * inv_det;
+                // Conservative check that t is really positive (pbrt-v4 §6.8.7), per lane.
+                let delta_t = t_error_bound(c.x, c.y, c.z, c.e, inv_det);
+                let valid = c.valid & t.cmpgt(delta_t);
+                valid.any().then_some(Lanes { valid, t, inv_det, e: c.e })
+            },
+            |l| l,
+        )?;
         let t = Vec4::select(l.valid, l.t, Vec4::INFINITY);
         let t_min = t.min_element();
         let lane = t.cmpeq(Vec4::splat(t_min)).bitmask().trailing_zeros() as usize;
@@ -58,15 +70,26 @@ impl Triangle4 {
         ))
     }
 
-    /// Whether any of the four triangles is hit within `(0, t_max)`.
+    /// Whether any of the four triangles is hit within `(0, t_max)`: the same test without a
+    /// division (the `t > δt` check as `|t_scaled| > δt · |det|`, see
+    /// [`super::triangle::t_error_scaled`]).
     #[inline(always)]
     pub fn occludes(&self, r: &RayPrecomp, t_max: f32) -> bool {
-        self.lanes(r, t_max).is_some()
+        let finish = |c: Candidates| (c.valid & c.t_scaled.abs().cmpgt(t_error_scaled(c.x, c.y, c.z, c.e))).any();
+        self.edges(r, t_max, |c| finish(c).then_some(()), |_| ()).is_some()
     }
 
-    /// The per-lane test: `None` when no lane hits.
+    /// The per-lane test up to the `t > δt` check, which `finish` does on the candidate lanes;
+    /// `None` when no lane hits. A lane with an edge function exactly zero sends the block
+    /// through the scalar test instead, whose lanes `scalar` turns into the answer.
     #[inline(always)]
-    fn lanes(&self, r: &RayPrecomp, t_max: f32) -> Option<Lanes> {
+    fn edges<R>(
+        &self,
+        r: &RayPrecomp,
+        t_max: f32,
+        finish: impl FnOnce(Candidates) -> Option<R>,
+        scalar: impl FnOnce(Lanes) -> R,
+    ) -> Option<R> {
         let [kx, ky, kz] = r.k;
         let [ox, oy, oz] = r.op4;
         let [sx, sy, sz] = r.s4;
@@ -83,7 +106,7 @@ impl Triangle4 {
         let e1 = p2x * p0y - p2y * p0x;
         let e2 = p0x * p1y - p0y * p1x;
         if (e0.cmpeq(Vec4::ZERO) | e1.cmpeq(Vec4::ZERO) | e2.cmpeq(Vec4::ZERO)).any() {
-            return self.scalar_lanes(r, t_max);
+            return self.scalar_lanes(r, t_max).map(scalar);
         }
         let inside = (e0.cmpge(Vec4::ZERO) & e1.cmpge(Vec4::ZERO) & e2.cmpge(Vec4::ZERO))
             | (e0.cmple(Vec4::ZERO) & e1.cmple(Vec4::ZERO) & e2.cmple(Vec4::ZERO));
@@ -96,12 +119,15 @@ impl Triangle4 {
         if !valid.any() {
             return None;
         }
-        let inv_det = det.recip();
-        let t = t_scaled * inv_det;
-        // Conservative check that t is really positive (pbrt-v4 §6.8.7), per lane.
-        let delta_t = t_error_bound([p0x, p1x, p2x], [p0y, p1y, p2y], [z0, z1, z2], [e0, e1, e2], inv_det);
-        let valid = valid & t.cmpgt(delta_t);
-        valid.any().then_some(Lanes { valid, t, inv_det, e: [e0, e1, e2] })
+        finish(Candidates {
+            valid,
+            det,
+            t_scaled,
+            e: [e0, e1, e2],
+            x: [p0x, p1x, p2x],
+            y: [p0y, p1y, p2y],
+            z: [z0, z1, z2],
+        })
     }
 
     /// The lanes through the scalar test (an edge function was exactly zero).
@@ -119,6 +145,18 @@ impl Triangle4 {
         l.valid = BVec4A::from_array(valid);
         l.valid.any().then_some(l)
     }
+}
+
+/// The per-lane test before its last check: lanes inside their triangle with `t` in range,
+/// their determinant, scaled `t`, edge functions and transformed vertices (for the error bound).
+struct Candidates {
+    valid: BVec4A,
+    det: Vec4,
+    t_scaled: Vec4,
+    e: [Vec4; 3],
+    x: [Vec4; 3],
+    y: [Vec4; 3],
+    z: [Vec4; 3],
 }
 
 /// Per-lane results: which lanes hit, their `t`, `1 / det` and edge functions (barycentrics
@@ -173,6 +211,23 @@ mod tests {
             blocks += 1;
         }
         assert!(hits > blocks / 4, "{hits} of {blocks}: the test must exercise hits");
+    }
+
+    /// Hits closer to the origin than the error bound of `t` (pbrt-v4's conservative check)
+    /// are refused by the scalar test, by the block's closest hit and by its division-free
+    /// occlusion test alike; farther ones are found by all three.
+    #[test]
+    fn hits_within_the_t_error_bound_are_refused() {
+        // The plane z = x, crossed by rays going down z at x = y = 0: |z| of the vertices is 1
+        // in the ray's frame, so δt is about 10⁻⁶.
+        let tri = [Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 0.0)];
+        let block = Triangle4::new(&[(tri, 0)]);
+        for (h, hit) in [(1e-8f32, false), (1e-7, false), (1e-4, true), (1.0, true)] {
+            let pre = RayPrecomp::new(&Ray::new(Vec3::new(0.0, 0.0, h), -Vec3::Z));
+            assert_eq!(intersect_triangle(&pre, &tri, f32::INFINITY).is_some(), hit, "scalar at {h}");
+            assert_eq!(block.intersect(&pre, f32::INFINITY).is_some(), hit, "closest hit at {h}");
+            assert_eq!(block.occludes(&pre, f32::INFINITY), hit, "occlusion at {h}");
+        }
     }
 
     #[test]
