@@ -72,7 +72,7 @@ impl Triangle4 {
 
     /// Whether any of the four triangles is hit within `(0, t_max)`: the same test without a
     /// division (the `t > δt` check as `|t_scaled| > δt · |det|`, see
-    /// [`super::triangle::t_error_scaled`]).
+    /// `t_error_scaled` in `geometry::triangle`).
     #[inline(always)]
     pub fn occludes(&self, r: &RayPrecomp, t_max: f32) -> bool {
         let finish = |c: Candidates| (c.valid & c.t_scaled.abs().cmpgt(t_error_scaled(c.x, c.y, c.z, c.e))).any();
