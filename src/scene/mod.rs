@@ -328,13 +328,21 @@ mod tests {
     /// and mixed leaves (primitive lists) both occur, and both answer like brute force.
     #[test]
     fn intersect_and_occluded_match_brute_force() {
-        let mut rng = Pcg32::new(9, 9);
+        // Below and above SMALL_SCENE_PRIMITIVES: both BVH cost models.
+        for triangles in [600u32, 3000] {
+            match_brute_force(triangles);
+        }
+    }
+
+    fn match_brute_force(triangles: u32) {
+        let mut rng = Pcg32::new(9, triangles as u64);
         let v = |rng: &mut Pcg32, s: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s - s / 2.0;
+        let size = 1.0 / (triangles as f32 / 600.0).cbrt();
         let mut positions = Vec::new();
         let mut indices = Vec::new();
-        for i in 0..600u32 {
+        for i in 0..triangles {
             let c = v(&mut rng, 8.0);
-            positions.extend([c + v(&mut rng, 1.0), c + v(&mut rng, 1.0), c + v(&mut rng, 1.0)]);
+            positions.extend([c + v(&mut rng, size), c + v(&mut rng, size), c + v(&mut rng, size)]);
             indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
         }
         let mesh = TriangleMesh::new(positions, vec![], vec![], indices).unwrap();
@@ -350,6 +358,7 @@ mod tests {
         }
         b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1).unwrap());
         let scene = b.build().unwrap();
+        assert_eq!(scene.primitive_count() > SMALL_SCENE_PRIMITIVES, triangles > 2000);
         assert!(!scene.blocks.is_empty(), "no triangle-only leaves");
         assert!(scene.prims.iter().any(|p| matches!(p.prim, Primitive::Triangle(_))), "no mixed leaves");
         let mut hits = 0;
