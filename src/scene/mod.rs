@@ -78,8 +78,8 @@ enum Primitive {
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape; for a triangle
-/// also its unit geometric normal ([`crate::geometry::TriangleMesh::normal_of`], front side), kept so that a hit
-/// needs no cross product and square root on the path's critical chain.
+/// also its unit geometric normal ([`crate::geometry::TriangleMesh::normal_of`], front side),
+/// kept so that a hit needs no cross product and square root on the path's critical chain.
 #[derive(Clone, Copy, Debug)]
 struct PrimRef {
     shape: u32,
