@@ -21,8 +21,9 @@ pub struct TriangleMesh {
     /// Triangle-by-area distribution, built by [`TriangleMesh::prepare_sampling`].
     area_distribution: Option<AliasTable>,
     total_area: f32,
-    /// Unit geometric normal of every triangle, kept for sampling (emitters): the same values as
-    /// [`TriangleMesh::normal_of`].
+    /// Unit geometric normal of every triangle, cached by [`TriangleMesh::prepare_normals`]
+    /// (the scene builder calls it for every mesh): the same values as
+    /// [`TriangleMesh::normal_of`], without a cross product and square root per hit or sample.
     face_normals: Vec<Vec3>,
 }
 
@@ -151,14 +152,24 @@ impl TriangleMesh {
         let areas: Vec<f32> = (0..self.len()).map(|i| crate::sampling::triangle_area(self.triangle(i))).collect();
         self.total_area = areas.iter().map(|&a| a as f64).sum::<f64>() as f32;
         self.area_distribution = AliasTable::new(&areas);
-        self.face_normals = (0..self.len()).map(|i| self.face_normal(i)).collect();
+        self.prepare_normals();
         self.area_distribution.is_some()
     }
 
-    /// Geometric normal of triangle `i` (unit, front side).
+    /// Caches every triangle's unit geometric normal for [`TriangleMesh::face_normal`]. Call it
+    /// after the last change of positions, indices or `flip_normals` (a transform clears it).
+    pub fn prepare_normals(&mut self) {
+        self.face_normals = (0..self.len()).map(|i| self.normal_of(&self.triangle(i))).collect();
+    }
+
+    /// Geometric normal of triangle `i` (unit, front side): cached after
+    /// [`TriangleMesh::prepare_normals`], computed otherwise.
     #[inline]
     pub fn face_normal(&self, i: usize) -> Vec3 {
-        self.normal_of(&self.triangle(i))
+        match self.face_normals.get(i) {
+            Some(&n) => n,
+            None => self.normal_of(&self.triangle(i)),
+        }
     }
 
     /// Geometric normal (unit, front side) of this mesh's triangle with vertices `p`.
@@ -210,7 +221,7 @@ impl TriangleMesh {
         let p = self.triangle(i);
         let x = p[0] * b.x + p[1] * b.y + p[2] * b.z;
         let err = crate::math::float::gamma(6) * ((b.x * p[0]).abs() + (b.y * p[1]).abs() + (b.z * p[2]).abs());
-        let ng = self.face_normals[i];
+        let ng = self.face_normal(i);
         let ns = if self.normals.is_empty() { ng } else { self.shading(i, [b.x, b.y, b.z], ng).0 };
         Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area))
     }
@@ -231,6 +242,19 @@ mod tests {
             let p = c.triangle(i);
             let centroid = (p[0] + p[1] + p[2]) / 3.0;
             assert!(c.face_normal(i).dot(centroid) > 0.0, "cube face {i} not outward");
+        }
+    }
+
+    #[test]
+    fn cached_face_normals_match_and_a_transform_drops_them() {
+        let mut c = TriangleMesh::cube();
+        c.prepare_normals();
+        for i in 0..c.len() {
+            assert_eq!(c.face_normal(i), c.normal_of(&c.triangle(i)));
+        }
+        c.transform(&Transform::rotate(Vec3::Y, 30.0).unwrap());
+        for i in 0..c.len() {
+            assert_eq!(c.face_normal(i), c.normal_of(&c.triangle(i)), "stale normal of face {i}");
         }
     }
 

@@ -2,6 +2,7 @@
 
 use super::{Cylinder, Disk, Sphere, TriangleMesh};
 use crate::math::{Bounds3, Vec2, Vec3};
+use crate::sampling::area_to_solid_angle;
 
 /// A shape's geometry (world space).
 #[derive(Clone, Debug)]
@@ -132,11 +133,9 @@ impl Geometry {
         }
         let d = p - p_ref;
         let dist2 = d.length_squared();
-        let pdf = dist2 * dist2.sqrt() / (self.area() * ng.dot(d).abs());
-        if pdf.is_finite() {
-            pdf
-        } else {
-            0.0
+        if dist2 == 0.0 {
+            return 0.0;
         }
+        area_to_solid_angle(1.0 / self.area(), dist2, ng.dot(d).abs() / dist2.sqrt())
     }
 }

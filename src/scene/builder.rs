@@ -108,16 +108,19 @@ impl SceneBuilder {
                 }
             }
         }
+        // Hits read the triangles' normals from the cache (no cross product and square root on
+        // the path's critical chain).
+        for g in &mut self.geometries {
+            if let Geometry::Mesh(m) = g {
+                m.prepare_normals();
+            }
+        }
         // Primitives and their bounds.
         let mut refs = Vec::new();
         let mut bounds = Vec::new();
         for (s, g) in self.geometries.iter().enumerate() {
             for i in 0..g.primitive_count() {
-                let ng = match g {
-                    Geometry::Mesh(m) => m.face_normal(i),
-                    _ => Vec3::ZERO,
-                };
-                refs.push(PrimRef { shape: s as u32, index: i as u32, ng });
+                refs.push(PrimRef { shape: s as u32, index: i as u32 });
                 bounds.push(g.primitive_bounds(i));
             }
         }

@@ -77,14 +77,11 @@ enum Primitive {
     Cylinder,
 }
 
-/// Identifies a primitive: shape index and primitive index within the shape; for a triangle
-/// also its unit geometric normal ([`crate::geometry::TriangleMesh::normal_of`], front side),
-/// kept so that a hit needs no cross product and square root on the path's critical chain.
+/// Identifies a primitive: shape index and primitive index within the shape.
 #[derive(Clone, Copy, Debug)]
 struct PrimRef {
     shape: u32,
     index: u32,
-    ng: Vec3,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -260,7 +257,7 @@ impl Scene {
         let r = self.refs[r as usize];
         let Geometry::Mesh(m) = &self.geometries[r.shape as usize] else { unreachable!("triangles belong to meshes") };
         let i = r.index as usize;
-        let ng = r.ng;
+        let ng = m.face_normal(i);
         let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
