@@ -234,9 +234,15 @@ impl PathIntegrator {
             let ctx = BsdfContext { uv: si.uv };
 
             // Direct light (its random numbers are drawn whether used or not, so that every
-            // vertex consumes the same sampler dimensions).
+            // vertex consumes the same sampler dimensions), then the BSDF sample that continues
+            // the path. The BSDF is sampled before the direct-light estimate although it is used
+            // after it: the two are independent, and next to each other in program order the
+            // processor overlaps their chains of dependent divisions and square roots.
             let u_light = sampler.next_1d();
             let u_light2 = sampler.next_2d();
+            let u_bsdf = sampler.next_1d();
+            let u_bsdf2 = sampler.next_2d();
+            let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
             if !bsdf.is_delta() {
                 match self.strategy {
                     DirectStrategy::Bsdf => {}
@@ -274,9 +280,7 @@ impl PathIntegrator {
             }
 
             // Continue the path by BSDF sampling.
-            let u_bsdf = sampler.next_1d();
-            let u_bsdf2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
+            let Some(bs) = bs else { break };
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
