@@ -242,8 +242,18 @@ impl Bsdf {
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
+            // Recursive, so kept out of line: the leaf cases above inline into the integrators.
+            _ => self.is_delta_nested(),
+        }
+    }
+
+    /// [`Bsdf::is_delta`] of the BSDFs that wrap others.
+    #[inline(never)]
+    fn is_delta_nested(&self) -> bool {
+        match self {
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
+            leaf => leaf.is_delta(),
         }
     }
 }
