@@ -45,6 +45,10 @@ pub struct Camera {
     fov_axis: FovAxis,
     /// tan of half the horizontal / vertical field of view.
     tan_half: Vec2,
+    /// Film position (pixels) to the camera-space plane z = 1: `xy = film · plane_scale +
+    /// plane_offset` (the NDC mapping and the field of view folded into one multiply-add).
+    plane_scale: Vec2,
+    plane_offset: Vec2,
     width: u32,
     height: u32,
     near_clip: f32,
@@ -83,11 +87,15 @@ impl Camera {
                 Vec2::new(t * aspect / diag, t / diag)
             }
         };
+        // x_plane = -(2 x / width - 1) tan_x (camera +x is left, film x grows right); likewise y.
+        let plane_scale = Vec2::new(-2.0 * tan_half.x / width as f32, -2.0 * tan_half.y / height as f32);
         Ok(Camera {
             to_world,
             fov_deg,
             fov_axis,
             tan_half,
+            plane_scale,
+            plane_offset: tan_half,
             width,
             height,
             near_clip: 1e-2,
@@ -101,7 +109,14 @@ impl Camera {
     /// other follows the new aspect ratio.
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, String> {
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
-        Ok(Camera { tan_half: c.tan_half, width, height, ..self.clone() })
+        Ok(Camera {
+            tan_half: c.tan_half,
+            plane_scale: c.plane_scale,
+            plane_offset: c.plane_offset,
+            width,
+            height,
+            ..self.clone()
+        })
     }
 
     /// Sets the near and far clip distances (along the view axis).
@@ -147,9 +162,9 @@ impl Camera {
     /// clip range.
     #[inline]
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
-        let ndc = Vec2::new(2.0 * film.x / self.width as f32 - 1.0, 2.0 * film.y / self.height as f32 - 1.0);
         // +x is left and +y is up in camera space; film x grows right and y grows down.
-        let d = Vec3::new(-ndc.x * self.tan_half.x, -ndc.y * self.tan_half.y, 1.0);
+        let xy = film * self.plane_scale + self.plane_offset;
+        let d = Vec3::new(xy.x, xy.y, 1.0);
         let (o, d) = if self.lens_radius > 0.0 {
             let lens = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
             let focus = d * self.focus_distance;
@@ -162,7 +177,7 @@ impl Camera {
         let o_clip = o + d * (self.near_clip * inv_z);
         let len = d.length();
         let t_max = (self.far_clip - self.near_clip) * inv_z * len;
-        let d_world = self.to_world.apply_vector(d / len).normalize();
+        let d_world = self.to_world.apply_vector(d).normalize();
         Ray::bounded(self.to_world.apply_point(o_clip), d_world, t_max)
     }
 }
