@@ -96,6 +96,19 @@ enum HitKind {
     Cylinder(Vec3, u32),
 }
 
+/// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
+/// (Embree's `rtcIntersect1` gives the same, plus an unnormalized geometric normal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Ray parameter of the hit (distance in units of the ray direction's length).
+    pub t: f32,
+    /// The primitive hit: see [`Scene::primitive`].
+    pub prim: u32,
+    /// Barycentrics `(b1, b2)` of vertices 1 and 2 of a triangle (`b0 = 1 - b1 - b2`); zero on
+    /// analytic shapes.
+    pub barycentrics: Vec2,
+}
+
 /// A scene ready to render.
 #[derive(Debug)]
 pub struct Scene {
@@ -195,6 +208,34 @@ impl Scene {
     /// The closest surface hit along `ray` within `(0, ray.t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        let (t, kind) = self.closest(ray)?;
+        Some(self.interaction(ray, t, kind))
+    }
+
+    /// The closest hit along `ray` within `(0, ray.t_max)` without its surface interaction
+    /// (no shading normal, uv or error bounds, and no access to the shape's data): the ray
+    /// query alone, as benchmarks of ray-tracing kernels time it.
+    #[inline]
+    pub fn intersect_hit(&self, ray: &Ray) -> Option<RayHit> {
+        let (t, kind) = self.closest(ray)?;
+        let (prim, barycentrics) = match kind {
+            HitKind::Block(h, b, lane) => (self.blocks[b as usize].id[lane], Vec2::new(h.b1, h.b2)),
+            HitKind::Triangle(h, k) => (self.prims[k as usize].r, Vec2::new(h.b1, h.b2)),
+            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) => (r, Vec2::ZERO),
+        };
+        Some(RayHit { t, prim, barycentrics })
+    }
+
+    /// Shape index and, for a triangle, its index in the mesh (0 for analytic shapes) of
+    /// primitive `prim` of a [`RayHit`]. Panics if `prim` is not a primitive of this scene.
+    pub fn primitive(&self, prim: u32) -> (u32, u32) {
+        let r = self.refs[prim as usize];
+        (r.shape, r.index)
+    }
+
+    /// The closest hit along `ray` within `(0, ray.t_max)`: distance and what was hit.
+    #[inline(always)]
+    fn closest(&self, ray: &Ray) -> Option<(f32, HitKind)> {
         let pre = RayPrecomp::new(ray);
         let mut best: Option<(f32, HitKind)> = None;
         self.bvh.closest_hit(ray, ray.t_max, |first, count, t_max| {
@@ -216,8 +257,7 @@ impl Scene {
                 }
             }
         });
-        let (t, kind) = best?;
-        Some(self.interaction(ray, t, kind))
+        best
     }
 
     /// Intersects primitive `k` of a mixed leaf (`Scene::prims[k]`) within `(0, t_max)`.
@@ -372,8 +412,23 @@ mod tests {
                 .enumerate()
                 .filter_map(|(i, s)| s.intersect(&ray, f32::INFINITY).map(|h| (h.t, i as u32 + 1, 0)));
             let brute = tri.chain(sph).min_by(|a, b| a.0.total_cmp(&b.0));
-            let got = scene.intersect(&ray).map(|si| (si.t, si.shape, si.prim));
+            let si = scene.intersect(&ray);
+            let got = si.map(|si| (si.t, si.shape, si.prim));
             assert_eq!(got, brute);
+            // The hit-only query names the same primitive at the same t, and for triangles its
+            // barycentrics give the interaction's point.
+            let hit = scene.intersect_hit(&ray);
+            assert_eq!(hit.map(|h| (h.t, scene.primitive(h.prim))), got.map(|(t, shape, prim)| (t, (shape, prim))));
+            if let (Some(h), Some(si)) = (hit, si) {
+                if si.shape == 0 {
+                    let p = tris[si.prim as usize];
+                    let b = h.barycentrics;
+                    let q = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
+                    assert!((q - si.p).length() <= 1e-4, "{q} vs {}", si.p);
+                } else {
+                    assert_eq!(h.barycentrics, Vec2::ZERO);
+                }
+            }
             if let Some((t, _, _)) = brute {
                 hits += 1;
                 assert!(scene.occluded(&Ray::bounded(ray.o, ray.d, t * 1.001)));
