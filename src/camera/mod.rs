@@ -46,9 +46,8 @@ pub struct Camera {
     /// tan of half the horizontal / vertical field of view.
     tan_half: Vec2,
     /// Film position (pixels) to the camera-space plane z = 1: `xy = film · plane_scale +
-    /// plane_offset` (the NDC mapping and the field of view folded into one multiply-add).
+    /// tan_half` (the NDC mapping and the field of view folded into one multiply-add).
     plane_scale: Vec2,
-    plane_offset: Vec2,
     width: u32,
     height: u32,
     near_clip: f32,
@@ -95,7 +94,6 @@ impl Camera {
             fov_axis,
             tan_half,
             plane_scale,
-            plane_offset: tan_half,
             width,
             height,
             near_clip: 1e-2,
@@ -109,14 +107,7 @@ impl Camera {
     /// other follows the new aspect ratio.
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, String> {
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
-        Ok(Camera {
-            tan_half: c.tan_half,
-            plane_scale: c.plane_scale,
-            plane_offset: c.plane_offset,
-            width,
-            height,
-            ..self.clone()
-        })
+        Ok(Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() })
     }
 
     /// Sets the near and far clip distances (along the view axis).
@@ -163,7 +154,7 @@ impl Camera {
     #[inline]
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
         // +x is left and +y is up in camera space; film x grows right and y grows down.
-        let xy = film * self.plane_scale + self.plane_offset;
+        let xy = film * self.plane_scale + self.tan_half;
         let d = Vec3::new(xy.x, xy.y, 1.0);
         let (o, d) = if self.lens_radius > 0.0 {
             let lens = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
