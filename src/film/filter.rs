@@ -1,23 +1,23 @@
 //! Pixel reconstruction filters (Mitsuba's `rfilter`: `box`, `tent`, `gaussian`), applied by
-//! **filter importance sampling**: each pixel sample's film position is offset from the pixel
-//! centre with density proportional to the filter, so the plain average of the samples converges
-//! to the filter-weighted pixel value `∫ f(x) L(x) dx / ∫ f` that Mitsuba's weighted splatting
-//! converges to, while every sample stays in its own pixel (deterministic, tile-parallel).
+//! Mitsuba 3's weighted splatting ([`crate::film`]): a sample at film position `x` weighs
+//! `f(c − x)` in every pixel of centre `c` within the radius, and a pixel's value is
+//! `Σ f L / Σ f`.
 //!
-//! All filters here are separable, `f(x, y) = f₁(x) f₁(y)`, so each axis is sampled on its own:
-//! - `box` (radius ½): uniform over the pixel, `x = u - ½`.
-//! - `tent` (radius r, default 1): `f₁(x) = max(0, 1 - |x|/r)`, sampled by inversion: with
-//!   `u' = 2u - 1`, `x = r (1 - √(1 - |u'|)) sign(u')`.
+//! All filters here are separable, `f(x, y) = f₁(x) f₁(y)`, with `f₁` (unnormalized, in pixels):
+//! - `box` (radius ½): `f₁(x) = 1` for `|x| ≤ ½`; the sample counts in its own pixel only.
+//! - `tent` (radius r, default 1): `f₁(x) = max(0, 1 − |x|/r)`.
 //! - `gaussian` (standard deviation σ, default ½; radius 4σ as in Mitsuba):
-//!   `f₁(x) = max(0, exp(-x²/2σ²) - exp(-(4σ)²/2σ²))`, sampled by inverting a 512-piece tabulated
-//!   CDF (piecewise-constant density; the difference from the exact filter shape is below 0.5 % of
-//!   its width).
+//!   `f₁(x) = max(0, exp(−x²/2σ²) − exp(−8))` (shifted to reach zero at the radius).
 
-use crate::math::Vec2;
-use crate::sampling::PiecewiseConstant1D;
+/// Largest border (pixels beyond a tile) a filter footprint may need: radii up to
+/// `MAX_BORDER + ½` pixels are accepted.
+pub const MAX_BORDER: u32 = 16;
+
+/// Largest accepted filter radius (pixels).
+pub const MAX_RADIUS: f32 = MAX_BORDER as f32 + 0.5;
 
 /// A reconstruction filter.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Filter {
     /// The pixel's square.
     Box,
@@ -30,32 +30,18 @@ pub enum Filter {
     Gaussian {
         /// Standard deviation in pixels.
         stddev: f32,
-        /// Tabulated 1D filter on `[-4σ, 4σ]`.
-        table: PiecewiseConstant1D,
     },
 }
 
 impl Filter {
-    /// Mitsuba's `tent` of radius `radius` (> 0).
+    /// Mitsuba's `tent` of radius `radius` (pixels, in `(0, MAX_RADIUS]`).
     pub fn tent(radius: f32) -> Option<Filter> {
-        (radius > 0.0 && radius.is_finite()).then_some(Filter::Tent { radius })
+        (radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Tent { radius })
     }
 
-    /// Mitsuba's `gaussian` with standard deviation `stddev` (> 0).
+    /// Mitsuba's `gaussian` with standard deviation `stddev` (pixels, `0 < 4σ ≤ MAX_RADIUS`).
     pub fn gaussian(stddev: f32) -> Option<Filter> {
-        if !(stddev > 0.0 && stddev.is_finite()) {
-            return None;
-        }
-        let r = 4.0 * stddev;
-        let n = 512;
-        let g = |x: f32| (-x * x / (2.0 * stddev * stddev)).exp();
-        let f: Vec<f32> = (0..n)
-            .map(|i| {
-                let x = -r + (i as f32 + 0.5) * 2.0 * r / n as f32;
-                (g(x) - g(r)).max(0.0)
-            })
-            .collect();
-        Some(Filter::Gaussian { stddev, table: PiecewiseConstant1D::new(&f, -r, r)? })
+        (stddev > 0.0 && 4.0 * stddev <= MAX_RADIUS).then_some(Filter::Gaussian { stddev })
     }
 
     /// Half-width of the filter's support (pixels).
@@ -63,29 +49,25 @@ impl Filter {
         match self {
             Filter::Box => 0.5,
             Filter::Tent { radius } => *radius,
-            Filter::Gaussian { stddev, .. } => 4.0 * stddev,
+            Filter::Gaussian { stddev } => 4.0 * stddev,
         }
     }
 
-    /// Offset from the pixel centre for uniform `u ∈ [0,1)²`, distributed as the filter.
+    /// How many pixels beyond its own the footprint of a sample can reach: `⌈r − ½⌉`.
+    pub fn border(&self) -> u32 {
+        ((self.radius() - 0.5).ceil().max(0.0) as u32).min(MAX_BORDER)
+    }
+
+    /// The 1D filter value `f₁(x)` (unnormalized) at offset `x` pixels from a pixel centre.
     #[inline]
-    pub fn sample(&self, u: Vec2) -> Vec2 {
-        match self {
-            Filter::Box => u - Vec2::splat(0.5),
-            Filter::Tent { radius } => Vec2::new(sample_tent(u.x, *radius), sample_tent(u.y, *radius)),
-            Filter::Gaussian { table, .. } => Vec2::new(table.sample(u.x).0.value, table.sample(u.y).0.value),
-        }
-    }
-
-    /// The 1D filter value `f₁(x)` (unnormalized), for tests and documentation.
     pub fn eval_1d(&self, x: f32) -> f32 {
         match self {
             Filter::Box => f32::from(x.abs() <= 0.5),
             Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
-            Filter::Gaussian { stddev, .. } => {
-                let g = |x: f32| (-x * x / (2.0 * stddev * stddev)).exp();
+            Filter::Gaussian { stddev } => {
                 if x.abs() <= 4.0 * stddev {
-                    (g(x) - g(4.0 * stddev)).max(0.0)
+                    // exp(-(4σ)² / 2σ²) = exp(-8): the shift that makes f reach 0 at the radius.
+                    ((-x * x / (2.0 * stddev * stddev)).exp() - (-8.0f32).exp()).max(0.0)
                 } else {
                     0.0
                 }
@@ -94,58 +76,24 @@ impl Filter {
     }
 }
 
-/// Inversion of the tent density `(1 - |x|/r)/r` on `[-r, r]`.
-#[inline]
-fn sample_tent(u: f32, r: f32) -> f32 {
-    let v = 2.0 * u - 1.0;
-    r * (1.0 - (1.0 - v.abs()).max(0.0).sqrt()) * v.signum()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sampling::Pcg32;
-    use crate::testkit::{chi2_1d, Chi2Config};
-
-    /// χ² of each filter's sampled offsets (one axis) against its normalized 1D shape.
-    #[test]
-    fn filter_samples_follow_the_filter() {
-        for (k, filter) in
-            [Filter::Box, Filter::tent(1.0).unwrap(), Filter::tent(2.5).unwrap(), Filter::gaussian(0.5).unwrap()]
-                .into_iter()
-                .enumerate()
-        {
-            let r = filter.radius();
-            // Normalization by quadrature.
-            let n = 20000;
-            let integral: f64 =
-                (0..n).map(|i| filter.eval_1d(-r + (i as f32 + 0.5) * 2.0 * r / n as f32) as f64).sum::<f64>()
-                    * 2.0
-                    * r as f64
-                    / n as f64;
-            let pdf = |x: f64| filter.eval_1d(x as f32) as f64 / integral;
-            let result = chi2_1d(
-                (-r as f64, r as f64),
-                40,
-                100_000,
-                |rng: &mut Pcg32| Some(filter.sample(Vec2::new(rng.next_f32(), rng.next_f32())).x as f64),
-                pdf,
-                &Chi2Config::default().with_seed(k as u64),
-            );
-            assert!(result.passed(), "filter {k}: {result:?}");
-        }
-    }
 
     #[test]
-    fn samples_stay_in_the_support_and_box_is_the_pixel() {
+    fn shapes_radii_and_borders() {
         let g = Filter::gaussian(0.5).unwrap();
-        let t = Filter::tent(1.0).unwrap();
-        for u in [0.0, 1e-7, 0.5, 0.999_999_9] {
-            let v = Vec2::splat(u);
-            assert!(g.sample(v).abs().max_element() <= 2.0);
-            assert!(t.sample(v).abs().max_element() <= 1.0);
-            assert_eq!(Filter::Box.sample(v), v - 0.5);
-        }
+        assert_eq!(g.radius(), 2.0);
+        assert_eq!(g.border(), 2);
+        assert_eq!(Filter::Box.border(), 0);
+        assert_eq!(Filter::tent(1.0).unwrap().border(), 1);
+        assert_eq!(Filter::tent(1.6).unwrap().border(), 2);
+        assert!((g.eval_1d(0.0) - (1.0 - (-8.0f32).exp())).abs() < 1e-6);
+        assert_eq!(g.eval_1d(2.0), 0.0);
+        assert_eq!(g.eval_1d(2.5), 0.0);
+        assert!(g.eval_1d(1.0) > 0.0 && g.eval_1d(1.0) < g.eval_1d(0.5));
+        assert_eq!(Filter::tent(2.0).unwrap().eval_1d(1.0), 0.5);
         assert!(Filter::tent(0.0).is_none() && Filter::gaussian(-1.0).is_none());
+        assert!(Filter::tent(f32::NAN).is_none() && Filter::tent(100.0).is_none() && Filter::gaussian(5.0).is_none());
     }
 }

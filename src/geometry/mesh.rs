@@ -1,7 +1,7 @@
 //! Triangle meshes, and the built-in rectangle and cube of Mitsuba 3.
 
 use super::sphere::SurfacePoint;
-use crate::math::{Transform, Vec2, Vec3};
+use crate::math::{DirectionCone, Transform, Vec2, Vec3};
 use crate::sampling::{sample_uniform_triangle, AliasTable};
 
 /// An indexed triangle mesh in world space. Triangles are counter-clockwise seen from their
@@ -208,6 +208,24 @@ impl TriangleMesh {
     /// after the last change of positions, indices or `flip_normals` (a transform clears it).
     pub fn prepare_normals(&mut self) {
         self.face_normals = (0..self.len()).map(|i| self.normal_of(&self.triangle(i))).collect();
+    }
+
+    /// A cone holding every front-side geometric normal and (if the mesh has them) every
+    /// front-side vertex normal. Unions of single directions, each widened by a round-off margin.
+    pub fn normal_cone(&self) -> DirectionCone {
+        let sign = if self.flip_normals { -1.0 } else { 1.0 };
+        let mut cone = DirectionCone::EMPTY;
+        let faces = (0..self.len()).map(|i| self.face_normal(i));
+        let vertices = self.normals.iter().map(|n| sign * n.normalize_or_zero()).filter(|n| *n != Vec3::ZERO);
+        for n in faces.chain(vertices) {
+            if !cone.contains(n) {
+                cone = DirectionCone::union(&cone, &DirectionCone::from_direction(n));
+                if cone.cos_theta <= -1.0 {
+                    break;
+                }
+            }
+        }
+        cone
     }
 
     /// Geometric normal of triangle `i` (unit, front side): cached after

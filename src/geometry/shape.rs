@@ -1,7 +1,7 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
 use super::{Cylinder, Disk, Sphere, TriangleMesh};
-use crate::math::{Bounds3, Vec2, Vec3};
+use crate::math::{Bounds3, DirectionCone, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
 /// A shape's geometry (world space).
@@ -70,6 +70,23 @@ impl Geometry {
                 b
             }
             Geometry::Cylinder(c) => c.bounds(),
+        }
+    }
+
+    /// Bounds of the whole shape (world).
+    pub fn bounds(&self) -> Bounds3 {
+        (0..self.primitive_count()).fold(Bounds3::EMPTY, |b, i| b.union(&self.primitive_bounds(i)))
+    }
+
+    /// A cone holding every front-side normal of the shape (geometric and, for meshes with
+    /// vertex normals, shading normals, which decide the side that emits): the light BVH's
+    /// orientation bound. Flat meshes and disks give a single direction; spheres and cylinders
+    /// the whole sphere.
+    pub fn normal_cone(&self) -> DirectionCone {
+        match self {
+            Geometry::Mesh(m) => m.normal_cone(),
+            Geometry::Disk(d) => DirectionCone::from_direction(d.normal()),
+            Geometry::Sphere(_) | Geometry::Cylinder(_) => DirectionCone::ENTIRE_SPHERE,
         }
     }
 

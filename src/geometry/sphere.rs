@@ -214,4 +214,114 @@ mod tests {
             assert!((pdf - s.pdf_solid_angle(p_ref, sp.p, sp.n)).abs() < 1e-3 * pdf);
         }
     }
+
+    /// Cone sampling stays exact for tiny cones (sin θ_max from 0.1 down to 1e-4, where f32
+    /// directions cannot resolve the cone on the unit sphere): in the cone's own coordinates,
+    /// computed in f64 from the sampled points, `((1 − cos θ)/(1 − cos θ_max), φ/2π)` is uniform
+    /// (χ²); the pdf is `1/(2π(1 − cos θ_max))` to 1e-3; every point lies on the cap visible from
+    /// the reference point, and the shadow ray toward it is not blocked by the sphere itself.
+    #[test]
+    fn tiny_cones_are_sampled_exactly() {
+        use crate::geometry::interaction::SHADOW_EPSILON;
+        use crate::math::float::offset_ray_origin;
+        use crate::testkit::Rect;
+        let p_ref = Vec3::new(0.3, -1.2, 2.0);
+        let axis = Vec3::new(0.48, 0.6, -0.64); // unit
+        for (k, sin_max) in [0.1f64, 1e-2, 1e-3, 1e-4].into_iter().enumerate() {
+            let dist = 4.0f32;
+            let s = Sphere { center: p_ref + axis * dist, radius: (sin_max * dist as f64) as f32, flip: false };
+            let c = (s.center - p_ref).as_dvec3();
+            let (dc, r) = (c.length(), s.radius as f64);
+            let w = c / dc;
+            let one_minus_cos_max = 1.0 - (1.0 - (r / dc).powi(2)).sqrt();
+            let (t1, t2) = {
+                let t = if w.x.abs() < 0.9 { glam::DVec3::X } else { glam::DVec3::Y };
+                let t1 = w.cross(t).normalize();
+                (t1, w.cross(t1))
+            };
+            let to_cone = |q: Vec3| -> Vec2 {
+                let d = (q - p_ref).as_dvec3().normalize();
+                // 1 − cos θ = 2 sin²(θ/2) = |d − w|² / 2, without cancellation.
+                let u = (d - w).length_squared() / 2.0 / one_minus_cos_max;
+                // Points at the silhouette may leave the cone by the f32 rounding of their
+                // position (≈ 1e-7 |p| across a cone of radius r: up to a few 1e-3 of u at the
+                // smallest cone); further out is an error.
+                let u = if u > 1.0 && u < 1.01 { 1.0 } else { u };
+                let phi = d.dot(t2).atan2(d.dot(t1));
+                Vec2::new(u as f32, ((phi / std::f64::consts::TAU).rem_euclid(1.0)) as f32)
+            };
+            let out = chi2_2d(
+                &Rect::UNIT,
+                [11, 13],
+                200_000,
+                |rng| s.sample_solid_angle(p_ref, u2(rng)).map(|(sp, _)| to_cone(sp.p)),
+                |_| 1.0,
+                &Chi2Config::default().with_seed(k as u64),
+            );
+            assert!(out.passed(), "sin θ_max = {sin_max}: {out}");
+            let want_pdf = 1.0 / (2.0 * std::f64::consts::PI * one_minus_cos_max);
+            let mut rng = crate::sampling::Pcg32::new(2, k as u64);
+            for _ in 0..20_000 {
+                let (sp, pdf) = s.sample_solid_angle(p_ref, u2(&mut rng)).expect("a sample");
+                assert!(((pdf as f64) / want_pdf - 1.0).abs() < 1e-3, "sin θ_max = {sin_max}: pdf {pdf} vs {want_pdf}");
+                assert_eq!(pdf, s.pdf_solid_angle(p_ref, sp.p, sp.n));
+                let to_ref = (p_ref - sp.p).normalize();
+                assert!(sp.n.dot(to_ref) > -1e-3, "sin θ_max = {sin_max}: point on the far side");
+                let target = offset_ray_origin(sp.p, sp.p_error, sp.n, to_ref);
+                let shadow = Ray::bounded(p_ref, target - p_ref, 1.0 - SHADOW_EPSILON);
+                assert!(
+                    s.intersect(&shadow, shadow.t_max).is_none(),
+                    "sin θ_max = {sin_max}: self-occluded shadow ray"
+                );
+            }
+        }
+    }
+
+    /// The light-sampling estimate of irradiance from a small sphere, `L cos θ_n / p(ω)`, has
+    /// the mean and variance that quadrature over the cone predicts (normal tilted 60° from the
+    /// cone axis, so the cosine varies across the cone). Lost or misweighted samples would
+    /// inflate the variance by orders of magnitude at these cone sizes.
+    #[test]
+    fn irradiance_estimate_has_the_predicted_variance() {
+        let p_ref = Vec3::ZERO;
+        let axis = Vec3::Z;
+        let n = Vec3::new(0.75f32.sqrt(), 0.0, 0.5); // 60° from the axis
+        for (k, sin_max) in [0.2f64, 0.03, 3e-3, 3e-4].into_iter().enumerate() {
+            let s = Sphere { center: axis * 2.0, radius: (2.0 * sin_max) as f32, flip: false };
+            let cos_max = (1.0 - sin_max * sin_max).sqrt();
+            let omega = 2.0 * std::f64::consts::PI * (1.0 - cos_max);
+            // Moments of cos θ_n over the cone by midpoint quadrature in (θ, φ).
+            let (nt, np) = (400, 400);
+            let theta_max = sin_max.asin();
+            let (mut m1, mut m2) = (0.0f64, 0.0f64);
+            for i in 0..nt {
+                let th = (i as f64 + 0.5) / nt as f64 * theta_max;
+                for j in 0..np {
+                    let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                    let d = glam::DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+                    let c = d.dot(n.as_dvec3());
+                    let dw = th.sin() * (theta_max / nt as f64) * (std::f64::consts::TAU / np as f64);
+                    m1 += c * dw;
+                    m2 += c * c * dw;
+                }
+            }
+            // X = cos θ_n · Ω (radiance 1): E X = ∫ cos, E X² = Ω ∫ cos².
+            let (mean, var) = (m1, omega * m2 - m1 * m1);
+            let mut rng = crate::sampling::Pcg32::new(5, k as u64);
+            let n_samples = 400_000;
+            let (mut s1, mut s2) = (0.0f64, 0.0f64);
+            for _ in 0..n_samples {
+                let x = match s.sample_solid_angle(p_ref, u2(&mut rng)) {
+                    Some((sp, pdf)) => ((sp.p - p_ref).normalize().dot(n) / pdf) as f64,
+                    None => 0.0,
+                };
+                s1 += x;
+                s2 += x * x;
+            }
+            let m = s1 / n_samples as f64;
+            let v = s2 / n_samples as f64 - m * m;
+            assert!((m / mean - 1.0).abs() < 1e-3, "sin θ_max = {sin_max}: mean {m} vs {mean}");
+            assert!((v / var - 1.0).abs() < 0.05, "sin θ_max = {sin_max}: variance {v:e} vs {var:e}");
+        }
+    }
 }

@@ -9,6 +9,7 @@
 //! "BSDF sampling only" direct-lighting estimator.
 
 use super::Integrator;
+use crate::light::LightSampleContext;
 use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::sampling::Sampler;
@@ -90,6 +91,7 @@ impl Integrator for DirectIntegrator {
         let wo_local = frame.to_local(wo);
         let ctx = BsdfContext { uv: si.uv };
         let (nl, nb) = (self.emitter_samples, self.bsdf_samples);
+        let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();
 
         // Light sampling.
@@ -99,7 +101,7 @@ impl Integrator for DirectIntegrator {
             if delta_bsdf {
                 continue;
             }
-            let Some((light_index, pmf)) = scene.sample_light(u) else { continue };
+            let Some((light_index, pmf)) = scene.sample_light(&light_ctx, u) else { continue };
             let light = &scene.lights()[light_index as usize];
             let Some(ls) = light.sample_li(geometries, si.p, u2) else { continue };
             let wi_local = frame.to_local(ls.wi);
@@ -129,7 +131,7 @@ impl Integrator for DirectIntegrator {
                     return 0.0;
                 }
                 let light = &scene.lights()[light_index as usize];
-                scene.light_pmf(light_index)
+                scene.light_pmf(&light_ctx, light_index)
                     * match p_light {
                         Some((p, n)) => light.pdf_li(geometries, si.p, p, n),
                         None => light.pdf_li_direction(wi),

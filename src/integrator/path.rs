@@ -15,6 +15,7 @@
 //! Parameters (Mitsuba): `max_depth` (default -1), `rr_depth` (5), `hide_emitters` (false).
 
 use super::Integrator;
+use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext};
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::sampling::{
@@ -94,11 +95,16 @@ impl PathIntegrator {
     }
 
     /// Weight of emission found by the path itself (not by light sampling). `prev` is the previous
-    /// vertex (position, BSDF pdf of the direction taken, delta?), `None` for camera rays;
-    /// `pdf_light(p_prev)` computes the light-sampling density of the same direction from the
-    /// previous vertex (solid angle, including the light selection probability).
+    /// vertex (its light-sampling context, BSDF pdf of the direction taken, delta?), `None` for
+    /// camera rays; `pdf_light(ctx_prev)` computes the light-sampling density of the same
+    /// direction from the previous vertex (solid angle, including the light selection
+    /// probability, which depends on the vertex).
     #[inline]
-    fn emission_weight(&self, prev: Option<(Vec3, f32, bool)>, pdf_light: impl FnOnce(Vec3) -> f32) -> f32 {
+    fn emission_weight(
+        &self,
+        prev: Option<(LightSampleContext, f32, bool)>,
+        pdf_light: impl FnOnce(&LightSampleContext) -> f32,
+    ) -> f32 {
         match prev {
             None => {
                 if self.hide_emitters {
@@ -108,10 +114,10 @@ impl PathIntegrator {
                 }
             }
             Some((_, _, true)) => 1.0,
-            Some((p_prev, pdf_bsdf, false)) => match self.strategy {
+            Some((ref ctx_prev, pdf_bsdf, false)) => match self.strategy {
                 DirectStrategy::Bsdf => 1.0,
                 DirectStrategy::Light | DirectStrategy::Uniform | DirectStrategy::Cosine => 0.0,
-                DirectStrategy::Mis => self.mis(pdf_bsdf, pdf_light(p_prev)),
+                DirectStrategy::Mis => self.mis(pdf_bsdf, pdf_light(ctx_prev)),
             },
         }
     }
@@ -183,8 +189,8 @@ impl PathIntegrator {
         let geometries = scene.geometries();
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
-        // The previous vertex (position, BSDF pdf of the direction taken, whether delta).
-        let mut prev: Option<(Vec3, f32, bool)> = None;
+        // The previous vertex (light-sampling context, BSDF pdf of the direction taken, delta?).
+        let mut prev: Option<(LightSampleContext, f32, bool)> = None;
         let mut depth = 0u32;
         // Product of the relative IORs crossed: radiance scales by η² at refractions, which
         // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
@@ -196,7 +202,7 @@ impl PathIntegrator {
                 let d = ray.d.normalize();
                 for &i in scene.infinite_lights() {
                     let light = &scene.lights()[i as usize];
-                    let weight = self.emission_weight(prev, |_| scene.light_pmf(i) * light.pdf_li_direction(d));
+                    let weight = self.emission_weight(prev, |c| scene.light_pmf(c, i) * light.pdf_li_direction(d));
                     record(depth + 1, beta * light.le_escaped(d) * weight);
                 }
                 break;
@@ -218,8 +224,8 @@ impl PathIntegrator {
                 let le = scene.lights()[light_index as usize].le(si.ns, wo);
                 if le != Rgb::ZERO {
                     let light = &scene.lights()[light_index as usize];
-                    let weight = self.emission_weight(prev, |p_prev| {
-                        scene.light_pmf(light_index) * light.pdf_li(geometries, p_prev, si.p, si.ng)
+                    let weight = self.emission_weight(prev, |c| {
+                        scene.light_pmf(c, light_index) * light.pdf_li(geometries, c.p, si.p, si.ng)
                     });
                     record(depth + 1, beta * le * weight);
                 }
@@ -232,6 +238,7 @@ impl PathIntegrator {
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
             let ctx = BsdfContext { uv: si.uv };
+            let light_ctx = LightSampleContext { p: si.p, n: si.ns };
 
             // Direct light (its random numbers are drawn whether used or not, so that every
             // vertex consumes the same sampler dimensions), then the BSDF sample that continues
@@ -253,7 +260,7 @@ impl PathIntegrator {
                         }
                     }
                     DirectStrategy::Mis | DirectStrategy::Light => {
-                        if let Some((light_index, pmf)) = scene.sample_light(u_light) {
+                        if let Some((light_index, pmf)) = scene.sample_light(&light_ctx, u_light) {
                             let light = &scene.lights()[light_index as usize];
                             if let Some(ls) = light.sample_li(geometries, si.p, u_light2) {
                                 let wi_local = frame.to_local(ls.wi);
@@ -284,7 +291,7 @@ impl PathIntegrator {
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
-            prev = Some((si.p, bs.pdf, bs.delta));
+            prev = Some((light_ctx, bs.pdf, bs.delta));
             ray = si.spawn_ray(wi);
             depth += 1;
 

@@ -73,7 +73,7 @@ impl LightTracer {
     /// each contribution that reaches the camera (film position in pixels of the whole film).
     pub fn trace(&self, scene: &Scene, rng: &mut Pcg32, splat: &mut impl FnMut(Vec2, Rgb)) {
         let mut u2 = || Vec2::new(rng.next_f32(), rng.next_f32());
-        let Some((light_index, pmf)) = scene.sample_light(u2().x) else { return };
+        let Some((light_index, pmf)) = scene.sample_emitting_light(u2().x) else { return };
         let light: &Light = &scene.lights()[light_index as usize];
         let camera = scene.camera();
         let shapes = scene.geometries();

@@ -20,6 +20,7 @@
 
 use super::Integrator;
 use crate::geometry::interaction::SHADOW_EPSILON;
+use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext};
 use crate::math::float::offset_ray_origin;
 use crate::math::{Frame, Ray, Rgb, Vec3};
@@ -99,11 +100,15 @@ impl VolPathIntegrator {
     /// Power-heuristic weight of emission found by the path itself; `prev` = (previous vertex,
     /// pdf of the direction taken, delta?), `None` for camera rays.
     #[inline]
-    fn emission_weight(&self, prev: Option<(Vec3, f32, bool)>, pdf_light: impl FnOnce(Vec3) -> f32) -> f32 {
+    fn emission_weight(
+        &self,
+        prev: Option<(LightSampleContext, f32, bool)>,
+        pdf_light: impl FnOnce(&LightSampleContext) -> f32,
+    ) -> f32 {
         match prev {
             None => f32::from(u8::from(!self.hide_emitters)),
             Some((_, _, true)) => 1.0,
-            Some((p, pdf, false)) => power_heuristic(1, pdf, 1, pdf_light(p)),
+            Some((ref c, pdf, false)) => power_heuristic(1, pdf, 1, pdf_light(c)),
         }
     }
 
@@ -115,7 +120,7 @@ impl VolPathIntegrator {
     fn direct(
         &self,
         scene: &Scene,
-        p: Vec3,
+        light_ctx: &LightSampleContext,
         medium: impl Fn(Vec3) -> Option<u32>,
         u_light: f32,
         u2: crate::math::Vec2,
@@ -123,9 +128,9 @@ impl VolPathIntegrator {
         pdf: impl Fn(Vec3) -> f32,
         shadow: impl Fn(Vec3, Vec3, Vec3) -> Ray,
     ) -> Rgb {
-        let Some((index, pmf)) = scene.sample_light(u_light) else { return Rgb::ZERO };
+        let Some((index, pmf)) = scene.sample_light(light_ctx, u_light) else { return Rgb::ZERO };
         let light = &scene.lights()[index as usize];
-        let Some(ls) = light.sample_li(scene.geometries(), p, u2) else { return Rgb::ZERO };
+        let Some(ls) = light.sample_li(scene.geometries(), light_ctx.p, u2) else { return Rgb::ZERO };
         let value = f(ls.wi);
         if value == Rgb::ZERO {
             return Rgb::ZERO;
@@ -159,7 +164,7 @@ impl Integrator for VolPathIntegrator {
         let len = camera_ray.d.length();
         let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len);
         let mut medium = scene.camera_medium();
-        let mut prev: Option<(Vec3, f32, bool)> = None;
+        let mut prev: Option<(LightSampleContext, f32, bool)> = None;
         let mut depth = 0u32;
         let mut crossings = 0u32;
         if max_depth == 0 {
@@ -183,10 +188,12 @@ impl Integrator for VolPathIntegrator {
                             break;
                         }
                         let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
+                        // A point in a medium has no normal.
+                        let light_ctx = LightSampleContext { p, n: Vec3::ZERO };
                         l += beta
                             * self.direct(
                                 scene,
-                                p,
+                                &light_ctx,
                                 |_| medium,
                                 u_light,
                                 u_light2,
@@ -199,7 +206,7 @@ impl Integrator for VolPathIntegrator {
                                 },
                             );
                         let s = phase.sample(wo, sampler.next_2d());
-                        prev = Some((p, s.pdf, false));
+                        prev = Some((light_ctx, s.pdf, false));
                         ray = Ray::new(p, s.value);
                         depth += 1;
                         crossings = 0;
@@ -215,7 +222,7 @@ impl Integrator for VolPathIntegrator {
             let Some(si) = hit else {
                 for &i in scene.infinite_lights() {
                     let light = &scene.lights()[i as usize];
-                    let w = self.emission_weight(prev, |_| scene.light_pmf(i) * light.pdf_li_direction(ray.d));
+                    let w = self.emission_weight(prev, |c| scene.light_pmf(c, i) * light.pdf_li_direction(ray.d));
                     l += beta * light.le_escaped(ray.d) * w;
                 }
                 break;
@@ -231,7 +238,7 @@ impl Integrator for VolPathIntegrator {
                 let le = light.le(si.ns, wo);
                 if le != Rgb::ZERO {
                     let w = self
-                        .emission_weight(prev, |pp| scene.light_pmf(li) * light.pdf_li(geometries, pp, si.p, si.ng));
+                        .emission_weight(prev, |c| scene.light_pmf(c, li) * light.pdf_li(geometries, c.p, si.p, si.ng));
                     l += beta * le * w;
                 }
             }
@@ -253,6 +260,7 @@ impl Integrator for VolPathIntegrator {
             let frame: Frame = si.frame();
             let wo_local = frame.to_local(wo);
             let ctx = BsdfContext { uv: si.uv };
+            let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
             if !bsdf.is_delta() {
                 // The shadow ray starts in the medium on the light's side of the surface.
@@ -266,7 +274,7 @@ impl Integrator for VolPathIntegrator {
                 l += beta
                     * self.direct(
                         scene,
-                        si.p,
+                        &light_ctx,
                         side_medium,
                         u_light,
                         u_light2,
@@ -283,7 +291,7 @@ impl Integrator for VolPathIntegrator {
             if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
                 medium = medium_after(scene, si.shape, si.ng, wi, medium);
             }
-            prev = Some((si.p, bs.pdf, bs.delta));
+            prev = Some((light_ctx, bs.pdf, bs.delta));
             ray = si.spawn_ray(wi);
             depth += 1;
             crossings = 0;

@@ -5,9 +5,13 @@
 //! it can be MIS-combined with BSDF sampling); delta lights (points) flag `delta` instead and
 //! their pdf is a probability (1).
 
+mod bvh;
 mod envmap;
+mod sampler;
 
+pub use bvh::{LightBounds, LightBvh};
 pub use envmap::EnvMap;
+pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind};
 
 use crate::geometry::Geometry;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};

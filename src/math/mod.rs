@@ -8,6 +8,7 @@
 
 pub mod bounds;
 pub mod color;
+pub mod cone;
 pub mod float;
 pub mod frame;
 pub mod ray;
@@ -18,6 +19,7 @@ pub mod trig;
 
 pub use bounds::Bounds3;
 pub use color::{luminance, Rgb};
+pub use cone::DirectionCone;
 pub use frame::Frame;
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use ray::Ray;

@@ -11,7 +11,7 @@ mod splat;
 pub use splat::render_light_paths;
 
 use crate::film::filter::Filter;
-use crate::film::{Film, TileBuffer};
+use crate::film::{Film, FilmSample, TileBuffer};
 use crate::integrator::radiosity::{Radiosity, RadiosityIntegrator};
 use crate::integrator::{AnyIntegrator, Integrator};
 use crate::math::{Rgb, Vec2};
@@ -244,27 +244,34 @@ pub fn render(
                         return None;
                     }
                     let mut sampler = prototype.clone();
-                    let mut tile = TileBuffer::new(x0, y0, w, h).with_terms(terms);
+                    let mut tile =
+                        TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]).with_terms(terms);
                     let mut sample_terms = vec![Rgb::ZERO; terms];
                     for y in y0..y0 + h {
                         for x in x0..x0 + w {
                             for i in done..done + pass {
                                 sampler.start_pixel_sample([x + wx, y + wy], i, 0);
+                                // Uniform over the pixel; the filter weighs the sample where it
+                                // is splatted (Mitsuba 3's reconstruction).
+                                let u_film = sampler.next_2d();
                                 let centre = Vec2::new((x + wx) as f32 + 0.5, (y + wy) as f32 + 0.5);
-                                let film_pos = centre + settings.filter.sample(sampler.next_2d());
+                                let film_pos = centre + (u_film - Vec2::splat(0.5));
                                 let u_lens = sampler.next_2d();
                                 let ray = cam.generate_ray(film_pos, u_lens);
-                                if settings.alpha {
-                                    tile.add_alpha(x, y, f32::from(u8::from(scene.intersect(&ray).is_some())));
-                                }
-                                if terms == 0 {
-                                    tile.add(x, y, integrator.li(scene, &ray, &mut sampler));
+                                let alpha =
+                                    settings.alpha.then(|| f32::from(u8::from(scene.intersect(&ray).is_some())));
+                                let l = if terms == 0 {
+                                    integrator.li(scene, &ray, &mut sampler)
                                 } else {
                                     sample_terms.fill(Rgb::ZERO);
-                                    let l = integrator.li_terms(scene, &ray, &mut sampler, &mut sample_terms);
-                                    tile.add(x, y, l);
-                                    tile.add_terms(x, y, l, &sample_terms);
-                                }
+                                    integrator.li_terms(scene, &ray, &mut sampler, &mut sample_terms)
+                                };
+                                tile.put(
+                                    [x, y],
+                                    u_film,
+                                    &settings.filter,
+                                    FilmSample { l, alpha, terms: &sample_terms },
+                                );
                             }
                         }
                     }

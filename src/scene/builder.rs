@@ -6,7 +6,7 @@ use crate::bvh::Bvh;
 use crate::camera::Camera;
 use crate::geometry::triangle4::Triangle4;
 use crate::geometry::Geometry;
-use crate::light::Light;
+use crate::light::{Light, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
 use crate::math::{Rgb, Vec3};
 use crate::sampling::AliasTable;
@@ -86,8 +86,9 @@ impl SceneBuilder {
         self.camera = Some(camera);
     }
 
-    /// Builds the scene: BVH, primitive arrays in leaf order, and the power-proportional light
-    /// distribution. Errors name what is missing or inconsistent.
+    /// Builds the scene: BVH, primitive arrays in leaf order, the light sampler (the light BVH;
+    /// see [`Scene::set_light_sampler`]) and the power-proportional distribution that light
+    /// tracing starts paths from. Errors name what is missing or inconsistent.
     pub fn build(mut self) -> Result<Scene, String> {
         let camera = self.camera.take().ok_or("the scene has no camera")?;
         for (i, s) in self.shapes.iter().enumerate() {
@@ -169,17 +170,17 @@ impl SceneBuilder {
         }
         let infinite_lights =
             (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect();
+        let light_sampler = LightSampler::new(LightSamplerKind::default(), &self.lights, &self.geometries)?;
         let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
-        let light_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
-        if !powers.is_empty() && light_distribution.is_none() {
-            return Err("every light has zero power".into());
-        }
+        let emission_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
         Ok(Scene {
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,
             lights: self.lights,
-            light_distribution,
+            light_sampler,
+            light_sampler_kind: LightSamplerKind::default(),
+            emission_distribution,
             infinite_lights,
             media: self.media,
             camera_medium: self.camera_medium,

@@ -1,5 +1,5 @@
 //! The runtime scene: shapes with their BSDFs and emitters, the BVH over their primitives,
-//! the lights with a power-proportional selection distribution, and the camera. Built with
+//! the lights with their light sampler, and the camera. Built with
 //! [`SceneBuilder`]; immutable (and `Sync`) while rendering.
 
 mod builder;
@@ -13,7 +13,7 @@ use crate::camera::Camera;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
 use crate::geometry::triangle4::Triangle4;
 use crate::geometry::{Geometry, Sphere, SurfaceInteraction};
-use crate::light::Light;
+use crate::light::{Light, LightSampleContext, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
 use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::AliasTable;
@@ -116,7 +116,10 @@ pub struct Scene {
     geometries: Vec<Geometry>,
     bsdfs: Vec<Bsdf>,
     lights: Vec<Light>,
-    light_distribution: Option<AliasTable>,
+    light_sampler: LightSampler,
+    light_sampler_kind: LightSamplerKind,
+    /// Lights by power, for light tracing's choice of where paths start.
+    emission_distribution: Option<AliasTable>,
     infinite_lights: Vec<u32>,
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
@@ -191,18 +194,38 @@ impl Scene {
         self.refs.len()
     }
 
-    /// Chooses a light with probability proportional to its power: the light index and its
-    /// probability. `None` without lights.
+    /// Chooses a light for next-event estimation at `ctx` with the scene's light sampler: the
+    /// light index and the probability of choosing it. `None` without lights (or, with the light
+    /// BVH, when no light can reach the point).
     #[inline]
-    pub fn sample_light(&self, u: f32) -> Option<(u32, f32)> {
-        let (s, _) = self.light_distribution.as_ref()?.sample(u);
+    pub fn sample_light(&self, ctx: &LightSampleContext, u: f32) -> Option<(u32, f32)> {
+        self.light_sampler.sample(ctx, u)
+    }
+
+    /// Probability that [`Scene::sample_light`] at `ctx` picks light `i`.
+    #[inline]
+    pub fn light_pmf(&self, ctx: &LightSampleContext, i: u32) -> f32 {
+        self.light_sampler.pmf(ctx, i)
+    }
+
+    /// Chooses the light a light-tracing path starts from, with probability proportional to
+    /// its power: the light index and its probability. `None` without lights.
+    #[inline]
+    pub fn sample_emitting_light(&self, u: f32) -> Option<(u32, f32)> {
+        let (s, _) = self.emission_distribution.as_ref()?.sample(u);
         Some((s.value as u32, s.pdf))
     }
 
-    /// Probability that [`Scene::sample_light`] picks light `i`.
-    #[inline]
-    pub fn light_pmf(&self, i: u32) -> f32 {
-        self.light_distribution.as_ref().map_or(0.0, |d| d.pmf(i as usize))
+    /// Replaces the light sampler (default: the light BVH).
+    pub fn set_light_sampler(&mut self, kind: LightSamplerKind) -> Result<(), String> {
+        self.light_sampler = LightSampler::new(kind, &self.lights, &self.geometries)?;
+        self.light_sampler_kind = kind;
+        Ok(())
+    }
+
+    /// Which light sampler next-event estimation uses.
+    pub fn light_sampler_kind(&self) -> LightSamplerKind {
+        self.light_sampler_kind
     }
 
     /// The closest surface hit along `ray` within `(0, ray.t_max)`.

@@ -9,6 +9,7 @@ use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
 use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
 use crate::integrator::{radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator, VolPathIntegrator};
+use crate::light::LightSamplerKind;
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
 use crate::material::fresnel::lookup_ior;
@@ -76,6 +77,8 @@ pub struct Builder {
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
     default_bsdf: [Option<u32>; 2],
     medium_index: HashMap<*const Obj, u32>,
+    /// The integrator's `light_sampler` (neumann's own parameter; default the light BVH).
+    light_sampler: LightSamplerKind,
 }
 
 impl Builder {
@@ -86,6 +89,7 @@ impl Builder {
             images: HashMap::new(),
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
+            light_sampler: LightSamplerKind::default(),
         }
     }
 
@@ -131,7 +135,13 @@ impl Builder {
         let sensor = sensor.ok_or_else(|| SceneError::at(&root.loc, "the scene has no <sensor> (camera)"))?;
         let SensorSettings { camera, spp, sampler, seed, filter, window, alpha } = self.sensor(&sensor)?;
         self.sb.set_camera(camera);
-        let scene = self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
+        let mut scene =
+            self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
+        if self.light_sampler != LightSamplerKind::default() {
+            scene
+                .set_light_sampler(self.light_sampler)
+                .map_err(|e| SceneError::at(&root.loc, format!("cannot build the light sampler: {e}")))?;
+        }
         let mut warnings = Vec::new();
         root.unused_warnings(&mut warnings, &mut Vec::new());
         Ok(SceneFile {
@@ -150,6 +160,10 @@ impl Builder {
     fn integrator(&mut self, o: &Obj) -> Result<AnyIntegrator> {
         o.built.set(true);
         o.check_children(&[])?;
+        if matches!(o.ty.as_str(), "path" | "volpath" | "direct") {
+            let names: Vec<&str> = LightSamplerKind::ALL.iter().map(|(_, n)| *n).collect();
+            self.light_sampler = o.choice("light_sampler", &names)?.parse().map_err(|e: String| o.error(e))?;
+        }
         match o.ty.as_str() {
             "path" | "ptracer" | "volpath" => {
                 let max_depth = o.int("max_depth", -1)?;
@@ -294,11 +308,14 @@ impl Builder {
                     "box" => Filter::Box,
                     "tent" => {
                         let radius = r.float("radius", 1.0)?;
-                        Filter::tent(radius).ok_or_else(|| r.error_at("radius", "radius must be positive"))?
+                        Filter::tent(radius)
+                            .ok_or_else(|| r.error_at("radius", "radius must be positive and at most 16.5 pixels"))?
                     }
                     "gaussian" => {
                         let s = r.float("stddev", 0.5)?;
-                        Filter::gaussian(s).ok_or_else(|| r.error_at("stddev", "stddev must be positive"))?
+                        Filter::gaussian(s).ok_or_else(|| {
+                            r.error_at("stddev", "stddev must be positive and at most 4.125 pixels (radius 4 stddev)")
+                        })?
                     }
                     _ => return Err(unknown(r, FILTERS)),
                 };

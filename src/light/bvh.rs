@@ -1,0 +1,593 @@
+//! The light BVH: chooses a light for next-event estimation with probability proportional to a
+//! bound on its contribution at the shading point (pbrt-v4's `BVHLightSampler`, after Conty
+//! Estevez and Kulla, "Importance Sampling of Many Lights with Adaptive Tree Splitting", 2018).
+//!
+//! Each node bounds its lights by [`LightBounds`]: a box, their total power `φ`, a cone `(w, θ_o)`
+//! holding their normals and the spread `θ_e` of emission about each normal (π/2 for diffuse
+//! emitters). The importance of a node at point `p` with normal `n` is
+//! `φ cos θ' / d² · cos θ'_i`, where `θ'` is the smallest angle between the emission cone and
+//! the direction to `p` (zero importance beyond `θ_o + θ_e`), `θ'_i` the smallest angle between
+//! `n` and the directions to the box, and `d²` the squared distance to the box centre clamped
+//! below by half the box diagonal. Sampling walks from the root choosing a child with
+//! probability proportional to its importance; the pmf of a light is the product of the choices
+//! on its path (recorded as a bit trail, so [`LightBvh::pmf`] retraces it for MIS).
+//!
+//! Lights at infinity (environments, directional light) have no bounds: they are chosen apart,
+//! each with probability `1 / (n_infinite + 1)`, and the BVH gets the remaining `1 / (n + 1)`
+//! (as in pbrt-v4). Lights of zero power are never chosen.
+//!
+//! The tree is built top-down with pbrt-v4's surface-area-orientation heuristic: 12 buckets per
+//! axis, cost `φ M_Ω K_r A` per side (`M_Ω` the orientation cone's measure, `K_r` the box's
+//! aspect along the split axis, `A` its surface area).
+
+use super::Light;
+use crate::geometry::Geometry;
+use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, PI};
+
+/// Spatial and directional bounds of a set of emitters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightBounds {
+    /// Box holding the emitters (world).
+    pub bounds: Bounds3,
+    /// Total emitted power (luminance of the flux, W), as [`Light::power`].
+    pub phi: f32,
+    /// Axis of the normal cone.
+    pub w: Vec3,
+    /// Cosine of the normal cone's half-angle `θ_o` (-1: every direction).
+    pub cos_theta_o: f32,
+    /// Cosine of the spread `θ_e` of emission about each normal (0 for diffuse emitters).
+    pub cos_theta_e: f32,
+}
+
+impl LightBounds {
+    /// The bounds of `light`, or `None` for lights at infinity and lights without power.
+    pub fn of(light: &Light, shapes: &[Geometry]) -> Option<LightBounds> {
+        let phi = light.power(shapes);
+        if !(phi > 0.0 && phi.is_finite()) {
+            return None;
+        }
+        match light {
+            Light::Area { shape, .. } => {
+                let g = &shapes[*shape as usize];
+                let cone = g.normal_cone();
+                Some(LightBounds { bounds: g.bounds(), phi, w: cone.w, cos_theta_o: cone.cos_theta, cos_theta_e: 0.0 })
+            }
+            Light::Point { position, .. } => Some(LightBounds {
+                bounds: Bounds3::from_point(*position),
+                phi,
+                w: Vec3::Z,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+            }),
+            Light::Spot { position, frame, cutoff, beam, .. } => Some(LightBounds {
+                bounds: Bounds3::from_point(*position),
+                phi,
+                w: frame.to_world(Vec3::Z),
+                // Full strength within the beam, falling to zero at the cutoff (pbrt-v4's bound).
+                cos_theta_o: beam.cos(),
+                cos_theta_e: (cutoff - beam).cos(),
+            }),
+            Light::Constant { .. } | Light::EnvMap { .. } | Light::Directional { .. } => None,
+        }
+    }
+
+    /// Bounds of the union of two sets of emitters.
+    pub fn union(a: &LightBounds, b: &LightBounds) -> LightBounds {
+        let cone = DirectionCone::union(
+            &DirectionCone { w: a.w, cos_theta: a.cos_theta_o },
+            &DirectionCone { w: b.w, cos_theta: b.cos_theta_o },
+        );
+        LightBounds {
+            bounds: a.bounds.union(&b.bounds),
+            phi: a.phi + b.phi,
+            w: cone.w,
+            cos_theta_o: cone.cos_theta,
+            cos_theta_e: a.cos_theta_e.min(b.cos_theta_e),
+        }
+    }
+
+    /// Conservative importance of these emitters at point `p` with unit normal `n` (zero for a
+    /// point in a medium): pbrt-v4's `LightBounds::Importance` (module docs). Zero only where
+    /// no emitter of the set can send light to `p` (or reach `n`'s hemisphere pair).
+    pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        NodeBounds::new(self).importance(p, n)
+    }
+
+    /// pbrt-v4's split cost of a node with these bounds inside `parent` split along `axis`.
+    fn cost(&self, parent: &Bounds3, axis: usize) -> f32 {
+        let theta_o = safe_acos(self.cos_theta_o);
+        let theta_e = safe_acos(self.cos_theta_e);
+        let theta_w = (theta_o + theta_e).min(PI);
+        let sin_o = safe_sqrt(1.0 - self.cos_theta_o * self.cos_theta_o);
+        let m_omega = 2.0 * PI * (1.0 - self.cos_theta_o)
+            + PI / 2.0
+                * (2.0 * theta_w * sin_o - (theta_o - 2.0 * theta_w).cos() - 2.0 * theta_o * sin_o + self.cos_theta_o);
+        let d = parent.diagonal();
+        let kr = if d[axis] > 0.0 { d.max_element() / d[axis] } else { 1.0 };
+        self.phi * m_omega * kr * self.bounds.surface_area()
+    }
+}
+
+/// [`LightBounds`] as the traversal reads them: the box reduced to its bounding sphere, and the
+/// sine of the normal cone's angle, precomputed.
+#[derive(Clone, Copy, Debug)]
+struct NodeBounds {
+    /// Centre of the box (and of its bounding sphere).
+    center: Vec3,
+    /// Radius of the bounding sphere (half the box diagonal).
+    radius: f32,
+    w: Vec3,
+    phi: f32,
+    cos_theta_o: f32,
+    sin_theta_o: f32,
+    cos_theta_e: f32,
+}
+
+impl NodeBounds {
+    fn new(b: &LightBounds) -> NodeBounds {
+        let (center, radius) = b.bounds.bounding_sphere();
+        NodeBounds {
+            center,
+            radius,
+            w: b.w,
+            phi: b.phi,
+            cos_theta_o: b.cos_theta_o,
+            sin_theta_o: safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o),
+            cos_theta_e: b.cos_theta_e,
+        }
+    }
+
+    /// See [`LightBounds::importance`].
+    #[inline]
+    fn importance(&self, p: Vec3, n: Vec3) -> f32 {
+        // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
+        #[inline(always)]
+        fn cos_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+            if cos_a > cos_b {
+                1.0
+            } else {
+                cos_a * cos_b + sin_a * sin_b
+            }
+        }
+        #[inline(always)]
+        fn sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
+            if cos_a > cos_b {
+                0.0
+            } else {
+                sin_a * cos_b - cos_a * sin_b
+            }
+        }
+        let d = p - self.center;
+        let dist2 = d.length_squared();
+        // pbrt-v4 clamps d² below by half the box diagonal (a length: its units as written).
+        let d2 = dist2.max(self.radius);
+        let wi = if dist2 > 0.0 { d / dist2.sqrt() } else { Vec3::ZERO };
+        let cos_w = self.w.dot(wi);
+        let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
+        // The cone of directions from p to the bounding sphere (the whole sphere from inside).
+        let r2 = self.radius * self.radius;
+        let cos_b = if dist2 < r2 { -1.0 } else { safe_sqrt(1.0 - r2 / dist2) };
+        let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
+        let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
+        if cos_p <= self.cos_theta_e {
+            return 0.0;
+        }
+        let mut importance = self.phi * cos_p / d2;
+        if n != Vec3::ZERO {
+            let cos_i = wi.dot(n).abs();
+            let sin_i = safe_sqrt(1.0 - cos_i * cos_i);
+            importance *= cos_sub(sin_i, cos_i, sin_b, cos_b);
+        }
+        importance.max(0.0)
+    }
+}
+
+/// A node: its bounds, and either its second child (the first follows it) or its light.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    bounds: NodeBounds,
+    /// Second child's index (interior) or the light's index (leaf).
+    child_or_light: u32,
+    leaf: bool,
+}
+
+/// The light BVH over a scene's bounded lights, with the scene's lights at infinity beside it.
+#[derive(Clone, Debug)]
+pub struct LightBvh {
+    nodes: Vec<Node>,
+    /// Per light: its path from the root (bit k set: the second child at depth k), or
+    /// `NOT_IN_TREE`.
+    trails: Vec<u64>,
+    /// Lights at infinity, chosen apart.
+    infinite: Vec<u32>,
+    /// Whether each light is at infinity.
+    is_infinite: Vec<bool>,
+    /// Probability of choosing among the lights at infinity, `n_inf / (n_inf + 1)` (or 1 without
+    /// a tree).
+    p_infinite: f32,
+}
+
+/// Trail of a light that the tree does not hold.
+const NOT_IN_TREE: u64 = u64::MAX;
+
+/// Deepest path a trail can record (the build falls back to median splits below it).
+const MAX_DEPTH: u32 = 62;
+
+impl LightBvh {
+    /// Builds the tree over `lights` (on `shapes`).
+    pub fn new(lights: &[Light], shapes: &[Geometry]) -> LightBvh {
+        let mut items: Vec<(u32, LightBounds)> = Vec::new();
+        let mut infinite = Vec::new();
+        let mut is_infinite = vec![false; lights.len()];
+        for (i, l) in lights.iter().enumerate() {
+            if l.is_infinite() || matches!(l, Light::Directional { .. }) {
+                // Zero-power lights at infinity are still never chosen: skip them too.
+                if l.power(shapes) > 0.0 {
+                    infinite.push(i as u32);
+                    is_infinite[i] = true;
+                }
+            } else if let Some(b) = LightBounds::of(l, shapes) {
+                items.push((i as u32, b));
+            }
+        }
+        let mut bvh = LightBvh {
+            nodes: Vec::new(),
+            trails: vec![NOT_IN_TREE; lights.len()],
+            infinite,
+            is_infinite,
+            p_infinite: 0.0,
+        };
+        if !items.is_empty() {
+            let n = items.len();
+            bvh.build(&mut items, 0, n, 0, 0);
+        }
+        let (n_inf, tree) = (bvh.infinite.len() as u32, u32::from(!bvh.nodes.is_empty()));
+        bvh.p_infinite = if n_inf + tree == 0 { 0.0 } else { n_inf as f32 / (n_inf + tree) as f32 };
+        bvh
+    }
+
+    /// Number of tree nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Builds the subtree of `items[start..end]` at `depth` with path `trail`; returns its bounds.
+    fn build(
+        &mut self,
+        items: &mut [(u32, LightBounds)],
+        start: usize,
+        end: usize,
+        trail: u64,
+        depth: u32,
+    ) -> LightBounds {
+        if end - start == 1 {
+            let (light, b) = items[start];
+            self.nodes.push(Node { bounds: NodeBounds::new(&b), child_or_light: light, leaf: true });
+            self.trails[light as usize] = trail;
+            return b;
+        }
+        let mut bounds = Bounds3::EMPTY;
+        let mut centroids = Bounds3::EMPTY;
+        for (_, b) in &items[start..end] {
+            bounds = bounds.union(&b.bounds);
+            centroids = centroids.union_point(b.bounds.centroid());
+        }
+        const BUCKETS: usize = 12;
+        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
+        if depth < MAX_DEPTH {
+            for axis in 0..3 {
+                let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
+                if hi <= lo {
+                    continue;
+                }
+                let bucket_of = |b: &LightBounds| {
+                    (((b.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize).min(BUCKETS - 1)
+                };
+                let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
+                for (_, b) in &items[start..end] {
+                    let k = bucket_of(b);
+                    buckets[k] = Some(match buckets[k] {
+                        Some(acc) => LightBounds::union(&acc, b),
+                        None => *b,
+                    });
+                }
+                let merge = |range: &[Option<LightBounds>]| {
+                    range
+                        .iter()
+                        .flatten()
+                        .fold(None, |acc: Option<LightBounds>, b| Some(acc.map_or(*b, |a| LightBounds::union(&a, b))))
+                };
+                for split in 0..BUCKETS - 1 {
+                    let (Some(b0), Some(b1)) = (merge(&buckets[..=split]), merge(&buckets[split + 1..])) else {
+                        continue;
+                    };
+                    let cost = b0.cost(&bounds, axis) + b1.cost(&bounds, axis);
+                    if cost.is_finite() && best.is_none_or(|(c, _, _)| cost < c) {
+                        best = Some((cost, axis, split));
+                    }
+                }
+            }
+        }
+        let mut mid = (start + end) / 2;
+        if let Some((_, axis, split)) = best {
+            let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
+            let slice = &mut items[start..end];
+            let mut k = 0;
+            for i in 0..slice.len() {
+                let b = (((slice[i].1.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize)
+                    .min(BUCKETS - 1);
+                if b <= split {
+                    slice.swap(i, k);
+                    k += 1;
+                }
+            }
+            if k > 0 && k < slice.len() {
+                mid = start + k;
+            }
+        }
+        let index = self.nodes.len();
+        // Placeholder; filled in once both children are built.
+        self.nodes.push(Node { bounds: NodeBounds::new(&items[start].1), child_or_light: 0, leaf: false });
+        let b0 = self.build(items, start, mid, trail, depth + 1);
+        let second = self.nodes.len() as u32;
+        let b1 = self.build(items, mid, end, trail | (1u64 << depth), depth + 1);
+        let b = LightBounds::union(&b0, &b1);
+        self.nodes[index] = Node { bounds: NodeBounds::new(&b), child_or_light: second, leaf: false };
+        b
+    }
+
+    /// Chooses a light for shading point `p` with unit normal `n` (zero in a medium): the
+    /// light's index and the probability of choosing it. `None` if no light can reach `p`.
+    #[inline]
+    pub fn sample(&self, p: Vec3, n: Vec3, u: f32) -> Option<(u32, f32)> {
+        let p_inf = self.p_infinite;
+        if u < p_inf {
+            let k = ((u / p_inf * self.infinite.len() as f32) as usize).min(self.infinite.len() - 1);
+            return Some((self.infinite[k], p_inf / self.infinite.len() as f32));
+        }
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let mut u = if p_inf > 0.0 { ((u - p_inf) / (1.0 - p_inf)).min(crate::math::ONE_MINUS_EPSILON) } else { u };
+        let mut pmf = 1.0 - p_inf;
+        let mut index = 0usize;
+        loop {
+            let node = &self.nodes[index];
+            if node.leaf {
+                // A leaf reached through a split has positive importance. A lone light (the
+                // root) is returned without testing it: its pmf is the same everywhere, and
+                // where it cannot reach, its sample_li or the BSDF gives nothing.
+                return Some((node.child_or_light, pmf));
+            }
+            let (c0, c1) = (index + 1, node.child_or_light as usize);
+            let i0 = self.nodes[c0].bounds.importance(p, n);
+            let i1 = self.nodes[c1].bounds.importance(p, n);
+            if i0 == 0.0 && i1 == 0.0 {
+                return None;
+            }
+            let p0 = i0 / (i0 + i1);
+            if u < p0 {
+                u = (u / p0).min(crate::math::ONE_MINUS_EPSILON);
+                pmf *= p0;
+                index = c0;
+            } else {
+                u = ((u - p0) / (1.0 - p0)).min(crate::math::ONE_MINUS_EPSILON);
+                pmf *= 1.0 - p0;
+                index = c1;
+            }
+        }
+    }
+
+    /// Probability that [`LightBvh::sample`] at `(p, n)` chooses light `light`.
+    #[inline]
+    pub fn pmf(&self, p: Vec3, n: Vec3, light: u32) -> f32 {
+        let p_inf = self.p_infinite;
+        if self.is_infinite.get(light as usize).copied().unwrap_or(false) {
+            return p_inf / self.infinite.len() as f32;
+        }
+        let Some(&trail) = self.trails.get(light as usize) else { return 0.0 };
+        if trail == NOT_IN_TREE {
+            return 0.0;
+        }
+        let mut trail = trail;
+        let mut pmf = 1.0 - p_inf;
+        let mut index = 0usize;
+        loop {
+            let node = &self.nodes[index];
+            if node.leaf {
+                return pmf;
+            }
+            let (c0, c1) = (index + 1, node.child_or_light as usize);
+            let i0 = self.nodes[c0].bounds.importance(p, n);
+            let i1 = self.nodes[c1].bounds.importance(p, n);
+            if i0 == 0.0 && i1 == 0.0 {
+                return 0.0;
+            }
+            // The same arithmetic as `sample`, so that the two agree to the last bit.
+            let p0 = i0 / (i0 + i1);
+            let second = trail & 1 == 1;
+            pmf *= if second { 1.0 - p0 } else { p0 };
+            index = if second { c1 } else { c0 };
+            trail >>= 1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Disk, Sphere, TriangleMesh};
+    use crate::math::{Frame, Rgb, Transform};
+    use crate::sampling::{sample_uniform_sphere, Pcg32};
+    use crate::testkit::{chi2_discrete, u2, Chi2Config};
+
+    /// A scene of varied bounded lights (spheres, oriented quads, a disk, points, a spot) and an
+    /// environment, with their shapes.
+    pub(crate) fn many_lights(seed: u64) -> (Vec<Light>, Vec<Geometry>) {
+        let mut rng = Pcg32::new(seed, 7);
+        let mut shapes = Vec::new();
+        let mut lights = Vec::new();
+        let mut r = || rng.next_f32();
+        for k in 0..40 {
+            let c = Vec3::new(8.0 * r() - 4.0, 3.0 * r(), 8.0 * r() - 4.0);
+            let radiance = Rgb::new(r(), r(), r()) * (10.0 * r() + 0.1);
+            let mut g = if k % 3 == 0 {
+                let mut m = TriangleMesh::rectangle();
+                let axis = sample_uniform_sphere(glam::Vec2::new(r(), r())).value;
+                let t = Transform::translate(c)
+                    * Transform::rotate(axis, 360.0 * r()).unwrap()
+                    * Transform::scale(Vec3::splat(0.05 + 0.3 * r())).unwrap();
+                m.transform(&t);
+                Geometry::Mesh(m)
+            } else if k % 7 == 1 {
+                Geometry::Disk(
+                    Disk::new(Transform::translate(c) * Transform::rotate(Vec3::X, 90.0).unwrap(), false).unwrap(),
+                )
+            } else {
+                Geometry::Sphere(Sphere { center: c, radius: 0.01 + 0.3 * r(), flip: false })
+            };
+            assert!(g.prepare_sampling());
+            if let Geometry::Mesh(m) = &mut g {
+                m.prepare_normals();
+            }
+            shapes.push(g);
+            lights.push(Light::Area { shape: k, radiance });
+        }
+        lights.push(Light::Point { position: Vec3::new(1.0, 2.0, -1.0), intensity: Rgb::splat(3.0) });
+        lights.push(Light::Point { position: Vec3::new(-3.0, 0.5, 2.0), intensity: Rgb::new(0.1, 0.5, 0.2) });
+        lights.push(Light::Spot {
+            position: Vec3::new(0.0, 4.0, 0.0),
+            frame: Frame::from_z(-Vec3::Y),
+            intensity: Rgb::splat(20.0),
+            cutoff: 0.5,
+            beam: 0.3,
+        });
+        lights.push(Light::Constant { radiance: Rgb::splat(0.2), center: Vec3::ZERO, radius: 6.0 });
+        (lights, shapes)
+    }
+
+    fn contexts() -> Vec<(Vec3, Vec3)> {
+        let mut rng = Pcg32::new(3, 3);
+        let mut out = vec![(Vec3::new(0.3, -0.2, 0.1), Vec3::Y), (Vec3::new(2.0, 1.0, 0.5), Vec3::ZERO)];
+        for _ in 0..4 {
+            let p = Vec3::new(8.0 * rng.next_f32() - 4.0, 3.0 * rng.next_f32(), 8.0 * rng.next_f32() - 4.0);
+            out.push((p, sample_uniform_sphere(u2(&mut rng)).value));
+        }
+        out
+    }
+
+    /// The lights chosen at a shading point follow `pmf` (χ²), the pmf sums to at most one over
+    /// the lights, and `sample` reports exactly the probability that `pmf` computes (MIS needs both
+    /// to agree to the last bit).
+    #[test]
+    fn selection_follows_the_pmf() {
+        let (lights, shapes) = many_lights(1);
+        let bvh = LightBvh::new(&lights, &shapes);
+        assert!(bvh.node_count() == 2 * (lights.len() - 1) - 1, "one leaf per bounded light");
+        for (k, &(p, n)) in contexts().iter().enumerate() {
+            // Below 1 where a node's bound is positive but both children's are zero: then no
+            // light is chosen (pbrt-v4 likewise), which the χ² test's extra cell checks.
+            let total: f64 = (0..lights.len() as u32).map(|i| bvh.pmf(p, n, i) as f64).sum();
+            assert!(total <= 1.0 + 1e-5 && total > 0.5, "context {k}: Σ pmf = {total}");
+            let out = chi2_discrete(
+                lights.len(),
+                300_000,
+                |rng| {
+                    let (i, pmf) = bvh.sample(p, n, rng.next_f32())?;
+                    assert_eq!(pmf.to_bits(), bvh.pmf(p, n, i).to_bits(), "light {i}: sample and pmf disagree");
+                    Some(i as usize)
+                },
+                |i| bvh.pmf(p, n, i as u32) as f64,
+                &Chi2Config::default().with_seed(k as u64),
+            );
+            assert!(out.passed(), "context {k}: {out}");
+        }
+    }
+
+    /// With two lights the tree is one split, and the pmf is the ratio of importances, computed
+    /// here from the definition: for point lights `φ |cos θ_i| / d²`; the environment gets half.
+    #[test]
+    fn two_point_lights_by_exact_importance() {
+        let a = Vec3::new(1.0, 2.0, 0.0);
+        let b = Vec3::new(-2.0, 1.0, 3.0);
+        let lights = vec![
+            Light::Point { position: a, intensity: Rgb::splat(2.0) },
+            Light::Point { position: b, intensity: Rgb::new(1.0, 5.0, 0.5) },
+            Light::Constant { radiance: Rgb::ONE, center: Vec3::ZERO, radius: 5.0 },
+        ];
+        let bvh = LightBvh::new(&lights, &[]);
+        let p = Vec3::new(0.2, 0.0, 0.4);
+        let n = Vec3::new(0.3, 1.0, -0.2).normalize();
+        let imp = |c: Vec3, l: &Light| {
+            let d = c - p;
+            l.power(&[]) as f64 * (d.normalize().dot(n).abs() as f64) / d.length_squared() as f64
+        };
+        let (ia, ib) = (imp(a, &lights[0]), imp(b, &lights[1]));
+        assert!((bvh.pmf(p, n, 0) as f64 - 0.5 * ia / (ia + ib)).abs() < 1e-5);
+        assert!((bvh.pmf(p, n, 1) as f64 - 0.5 * ib / (ia + ib)).abs() < 1e-5);
+        assert_eq!(bvh.pmf(p, n, 2), 0.5);
+        // In a medium (no normal) the cosine drops out.
+        let imp0 = |c: Vec3, l: &Light| l.power(&[]) as f64 / (c - p).length_squared() as f64;
+        let (ia, ib) = (imp0(a, &lights[0]), imp0(b, &lights[1]));
+        assert!((bvh.pmf(p, Vec3::ZERO, 0) as f64 - 0.5 * ia / (ia + ib)).abs() < 1e-5);
+    }
+
+    /// The importance bound is conservative: wherever a light can send light to a point (a light
+    /// sample from there arrives from the light's front, off the point's tangent plane), the
+    /// light's pmf is positive, so the estimator stays unbiased. A one-sided quad seen from
+    /// behind gets nothing.
+    #[test]
+    fn every_light_that_can_contribute_can_be_chosen() {
+        let (lights, shapes) = many_lights(2);
+        let bvh = LightBvh::new(&lights, &shapes);
+        let mut rng = Pcg32::new(9, 1);
+        let mut checked = 0;
+        for _ in 0..300 {
+            let p = Vec3::new(10.0 * rng.next_f32() - 5.0, 4.0 * rng.next_f32() - 0.5, 10.0 * rng.next_f32() - 5.0);
+            let n = sample_uniform_sphere(u2(&mut rng)).value;
+            for (i, light) in lights.iter().enumerate() {
+                for _ in 0..8 {
+                    let Some(ls) = light.sample_li(&shapes, p, u2(&mut rng)) else { continue };
+                    if ls.li.max_element() > 0.0 && ls.wi.dot(n).abs() > 1e-3 {
+                        checked += 1;
+                        assert!(bvh.pmf(p, n, i as u32) > 0.0, "light {i} reaches {p} but has pmf 0");
+                    }
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked} contributions checked");
+        let mut quad = TriangleMesh::rectangle(); // faces +z
+        quad.prepare_normals();
+        let shapes = [Geometry::Mesh(quad)];
+        let lights = [Light::Area { shape: 0, radiance: Rgb::ONE }];
+        let bvh = LightBvh::new(&lights, &shapes);
+        // Behind it, outside its bounding sphere (radius √2), nothing can arrive: the bound
+        // says so. (A lone light is still chosen there: its pmf is one everywhere.)
+        let bounds = LightBounds::of(&lights[0], &shapes).unwrap();
+        assert_eq!(bounds.importance(Vec3::new(0.0, 0.0, -3.0), Vec3::Z), 0.0, "behind a one-sided light");
+        assert!(bounds.importance(Vec3::new(0.0, 0.0, 3.0), Vec3::Z) > 0.0);
+        assert_eq!(bvh.pmf(Vec3::new(0.3, 0.2, -3.0), Vec3::Z, 0), 1.0);
+    }
+
+    /// Lights without power are never chosen, and lights at infinity share their half evenly.
+    #[test]
+    fn zero_power_and_infinite_lights() {
+        let lights = vec![
+            Light::Point { position: Vec3::ZERO, intensity: Rgb::ZERO },
+            Light::Point { position: Vec3::X, intensity: Rgb::ONE },
+            Light::Constant { radiance: Rgb::ONE, center: Vec3::ZERO, radius: 5.0 },
+            Light::Directional { direction: -Vec3::Y, irradiance: Rgb::ONE, center: Vec3::ZERO, radius: 5.0 },
+        ];
+        let bvh = LightBvh::new(&lights, &[]);
+        let (p, n) = (Vec3::new(0.0, -1.0, 0.0), Vec3::Y);
+        assert_eq!(bvh.pmf(p, n, 0), 0.0);
+        assert!((bvh.pmf(p, n, 1) - 1.0 / 3.0).abs() < 1e-6);
+        assert!((bvh.pmf(p, n, 2) - 1.0 / 3.0).abs() < 1e-6 && (bvh.pmf(p, n, 3) - 1.0 / 3.0).abs() < 1e-6);
+        for k in 0..1000 {
+            let (i, _) = bvh.sample(p, n, k as f32 / 1000.0).unwrap();
+            assert_ne!(i, 0);
+        }
+    }
+}

@@ -1,0 +1,235 @@
+//! Light selection for next-event estimation: which emitter a shading point samples.
+//!
+//! A [`LightSampler`] chooses one light with a discrete probability that may depend on the
+//! shading point `(p, n)`; MIS at an emitter found by BSDF sampling needs the same probability
+//! for the previous vertex, which [`LightSampler::pmf`] returns (the estimator is unbiased for any
+//! choice that gives every light that can contribute a positive probability):
+//!
+//! - `bvh` (default): the light BVH ([`super::LightBvh`]), probability proportional to a bound on
+//!   each light's contribution at the point (pbrt-v4's default);
+//! - `power`: proportional to emitted power, the same everywhere (pbrt-v4's `power`);
+//! - `uniform`: every light alike (Mitsuba 3's rule).
+
+use super::{Light, LightBvh};
+use crate::geometry::Geometry;
+use crate::math::Vec3;
+use crate::sampling::AliasTable;
+
+/// Which light sampler a render uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSamplerKind {
+    /// Light BVH: importance bounded by power, distance and orientation at the shading point.
+    #[default]
+    Bvh,
+    /// Proportional to power.
+    Power,
+    /// Uniform over the lights.
+    Uniform,
+}
+
+impl LightSamplerKind {
+    /// Every kind with its name, in the order the documentation lists them.
+    pub const ALL: [(LightSamplerKind, &'static str); 3] =
+        [(LightSamplerKind::Bvh, "bvh"), (LightSamplerKind::Power, "power"), (LightSamplerKind::Uniform, "uniform")];
+
+    /// The kind's name (as in scene files and on the command line).
+    pub fn name(self) -> &'static str {
+        Self::ALL.iter().find(|(k, _)| *k == self).map(|(_, n)| *n).unwrap_or("bvh")
+    }
+}
+
+impl std::str::FromStr for LightSamplerKind {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .iter()
+            .find(|(_, n)| *n == s)
+            .map(|(k, _)| *k)
+            .ok_or_else(|| format!("unknown light sampler '{s}' (expected one of: bvh, power, uniform)"))
+    }
+}
+
+impl std::fmt::Display for LightSamplerKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Where a light is chosen for: the shading point and its unit normal (zero for a point in a
+/// medium, which has no normal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSampleContext {
+    /// Shading point (world).
+    pub p: Vec3,
+    /// Unit shading normal at `p` (world), or zero.
+    pub n: Vec3,
+}
+
+/// A light sampler built for one scene's lights.
+#[derive(Clone, Debug)]
+pub enum LightSampler {
+    /// No light can be chosen.
+    Empty,
+    /// Every one of `count` lights with probability `1 / count`.
+    Uniform {
+        /// Number of lights.
+        count: u32,
+    },
+    /// Proportional to power (the alias table over the lights' powers).
+    Power(AliasTable),
+    /// The light BVH.
+    Bvh(LightBvh),
+}
+
+impl LightSampler {
+    /// The sampler of `kind` for `lights` on `shapes`. Errors if lights exist but none has
+    /// power (power and BVH selection would have nothing to choose).
+    pub fn new(kind: LightSamplerKind, lights: &[Light], shapes: &[Geometry]) -> Result<LightSampler, String> {
+        if lights.is_empty() {
+            return Ok(LightSampler::Empty);
+        }
+        let powers: Vec<f32> = lights.iter().map(|l| l.power(shapes)).collect();
+        let power = AliasTable::new(&powers).ok_or("every light has zero power")?;
+        Ok(match kind {
+            LightSamplerKind::Uniform => LightSampler::Uniform { count: lights.len() as u32 },
+            LightSamplerKind::Power => LightSampler::Power(power),
+            LightSamplerKind::Bvh => LightSampler::Bvh(LightBvh::new(lights, shapes)),
+        })
+    }
+
+    /// Chooses a light for `ctx` with `u ∈ [0, 1)`: its index and the probability of choosing
+    /// it. `None` if there is none to choose (the BVH also returns `None` when no light can
+    /// reach the point).
+    #[inline]
+    pub fn sample(&self, ctx: &LightSampleContext, u: f32) -> Option<(u32, f32)> {
+        match self {
+            LightSampler::Empty => None,
+            LightSampler::Uniform { count } => Some((((u * *count as f32) as u32).min(count - 1), 1.0 / *count as f32)),
+            LightSampler::Power(table) => {
+                let (s, _) = table.sample(u);
+                Some((s.value as u32, s.pdf))
+            }
+            LightSampler::Bvh(bvh) => bvh.sample(ctx.p, ctx.n, u),
+        }
+    }
+
+    /// Probability that [`LightSampler::sample`] at `ctx` chooses light `i`.
+    #[inline]
+    pub fn pmf(&self, ctx: &LightSampleContext, i: u32) -> f32 {
+        match self {
+            LightSampler::Empty => 0.0,
+            LightSampler::Uniform { count } => 1.0 / *count as f32,
+            LightSampler::Power(table) => table.pmf(i as usize),
+            LightSampler::Bvh(bvh) => bvh.pmf(ctx.p, ctx.n, i),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Disk, Sphere, TriangleMesh};
+    use crate::math::{Ray, Rgb, Transform};
+    use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
+
+    /// Area lights around a point (disjoint as seen from it) and an environment.
+    fn lights_around(p: Vec3) -> (Vec<Light>, Vec<Geometry>) {
+        let mut quad = TriangleMesh::rectangle();
+        quad.transform(
+            &(Transform::translate(p + Vec3::new(0.0, 0.0, 2.0)) * Transform::rotate(Vec3::X, 170.0).unwrap()),
+        );
+        quad.prepare_normals();
+        let disk = Disk::new(
+            Transform::translate(p + Vec3::new(-2.0, 0.5, 0.0)) * Transform::rotate(Vec3::Y, 80.0).unwrap(),
+            false,
+        )
+        .unwrap();
+        let mut shapes = vec![
+            Geometry::Mesh(quad),
+            Geometry::Sphere(Sphere { center: p + Vec3::new(0.0, -2.0, -1.0), radius: 0.8, flip: false }),
+            Geometry::Sphere(Sphere { center: p + Vec3::new(3.0, 1.0, 0.0), radius: 0.05, flip: false }),
+            Geometry::Disk(disk),
+        ];
+        for s in &mut shapes {
+            assert!(s.prepare_sampling());
+        }
+        let lights = vec![
+            Light::Area { shape: 0, radiance: Rgb::splat(2.0) },
+            Light::Area { shape: 1, radiance: Rgb::new(1.0, 0.5, 0.2) },
+            Light::Area { shape: 2, radiance: Rgb::splat(300.0) },
+            Light::Area { shape: 3, radiance: Rgb::splat(1.0) },
+            Light::Constant { radiance: Rgb::splat(0.3), center: p, radius: 10.0 },
+        ];
+        (lights, shapes)
+    }
+
+    /// The direction density of "choose a light, then `sample_li`" is
+    /// `Σ_lights pmf(ctx, i) · pdf_li(i, ω)`, the density MIS evaluates at BSDF-sampled hits, for
+    /// every sampler kind (χ² over the sphere of directions). Fails if `pmf` and `sample`
+    /// disagree, or `pdf_li` and `sample_li` do, for any light type.
+    #[test]
+    fn light_sampling_density_through_each_sampler() {
+        let p = Vec3::new(0.5, 0.2, -0.3);
+        let n = Vec3::new(0.2, 0.3, 1.0).normalize();
+        let ctx = LightSampleContext { p, n };
+        let (lights, shapes) = lights_around(p);
+        for (k, (kind, name)) in LightSamplerKind::ALL.iter().enumerate() {
+            let sampler = LightSampler::new(*kind, &lights, &shapes).unwrap();
+            let pdf = |w: &Vec3| -> f64 {
+                let ray = Ray::new(p, *w);
+                let mut total = 0.0f64;
+                for (i, light) in lights.iter().enumerate() {
+                    let density = match light {
+                        Light::Area { shape, .. } => {
+                            let g = &shapes[*shape as usize];
+                            let hit = match g {
+                                Geometry::Mesh(m) => (0..m.len()).find_map(|t| {
+                                    let pre = crate::geometry::triangle::RayPrecomp::new(&ray);
+                                    crate::geometry::triangle::intersect_triangle(&pre, &m.triangle(t), f32::INFINITY)
+                                        .map(|h| (ray.at(h.t), m.face_normal(t)))
+                                }),
+                                Geometry::Sphere(s) => s.intersect(&ray, f32::INFINITY).map(|h| {
+                                    let (sp, _) = s.surface(&ray, h.t);
+                                    (sp.p, sp.n)
+                                }),
+                                Geometry::Disk(d) => {
+                                    d.intersect(&ray, f32::INFINITY).map(|(_, q)| (d.surface(q).0.p, d.normal()))
+                                }
+                                Geometry::Cylinder(_) => None,
+                            };
+                            match hit {
+                                Some((q, nq)) if nq.dot(-*w) > 0.0 => light.pdf_li(&shapes, p, q, nq),
+                                _ => 0.0,
+                            }
+                        }
+                        _ => light.pdf_li_direction(*w),
+                    };
+                    total += (sampler.pmf(&ctx, i as u32) * density) as f64;
+                }
+                total
+            };
+            let out = chi2_2d(
+                &SPHERE,
+                [61, 121],
+                600_000,
+                |r| {
+                    let (i, _) = sampler.sample(&ctx, r.next_f32())?;
+                    lights[i as usize].sample_li(&shapes, p, u2(r)).map(|s| s.wi)
+                },
+                pdf,
+                &Chi2Config::default().with_seed(k as u64),
+            );
+            assert!(out.passed(), "{name}: {out}");
+        }
+    }
+
+    #[test]
+    fn kinds_parse_and_print() {
+        for (kind, name) in LightSamplerKind::ALL {
+            assert_eq!(name.parse::<LightSamplerKind>().unwrap(), kind);
+            assert_eq!(kind.to_string(), name);
+        }
+        assert!("bhv".parse::<LightSamplerKind>().unwrap_err().contains("bvh, power, uniform"));
+        assert_eq!(LightSamplerKind::default(), LightSamplerKind::Bvh);
+    }
+}
