@@ -151,7 +151,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
 
     if !args.no_cbox {
         let scene = cornell::cornell_box(args.cbox_res, args.cbox_res)?;
-        let integrator = PathIntegrator { max_depth: 8, ..Default::default() };
+        let integrator = PathIntegrator::with_max_depth(8);
         let settings = RenderSettings { spp: args.cbox_spp, seed: 0, ..Default::default() };
         let out = render(&scene, &integrator, &settings, &AtomicBool::new(false))?;
         println!(

@@ -241,7 +241,7 @@ mod tests {
     #[test]
     fn cornell_box_convergence_and_outputs() {
         let scene = crate::scene::cornell::cornell_box(16, 16).unwrap();
-        let integrator = crate::integrator::PathIntegrator { max_depth: 4, ..Default::default() };
+        let integrator = crate::integrator::PathIntegrator::with_max_depth(4);
         let reference = render(
             &scene,
             &integrator,

@@ -5,7 +5,7 @@ use neumann::estimators::irradiance::{estimate_uniform_sky_irradiance, Hemispher
 use neumann::film::output::{write_image_alpha, Format, ImageInfo};
 use neumann::integrator::radiosity::{self, Method};
 use neumann::integrator::{
-    AnyIntegrator, DirectIntegrator, DirectStrategy, LightTracer, PathIntegrator, VolPathIntegrator,
+    AnyIntegrator, DirectIntegrator, DirectStrategy, LightTracer, PathIntegrator, PathSettings, VolPathIntegrator,
 };
 use neumann::render::{render, render_integrator, RenderSettings, SamplerKind};
 use neumann::sampling::Pcg32;
@@ -309,7 +309,7 @@ fn run_converge(a: ConvergeArgs) -> Result<(), Failure> {
             )))
         }
     };
-    let max_depth = a.max_depth.unwrap_or(base.max_depth);
+    let max_depth = a.max_depth.unwrap_or(base.settings.max_depth);
     if max_depth < -1 {
         return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {max_depth}")));
     }
@@ -331,7 +331,11 @@ fn run_converge(a: ConvergeArgs) -> Result<(), Failure> {
                 "no --ref: rendering a reference with MIS at {spp} spp (seed {}), written to reference.exr",
                 a.seed + 1_000_003
             );
-            let integrator = PathIntegrator { max_depth, strategy: DirectStrategy::Mis, ..base.clone() };
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth, ..base.settings },
+                strategy: DirectStrategy::Mis,
+                ..base.clone()
+            };
             let settings = RenderSettings {
                 spp,
                 seed: a.seed + 1_000_003,
@@ -352,7 +356,11 @@ fn run_converge(a: ConvergeArgs) -> Result<(), Failure> {
     for &d in &a.direct {
         for &s in &a.sampler {
             let name = if a.sampler.len() > 1 { format!("{d:?} / {s:?}") } else { format!("{d:?}") }.to_lowercase();
-            let integrator = PathIntegrator { max_depth, strategy: direct_strategy(d), ..base.clone() };
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth, ..base.settings },
+                strategy: direct_strategy(d),
+                ..base.clone()
+            };
             let base =
                 RenderSettings { sampler: sampler_kind(s), seed: a.seed, threads: a.threads, ..Default::default() };
             let curve =
@@ -441,7 +449,7 @@ fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Failure>
     Ok(Job {
         name: name.to_string(),
         scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?,
-        integrator: AnyIntegrator::Path(PathIntegrator { max_depth, ..Default::default() }),
+        integrator: AnyIntegrator::Path(PathIntegrator::with_max_depth(max_depth)),
         spp,
         sampler: SamplerKind::Independent,
         seed: 0,
@@ -509,9 +517,9 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
         match &mut job.integrator {
-            AnyIntegrator::Path(p) => p.max_depth = d,
-            AnyIntegrator::Ptracer(t) => t.max_depth = d,
-            AnyIntegrator::VolPath(v) => v.max_depth = d,
+            AnyIntegrator::Path(PathIntegrator { settings, .. })
+            | AnyIntegrator::Ptracer(LightTracer { settings })
+            | AnyIntegrator::VolPath(VolPathIntegrator { settings }) => settings.max_depth = d,
             other => {
                 return Err(usage(format!(
                     "--max-depth applies to the path, volpath and ptracer integrators, not '{}'",
@@ -601,7 +609,7 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
 
     let term_count = match (&a.bounces_out, &job.integrator) {
         (None, _) => 0,
-        (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.max_depth) => p.max_depth as usize,
+        (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.settings.max_depth) => p.settings.max_depth as usize,
         (Some(_), AnyIntegrator::Path(_)) => 8,
         (Some(_), other) => {
             return Err(usage(format!("--bounces-out needs the path integrator, not '{}'", other.name())))
@@ -674,28 +682,22 @@ fn run_render(a: RenderArgs) -> Result<(), Failure> {
 /// Applies `--integrator` and the radiosity flags to the scene's integrator. Settings the old
 /// and new integrator share (max_depth, rr_depth, hide_emitters) carry over.
 fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), Failure> {
-    let (max_depth, rr_depth, hide_emitters) = match current {
-        AnyIntegrator::Path(p) => (p.max_depth, p.rr_depth, p.hide_emitters),
-        AnyIntegrator::Ptracer(t) => (t.max_depth, t.rr_depth, t.hide_emitters),
-        AnyIntegrator::VolPath(v) => (v.max_depth, v.rr_depth, v.hide_emitters),
-        AnyIntegrator::Direct(d) => (-1, 5, d.hide_emitters),
-        AnyIntegrator::Radiosity(_) => (-1, 5, false),
+    let settings = match &*current {
+        AnyIntegrator::Direct(d) => PathSettings { hide_emitters: d.hide_emitters, ..Default::default() },
+        other => other.path_settings().copied().unwrap_or_default(),
     };
     if let Some(kind) = a.integrator {
         let same = current.name() == format!("{kind:?}").to_ascii_lowercase();
         if !same {
             *current = match kind {
-                IntegratorArg::Path => {
-                    AnyIntegrator::Path(PathIntegrator { max_depth, rr_depth, hide_emitters, ..Default::default() })
-                }
-                IntegratorArg::Direct => {
-                    AnyIntegrator::Direct(DirectIntegrator { hide_emitters, ..Default::default() })
-                }
-                IntegratorArg::Ptracer => AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters }),
+                IntegratorArg::Path => AnyIntegrator::Path(PathIntegrator { settings, ..Default::default() }),
+                IntegratorArg::Direct => AnyIntegrator::Direct(DirectIntegrator {
+                    hide_emitters: settings.hide_emitters,
+                    ..Default::default()
+                }),
+                IntegratorArg::Ptracer => AnyIntegrator::Ptracer(LightTracer { settings }),
                 IntegratorArg::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
-                IntegratorArg::Volpath => {
-                    AnyIntegrator::VolPath(VolPathIntegrator { max_depth, rr_depth, hide_emitters })
-                }
+                IntegratorArg::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
             };
         }
     }

@@ -8,11 +8,13 @@ pub mod direct;
 pub mod path;
 pub mod ptracer;
 pub mod radiosity;
+pub mod trace;
 pub mod volpath;
 
 pub use direct::DirectIntegrator;
 pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
 pub use ptracer::LightTracer;
+pub use trace::{Mis, PathSettings};
 pub use volpath::VolPathIntegrator;
 
 use crate::math::{Ray, Rgb};
@@ -96,16 +98,35 @@ impl AnyIntegrator {
         }
     }
 
+    /// The path-length settings of the path-space integrators (`path`, `volpath`, `ptracer`).
+    pub fn path_settings(&self) -> Option<&PathSettings> {
+        match self {
+            AnyIntegrator::Path(p) => Some(&p.settings),
+            AnyIntegrator::Ptracer(t) => Some(&t.settings),
+            AnyIntegrator::VolPath(v) => Some(&v.settings),
+            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
+        }
+    }
+
+    /// Mutable [`AnyIntegrator::path_settings`].
+    pub fn path_settings_mut(&mut self) -> Option<&mut PathSettings> {
+        match self {
+            AnyIntegrator::Path(p) => Some(&mut p.settings),
+            AnyIntegrator::Ptracer(t) => Some(&mut t.settings),
+            AnyIntegrator::VolPath(v) => Some(&mut v.settings),
+            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
+        }
+    }
+
     /// One line describing the integrator and its main settings.
     pub fn describe(&self) -> String {
-        let depth = |d: i32| if d < 0 { "unlimited".to_string() } else { d.to_string() };
         match self {
-            AnyIntegrator::Path(p) => format!("path tracer, max_depth {}", depth(p.max_depth)),
+            AnyIntegrator::Path(p) => format!("path tracer, max_depth {}", p.settings.depth_text()),
             AnyIntegrator::Direct(d) => {
                 format!("direct lighting, {} emitter + {} BSDF samples", d.emitter_samples, d.bsdf_samples)
             }
-            AnyIntegrator::Ptracer(t) => format!("light tracer, max_depth {}", depth(t.max_depth)),
-            AnyIntegrator::VolPath(v) => format!("volumetric path tracer, max_depth {}", depth(v.max_depth)),
+            AnyIntegrator::Ptracer(t) => format!("light tracer, max_depth {}", t.settings.depth_text()),
+            AnyIntegrator::VolPath(v) => format!("volumetric path tracer, max_depth {}", v.settings.depth_text()),
             AnyIntegrator::Radiosity(o) => format!(
                 "radiosity, patch size {}, {} form-factor rays per patch, {:?}{}",
                 o.patch_size,

@@ -14,20 +14,21 @@
 //!
 //! Parameters (Mitsuba): `max_depth` (default -1), `rr_depth` (5), `hide_emitters` (false).
 
+use super::trace::{self, Mis, PathSettings, PrevVertex};
 use super::Integrator;
 use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext};
 use crate::math::{Frame, Ray, Rgb, Vec3};
-use crate::sampling::{
-    balance_heuristic, power_heuristic, sample_cosine_hemisphere_malley, sample_uniform_hemisphere,
-    sample_uniform_sphere, Sampler,
-};
+use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_hemisphere, sample_uniform_sphere, Sampler};
 use crate::scene::Scene;
 
+pub use super::trace::MisHeuristic;
+
 /// How direct light is estimated at each vertex.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DirectStrategy {
     /// Light sampling and BSDF sampling combined by MIS (power heuristic by default).
+    #[default]
     Mis,
     /// Light (emitter area) sampling only: emitters hit by BSDF-sampled rays after a
     /// non-specular bounce do not count.
@@ -43,82 +44,30 @@ pub enum DirectStrategy {
     Cosine,
 }
 
-/// The MIS heuristic combining light and BSDF sampling.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum MisHeuristic {
-    /// Veach's balance heuristic `w_a = p_a / (p_a + p_b)`.
-    Balance,
-    /// Veach's power heuristic with exponent 2, `w_a = p_a² / (p_a² + p_b²)`.
-    Power,
-}
-
 /// Unidirectional path tracer.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct PathIntegrator {
-    /// Longest path in segments; negative for unlimited.
-    pub max_depth: i32,
-    /// Depth (path vertices after the camera) from which Russian roulette applies.
-    pub rr_depth: u32,
+    /// `max_depth`, `rr_depth`, `hide_emitters`.
+    pub settings: PathSettings,
     /// Direct-light strategy.
     pub strategy: DirectStrategy,
     /// MIS heuristic (used by the `Mis` strategy).
     pub heuristic: MisHeuristic,
-    /// Whether emitters seen directly by the camera are hidden: camera rays pass through emitting
-    /// shapes (as in Mitsuba 3) and environments are black to them; lighting is unchanged.
-    pub hide_emitters: bool,
-}
-
-/// How many hidden emitters a camera ray may pass through before it gives up (a ray inside a
-/// stack of emitting shells).
-pub(crate) const MAX_HIDDEN_SKIPS: u32 = 64;
-
-impl Default for PathIntegrator {
-    fn default() -> Self {
-        PathIntegrator {
-            max_depth: -1,
-            rr_depth: 5,
-            strategy: DirectStrategy::Mis,
-            heuristic: MisHeuristic::Power,
-            hide_emitters: false,
-        }
-    }
 }
 
 impl PathIntegrator {
-    /// MIS weight of a sample of density `a` against the other strategy's density `b`.
-    #[inline]
-    fn mis(&self, a: f32, b: f32) -> f32 {
-        match self.heuristic {
-            MisHeuristic::Power => power_heuristic(1, a, 1, b),
-            MisHeuristic::Balance => balance_heuristic(1, a, 1, b),
-        }
+    /// The default path tracer with at most `max_depth` segments (-1: unlimited).
+    pub fn with_max_depth(max_depth: i32) -> PathIntegrator {
+        PathIntegrator { settings: PathSettings { max_depth, ..Default::default() }, ..Default::default() }
     }
 
-    /// Weight of emission found by the path itself (not by light sampling). `prev` is the previous
-    /// vertex (its light-sampling context, BSDF pdf of the direction taken, delta?), `None` for
-    /// camera rays; `pdf_light(ctx_prev)` computes the light-sampling density of the same
-    /// direction from the previous vertex (solid angle, including the light selection
-    /// probability, which depends on the vertex).
-    #[inline]
-    fn emission_weight(
-        &self,
-        prev: Option<(LightSampleContext, f32, bool)>,
-        pdf_light: impl FnOnce(&LightSampleContext) -> f32,
-    ) -> f32 {
-        match prev {
-            None => {
-                if self.hide_emitters {
-                    0.0
-                } else {
-                    1.0
-                }
-            }
-            Some((_, _, true)) => 1.0,
-            Some((ref ctx_prev, pdf_bsdf, false)) => match self.strategy {
-                DirectStrategy::Bsdf => 1.0,
-                DirectStrategy::Light | DirectStrategy::Uniform | DirectStrategy::Cosine => 0.0,
-                DirectStrategy::Mis => self.mis(pdf_bsdf, pdf_light(ctx_prev)),
-            },
+    /// How light and BSDF sampling share direct light under this strategy (for the direction
+    /// strategies, emitters found by the path's own BSDF samples do not count either).
+    fn mis(&self) -> Mis {
+        match self.strategy {
+            DirectStrategy::Mis => Mis::Combine { heuristic: self.heuristic, n_light: 1, n_bsdf: 1 },
+            DirectStrategy::Light | DirectStrategy::Uniform | DirectStrategy::Cosine => Mis::LightOnly,
+            DirectStrategy::Bsdf => Mis::BsdfOnly,
         }
     }
 
@@ -182,50 +131,43 @@ impl PathIntegrator {
     /// series, k = 1 for emitters seen directly). [`Integrator::li`] sums them in order.
     #[inline]
     pub fn trace(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, mut record: impl FnMut(u32, Rgb)) {
-        let max_depth = if self.max_depth < 0 { u32::MAX } else { self.max_depth as u32 };
+        let max_depth = self.settings.max_segments();
         if max_depth == 0 {
             return;
         }
-        let geometries = scene.geometries();
+        let hide = self.settings.hide_emitters;
+        let mis = self.mis();
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
-        // The previous vertex (light-sampling context, BSDF pdf of the direction taken, delta?).
-        let mut prev: Option<(LightSampleContext, f32, bool)> = None;
+        let mut prev: Option<PrevVertex> = None;
         let mut depth = 0u32;
         // Product of the relative IORs crossed: radiance scales by η² at refractions, which
         // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
         let mut eta = 1.0f32;
-        let mut skipped = 0u32;
         loop {
-            let Some(si) = scene.intersect(&ray) else {
+            let hit = if depth == 0 && hide {
+                // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
+                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
+                ray = through;
+                hit
+            } else {
+                scene.intersect(&ray)
+            };
+            let Some(si) = hit else {
                 // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
                 let d = ray.d.normalize();
-                for &i in scene.infinite_lights() {
-                    let light = &scene.lights()[i as usize];
-                    let weight = self.emission_weight(prev, |c| scene.light_pmf(c, i) * light.pdf_li_direction(d));
-                    record(depth + 1, beta * light.le_escaped(d) * weight);
-                }
+                trace::escaped(scene, d, prev.as_ref(), hide, &mis, |le, w| record(depth + 1, beta * le * w));
                 break;
             };
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
-            // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-            if depth == 0 && self.hide_emitters && shape.light.is_some() {
-                skipped += 1;
-                if skipped > MAX_HIDDEN_SKIPS {
-                    break;
-                }
-                ray = si.spawn_ray(ray.d);
-                continue;
-            }
 
             // Emission found by the path itself.
             if let Some(light_index) = shape.light {
                 let le = scene.lights()[light_index as usize].le(si.ns, wo);
                 if le != Rgb::ZERO {
-                    let light = &scene.lights()[light_index as usize];
-                    let weight = self.emission_weight(prev, |c| {
-                        scene.light_pmf(c, light_index) * light.pdf_li(geometries, c.p, si.p, si.ng)
+                    let weight = trace::emission_weight(prev.as_ref(), hide, &mis, |c| {
+                        trace::light_pdf_at(scene, c, light_index, si.p, si.ng)
                     });
                     record(depth + 1, beta * le * weight);
                 }
@@ -251,38 +193,24 @@ impl PathIntegrator {
             let u_bsdf2 = sampler.next_2d();
             let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
             if !bsdf.is_delta() {
-                match self.strategy {
-                    DirectStrategy::Bsdf => {}
+                let c = match self.strategy {
+                    DirectStrategy::Bsdf => Rgb::ZERO,
                     DirectStrategy::Uniform | DirectStrategy::Cosine => {
-                        let c = self.direct_by_direction(scene, &si, &frame, bsdf, &ctx, wo_local, u_light2);
-                        if c != Rgb::ZERO {
-                            record(depth + 2, beta * c);
-                        }
+                        self.direct_by_direction(scene, &si, &frame, bsdf, &ctx, wo_local, u_light2)
                     }
-                    DirectStrategy::Mis | DirectStrategy::Light => {
-                        if let Some((light_index, pmf)) = scene.sample_light(&light_ctx, u_light) {
-                            let light = &scene.lights()[light_index as usize];
-                            if let Some(ls) = light.sample_li(geometries, si.p, u_light2) {
-                                let wi_local = frame.to_local(ls.wi);
-                                let f = bsdf.eval(&ctx, wo_local, wi_local);
-                                if f != Rgb::ZERO && !scene.occluded(&si.spawn_ray_to(ls.p, ls.n, ls.p_error)) {
-                                    let contribution = if ls.delta {
-                                        f * ls.li / pmf
-                                    } else {
-                                        let pdf_light = pmf * ls.pdf;
-                                        let w = match self.strategy {
-                                            DirectStrategy::Mis => {
-                                                self.mis(pdf_light, bsdf.pdf(&ctx, wo_local, wi_local))
-                                            }
-                                            _ => 1.0,
-                                        };
-                                        f * ls.li * (w / pdf_light)
-                                    };
-                                    record(depth + 2, beta * contribution);
-                                }
-                            }
-                        }
-                    }
+                    DirectStrategy::Mis | DirectStrategy::Light => trace::sample_direct(
+                        scene,
+                        &light_ctx,
+                        u_light,
+                        u_light2,
+                        &mis,
+                        |wi| bsdf.eval(&ctx, wo_local, frame.to_local(wi)),
+                        |wi| bsdf.pdf(&ctx, wo_local, frame.to_local(wi)),
+                        trace::occlusion(scene, &si),
+                    ),
+                };
+                if c != Rgb::ZERO {
+                    record(depth + 2, beta * c);
                 }
             }
 
@@ -291,12 +219,12 @@ impl PathIntegrator {
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
-            prev = Some((light_ctx, bs.pdf, bs.delta));
+            prev = Some(PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta });
             ray = si.spawn_ray(wi);
             depth += 1;
 
             // Russian roulette.
-            if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
+            if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
                 break;
             }
         }
@@ -371,7 +299,7 @@ mod tests {
                 -1 => l1 / (1.0 - rho as f64),
                 d => (0..(d - 1).max(0)).map(|k| l1 * (rho as f64).powi(k)).sum(),
             };
-            let integrator = PathIntegrator { max_depth, ..Default::default() };
+            let integrator = PathIntegrator::with_max_depth(max_depth);
             let settings = RenderSettings { spp, seed: 3, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             let (mean, se) = image_mean(&out.film);
@@ -419,7 +347,11 @@ mod tests {
         let ray = Ray::new(o, (Vec3::ZERO - o).normalize());
         for (k, strategy) in [DirectStrategy::Mis, DirectStrategy::Light, DirectStrategy::Bsdf].into_iter().enumerate()
         {
-            let integrator = PathIntegrator { max_depth: 2, strategy, ..Default::default() };
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth: 2, ..Default::default() },
+                strategy,
+                ..Default::default()
+            };
             let mut sampler = SamplerKind::Independent.make(1, k as u64);
             let n = if strategy == DirectStrategy::Bsdf { 400_000 } else { 50_000 };
             let values: Vec<f64> = (0..n)
@@ -449,7 +381,11 @@ mod tests {
             (DirectStrategy::Uniform, MisHeuristic::Power, 1024),
         ];
         for (k, (strategy, heuristic, spp)) in cases.into_iter().enumerate() {
-            let integrator = PathIntegrator { max_depth: 6, strategy, heuristic, ..Default::default() };
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth: 6, ..Default::default() },
+                strategy,
+                heuristic,
+            };
             let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             means.push((strategy, heuristic, image_mean(&out.film)));
@@ -486,7 +422,11 @@ mod tests {
         for (k, strategy) in
             [DirectStrategy::Light, DirectStrategy::Cosine, DirectStrategy::Uniform].into_iter().enumerate()
         {
-            let integrator = PathIntegrator { max_depth: 2, strategy, hide_emitters: true, ..Default::default() };
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth: 2, hide_emitters: true, ..Default::default() },
+                strategy,
+                ..Default::default()
+            };
             let settings = RenderSettings { spp: 2048, seed: 7 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             let var = out.film.variance_of_mean();
@@ -533,7 +473,7 @@ mod tests {
             let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
             b.set_camera(Camera::perspective(to_world, 10.0, FovAxis::X, 12, 12).unwrap());
             let scene = b.build().unwrap();
-            let integrator = PathIntegrator { max_depth, ..Default::default() };
+            let integrator = PathIntegrator::with_max_depth(max_depth);
             let settings = RenderSettings { spp: 64, seed: 10 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             let (mean, se) = image_mean(&out.film);
@@ -564,7 +504,10 @@ mod tests {
         // Mean over many samples of the radiance along a ray from `o` to the floor's origin.
         let radiance = |o: Vec3, hide: bool, direct: bool| {
             let ray = Ray::new(o, (Vec3::ZERO - o).normalize());
-            let path = PathIntegrator { max_depth: 2, hide_emitters: hide, ..Default::default() };
+            let path = PathIntegrator {
+                settings: PathSettings { max_depth: 2, hide_emitters: hide, ..Default::default() },
+                ..Default::default()
+            };
             let dir = super::super::DirectIntegrator { hide_emitters: hide, ..Default::default() };
             let mut sampler = SamplerKind::Independent.make(4096, 0);
             let n = 4096;
@@ -610,7 +553,7 @@ mod tests {
         let radiance_at = |scene: &crate::scene::Scene, x: f32| {
             let target = Vec3::new(x, 0.0, 0.0);
             let o = target + Vec3::new(0.0, 1.0, -1.0);
-            let integrator = PathIntegrator { max_depth: 2, ..Default::default() };
+            let integrator = PathIntegrator::with_max_depth(2);
             let mut sampler = SamplerKind::Independent.make(1, 0);
             sampler.start_pixel_sample([0, 0], 0, 0);
             integrator.li(scene, &Ray::new(o, (target - o).normalize()), &mut sampler).x
@@ -698,7 +641,7 @@ mod tests {
         });
         b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
         let scene = b.build().unwrap();
-        let integrator = PathIntegrator { max_depth: 2, ..Default::default() };
+        let integrator = PathIntegrator::with_max_depth(2);
         // uv = ((X/10 + 1)/2, (1 - Z/10)/2); ×10 → cell parity from the fractional parts.
         for (x, rho) in [(0.5f32, rho0.x), (1.5, rho1.x), (2.5, rho0.x)] {
             let target = Vec3::new(x, 0.0, -0.5);

@@ -23,6 +23,7 @@
 //! (`spp × W × H` paths in all), a pixel's value is the sum of its splats divided by `spp`
 //! (see [`crate::render::render_light_paths`]).
 
+use super::trace::PathSettings;
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::Light;
 use crate::material::BsdfContext;
@@ -31,21 +32,13 @@ use crate::math::{luminance, Ray, Rgb, Vec2, Vec3};
 use crate::sampling::Pcg32;
 use crate::scene::Scene;
 
-/// The light tracer's settings.
-#[derive(Clone, Debug)]
+/// The light tracer's settings: `max_depth` counts segments with the camera connection,
+/// Russian roulette applies from `rr_depth` segments on, and `hide_emitters` leaves out the
+/// emitters' direct connection to the camera.
+#[derive(Clone, Debug, Default)]
 pub struct LightTracer {
-    /// Longest path in segments (camera connection included); -1: unlimited.
-    pub max_depth: i32,
-    /// Russian roulette from this many segments on.
-    pub rr_depth: u32,
-    /// Do not connect emitters directly to the camera.
-    pub hide_emitters: bool,
-}
-
-impl Default for LightTracer {
-    fn default() -> Self {
-        LightTracer { max_depth: -1, rr_depth: 5, hide_emitters: false }
-    }
+    /// `max_depth`, `rr_depth`, `hide_emitters`.
+    pub settings: PathSettings,
 }
 
 /// Veach's shading-normal correction for adjoint transport at a surface point with shading
@@ -66,7 +59,7 @@ fn shading_correction(ns: Vec3, ng: Vec3, w_prev: Vec3, w_next: Vec3) -> f32 {
 
 impl LightTracer {
     fn allows(&self, segments: u32) -> bool {
-        self.max_depth < 0 || segments as i64 <= self.max_depth as i64
+        self.settings.allows(segments)
     }
 
     /// Traces one light path with random numbers from `rng`, calling `splat(film, value)` for
@@ -80,7 +73,7 @@ impl LightTracer {
 
         // The emitter seen directly: one segment, light to camera.
         let (u_pos, u_lens) = (u2(), u2());
-        if !self.hide_emitters && self.allows(1) {
+        if !self.settings.hide_emitters && self.allows(1) {
             if let Some(pos) = light.sample_le_position(shapes, u_pos) {
                 if let Some(cs) = camera.sample_wi(pos.p, u_lens) {
                     let cos = if pos.ng == Vec3::ZERO { 1.0 } else { pos.ng.dot(cs.wi).abs() };
@@ -143,7 +136,7 @@ impl LightTracer {
                 break;
             }
             segments += 1;
-            if segments >= self.rr_depth {
+            if segments >= self.settings.rr_depth {
                 let q = (luminance(beta) / beta0).min(0.95);
                 if u_rr >= q {
                     break;
@@ -248,10 +241,10 @@ mod tests {
         let scene = crate::scene::cornell::cornell_box(16, 16).unwrap();
         let never = AtomicBool::new(false);
         for depth in [1, 2] {
-            let path = PathIntegrator { max_depth: depth, ..Default::default() };
+            let path = PathIntegrator::with_max_depth(depth);
             let reference =
                 render(&scene, &path, &RenderSettings { spp: 1024, seed: 3, ..Default::default() }, &never).unwrap();
-            let tracer = LightTracer { max_depth: depth, ..Default::default() };
+            let tracer = LightTracer { settings: PathSettings { max_depth: depth, ..Default::default() } };
             let light = render_light_paths(
                 &scene,
                 &tracer,

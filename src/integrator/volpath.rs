@@ -18,6 +18,7 @@
 //! Parameters (Mitsuba): `max_depth` (segments, -1 unlimited), `rr_depth` (5),
 //! `hide_emitters` (false).
 
+use super::trace::{self, Mis, PathSettings, PrevVertex};
 use super::Integrator;
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::LightSampleContext;
@@ -25,27 +26,17 @@ use crate::material::{Bsdf, BsdfContext};
 use crate::math::float::offset_ray_origin;
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::medium::{FreeFlight, Medium};
-use crate::sampling::{power_heuristic, Sampler};
+use crate::sampling::Sampler;
 use crate::scene::Scene;
 
 /// Crossings of null surfaces allowed along one segment (guards against degenerate geometry).
 const MAX_NULL_CROSSINGS: u32 = 256;
 
 /// Mitsuba's `volpath`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct VolPathIntegrator {
-    /// Longest path in segments (-1: unlimited).
-    pub max_depth: i32,
-    /// Russian roulette from this depth on.
-    pub rr_depth: u32,
-    /// Emitters seen directly by the camera are transparent.
-    pub hide_emitters: bool,
-}
-
-impl Default for VolPathIntegrator {
-    fn default() -> Self {
-        VolPathIntegrator { max_depth: -1, rr_depth: 5, hide_emitters: false }
-    }
+    /// `max_depth`, `rr_depth`, `hide_emitters`.
+    pub settings: PathSettings,
 }
 
 /// The medium on the other side of shape `shape`'s surface for a ray travelling along `d`
@@ -96,66 +87,15 @@ pub fn transmittance(scene: &Scene, mut ray: Ray, mut medium: Option<u32>) -> Rg
     Rgb::ZERO
 }
 
-impl VolPathIntegrator {
-    /// Power-heuristic weight of emission found by the path itself; `prev` = (previous vertex,
-    /// pdf of the direction taken, delta?), `None` for camera rays.
-    #[inline]
-    fn emission_weight(
-        &self,
-        prev: Option<(LightSampleContext, f32, bool)>,
-        pdf_light: impl FnOnce(&LightSampleContext) -> f32,
-    ) -> f32 {
-        match prev {
-            None => f32::from(u8::from(!self.hide_emitters)),
-            Some((_, _, true)) => 1.0,
-            Some((ref c, pdf, false)) => power_heuristic(1, pdf, 1, pdf_light(c)),
-        }
-    }
-
-    /// Direct light at `p` by light sampling with transmittance: `medium(wi)` is the medium the
-    /// shadow ray toward `wi` starts in, `f(wi)` the BSDF (× cos) or phase value and `pdf(wi)`
-    /// its sampling density for MIS; `shadow(light point, its normal, its error)` builds the
-    /// shadow ray.
-    #[allow(clippy::too_many_arguments)]
-    fn direct(
-        &self,
-        scene: &Scene,
-        light_ctx: &LightSampleContext,
-        medium: impl Fn(Vec3) -> Option<u32>,
-        u_light: f32,
-        u2: crate::math::Vec2,
-        f: impl Fn(Vec3) -> Rgb,
-        pdf: impl Fn(Vec3) -> f32,
-        shadow: impl Fn(Vec3, Vec3, Vec3) -> Ray,
-    ) -> Rgb {
-        let Some((index, pmf)) = scene.sample_light(light_ctx, u_light) else { return Rgb::ZERO };
-        let light = &scene.lights()[index as usize];
-        let Some(ls) = light.sample_li(scene.geometries(), light_ctx.p, u2) else { return Rgb::ZERO };
-        let value = f(ls.wi);
-        if value == Rgb::ZERO {
-            return Rgb::ZERO;
-        }
-        let tr = transmittance(scene, shadow(ls.p, ls.n, ls.p_error), medium(ls.wi));
-        if tr == Rgb::ZERO {
-            return Rgb::ZERO;
-        }
-        if ls.delta {
-            value * ls.li * tr / pmf
-        } else {
-            let p_light = pmf * ls.pdf;
-            value * ls.li * tr * (power_heuristic(1, p_light, 1, pdf(ls.wi)) / p_light)
-        }
-    }
-}
-
 impl Integrator for VolPathIntegrator {
     fn name(&self) -> &'static str {
         "volpath"
     }
 
     fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
-        let max_depth = if self.max_depth < 0 { u32::MAX } else { self.max_depth as u32 };
-        let geometries = scene.geometries();
+        let max_depth = self.settings.max_segments();
+        let hide = self.settings.hide_emitters;
+        let mis = Mis::POWER;
         let media = scene.media();
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
@@ -164,7 +104,7 @@ impl Integrator for VolPathIntegrator {
         let len = camera_ray.d.length();
         let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len);
         let mut medium = scene.camera_medium();
-        let mut prev: Option<(LightSampleContext, f32, bool)> = None;
+        let mut prev: Option<PrevVertex> = None;
         let mut depth = 0u32;
         let mut crossings = 0u32;
         if max_depth == 0 {
@@ -191,26 +131,30 @@ impl Integrator for VolPathIntegrator {
                         // A point in a medium has no normal.
                         let light_ctx = LightSampleContext { p, n: Vec3::ZERO };
                         l += beta
-                            * self.direct(
+                            * trace::sample_direct(
                                 scene,
                                 &light_ctx,
-                                |_| medium,
                                 u_light,
                                 u_light2,
+                                &mis,
                                 |wi| Rgb::splat(phase.eval(wo, wi)),
                                 |wi| phase.eval(wo, wi),
-                                |lp, ln, lerr| {
-                                    let target =
-                                        if ln == Vec3::ZERO { lp } else { offset_ray_origin(lp, lerr, ln, p - lp) };
-                                    Ray::bounded(p, target - p, 1.0 - SHADOW_EPSILON)
+                                |ls| {
+                                    let (lp, ln) = (ls.p, ls.n);
+                                    let target = if ln == Vec3::ZERO {
+                                        lp
+                                    } else {
+                                        offset_ray_origin(lp, ls.p_error, ln, p - lp)
+                                    };
+                                    transmittance(scene, Ray::bounded(p, target - p, 1.0 - SHADOW_EPSILON), medium)
                                 },
                             );
                         let s = phase.sample(wo, sampler.next_2d());
-                        prev = Some((light_ctx, s.pdf, false));
+                        prev = Some(PrevVertex { ctx: light_ctx, pdf: s.pdf, delta: false });
                         ray = Ray::new(p, s.value);
                         depth += 1;
                         crossings = 0;
-                        if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
+                        if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
                             break;
                         }
                         continue;
@@ -220,11 +164,7 @@ impl Integrator for VolPathIntegrator {
             }
 
             let Some(si) = hit else {
-                for &i in scene.infinite_lights() {
-                    let light = &scene.lights()[i as usize];
-                    let w = self.emission_weight(prev, |c| scene.light_pmf(c, i) * light.pdf_li_direction(ray.d));
-                    l += beta * light.le_escaped(ray.d) * w;
-                }
+                trace::escaped(scene, ray.d, prev.as_ref(), hide, &mis, |le, w| l += beta * le * w);
                 break;
             };
             let shape = scene.shapes()[si.shape as usize];
@@ -232,13 +172,13 @@ impl Integrator for VolPathIntegrator {
             let wo = -ray.d;
 
             // Emission found by the path (not for hidden emitters seen by the camera).
-            let hidden = depth == 0 && self.hide_emitters && shape.light.is_some();
+            let hidden = depth == 0 && hide && shape.light.is_some();
             if let Some(li) = shape.light.filter(|_| !hidden) {
-                let light = &scene.lights()[li as usize];
-                let le = light.le(si.ns, wo);
+                let le = scene.lights()[li as usize].le(si.ns, wo);
                 if le != Rgb::ZERO {
-                    let w = self
-                        .emission_weight(prev, |c| scene.light_pmf(c, li) * light.pdf_li(geometries, c.p, si.p, si.ng));
+                    let w = trace::emission_weight(prev.as_ref(), hide, &mis, |c| {
+                        trace::light_pdf_at(scene, c, li, si.p, si.ng)
+                    });
                     l += beta * le * w;
                 }
             }
@@ -272,15 +212,15 @@ impl Integrator for VolPathIntegrator {
                     }
                 };
                 l += beta
-                    * self.direct(
+                    * trace::sample_direct(
                         scene,
                         &light_ctx,
-                        side_medium,
                         u_light,
                         u_light2,
+                        &mis,
                         |wi| bsdf.eval(&ctx, wo_local, frame.to_local(wi)),
                         |wi| bsdf.pdf(&ctx, wo_local, frame.to_local(wi)),
-                        |lp, ln, lerr| si.spawn_ray_to(lp, ln, lerr),
+                        |ls| transmittance(scene, si.spawn_ray_to(ls.p, ls.n, ls.p_error), side_medium(ls.wi)),
                     );
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
@@ -291,11 +231,11 @@ impl Integrator for VolPathIntegrator {
             if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
                 medium = medium_after(scene, si.shape, si.ng, wi, medium);
             }
-            prev = Some((light_ctx, bs.pdf, bs.delta));
+            prev = Some(PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta });
             ray = si.spawn_ray(wi);
             depth += 1;
             crossings = 0;
-            if !super::russian_roulette(&mut beta, eta, depth, self.rr_depth, sampler.next_1d()) {
+            if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
                 break;
             }
         }

@@ -353,7 +353,7 @@ mod tests {
     #[test]
     fn neumann_terms_sum_to_the_render() {
         let scene = cornell_box(16, 16).unwrap();
-        let integrator = PathIntegrator { max_depth: 6, ..Default::default() };
+        let integrator = PathIntegrator::with_max_depth(6);
         let never = AtomicBool::new(false);
         let plain =
             render(&scene, &integrator, &RenderSettings { spp: 8, seed: 4, ..Default::default() }, &never).unwrap();
@@ -371,7 +371,7 @@ mod tests {
         assert!(!lit.is_empty() && lit.len() < 16, "{} light pixels", lit.len());
         assert!(terms[1].iter().filter(|c| c.max_element() > 0.0).count() > total.len() / 2, "direct light");
         assert!(terms[2].iter().any(|c| c.max_element() > 0.0), "one bounce");
-        let direct = PathIntegrator { max_depth: 2, ..Default::default() };
+        let direct = PathIntegrator::with_max_depth(2);
         let two = render(&scene, &direct, &RenderSettings { spp: 4, terms: 4, ..Default::default() }, &never).unwrap();
         assert!((2..4).all(|k| two.film.term_image(k).iter().all(|c| *c == crate::math::Rgb::ZERO)));
         assert!(two.film.term_image(1).iter().any(|c| c.max_element() > 0.0));

@@ -8,7 +8,9 @@ use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
 use crate::film::filter::Filter;
 use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
-use crate::integrator::{radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator, VolPathIntegrator};
+use crate::integrator::{
+    radiosity, AnyIntegrator, DirectIntegrator, LightTracer, PathIntegrator, PathSettings, VolPathIntegrator,
+};
 use crate::light::LightSamplerKind;
 use crate::light::{EnvMap, Light};
 use crate::load::image::{load_image, Image};
@@ -166,24 +168,13 @@ impl Builder {
         }
         match o.ty.as_str() {
             "path" | "ptracer" | "volpath" => {
-                let max_depth = o.int("max_depth", -1)?;
-                if max_depth < -1 || max_depth > i32::MAX as i64 {
-                    return Err(
-                        o.error_at("max_depth", format!("max_depth must be -1 (unlimited) or ≥ 0, got {max_depth}"))
-                    );
-                }
-                let rr_depth = o.int("rr_depth", 5)?;
-                if !(1..=u32::MAX as i64).contains(&rr_depth) {
-                    return Err(o.error_at("rr_depth", format!("rr_depth must be ≥ 1, got {rr_depth}")));
-                }
-                let (max_depth, rr_depth, hide_emitters) =
-                    (max_depth as i32, rr_depth as u32, o.bool("hide_emitters", false)?);
-                Ok(if o.ty == "path" {
-                    AnyIntegrator::Path(PathIntegrator { max_depth, rr_depth, hide_emitters, ..Default::default() })
-                } else if o.ty == "volpath" {
-                    AnyIntegrator::VolPath(VolPathIntegrator { max_depth, rr_depth, hide_emitters })
-                } else {
-                    AnyIntegrator::Ptracer(LightTracer { max_depth, rr_depth, hide_emitters })
+                let settings =
+                    PathSettings::new(o.int("max_depth", -1)?, o.int("rr_depth", 5)?, o.bool("hide_emitters", false)?)
+                        .map_err(|(name, message)| o.error_at(name, message))?;
+                Ok(match o.ty.as_str() {
+                    "path" => AnyIntegrator::Path(PathIntegrator { settings, ..Default::default() }),
+                    "volpath" => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
+                    _ => AnyIntegrator::Ptracer(LightTracer { settings }),
                 })
             }
             "radiosity" => {

@@ -42,7 +42,7 @@ fn shared_cornell_box_matches_the_builtin() {
     assert!(file.warnings.is_empty(), "{:?}", file.warnings);
     assert_eq!((file.scene.camera().width(), file.scene.camera().height()), (256, 256));
     assert_eq!(file.spp, 64);
-    assert!(matches!(file.integrator, crate::integrator::AnyIntegrator::Path(p) if p.max_depth == 65));
+    assert!(matches!(file.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.max_depth == 65));
     assert!(matches!(file.filter, Filter::Box));
     let builtin = crate::scene::cornell::cornell_box(256, 256).unwrap();
     assert_eq!(file.scene.primitive_count(), builtin.primitive_count());
@@ -65,7 +65,7 @@ fn shared_cornell_box_matches_the_builtin() {
     let never = std::sync::atomic::AtomicBool::new(false);
     let from_file = crate::render::render_integrator(&small.scene, &small.integrator, &settings, &never).unwrap();
     let builtin_small = crate::scene::cornell::cornell_box(24, 24).unwrap();
-    let integrator = crate::integrator::PathIntegrator { max_depth: 65, ..Default::default() };
+    let integrator = crate::integrator::PathIntegrator::with_max_depth(65);
     let from_builtin = crate::render::render(&builtin_small, &integrator, &settings, &never).unwrap();
     assert!(from_file.film.image() == from_builtin.film.image(), "cbox.xml and the built-in box differ");
 }
@@ -167,7 +167,7 @@ fn defaults_references_spectra_and_plugins() {
     assert_eq!((f.spp, f.sampler, f.seed), (7, SamplerKind::Sobol, 3));
     assert_eq!(f.window, Some([5, 0, 10, 30]));
     assert!(matches!(f.filter, Filter::Tent { radius } if radius == 1.5));
-    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.hide_emitters && p.max_depth == 3));
+    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.hide_emitters && p.settings.max_depth == 3));
     // Two instanced spheres at x = ±2.
     let centres: Vec<Vec3> = f
         .scene
@@ -388,7 +388,7 @@ fn ptracer_and_radiosity_integrators() {
     use crate::integrator::{radiosity::Method, AnyIntegrator};
     let f = load(&scene(r#"<integrator type="ptracer"><integer name="max_depth" value="3"/><boolean name="hide_emitters" value="true"/></integrator>"#)).unwrap();
     assert!(
-        matches!(f.integrator, AnyIntegrator::Ptracer(t) if t.max_depth == 3 && t.hide_emitters && t.rr_depth == 5)
+        matches!(f.integrator, AnyIntegrator::Ptracer(t) if t.settings.max_depth == 3 && t.settings.hide_emitters && t.settings.rr_depth == 5)
     );
     let f = load(&scene(
         r#"<integrator type="radiosity">
@@ -433,7 +433,7 @@ fn media_on_shapes_and_the_sensor() {
 </scene>"#;
     let f = load(text).unwrap();
     assert!(f.warnings.is_empty(), "{:?}", f.warnings);
-    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::VolPath(v) if v.max_depth == 7));
+    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::VolPath(v) if v.settings.max_depth == 7));
     let s = &f.scene;
     assert_eq!(s.media().len(), 2);
     assert_eq!(s.camera_medium(), Some(0));

@@ -1,0 +1,317 @@
+//! The tracing core every integrator shares (Tungsten's `TraceBase`, Mitsuba's
+//! `sample_emitter_direction` + `eval_pdf`): path-length settings, next-event estimation with
+//! multiple importance sampling generic over visibility, the MIS weight of emission found by
+//! BSDF or phase sampling, the escaped-ray rule and the hidden-emitter rule.
+//!
+//! Direct light at a vertex `x` by light sampling (one sample of `n_light`):
+//! choose a light with the scene's light sampler (probability `P(l | x)`), sample a point on it
+//! ([`crate::light::Light::sample_li`], density `p_l(ω)` per solid angle), and add
+//! `f(ω) Lₑ Tr w_l / (P(l | x) p_l(ω) n_light)`, where `f` is the BSDF times the cosine (or the
+//! phase function), `Tr` the visibility (0 or 1 for occlusion, the transmittance through media)
+//! and `w_l` the MIS weight against the `n_bsdf` BSDF samples (Veach's power or balance
+//! heuristic with sample counts, or 1). Emission that a BSDF-sampled direction finds gets the
+//! complementary weight [`emission_weight`]; both use the same `P(l | x) p_l(ω)`, evaluated at
+//! the vertex the direction left from.
+
+use crate::geometry::SurfaceInteraction;
+use crate::light::{LightSample, LightSampleContext};
+use crate::math::{Ray, Rgb, Vec2, Vec3};
+use crate::sampling::{balance_heuristic, power_heuristic};
+use crate::scene::Scene;
+
+/// Path-length settings of the path-space integrators (`path`, `volpath`, `ptracer`), with
+/// Mitsuba's names and defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PathSettings {
+    /// Longest path in segments (`max_depth`; -1: unlimited). 1 shows the emitters only, 2 adds
+    /// direct light (Mitsuba's meaning).
+    pub max_depth: i32,
+    /// Russian roulette applies from this many segments on (`rr_depth`, ≥ 1).
+    pub rr_depth: u32,
+    /// Emitters seen directly by the camera are invisible (`hide_emitters`): camera rays pass
+    /// through emitting shapes and environments are black to them; lighting is unchanged.
+    pub hide_emitters: bool,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        PathSettings { max_depth: -1, rr_depth: 5, hide_emitters: false }
+    }
+}
+
+impl PathSettings {
+    /// Checked settings: `max_depth ≥ -1`, `rr_depth ≥ 1`. The error names the bad parameter.
+    pub fn new(max_depth: i64, rr_depth: i64, hide_emitters: bool) -> Result<PathSettings, (&'static str, String)> {
+        if max_depth < -1 || max_depth > i32::MAX as i64 {
+            return Err(("max_depth", format!("max_depth must be -1 (unlimited) or ≥ 0, got {max_depth}")));
+        }
+        if !(1..=u32::MAX as i64).contains(&rr_depth) {
+            return Err(("rr_depth", format!("rr_depth must be ≥ 1, got {rr_depth}")));
+        }
+        Ok(PathSettings { max_depth: max_depth as i32, rr_depth: rr_depth as u32, hide_emitters })
+    }
+
+    /// The longest path in segments (`u32::MAX` when unlimited).
+    #[inline]
+    pub fn max_segments(&self) -> u32 {
+        if self.max_depth < 0 {
+            u32::MAX
+        } else {
+            self.max_depth as u32
+        }
+    }
+
+    /// Whether a path of `segments` segments is within `max_depth`.
+    #[inline]
+    pub fn allows(&self, segments: u32) -> bool {
+        segments <= self.max_segments()
+    }
+
+    /// `max_depth` for messages: a number or "unlimited".
+    pub fn depth_text(&self) -> String {
+        if self.max_depth < 0 {
+            "unlimited".into()
+        } else {
+            self.max_depth.to_string()
+        }
+    }
+}
+
+/// How many hidden emitters a camera ray may pass through before it gives up (a ray inside a
+/// stack of emitting shells).
+pub const MAX_HIDDEN_SKIPS: u32 = 64;
+
+/// The MIS heuristic combining light and BSDF sampling.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MisHeuristic {
+    /// Veach's balance heuristic `w_a = n_a p_a / (n_a p_a + n_b p_b)`.
+    Balance,
+    /// Veach's power heuristic with exponent 2, `w_a = (n_a p_a)² / ((n_a p_a)² + (n_b p_b)²)`.
+    #[default]
+    Power,
+}
+
+/// How next-event estimation and BSDF sampling share direct light at a vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mis {
+    /// Both strategies, weighted by `heuristic` with `n_light` light samples and `n_bsdf` BSDF
+    /// samples per vertex.
+    Combine {
+        /// The heuristic.
+        heuristic: MisHeuristic,
+        /// Light samples per vertex.
+        n_light: u32,
+        /// BSDF samples per vertex.
+        n_bsdf: u32,
+    },
+    /// Light sampling alone counts direct light (weight 1); emitters found by BSDF sampling add
+    /// nothing (weight 0).
+    LightOnly,
+    /// BSDF sampling alone counts direct light (no next-event estimation).
+    BsdfOnly,
+}
+
+impl Mis {
+    /// One light and one BSDF sample per vertex, power heuristic.
+    pub const POWER: Mis = Mis::Combine { heuristic: MisHeuristic::Power, n_light: 1, n_bsdf: 1 };
+
+    /// Weight of a light sample of density `p_light` against BSDF density `p_bsdf()` (only
+    /// evaluated when needed).
+    #[inline]
+    pub fn light_weight(&self, p_light: f32, p_bsdf: impl FnOnce() -> f32) -> f32 {
+        match *self {
+            Mis::Combine { heuristic, n_light, n_bsdf } => {
+                if n_bsdf == 0 {
+                    return 1.0;
+                }
+                let pb = p_bsdf();
+                match heuristic {
+                    MisHeuristic::Power => power_heuristic(n_light, p_light, n_bsdf, pb),
+                    MisHeuristic::Balance => balance_heuristic(n_light, p_light, n_bsdf, pb),
+                }
+            }
+            Mis::LightOnly => 1.0,
+            Mis::BsdfOnly => 0.0,
+        }
+    }
+
+    /// Weight of emission found by a BSDF sample of density `p_bsdf` against the light-sampling
+    /// density `p_light()` of the same direction (only evaluated when needed).
+    #[inline]
+    pub fn bsdf_weight(&self, p_bsdf: f32, p_light: impl FnOnce() -> f32) -> f32 {
+        match *self {
+            Mis::Combine { heuristic, n_light, n_bsdf } => {
+                if n_light == 0 {
+                    return 1.0;
+                }
+                let pl = p_light();
+                match heuristic {
+                    MisHeuristic::Power => power_heuristic(n_bsdf, p_bsdf, n_light, pl),
+                    MisHeuristic::Balance => balance_heuristic(n_bsdf, p_bsdf, n_light, pl),
+                }
+            }
+            Mis::LightOnly => 0.0,
+            Mis::BsdfOnly => 1.0,
+        }
+    }
+}
+
+/// The vertex a path left from, as MIS at the next vertex needs it.
+#[derive(Clone, Copy, Debug)]
+pub struct PrevVertex {
+    /// Where lights would have been sampled from (the light sampler's context).
+    pub ctx: LightSampleContext,
+    /// Density (solid angle) of the direction the path took from it.
+    pub pdf: f32,
+    /// Whether that direction came from a delta distribution (specular), which light sampling
+    /// cannot produce.
+    pub delta: bool,
+}
+
+/// Weight of emission found along a path (rather than by light sampling): 1 (or 0 with
+/// `hide_emitters`) for camera rays (`prev` is `None`); 1 after a specular bounce; otherwise the
+/// BSDF sample's MIS weight against light sampling from `prev`, whose density `pdf_light(ctx)`
+/// (light selection included) is evaluated only if needed.
+#[inline]
+pub fn emission_weight(
+    prev: Option<&PrevVertex>,
+    hide_emitters: bool,
+    mis: &Mis,
+    pdf_light: impl FnOnce(&LightSampleContext) -> f32,
+) -> f32 {
+    match prev {
+        None => f32::from(u8::from(!hide_emitters)),
+        Some(v) if v.delta => 1.0,
+        Some(v) => mis.bsdf_weight(v.pdf, || pdf_light(&v.ctx)),
+    }
+}
+
+/// The escaped-ray rule: a ray that leaves the scene in unit direction `d` sees each light at
+/// infinity; `add(Lₑ, w)` receives each one's radiance with its [`emission_weight`] (`prev`:
+/// the vertex the ray left, `None` for camera rays).
+#[inline]
+pub fn escaped(
+    scene: &Scene,
+    d: Vec3,
+    prev: Option<&PrevVertex>,
+    hide_emitters: bool,
+    mis: &Mis,
+    mut add: impl FnMut(Rgb, f32),
+) {
+    for &i in scene.infinite_lights() {
+        let light = &scene.lights()[i as usize];
+        let le = light.le_escaped(d);
+        if le == Rgb::ZERO {
+            continue;
+        }
+        let w = emission_weight(prev, hide_emitters, mis, |ctx| scene.light_pmf(ctx, i) * light.pdf_li_direction(d));
+        add(le, w);
+    }
+}
+
+/// Light-sampling density (selection included) from `ctx` of the point `p` (geometric normal
+/// `ng`) on light `i`: what [`emission_weight`] compares a BSDF sample with at an emitter hit.
+#[inline]
+pub fn light_pdf_at(scene: &Scene, ctx: &LightSampleContext, i: u32, p: Vec3, ng: Vec3) -> f32 {
+    scene.light_pmf(ctx, i) * scene.lights()[i as usize].pdf_li(scene.geometries(), ctx.p, p, ng)
+}
+
+/// One light sample at `ctx` (Mitsuba's `sample_emitter_direction` with the BSDF's `eval_pdf`):
+/// `value(ω)` is the BSDF × cosine or phase value toward the unit world direction `ω`,
+/// `pdf(ω)` its sampling density (for MIS; only called for lights that BSDF sampling can
+/// reach), and `visibility(sample)` the fraction of light that arrives (0 or 1 for occlusion, the
+/// transmittance through media; see [`occlusion`]). Returns
+/// `value Lₑ Tr w / (P(l) p_l n_light)` (module docs), zero when nothing arrives.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn sample_direct(
+    scene: &Scene,
+    ctx: &LightSampleContext,
+    u: f32,
+    u2: Vec2,
+    mis: &Mis,
+    value: impl FnOnce(Vec3) -> Rgb,
+    pdf: impl FnOnce(Vec3) -> f32,
+    visibility: impl FnOnce(&LightSample) -> Rgb,
+) -> Rgb {
+    let n_light = match *mis {
+        Mis::Combine { n_light, .. } => n_light.max(1),
+        Mis::LightOnly => 1,
+        Mis::BsdfOnly => return Rgb::ZERO,
+    };
+    let Some((index, pmf)) = scene.sample_light(ctx, u) else { return Rgb::ZERO };
+    let light = &scene.lights()[index as usize];
+    let Some(ls) = light.sample_li(scene.geometries(), ctx.p, u2) else { return Rgb::ZERO };
+    let f = value(ls.wi);
+    if f == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let tr = visibility(&ls);
+    if tr == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    if ls.delta {
+        f * ls.li * tr / (pmf * n_light as f32)
+    } else {
+        let p_light = pmf * ls.pdf;
+        let w = mis.light_weight(p_light, || pdf(ls.wi));
+        f * ls.li * tr * (w / (p_light * n_light as f32))
+    }
+}
+
+/// Visibility of a light sample from a surface point by a shadow ray (no media): 1 or 0.
+#[inline]
+pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnce(&LightSample) -> Rgb + 'a {
+    move |ls| if scene.occluded(&si.spawn_ray_to(ls.p, ls.n, ls.p_error)) { Rgb::ZERO } else { Rgb::ONE }
+}
+
+/// Follows a camera ray through emitters hidden from the camera (`hide_emitters`): the first
+/// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them; `None` if the
+/// ray escapes or gives up. Returns the ray that reached it too (to take its direction).
+#[inline]
+pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray) {
+    let mut ray = *ray;
+    for _ in 0..=MAX_HIDDEN_SKIPS {
+        let Some(si) = scene.intersect(&ray) else { return (None, ray) };
+        if scene.shapes()[si.shape as usize].light.is_none() {
+            return (Some(si), ray);
+        }
+        ray = si.spawn_ray(ray.d);
+    }
+    (None, ray)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two weights of one sample pair sum to one for every heuristic and sample count, and
+    /// the single-strategy settings give 1 to their strategy and 0 to the other.
+    #[test]
+    fn light_and_bsdf_weights_are_complementary() {
+        for heuristic in [MisHeuristic::Power, MisHeuristic::Balance] {
+            for (n_light, n_bsdf) in [(1, 1), (2, 3), (4, 1)] {
+                let mis = Mis::Combine { heuristic, n_light, n_bsdf };
+                for (pl, pb) in [(0.3f32, 2.0f32), (1.0, 1.0), (7.0, 0.01)] {
+                    let s = mis.light_weight(pl, || pb) + mis.bsdf_weight(pb, || pl);
+                    assert!((s - 1.0).abs() < 1e-6, "{mis:?} {pl} {pb}: {s}");
+                }
+            }
+        }
+        assert_eq!(Mis::LightOnly.light_weight(0.5, || panic!("not needed")), 1.0);
+        assert_eq!(Mis::LightOnly.bsdf_weight(0.5, || panic!("not needed")), 0.0);
+        assert_eq!(Mis::BsdfOnly.bsdf_weight(0.5, || panic!("not needed")), 1.0);
+        let no_bsdf = Mis::Combine { heuristic: MisHeuristic::Power, n_light: 1, n_bsdf: 0 };
+        assert_eq!(no_bsdf.light_weight(0.5, || panic!("not needed")), 1.0);
+    }
+
+    #[test]
+    fn path_settings_are_checked() {
+        assert_eq!(PathSettings::new(-1, 5, false).unwrap(), PathSettings::default());
+        assert_eq!(PathSettings::new(-2, 5, false).unwrap_err().0, "max_depth");
+        assert_eq!(PathSettings::new(3, 0, false).unwrap_err().0, "rr_depth");
+        let s = PathSettings::new(2, 5, true).unwrap();
+        assert!(s.allows(2) && !s.allows(3) && s.max_segments() == 2 && s.depth_text() == "2");
+        assert!(PathSettings::default().allows(u32::MAX) && PathSettings::default().depth_text() == "unlimited");
+    }
+}
