@@ -6,6 +6,7 @@
 //!
 //! Layers, each depending only on those above it in this list:
 //!
+//! - [`choice`]: named options (`FromStr`/`Display` from one list per enum).
 //! - [`math`]: vectors, colors, frames, transforms, bounds, rays, floating-point error bounds.
 //! - [`sampling`]: warps (`sample` / `pdf` / `invert`), discrete and tabulated distributions,
 //!   MIS heuristics, the RNG and the samplers.
@@ -24,7 +25,7 @@
 
 pub mod bvh;
 pub mod camera;
-pub mod converge;
+pub mod choice;
 pub mod estimators;
 pub mod film;
 pub mod geometry;
@@ -39,4 +40,3 @@ pub mod sampling;
 pub mod scene;
 pub mod testkit;
 pub mod texture;
-pub mod validate;

@@ -20,6 +20,7 @@
 //! weights exactly `s² / n`).
 
 pub mod filter;
+pub mod metrics;
 pub mod output;
 
 use crate::math::{Rgb, Vec2};

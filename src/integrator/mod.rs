@@ -64,6 +64,29 @@ pub(crate) fn russian_roulette(beta: &mut Rgb, eta: f32, depth: u32, rr_depth: u
     true
 }
 
+/// Which integrator (the names of scene files and the command line).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Path tracing with next-event estimation and MIS.
+    Path,
+    /// Direct lighting only.
+    Direct,
+    /// Light tracing.
+    Ptracer,
+    /// Radiosity.
+    Radiosity,
+    /// Volumetric path tracing.
+    Volpath,
+}
+
+crate::choices!(IntegratorKind, "integrator", {
+    IntegratorKind::Path => "path", "path tracing with next-event estimation and MIS (backward, from the camera)";
+    IntegratorKind::Direct => "direct", "direct lighting only (Mitsuba's `direct`)";
+    IntegratorKind::Ptracer => "ptracer", "light tracing (forward, from the emitters; Mitsuba's `ptracer`)";
+    IntegratorKind::Radiosity => "radiosity", "radiosity: finite elements for diffuse scenes, solved then displayed";
+    IntegratorKind::Volpath => "volpath", "volumetric path tracing: participating media (Mitsuba's `volpath`)";
+});
+
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
 /// Render it with [`crate::render::render_integrator`].
 #[derive(Clone, Debug)]
@@ -87,14 +110,33 @@ impl Default for AnyIntegrator {
 }
 
 impl AnyIntegrator {
+    /// Which integrator this is.
+    pub fn kind(&self) -> IntegratorKind {
+        match self {
+            AnyIntegrator::Path(_) => IntegratorKind::Path,
+            AnyIntegrator::Direct(_) => IntegratorKind::Direct,
+            AnyIntegrator::Ptracer(_) => IntegratorKind::Ptracer,
+            AnyIntegrator::Radiosity(_) => IntegratorKind::Radiosity,
+            AnyIntegrator::VolPath(_) => IntegratorKind::Volpath,
+        }
+    }
+
     /// Plugin name.
     pub fn name(&self) -> &'static str {
-        match self {
-            AnyIntegrator::Path(_) => "path",
-            AnyIntegrator::Direct(_) => "direct",
-            AnyIntegrator::Ptracer(_) => "ptracer",
-            AnyIntegrator::Radiosity(_) => "radiosity",
-            AnyIntegrator::VolPath(_) => "volpath",
+        crate::choice::Choice::name(self.kind())
+    }
+
+    /// The integrator `kind` with its default settings, keeping the path-length settings
+    /// `settings` where it has them (`hide_emitters` for `direct`).
+    pub fn with_kind(kind: IntegratorKind, settings: PathSettings) -> AnyIntegrator {
+        match kind {
+            IntegratorKind::Path => AnyIntegrator::Path(PathIntegrator { settings, ..Default::default() }),
+            IntegratorKind::Direct => {
+                AnyIntegrator::Direct(DirectIntegrator { hide_emitters: settings.hide_emitters, ..Default::default() })
+            }
+            IntegratorKind::Ptracer => AnyIntegrator::Ptracer(LightTracer { settings }),
+            IntegratorKind::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
+            IntegratorKind::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
         }
     }
 

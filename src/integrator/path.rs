@@ -55,6 +55,14 @@ pub struct PathIntegrator {
     pub heuristic: MisHeuristic,
 }
 
+crate::choices!(DirectStrategy, "direct-light strategy", {
+    DirectStrategy::Mis => "mis", "light sampling and BSDF sampling, combined by MIS (power heuristic by default)";
+    DirectStrategy::Light => "light", "light (emitter) sampling only";
+    DirectStrategy::Bsdf => "bsdf", "BSDF sampling only";
+    DirectStrategy::Uniform => "uniform", "uniform hemisphere sampling of directions, traced to emitters";
+    DirectStrategy::Cosine => "cosine", "cosine-weighted hemisphere sampling of directions, traced to emitters";
+});
+
 impl PathIntegrator {
     /// The default path tracer with at most `max_depth` segments (-1: unlimited).
     pub fn with_max_depth(max_depth: i32) -> PathIntegrator {
@@ -267,7 +275,8 @@ mod tests {
     use crate::geometry::{Geometry, Sphere, TriangleMesh};
     use crate::material::{Bsdf, Diffuse};
     use crate::math::Transform;
-    use crate::render::{render, RenderSettings, SamplerKind};
+    use crate::render::{render, RenderSettings};
+    use crate::sampling::sampler::SamplerKind;
     use crate::scene::SceneBuilder;
     use std::sync::atomic::AtomicBool;
 
@@ -381,11 +390,8 @@ mod tests {
             (DirectStrategy::Uniform, MisHeuristic::Power, 1024),
         ];
         for (k, (strategy, heuristic, spp)) in cases.into_iter().enumerate() {
-            let integrator = PathIntegrator {
-                settings: PathSettings { max_depth: 6, ..Default::default() },
-                strategy,
-                heuristic,
-            };
+            let integrator =
+                PathIntegrator { settings: PathSettings { max_depth: 6, ..Default::default() }, strategy, heuristic };
             let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             means.push((strategy, heuristic, image_mean(&out.film)));

@@ -180,7 +180,7 @@ mod tests {
     /// — and its mean is within 0.5 %.
     #[test]
     fn agrees_with_the_path_tracer_on_the_cornell_box() {
-        use crate::validate::relmse;
+        use crate::film::metrics::relmse;
         let scene = crate::scene::cornell::cornell_box(40, 24).unwrap();
         let never = AtomicBool::new(false);
         let path = |seed| {

@@ -45,6 +45,12 @@ pub enum Method {
     Shooting,
 }
 
+crate::choices!(Method, "radiosity solver", {
+    Method::Jacobi => "jacobi", "Jacobi iteration, B ← E + ρ F B (the Neumann series term by term)";
+    Method::GaussSeidel => "gauss-seidel", "Gauss–Seidel iteration (updated values used at once)";
+    Method::Shooting => "shooting", "progressive refinement: shoot the largest unshot power first";
+});
+
 /// Radiosity settings.
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -485,7 +491,7 @@ mod tests {
                 .unwrap();
             let img = out.film.image();
             let (mean, _) = out.film.mean_and_std_error();
-            let rmse = crate::converge::mse(&img, &ref_img).sqrt();
+            let rmse = crate::film::metrics::mse(&img, &ref_img).sqrt();
             println!(
                 "patch {size}: {} patches, mean {mean:.5} vs {ref_mean:.5} ± {ref_se:.5}, RMSE {rmse:.4}",
                 integrator.solution.b.len()

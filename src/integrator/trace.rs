@@ -91,6 +91,11 @@ pub enum MisHeuristic {
     Power,
 }
 
+crate::choices!(MisHeuristic, "MIS heuristic", {
+    MisHeuristic::Balance => "balance", "balance heuristic";
+    MisHeuristic::Power => "power", "power heuristic (exponent 2)";
+});
+
 /// How next-event estimation and BSDF sampling share direct light at a vertex.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mis {

@@ -27,33 +27,11 @@ pub enum LightSamplerKind {
     Uniform,
 }
 
-impl LightSamplerKind {
-    /// Every kind with its name, in the order the documentation lists them.
-    pub const ALL: [(LightSamplerKind, &'static str); 3] =
-        [(LightSamplerKind::Bvh, "bvh"), (LightSamplerKind::Power, "power"), (LightSamplerKind::Uniform, "uniform")];
-
-    /// The kind's name (as in scene files and on the command line).
-    pub fn name(self) -> &'static str {
-        Self::ALL.iter().find(|(k, _)| *k == self).map(|(_, n)| *n).unwrap_or("bvh")
-    }
-}
-
-impl std::str::FromStr for LightSamplerKind {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .iter()
-            .find(|(_, n)| *n == s)
-            .map(|(k, _)| *k)
-            .ok_or_else(|| format!("unknown light sampler '{s}' (expected one of: bvh, power, uniform)"))
-    }
-}
-
-impl std::fmt::Display for LightSamplerKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+crate::choices!(LightSamplerKind, "light sampler", {
+    LightSamplerKind::Bvh => "bvh", "light BVH: by a bound on each light's contribution at the shading point";
+    LightSamplerKind::Power => "power", "by emitted power, the same everywhere";
+    LightSamplerKind::Uniform => "uniform", "every light alike (Mitsuba's rule)";
+});
 
 /// Where a light is chosen for: the shading point and its unit normal (zero for a point in a
 /// medium, which has no normal).
@@ -128,6 +106,7 @@ impl LightSampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::choice::Choice;
     use crate::geometry::{Disk, Sphere, TriangleMesh};
     use crate::math::{Ray, Rgb, Transform};
     use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
@@ -173,7 +152,7 @@ mod tests {
         let n = Vec3::new(0.2, 0.3, 1.0).normalize();
         let ctx = LightSampleContext { p, n };
         let (lights, shapes) = lights_around(p);
-        for (k, (kind, name)) in LightSamplerKind::ALL.iter().enumerate() {
+        for (k, (kind, name, _)) in LightSamplerKind::CHOICES.iter().enumerate() {
             let sampler = LightSampler::new(*kind, &lights, &shapes).unwrap();
             let pdf = |w: &Vec3| -> f64 {
                 let ray = Ray::new(p, *w);
@@ -225,7 +204,7 @@ mod tests {
 
     #[test]
     fn kinds_parse_and_print() {
-        for (kind, name) in LightSamplerKind::ALL {
+        for &(kind, name, _) in LightSamplerKind::CHOICES {
             assert_eq!(name.parse::<LightSamplerKind>().unwrap(), kind);
             assert_eq!(kind.to_string(), name);
         }

@@ -15,35 +15,12 @@ use crate::film::{Film, FilmSample, TileBuffer};
 use crate::integrator::radiosity::{Radiosity, RadiosityIntegrator};
 use crate::integrator::{AnyIntegrator, Integrator};
 use crate::math::{Rgb, Vec2};
-use crate::sampling::sampler::{IndependentSampler, SobolSampler, StratifiedSampler};
-use crate::sampling::Sampler;
+use crate::sampling::sampler::SamplerKind;
 use crate::scene::Scene;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-
-/// Which sampler feeds the integrator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SamplerKind {
-    /// Independent uniform numbers.
-    Independent,
-    /// Jittered strata.
-    Stratified,
-    /// Padded Owen-scrambled Sobol.
-    Sobol,
-}
-
-impl SamplerKind {
-    /// The sampler for `spp` samples per pixel and `seed`.
-    pub fn make(self, spp: u32, seed: u64) -> Sampler {
-        match self {
-            SamplerKind::Independent => Sampler::Independent(IndependentSampler::new(spp, seed)),
-            SamplerKind::Stratified => Sampler::Stratified(StratifiedSampler::new(spp, true, seed)),
-            SamplerKind::Sobol => Sampler::Sobol(SobolSampler::new(spp, seed)),
-        }
-    }
-}
 
 /// Render settings.
 #[derive(Clone, Debug)]

@@ -27,6 +27,35 @@ use crate::math::Vec2;
 /// dimensions per sample.
 pub(crate) const DIMENSIONS_PER_SAMPLE: i64 = 1 << 16;
 
+/// Which sampler feeds the integrator.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Independent uniform numbers.
+    #[default]
+    Independent,
+    /// Jittered strata.
+    Stratified,
+    /// Padded Owen-scrambled Sobol.
+    Sobol,
+}
+
+impl SamplerKind {
+    /// The sampler for `spp` samples per pixel and `seed`.
+    pub fn make(self, spp: u32, seed: u64) -> Sampler {
+        match self {
+            SamplerKind::Independent => Sampler::Independent(IndependentSampler::new(spp, seed)),
+            SamplerKind::Stratified => Sampler::Stratified(StratifiedSampler::new(spp, true, seed)),
+            SamplerKind::Sobol => Sampler::Sobol(SobolSampler::new(spp, seed)),
+        }
+    }
+}
+
+crate::choices!(SamplerKind, "sampler", {
+    SamplerKind::Independent => "independent", "independent uniform numbers (PCG32 streams)";
+    SamplerKind::Stratified => "stratified", "jittered strata, randomly permuted per dimension";
+    SamplerKind::Sobol => "sobol", "Owen-scrambled Sobol points, padded across dimension pairs";
+});
+
 /// The samplers (a closed set, dispatched by `match`).
 #[derive(Clone, Debug)]
 pub enum Sampler {

@@ -6,6 +6,7 @@ use super::error::{nearest, SceneError};
 use super::parse::{resolve, Obj, Value};
 use super::SceneFile;
 use crate::camera::{Camera, FovAxis};
+use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
 use crate::integrator::{
@@ -23,7 +24,7 @@ use crate::material::{
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Mat3, Rgb, Transform, Vec3};
 use crate::medium::{Medium, PhaseFunction};
-use crate::render::SamplerKind;
+use crate::sampling::sampler::SamplerKind;
 use crate::scene::SceneBuilder;
 use crate::texture::{Bitmap, Filter as TexFilter, Texture, Wrap};
 use std::collections::HashMap;
@@ -163,8 +164,8 @@ impl Builder {
         o.built.set(true);
         o.check_children(&[])?;
         if matches!(o.ty.as_str(), "path" | "volpath" | "direct") {
-            let names: Vec<&str> = LightSamplerKind::ALL.iter().map(|(_, n)| *n).collect();
-            self.light_sampler = o.choice("light_sampler", &names)?.parse().map_err(|e: String| o.error(e))?;
+            self.light_sampler =
+                o.choice("light_sampler", &LightSamplerKind::names())?.parse().map_err(|e: String| o.error(e))?;
         }
         match o.ty.as_str() {
             "path" | "ptracer" | "volpath" => {

@@ -91,30 +91,7 @@ pub fn warning(loc: &Loc, message: &str) -> String {
     format!("{}: warning: {message}", loc.position())
 }
 
-/// The candidate closest to `name` by edit distance, if any is reasonably close: for "did you
-/// mean" hints on unknown plugins and parameters.
-pub fn nearest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<&'a str> {
-    candidates
-        .into_iter()
-        .map(|c| (edit_distance(name, c), c))
-        .min()
-        .filter(|&(d, c)| d <= (c.len().max(name.len()) / 2).max(2))
-        .map(|(_, c)| c)
-}
-
-/// Levenshtein distance (case-insensitive).
-fn edit_distance(a: &str, b: &str) -> usize {
-    let (a, b): (Vec<char>, Vec<char>) = (a.to_lowercase().chars().collect(), b.to_lowercase().chars().collect());
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.iter().enumerate() {
-        let mut cur = vec![i + 1; b.len() + 1];
-        for (j, cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + usize::from(ca != cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
-}
+pub use crate::choice::nearest;
 
 #[cfg(test)]
 mod tests {
@@ -132,6 +109,5 @@ mod tests {
         assert_eq!(nearest("difuse", ["diffuse", "dielectric", "conductor"]), Some("diffuse"));
         assert_eq!(nearest("roughplastik", ["plastic", "roughplastic"]), Some("roughplastic"));
         assert_eq!(nearest("xyzzy", ["diffuse", "plastic"]), None);
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
     }
 }

@@ -14,7 +14,7 @@ pub use error::SceneError;
 
 use crate::film::filter::Filter;
 use crate::integrator::AnyIntegrator;
-use crate::render::SamplerKind;
+use crate::sampling::sampler::SamplerKind;
 use crate::scene::Scene;
 use std::path::Path;
 

@@ -167,7 +167,9 @@ fn defaults_references_spectra_and_plugins() {
     assert_eq!((f.spp, f.sampler, f.seed), (7, SamplerKind::Sobol, 3));
     assert_eq!(f.window, Some([5, 0, 10, 30]));
     assert!(matches!(f.filter, Filter::Tent { radius } if radius == 1.5));
-    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.hide_emitters && p.settings.max_depth == 3));
+    assert!(
+        matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.hide_emitters && p.settings.max_depth == 3)
+    );
     // Two instanced spheres at x = ±2.
     let centres: Vec<Vec3> = f
         .scene
@@ -464,7 +466,7 @@ fn light_sampler_parameter() {
     let light = r#"<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#;
     let f = load(&scene(light)).unwrap();
     assert_eq!(f.scene.light_sampler_kind(), LightSamplerKind::Bvh);
-    for (name, kind) in LightSamplerKind::ALL.iter().map(|(k, n)| (*n, *k)) {
+    for &(kind, name, _) in <LightSamplerKind as crate::choice::Choice>::CHOICES {
         for integrator in ["path", "volpath", "direct"] {
             let body = format!(
                 r#"<integrator type="{integrator}"><string name="light_sampler" value="{name}"/></integrator>{light}"#

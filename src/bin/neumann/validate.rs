@@ -8,10 +8,11 @@
 //! means. Equal-spp relMSE within a small factor of Mitsuba's says neumann's estimator is as
 //! efficient per sample; the mean within 0.5 % catches a bias that noise would hide.
 
-use crate::load::image::load_image;
-use crate::math::Rgb;
-use crate::render::{render_integrator, RenderSettings};
-use crate::scene::xml::load_scene_file;
+use crate::{usage, Failure};
+use neumann::film::metrics::{image_mean, relmse};
+use neumann::load::image::load_image;
+use neumann::render::{render_integrator, RenderSettings};
+use neumann::scene::xml::load_scene_file;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -24,8 +25,6 @@ pub struct Reference {
     pub res: u32,
     /// Samples per pixel of the compared renders.
     pub test_spp: u32,
-    /// Samples per pixel of the reference.
-    pub reference_spp: u32,
     /// Mitsuba's relMSE at `test_spp` (mean over seeds).
     pub mitsuba_relmse: f64,
     /// Mean of the reference image.
@@ -77,11 +76,10 @@ pub fn read_references(dir: &Path) -> Result<Vec<Reference>, String> {
     let col = |name: &str| {
         header.iter().position(|h| *h == name).ok_or_else(|| format!("{}: no column '{name}'", path.display()))
     };
-    let (c_scene, c_res, c_spp, c_ref_spp, c_rel, c_mean, c_sps) = (
+    let (c_scene, c_res, c_spp, c_rel, c_mean, c_sps) = (
         col("scene")?,
         col("res")?,
         col("test_spp")?,
-        col("reference_spp")?,
         col("mitsuba_relmse")?,
         col("reference_mean")?,
         col("mitsuba_samples_per_second")?,
@@ -97,7 +95,6 @@ pub fn read_references(dir: &Path) -> Result<Vec<Reference>, String> {
                 scene: f.get(c_scene).ok_or_else(bad)?.to_string(),
                 res: num(c_res)? as u32,
                 test_spp: num(c_spp)? as u32,
-                reference_spp: num(c_ref_spp)? as u32,
                 mitsuba_relmse: num(c_rel)?,
                 reference_mean: num(c_mean)?,
                 mitsuba_samples_per_second: num(c_sps)?,
@@ -108,28 +105,6 @@ pub fn read_references(dir: &Path) -> Result<Vec<Reference>, String> {
             })
         })
         .collect()
-}
-
-/// `mean((x - r)² / (r² + 10⁻²))` over pixels and channels.
-pub fn relmse(image: &[Rgb], reference: &[Rgb]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .map(|(x, r)| {
-            (0..3)
-                .map(|c| {
-                    let (x, r) = (x[c] as f64, r[c] as f64);
-                    (x - r) * (x - r) / (r * r + 1e-2)
-                })
-                .sum::<f64>()
-        })
-        .sum();
-    sum / (3 * image.len().max(1)) as f64
-}
-
-/// Mean over pixels and channels.
-pub fn image_mean(image: &[Rgb]) -> f64 {
-    image.iter().map(|p| (p.x + p.y + p.z) as f64).sum::<f64>() / (3 * image.len().max(1)) as f64
 }
 
 /// Renders `scenes_dir/<scene>.xml` at the reference's settings (seed `seed`) and compares it with
@@ -165,17 +140,45 @@ pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn metrics() {
-        let r = vec![Rgb::splat(1.0), Rgb::splat(0.0)];
-        let x = vec![Rgb::splat(1.1), Rgb::splat(0.1)];
-        let expected = (0.01 / 1.01 + 0.01 / 0.01) / 2.0;
-        assert!((relmse(&x, &r) - expected).abs() < 1e-6);
-        assert!((image_mean(&x) - 0.6).abs() < 1e-6);
-        assert_eq!(relmse(&r, &r), 0.0);
+/// `neumann validate`: the comparison table; fails if any scene fails.
+pub fn run(
+    scenes: &[String],
+    scene_dir: &std::path::Path,
+    reference_dir: &std::path::Path,
+    seed: u64,
+) -> Result<(), Failure> {
+    let refs = read_references(reference_dir).map_err(|e| Failure(1, e))?;
+    if let Some(s) = scenes.iter().find(|s| !refs.iter().any(|r| &r.scene == *s)) {
+        let names: Vec<&str> = refs.iter().map(|r| r.scene.as_str()).collect();
+        return Err(usage(format!("no reference for scene '{s}' (references exist for: {})", names.join(", "))));
     }
+    println!(
+        "{:<16} {:>5} {:>6} {:>12} {:>12} {:>7} {:>6} {:>9} {:>10} {:>10}  verdict",
+        "scene", "res", "spp", "relMSE", "Mitsuba", "ratio", "bound", "mean diff", "Msamp/s", "Mitsuba"
+    );
+    let mut failed = 0;
+    for r in refs.iter().filter(|r| scenes.is_empty() || scenes.contains(&r.scene)) {
+        let v = validate(scene_dir, reference_dir, r, seed).map_err(|e| Failure(1, e))?;
+        let ok = v.passed();
+        failed += usize::from(!ok);
+        println!(
+            "{:<16} {:>5} {:>6} {:>12.4e} {:>12.4e} {:>7.3} {:>6.2} {:>+8.3}% {:>10.2} {:>10.2}  {}",
+            r.scene,
+            r.res,
+            r.test_spp,
+            v.relmse,
+            r.mitsuba_relmse,
+            v.relmse_ratio(),
+            r.max_relmse_ratio,
+            100.0 * v.mean_difference(),
+            v.samples_per_second / 1e6,
+            r.mitsuba_samples_per_second / 1e6,
+            if ok { "ok" } else { "FAIL" }
+        );
+    }
+    println!("(pass: relMSE ≤ bound × Mitsuba's at equal spp and |mean diff| ≤ 0.5 %; Mitsuba's speed as recorded with the references)");
+    if failed > 0 {
+        return Err(Failure(1, format!("{failed} scene(s) failed validation")));
+    }
+    Ok(())
 }

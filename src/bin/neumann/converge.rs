@@ -8,15 +8,148 @@
 //! against spp and MSE against seconds, one labelled curve per estimator, as SVG and PNG
 //! (plotters; the PNG's labels use the bundled DejaVu Sans subset in `assets/fonts/`).
 
-use crate::estimators::loglog_slope;
-use crate::integrator::Integrator;
-use crate::math::Rgb;
-use crate::render::{render, RenderSettings};
-use crate::scene::Scene;
-use crate::validate::relmse;
-use std::path::Path;
+use crate::job::{builtin_job, file_job, parse_defines, parse_res};
+use crate::{choice, usage, Failure, CANCEL};
+use neumann::estimators::loglog_slope;
+use neumann::film::metrics::{mse, relmse};
+use neumann::film::output::{write_image_alpha, ImageInfo};
+use neumann::integrator::{AnyIntegrator, DirectStrategy, Integrator, PathIntegrator, PathSettings};
+use neumann::math::Rgb;
+use neumann::render::{render, RenderSettings};
+use neumann::sampling::sampler::SamplerKind;
+use neumann::scene::Scene;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+#[derive(clap::Args, Debug)]
+pub struct ConvergeArgs {
+    /// Scene: a Mitsuba 3 XML file or a built-in scene (cbox, the default).
+    scene: Option<String>,
+    /// Reference image (EXR or PFM of the same size); default: render one with MIS at 16 × the
+    /// largest spp.
+    #[arg(long = "ref", value_name = "REF")]
+    reference: Option<PathBuf>,
+    /// Direct-light strategies to compare (comma-separated).
+    #[arg(long, value_parser = choice::<DirectStrategy>(), value_delimiter = ',', default_value = "mis,light,bsdf")]
+    direct: Vec<DirectStrategy>,
+    /// Samplers to compare (comma-separated).
+    #[arg(long, value_parser = choice::<SamplerKind>(), value_delimiter = ',', default_value = "independent")]
+    sampler: Vec<SamplerKind>,
+    /// Largest samples per pixel (levels 1, 2, 4, … up to it).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    max_spp: u32,
+    /// Film resolution, W or WxH (default: 64, small enough for many renders).
+    #[arg(long, default_value = "64")]
+    res: String,
+    /// Longest path in segments (2: direct light only).
+    #[arg(long, allow_negative_numbers = true)]
+    max_depth: Option<i32>,
+    /// Scene parameter name=value.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
+    /// Output folder for convergence.csv, convergence.svg, convergence.png (and reference.exr).
+    #[arg(long, default_value = "converge")]
+    out: PathBuf,
+    /// Seed of the measured renders.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+}
+
+/// `neumann converge`.
+pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
+    let scene_arg = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
+    let defines = parse_defines(&a.define)?;
+    let mut job = if scene_arg == "cbox" {
+        builtin_job(&scene_arg, &defines)?
+    } else {
+        file_job(std::path::Path::new(&scene_arg), &defines)?
+    };
+    let (w, h) = parse_res(&a.res).map_err(usage)?;
+    let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+    job.scene.set_camera(camera);
+    let base = match &job.integrator {
+        AnyIntegrator::Path(p) => p.clone(),
+        other => {
+            return Err(usage(format!(
+                "converge compares the path tracer's strategies; this scene uses '{}'",
+                other.name()
+            )))
+        }
+    };
+    let max_depth = a.max_depth.unwrap_or(base.settings.max_depth);
+    if max_depth < -1 {
+        return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {max_depth}")));
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| Failure(1, format!("cannot create '{}': {e}", a.out.display())))?;
+    let reference = match &a.reference {
+        Some(path) => {
+            let img = neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e))?;
+            if (img.width, img.height) != (w, h) {
+                return Err(Failure(
+                    1,
+                    format!("the reference is {}x{} but the renders are {w}x{h} (use --res)", img.width, img.height),
+                ));
+            }
+            img.pixels
+        }
+        None => {
+            let spp = a.max_spp.saturating_mul(16).min(1 << 16);
+            println!(
+                "no --ref: rendering a reference with MIS at {spp} spp (seed {}), written to reference.exr",
+                a.seed + 1_000_003
+            );
+            let integrator = PathIntegrator {
+                settings: PathSettings { max_depth, ..base.settings },
+                strategy: DirectStrategy::Mis,
+                ..base.clone()
+            };
+            let settings = RenderSettings {
+                spp,
+                seed: a.seed + 1_000_003,
+                threads: a.threads,
+                progress: true,
+                ..Default::default()
+            };
+            let out = render(&job.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+            let image = out.film.image();
+            write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0 })
+                .map_err(|e| Failure(1, e))?;
+            image
+        }
+    };
+    let levels = spp_levels(a.max_spp);
+    let mut curves = Vec::new();
+    println!("{:<24} {:>8} {:>12} {:>10} {:>12}", "estimator", "slope", "MSE (max)", "seconds", "1/(MSE·s)");
+    for &d in &a.direct {
+        for &s in &a.sampler {
+            let name = if a.sampler.len() > 1 { format!("{d} / {s}") } else { format!("{d}") };
+            let integrator =
+                PathIntegrator { settings: PathSettings { max_depth, ..base.settings }, strategy: d, ..base.clone() };
+            let base = RenderSettings { sampler: s, seed: a.seed, threads: a.threads, ..Default::default() };
+            let curve =
+                measure(&name, &job.scene, &integrator, &reference, &levels, &base).map_err(|e| Failure(1, e))?;
+            let last = curve.points.last().copied().expect("at least one level");
+            println!(
+                "{name:<24} {:>8.3} {:>12.4e} {:>10.3} {:>12.4e}",
+                curve.slope().unwrap_or(f64::NAN),
+                last.mse,
+                last.seconds,
+                curve.efficiency().unwrap_or(0.0)
+            );
+            curves.push(curve);
+        }
+    }
+    write_csv(&a.out.join("convergence.csv"), &curves).map_err(|e| Failure(1, e))?;
+    let title = format!("{} {w}x{h}, max_depth {max_depth}: MSE against a reference", job.name);
+    plot(&a.out.join("convergence.svg"), &a.out.join("convergence.png"), &title, &curves).map_err(|e| Failure(1, e))?;
+    println!("wrote convergence.csv, convergence.svg and convergence.png to {}", a.out.display());
+    Ok(())
+}
+
+/// Parses `W` or `WxH`.
 /// One measured point of a curve.
 #[derive(Clone, Copy, Debug)]
 pub struct Point {
@@ -24,7 +157,7 @@ pub struct Point {
     pub spp: u32,
     /// Mean squared error over pixels and channels.
     pub mse: f64,
-    /// Relative MSE (`(x - r)² / (r² + 10⁻²)`, see [`crate::validate::relmse`]).
+    /// Relative MSE (`(x - r)² / (r² + 10⁻²)`, see `neumann::film::metrics::relmse`).
     pub relmse: f64,
     /// Render time in seconds.
     pub seconds: f64,
@@ -49,19 +182,6 @@ impl Curve {
     pub fn efficiency(&self) -> Option<f64> {
         self.points.last().map(|p| 1.0 / (p.mse * p.seconds).max(1e-300))
     }
-}
-
-/// Mean squared error over pixels and channels.
-pub fn mse(image: &[Rgb], reference: &[Rgb]) -> f64 {
-    let sum: f64 = image
-        .iter()
-        .zip(reference)
-        .map(|(a, b)| {
-            let d = (*a - *b).as_dvec3();
-            d.length_squared()
-        })
-        .sum();
-    sum / (3 * image.len().max(1)) as f64
 }
 
 /// Sample counts 1, 2, 4, … up to `max_spp` (inclusive if a power of two).
@@ -108,7 +228,7 @@ pub fn write_csv(path: &Path, curves: &[Curve]) -> Result<(), String> {
     std::fs::write(path, s).map_err(|e| format!("cannot write '{}': {e}", path.display()))
 }
 
-static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans-subset.ttf");
+static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans-subset.ttf");
 
 /// Draws the two-panel log-log plot (MSE vs spp, MSE vs seconds) to `svg` and `png`.
 pub fn plot(svg: &Path, png: &Path, title: &str, curves: &[Curve]) -> Result<(), String> {
@@ -198,10 +318,10 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::estimators::irradiance::{
+    use neumann::estimators::irradiance::{
         estimate_uniform_sky_irradiance, estimate_uniform_sky_irradiance_stratified, HemisphereStrategy,
     };
-    use crate::sampling::Pcg32;
+    use neumann::sampling::Pcg32;
 
     /// The slope fit on synthetic estimators of known order: the MSE of uniform-hemisphere
     /// irradiance falls as N⁻¹, its jittered-stratified version (smooth 2D integrand) as N⁻².
@@ -240,8 +360,8 @@ mod tests {
     /// the CSV and both plots are written.
     #[test]
     fn cornell_box_convergence_and_outputs() {
-        let scene = crate::scene::cornell::cornell_box(16, 16).unwrap();
-        let integrator = crate::integrator::PathIntegrator::with_max_depth(4);
+        let scene = neumann::scene::cornell::cornell_box(16, 16).unwrap();
+        let integrator = PathIntegrator::with_max_depth(4);
         let reference = render(
             &scene,
             &integrator,

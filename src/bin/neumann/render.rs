@@ -1,0 +1,394 @@
+//! `neumann render`: render a scene to an image, with command-line flags overriding the scene's
+//! settings.
+
+use crate::job::{builtin_job, file_job, parse_defines, parse_res};
+use crate::{choice, usage, Failure, CANCEL};
+use neumann::film::output::{write_image_alpha, Format, ImageInfo};
+use neumann::integrator::radiosity::{self, Method};
+use neumann::integrator::{
+    AnyIntegrator, DirectStrategy, IntegratorKind, LightTracer, MisHeuristic, PathIntegrator, PathSettings,
+    VolPathIntegrator,
+};
+use neumann::light::LightSamplerKind;
+use neumann::render::{render_integrator, RenderSettings};
+use neumann::sampling::sampler::SamplerKind;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// Scene to render: a Mitsuba 3 XML file, or a built-in scene name (cbox, the default).
+    scene: Option<String>,
+    /// Output image; the extension picks the format (default: <scene>.png).
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Samples per pixel.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited).
+    #[arg(long, allow_negative_numbers = true)]
+    max_depth: Option<i32>,
+    /// Film resolution, W or WxH.
+    #[arg(long)]
+    res: Option<String>,
+    /// Seed of all random numbers (default: the scene's sampler seed, 0).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (default: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Render for this many seconds (whole passes), instead of a sample count.
+    #[arg(long)]
+    time: Option<f64>,
+    /// Scene parameter name=value: overrides the scene file's <default> of that name ($name);
+    /// the built-in Cornell box has res, spp, max_depth.
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    define: Vec<String>,
+    /// Sampler (default: the scene's; independent for the built-in scene).
+    #[arg(long, value_parser = choice::<SamplerKind>())]
+    sampler: Option<SamplerKind>,
+    /// Direct-light strategy of the path tracer (default: mis).
+    #[arg(long, value_parser = choice::<DirectStrategy>())]
+    direct: Option<DirectStrategy>,
+    /// MIS heuristic of the mis strategy (default: power).
+    #[arg(long, value_parser = choice::<MisHeuristic>())]
+    mis: Option<MisHeuristic>,
+    /// How next-event estimation chooses a light (path, volpath, direct). Default: the scene
+    /// integrator's `light_sampler`, else bvh.
+    #[arg(long, value_parser = choice::<LightSamplerKind>())]
+    light_sampler: Option<LightSamplerKind>,
+    /// Exposure in stops for PNG output (× 2^EV).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Integrator (default: the scene's; path for the built-in scene). Settings it shares with
+    /// the scene's integrator (max_depth, rr_depth, hide_emitters) are kept.
+    #[arg(long, value_parser = choice::<IntegratorKind>())]
+    integrator: Option<IntegratorKind>,
+    /// Radiosity: longest patch edge in world units (default 0.1; the Cornell box is 2 wide).
+    #[arg(long, value_name = "SIZE")]
+    patch_size: Option<f32>,
+    /// Radiosity: Monte Carlo form-factor rays per patch (default 512).
+    #[arg(long, value_name = "N")]
+    ff_rays: Option<u32>,
+    /// Radiosity: linear solver (default gauss-seidel).
+    #[arg(long, value_parser = choice::<Method>())]
+    radiosity_method: Option<Method>,
+    /// Radiosity: stop when the relative residual falls below this (default 1e-4).
+    #[arg(long)]
+    tolerance: Option<f64>,
+    /// Radiosity: smooth shading (vertex radiosities interpolated) instead of flat patches.
+    #[arg(long)]
+    smooth: bool,
+    /// Radiosity: write the per-patch solution (area, centroid, ρ, emission, radiosity) as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    patches_out: Option<PathBuf>,
+    /// Also write the terms of the Neumann series to this folder: term0.exr = Lₑ seen directly,
+    /// term1.exr = T Lₑ (direct light), term2.exr = T² Lₑ, …, up to max_depth (8 terms when
+    /// unlimited, the last holding all longer paths), sum.exr (= the render) and terms.png, a
+    /// contact sheet of the terms and their sum side by side.
+    #[arg(long, value_name = "DIR")]
+    bounces_out: Option<PathBuf>,
+}
+
+/// `neumann render`.
+pub fn run(a: RenderArgs) -> Result<(), Failure> {
+    let scene_arg = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
+    let defines = parse_defines(&a.define)?;
+    let mut job = if scene_arg == "cbox" {
+        builtin_job(&scene_arg, &defines)?
+    } else if scene_arg.to_ascii_lowercase().ends_with(".xml") || std::path::Path::new(&scene_arg).exists() {
+        file_job(std::path::Path::new(&scene_arg), &defines)?
+    } else {
+        return Err(Failure(
+            1,
+            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml scene file or a built-in scene name (cbox)"),
+        ));
+    };
+    // Command-line flags override the scene's settings.
+    if let Some(r) = &a.res {
+        let (w, h) = parse_res(r).map_err(usage)?;
+        let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+        job.scene.set_camera(camera);
+        job.window = None;
+    }
+    if let Some(s) = a.spp {
+        if s == 0 {
+            return Err(usage("--spp must be at least 1".into()));
+        }
+        job.spp = s;
+    }
+    select_integrator(&mut job.integrator, &a)?;
+    if job.scene.has_media() && !matches!(job.integrator, AnyIntegrator::VolPath(_)) {
+        eprintln!(
+            "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
+            job.integrator.name()
+        );
+    }
+    if let Some(d) = a.max_depth {
+        if d < -1 {
+            return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
+        }
+        match &mut job.integrator {
+            AnyIntegrator::Path(PathIntegrator { settings, .. })
+            | AnyIntegrator::Ptracer(LightTracer { settings })
+            | AnyIntegrator::VolPath(VolPathIntegrator { settings }) => settings.max_depth = d,
+            other => {
+                return Err(usage(format!(
+                    "--max-depth applies to the path, volpath and ptracer integrators, not '{}'",
+                    other.name()
+                )))
+            }
+        }
+    }
+    if let Some(s) = a.seed {
+        job.seed = s;
+    }
+    if let Some(s) = a.sampler {
+        job.sampler = s;
+    }
+    if let Some(kind) = a.light_sampler {
+        match &job.integrator {
+            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::Direct(_) => {
+                job.scene.set_light_sampler(kind).map_err(|e| Failure(1, e))?
+            }
+            other => {
+                return Err(usage(format!(
+                    "--light-sampler applies to the path, volpath and direct integrators, not '{}'",
+                    other.name()
+                )))
+            }
+        }
+    }
+    if let Some(direct) = a.direct {
+        match &mut job.integrator {
+            AnyIntegrator::Path(p) => {
+                p.strategy = direct;
+                if matches!(direct, DirectStrategy::Uniform | DirectStrategy::Cosine)
+                    && job.scene.lights().iter().any(|l| l.is_delta())
+                {
+                    eprintln!(
+                        "warning: --direct {direct} samples directions, which never hit point, spot or directional lights: \
+                         they contribute nothing with this strategy"
+                    );
+                }
+            }
+            other => {
+                return Err(usage(format!(
+                    "--direct applies to the path integrator, not '{}' (the direct integrator sets emitter_samples / bsdf_samples)",
+                    other.name()
+                )))
+            }
+        }
+    }
+    if let Some(m) = a.mis {
+        match &mut job.integrator {
+            AnyIntegrator::Path(p) => p.heuristic = m,
+            other => return Err(usage(format!("--mis applies to the path integrator, not '{}'", other.name()))),
+        }
+    }
+    let time_budget = match a.time {
+        None => None,
+        Some(t) => match Duration::try_from_secs_f64(t) {
+            Ok(d) if t > 0.0 => Some(d),
+            _ => return Err(usage(format!("--time must be a positive number of seconds, got {t:?}"))),
+        },
+    };
+    if !a.exposure.is_finite() {
+        return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
+    }
+    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
+    if Format::from_path(&output).map_err(usage)? == Format::Pfm && job.alpha {
+        return Err(usage(format!(
+            "the scene asks for an alpha channel (pixel_format rgba), which PFM cannot hold: write {}.exr or .png",
+            job.name
+        )));
+    }
+
+    let term_count = match (&a.bounces_out, &job.integrator) {
+        (None, _) => 0,
+        (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.settings.max_depth) => p.settings.max_depth as usize,
+        (Some(_), AnyIntegrator::Path(_)) => 8,
+        (Some(_), other) => {
+            return Err(usage(format!("--bounces-out needs the path integrator, not '{}'", other.name())))
+        }
+    };
+    if let Some(dir) = &a.bounces_out {
+        std::fs::create_dir_all(dir).map_err(|e| Failure(1, format!("cannot create '{}': {e}", dir.display())))?;
+    }
+    let settings = RenderSettings {
+        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.spp },
+        time_budget,
+        seed: job.seed,
+        threads: a.threads,
+        sampler: job.sampler,
+        progress: !a.quiet,
+        filter: job.filter.clone(),
+        window: job.window,
+        alpha: job.alpha,
+        terms: term_count,
+        ..Default::default()
+    };
+    let _ = ctrlc::set_handler(|| {
+        if CANCEL.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)"
+        );
+    });
+    let cam = job.scene.camera();
+    let [_, _, width, height] = job.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    println!(
+        "rendering {} at {width}x{height}, {}, {}, {} threads",
+        job.name,
+        match a.time {
+            Some(t) => format!("for {t} s"),
+            None => format!("{} spp", job.spp),
+        },
+        job.integrator.describe(),
+        if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
+    );
+    let out = render_integrator(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    if let Some(sol) = &out.radiosity {
+        report_radiosity(sol, a.patches_out.as_deref())?;
+    }
+    let (lo, hi) = out.film.spp_range();
+    let alpha = job.alpha.then(|| out.film.alpha());
+    let info = ImageInfo { spp: lo, exposure: a.exposure };
+    write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info).map_err(|e| Failure(1, e))?;
+    if let Some(dir) = &a.bounces_out {
+        write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e))?;
+        println!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
+    }
+    let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
+    println!(
+        "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",
+        output.display(),
+        out.elapsed.as_secs_f64(),
+        out.samples_per_second() / 1e6
+    );
+    if out.interrupted {
+        println!("render interrupted: the image holds {spp_text}");
+    }
+    if out.film.dropped() > 0 {
+        println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    Ok(())
+}
+
+/// Applies `--integrator` and the radiosity flags to the scene's integrator. Settings the old
+/// and new integrator share (max_depth, rr_depth, hide_emitters) carry over.
+fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), Failure> {
+    let settings = match &*current {
+        AnyIntegrator::Direct(d) => PathSettings { hide_emitters: d.hide_emitters, ..Default::default() },
+        other => other.path_settings().copied().unwrap_or_default(),
+    };
+    if let Some(kind) = a.integrator {
+        if current.kind() != kind {
+            *current = AnyIntegrator::with_kind(kind, settings);
+        }
+    }
+    let radiosity_flags = a.patch_size.is_some()
+        || a.ff_rays.is_some()
+        || a.radiosity_method.is_some()
+        || a.tolerance.is_some()
+        || a.smooth
+        || a.patches_out.is_some();
+    match current {
+        AnyIntegrator::Radiosity(o) => {
+            if let Some(s) = a.patch_size {
+                if !(s > 0.0 && s.is_finite()) {
+                    return Err(usage(format!("--patch-size must be a positive length, got {s}")));
+                }
+                o.patch_size = s;
+            }
+            if let Some(n) = a.ff_rays {
+                if n == 0 {
+                    return Err(usage("--ff-rays must be at least 1".into()));
+                }
+                o.rays_per_patch = n;
+            }
+            if let Some(t) = a.tolerance {
+                if !(t > 0.0 && t < 1.0) {
+                    return Err(usage(format!("--tolerance must be in (0, 1), got {t}")));
+                }
+                o.tolerance = t;
+            }
+            if let Some(m) = a.radiosity_method {
+                o.method = m;
+            }
+            o.smooth |= a.smooth;
+        }
+        other if radiosity_flags => {
+            return Err(usage(format!(
+                "--patch-size, --ff-rays, --radiosity-method, --tolerance, --smooth and --patches-out apply to the radiosity integrator, not '{}' (add --integrator radiosity)",
+                other.name()
+            )))
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+/// Prints the radiosity solve (patches, form factors, iterations and residuals, power) and
+/// writes the per-patch CSV if asked.
+fn report_radiosity(sol: &radiosity::Radiosity, csv: Option<&std::path::Path>) -> Result<(), Failure> {
+    println!(
+        "radiosity: {} patches, {} non-zero form factors, {} iterations, residual {:.2e}; emitted {:.4} W, reflected {:.4} W (luminance)",
+        sol.b.len(),
+        sol.form_factor_entries,
+        sol.history.last().map_or(0, |h| h.0),
+        sol.history.last().map_or(0.0, |h| h.1),
+        sol.emitted_power(),
+        sol.reflected_power()
+    );
+    let shown: Vec<String> = sol
+        .history
+        .iter()
+        .filter(|(k, _)| k.is_power_of_two() || *k == sol.history.last().map_or(0, |h| h.0))
+        .map(|(k, r)| format!("{k}: {r:.2e}"))
+        .collect();
+    println!("  residual by iteration: {}", shown.join(", "));
+    if let Some(path) = csv {
+        std::fs::write(path, sol.to_csv())
+            .map_err(|e| Failure(1, format!("cannot write '{}': {e}", path.display())))?;
+        println!("wrote the per-patch solution to {}", path.display());
+    }
+    Ok(())
+}
+
+/// Writes each Neumann-series term, the sum and a contact sheet (terms then sum, left to right).
+fn write_terms(
+    dir: &std::path::Path,
+    film: &neumann::film::Film,
+    w: u32,
+    h: u32,
+    info: &ImageInfo,
+) -> Result<(), String> {
+    let mut panels = Vec::new();
+    for k in 0..film.term_count() {
+        let image = film.term_image(k);
+        write_image_alpha(&dir.join(format!("term{k}.exr")), w, h, &image, None, info)?;
+        panels.push(image);
+    }
+    let sum = film.image();
+    write_image_alpha(&dir.join("sum.exr"), w, h, &sum, None, info)?;
+    panels.push(sum);
+    // Contact sheet: panels separated by 2-pixel white gaps.
+    let gap = 2u32;
+    let sheet_w = panels.len() as u32 * (w + gap) - gap;
+    let mut sheet = vec![neumann::math::Rgb::ONE; (sheet_w * h) as usize];
+    for (p, panel) in panels.iter().enumerate() {
+        let x0 = p as u32 * (w + gap);
+        for y in 0..h {
+            for x in 0..w {
+                sheet[(y * sheet_w + x0 + x) as usize] = panel[(y * w + x) as usize];
+            }
+        }
+    }
+    write_image_alpha(&dir.join("terms.png"), sheet_w, h, &sheet, None, info)
+}
