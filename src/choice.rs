@@ -3,7 +3,7 @@
 //! gets `FromStr` (with a nearest-name hint) and `Display` from that one list, so no other layer
 //! mirrors it.
 
-/// An enum whose values have names (see the module docs). Implement it with [`choices!`].
+/// An enum whose values have names (see the module docs). Implement it with [`crate::choices!`].
 pub trait Choice: Copy + PartialEq + Sized + 'static {
     /// Every value, with its name and a one-line description, in documentation order.
     const CHOICES: &'static [(Self, &'static str, &'static str)];
