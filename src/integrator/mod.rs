@@ -88,7 +88,7 @@ crate::choices!(IntegratorKind, "integrator", {
 });
 
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
-/// Render it with [`crate::render::render_integrator`].
+/// The render driver (`render::render_integrator`) renders it.
 #[derive(Clone, Debug)]
 pub enum AnyIntegrator {
     /// Mitsuba's `path`.

@@ -21,7 +21,7 @@
 //! `max_depth` counts path segments including the one to the camera, as for `path`: 1 shows
 //! the emitters only, 2 adds direct light. The image estimate: with `N` paths per pixel
 //! (`spp × W × H` paths in all), a pixel's value is the sum of its splats divided by `spp`
-//! (see [`crate::render::render_light_paths`]).
+//! (see `render::render_light_paths`).
 
 use super::trace::PathSettings;
 use crate::geometry::interaction::SHADOW_EPSILON;
@@ -305,7 +305,7 @@ mod tests {
                 <bsdf type="diffuse"/>
             </shape>
         </scene>"#;
-        let file = crate::scene::xml::load_scene_text(std::path::Path::new("glass.xml"), text, &[]).unwrap();
+        let file = crate::load::mitsuba::load_scene_text(std::path::Path::new("glass.xml"), text, &[]).unwrap();
         let scene = file.scene;
         let never = AtomicBool::new(false);
         let reference = render(

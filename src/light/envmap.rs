@@ -15,7 +15,7 @@
 //!
 //! Parameters (Mitsuba): `filename`, `scale` (default 1), `to_world` (rotation).
 
-use crate::load::image::Image;
+use crate::image::Image;
 use crate::math::{luminance, Rgb, Transform, Vec2, Vec3, PI};
 use crate::sampling::PiecewiseConstant2D;
 use std::sync::Arc;

@@ -5,26 +5,7 @@ use crate::math::color::srgb_decode;
 use crate::math::Rgb;
 use std::path::Path;
 
-/// A linear RGB image, rows from the top.
-#[derive(Clone, Debug)]
-pub struct Image {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Pixels, row-major from the top-left.
-    pub pixels: Vec<Rgb>,
-}
-
-impl Image {
-    /// Pixel at column `x`, row `y` (clamped to the image).
-    #[inline]
-    pub fn get(&self, x: i64, y: i64) -> Rgb {
-        let x = x.clamp(0, self.width as i64 - 1) as usize;
-        let y = y.clamp(0, self.height as i64 - 1) as usize;
-        self.pixels[y * self.width as usize + x]
-    }
-}
+pub use crate::image::Image;
 
 /// Loads a `.png` or `.exr` image. 8- and 16-bit PNGs are sRGB-encoded unless `raw` (data such as
 /// roughness maps), in which case values are only scaled to [0, 1].

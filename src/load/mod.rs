@@ -1,7 +1,10 @@
-//! Loading files: Wavefront OBJ and Stanford PLY meshes, PNG and OpenEXR images. Errors name the file,
-//! the line (for text formats) and what was expected.
+//! Loading files, the top layer: scene formats (Mitsuba 3 XML, [`mitsuba`]), which construct
+//! scenes, integrators and render settings, and the files they name: Wavefront OBJ and Stanford
+//! PLY meshes, PNG and OpenEXR images. Errors name the file, the line (for text formats) and what
+//! was expected.
 
 pub mod image;
+pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 

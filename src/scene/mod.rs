@@ -4,7 +4,6 @@
 
 mod builder;
 pub mod cornell;
-pub mod xml;
 
 pub use builder::SceneBuilder;
 

@@ -7,7 +7,7 @@
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
 
-use crate::load::image::Image;
+use crate::image::Image;
 use crate::math::{Mat3, Rgb, Vec2};
 use std::sync::Arc;
 

@@ -4,9 +4,9 @@
 use crate::{usage, Failure};
 use neumann::film::filter::Filter;
 use neumann::integrator::{AnyIntegrator, PathIntegrator};
+use neumann::load::mitsuba::load_scene_file;
 use neumann::sampling::sampler::SamplerKind;
 use neumann::scene::cornell;
-use neumann::scene::xml::load_scene_file;
 
 /// Parses `W` or `WxH`.
 pub fn parse_res(s: &str) -> Result<(u32, u32), String> {

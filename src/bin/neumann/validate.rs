@@ -11,8 +11,8 @@
 use crate::{usage, Failure};
 use neumann::film::metrics::{image_mean, relmse};
 use neumann::load::image::load_image;
+use neumann::load::mitsuba::load_scene_file;
 use neumann::render::{render_integrator, RenderSettings};
-use neumann::scene::xml::load_scene_file;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 

@@ -1,0 +1,26 @@
+//! Images in memory: linear RGB pixels, rows from the top. Textures and environment maps sample
+//! them; decoding files into them is the job of `load::image`, which sits above the
+//! renderer's layers.
+
+use crate::math::Rgb;
+
+/// A linear RGB image, rows from the top.
+#[derive(Clone, Debug)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixels, row-major from the top-left.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// Pixel at column `x`, row `y` (clamped to the image).
+    #[inline]
+    pub fn get(&self, x: i64, y: i64) -> Rgb {
+        let x = x.clamp(0, self.width as i64 - 1) as usize;
+        let y = y.clamp(0, self.height as i64 - 1) as usize;
+        self.pixels[y * self.width as usize + x]
+    }
+}
