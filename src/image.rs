@@ -3,6 +3,8 @@
 //! renderer's layers.
 
 use crate::math::Rgb;
+use crate::props::{Obj, Result};
+use std::sync::Arc;
 
 /// A linear RGB image, rows from the top.
 #[derive(Clone, Debug)]
@@ -23,4 +25,11 @@ impl Image {
         let y = y.clamp(0, self.height as i64 - 1) as usize;
         self.pixels[y * self.width as usize + x]
     }
+}
+/// Where plugins get their images: the loader resolves the file that the string parameter
+/// `name` of `o` names (relative to the scene file), decodes it (linear RGB; sRGB-decoded unless
+/// `raw`) and shares it between the plugins that name the same file.
+pub trait ImageSource {
+    /// The image named by parameter `name` of `o`; errors are located at the parameter.
+    fn image(&mut self, o: &Obj, name: &str, raw: bool) -> Result<Arc<Image>>;
 }

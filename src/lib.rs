@@ -8,6 +8,8 @@
 //!
 //! - [`choice`]: named options (`FromStr`/`Display` from one list per enum).
 //! - [`math`]: vectors, colors, frames, transforms, bounds, rays, floating-point error bounds.
+//! - [`props`]: plugin objects with typed, located properties (what loaders produce and plugins
+//!   construct themselves from); located scene errors.
 //! - [`image`]: images in memory (linear RGB).
 //! - [`sampling`]: warps (`sample` / `pdf` / `invert`), discrete and tabulated distributions,
 //!   MIS heuristics, the RNG and the samplers.
@@ -38,6 +40,7 @@ pub mod load;
 pub mod material;
 pub mod math;
 pub mod medium;
+pub mod props;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -9,6 +9,7 @@ use std::path::Path;
 const LAYERS: &[&str] = &[
     "choice",
     "math",
+    "props",
     "image",
     "sampling",
     "testkit",

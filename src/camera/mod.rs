@@ -6,6 +6,7 @@
 //! [`FovAxis`].
 
 use crate::math::{Ray, Transform, Vec2, Vec3};
+use crate::props::{Obj, Result as PropResult, SceneError, Value};
 use crate::sampling::sample_uniform_disk_concentric;
 
 /// Which image axis the field of view spans (Mitsuba's `fov_axis`).
@@ -236,6 +237,61 @@ impl Camera {
         let area = 4.0 * self.tan_half.x * self.tan_half.y;
         let weight = 1.0 / (area * cos * cos * cos * dist * dist);
         weight.is_finite().then_some(CameraSample { film, p_lens, wi: w / dist, dist, weight })
+    }
+}
+
+/// Camera plugins by their (Mitsuba) names.
+pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens"];
+
+impl Camera {
+    /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
+    /// `fov` + `fov_axis` (`x` default, `y`, `diagonal`, `smaller`, `larger`) or `focal_length`
+    /// (default `50mm`: the diagonal field of view of a 36 × 24 mm frame), `near_clip` (0.01),
+    /// `far_clip` (10⁴); thin lens: `aperture_radius`, `focus_distance` (both required).
+    pub fn from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
+        if !CAMERA_PLUGINS.contains(&o.ty.as_str()) {
+            return Err(o.unknown_plugin(CAMERA_PLUGINS));
+        }
+        let to_world = o.transform("to_world")?;
+        let (fov, axis) = match (o.float_opt("fov")?, o.get("focal_length")) {
+            (Some(_), Some(p)) => {
+                return Err(SceneError::at(&p.loc, "give either 'fov' or 'focal_length', not both"));
+            }
+            (Some(fov), None) => {
+                let axis = match o.choice("fov_axis", &["x", "y", "diagonal", "smaller", "larger"])?.as_str() {
+                    "x" => FovAxis::X,
+                    "y" => FovAxis::Y,
+                    "diagonal" => FovAxis::Diagonal,
+                    "smaller" => FovAxis::Smaller,
+                    _ => FovAxis::Larger,
+                };
+                (fov, axis)
+            }
+            (None, p) => {
+                // Mitsuba: a 35 mm focal length gives the diagonal field of view of a 36 × 24 mm frame.
+                let mm = match p.map(|p| &p.value) {
+                    None => 50.0,
+                    Some(Value::String(s)) => {
+                        s.trim().trim_end_matches("mm").trim().parse::<f32>().ok().filter(|f| *f > 0.0).ok_or_else(
+                            || o.error_at("focal_length", format!("focal_length must be like \"50mm\", got {s:?}")),
+                        )?
+                    }
+                    Some(Value::Float(f)) if *f > 0.0 => *f as f32,
+                    Some(_) => return Err(o.error_at("focal_length", "focal_length must be a string like \"50mm\"")),
+                };
+                (2.0 * ((36.0f32.hypot(24.0)) / (2.0 * mm)).atan().to_degrees(), FovAxis::Diagonal)
+            }
+        };
+        let mut camera = Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e))?;
+        let near = o.float("near_clip", 0.01)?;
+        let far = o.float("far_clip", 10000.0)?;
+        camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e))?;
+        if o.ty == "thinlens" {
+            let r = o.float_opt("aperture_radius")?.ok_or_else(|| o.error("'aperture_radius' is required"))?;
+            let d = o.float_opt("focus_distance")?.ok_or_else(|| o.error("'focus_distance' is required"))?;
+            camera = camera.with_thin_lens(r, d).map_err(|e| o.error_at("aperture_radius", e))?;
+        }
+        Ok(camera)
     }
 }
 

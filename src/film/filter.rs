@@ -9,6 +9,8 @@
 //! - `gaussian` (standard deviation σ, default ½; radius 4σ as in Mitsuba):
 //!   `f₁(x) = max(0, exp(−x²/2σ²) − exp(−8))` (shifted to reach zero at the radius).
 
+use crate::props::{Obj, Result as PropResult};
+
 /// Largest border (pixels beyond a tile) a filter footprint may need: radii up to
 /// `MAX_BORDER + ½` pixels are accepted.
 pub const MAX_BORDER: u32 = 16;
@@ -72,6 +74,31 @@ impl Filter {
                     0.0
                 }
             }
+        }
+    }
+}
+
+/// Every reconstruction-filter plugin by its (Mitsuba) name.
+pub const FILTER_PLUGINS: &[&str] = &["box", "tent", "gaussian"];
+
+impl Filter {
+    /// Mitsuba's `rfilter` plugins: `box`, `tent` (`radius` 1), `gaussian` (`stddev` 0.5).
+    pub fn from_props(r: &Obj) -> PropResult<Filter> {
+        r.built.set(true);
+        match r.ty.as_str() {
+            "box" => Ok(Filter::Box),
+            "tent" => {
+                let radius = r.float("radius", 1.0)?;
+                Filter::tent(radius)
+                    .ok_or_else(|| r.error_at("radius", "radius must be positive and at most 16.5 pixels"))
+            }
+            "gaussian" => {
+                let s = r.float("stddev", 0.5)?;
+                Filter::gaussian(s).ok_or_else(|| {
+                    r.error_at("stddev", "stddev must be positive and at most 4.125 pixels (radius 4 stddev)")
+                })
+            }
+            _ => Err(r.unknown_plugin(FILTER_PLUGINS)),
         }
     }
 }

@@ -24,6 +24,7 @@ pub mod metrics;
 pub mod output;
 
 use crate::math::{Rgb, Vec2};
+use crate::props::{Obj, Result as PropResult, SceneError};
 use filter::Filter;
 
 /// One pixel's filter-weighted sums (f64), kept together so that a splat touches one cache
@@ -372,6 +373,82 @@ impl Film {
                 Rgb::new(v(0), v(1), v(2))
             })
             .collect()
+    }
+}
+
+/// What a film asks for: its size, the crop window, the alpha channel and the reconstruction
+/// filter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FilmSettings {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Crop window `[x, y, width, height]`, if any.
+    pub window: Option<[u32; 4]>,
+    /// Whether an alpha channel is written (`pixel_format` `rgba`).
+    pub alpha: bool,
+    /// Reconstruction filter.
+    pub filter: Filter,
+}
+
+impl Default for FilmSettings {
+    /// Mitsuba's defaults: 768 × 576, RGB, Gaussian filter (σ = 0.5).
+    fn default() -> Self {
+        FilmSettings { width: 768, height: 576, window: None, alpha: false, filter: Filter::Gaussian { stddev: 0.5 } }
+    }
+}
+
+impl FilmSettings {
+    /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
+    /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
+    /// nested `<rfilter>`; `component_format`, `file_format` and `sample_border` are read (the
+    /// output format follows the output file's extension).
+    pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
+        f.built.set(true);
+        f.check_children(&["rfilter"])?;
+        if f.ty != "hdrfilm" {
+            return Err(f.unknown_plugin(&["hdrfilm"]));
+        }
+        let dim = |name: &str, default: i64| -> PropResult<u32> {
+            let v = f.int(name, default)?;
+            if (1..=16384).contains(&v) {
+                Ok(v as u32)
+            } else {
+                Err(f.error_at(name, format!("'{name}' must be between 1 and 16384, got {v}")))
+            }
+        };
+        let width = dim("width", 768)?;
+        let height = dim("height", 576)?;
+        if (width as u64) * (height as u64) > 1 << 26 {
+            return Err(f.error(format!("film {width}x{height} is too large (at most 67 million pixels)")));
+        }
+        let alpha = f.choice("pixel_format", &["rgb", "rgba"])? == "rgba";
+        f.choice("component_format", &["float16", "float32", "uint32"])?;
+        f.choice("file_format", &["openexr", "pfm", "png"])?;
+        f.bool("sample_border", false)?;
+        let mut window = None;
+        if f.has("crop_width") || f.has("crop_height") || f.has("crop_offset_x") || f.has("crop_offset_y") {
+            let ox = f.int("crop_offset_x", 0)?;
+            let oy = f.int("crop_offset_y", 0)?;
+            let cw = f.int("crop_width", width as i64 - ox)?;
+            let ch = f.int("crop_height", height as i64 - oy)?;
+            if ox < 0 || oy < 0 || cw < 1 || ch < 1 || ox + cw > width as i64 || oy + ch > height as i64 {
+                return Err(f.error(format!(
+                    "crop window {cw}x{ch} at ({ox}, {oy}) does not fit in the {width}x{height} film"
+                )));
+            }
+            window = Some([ox as u32, oy as u32, cw as u32, ch as u32]);
+        }
+        let filters = f.nested("rfilter");
+        if filters.len() > 1 {
+            return Err(SceneError::at(&filters[1].loc, "the film has more than one <rfilter>"));
+        }
+        let filter = match filters.first() {
+            Some(r) => Filter::from_props(r)?,
+            None => FilmSettings::default().filter,
+        };
+        Ok(FilmSettings { width, height, window, alpha, filter })
     }
 }
 

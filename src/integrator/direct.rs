@@ -13,6 +13,7 @@ use super::Integrator;
 use crate::light::LightSampleContext;
 use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
@@ -112,6 +113,31 @@ impl Integrator for DirectIntegrator {
             l += bs.weight * le / nb as f32;
         }
         l
+    }
+}
+
+impl DirectIntegrator {
+    /// Mitsuba's `direct`: `shading_samples` (1; the default of both counts), `emitter_samples`,
+    /// `bsdf_samples` (each 0 to 1024, not both 0), `hide_emitters` (false).
+    pub fn from_props(o: &Obj) -> PropResult<DirectIntegrator> {
+        let count = |name: &str, default: i64| -> PropResult<u32> {
+            let v = o.int(name, default)?;
+            if (0..=1024).contains(&v) {
+                Ok(v as u32)
+            } else {
+                Err(o.error_at(name, format!("'{name}' must be between 0 and 1024, got {v}")))
+            }
+        };
+        let shading = count("shading_samples", 1)?;
+        let d = DirectIntegrator {
+            emitter_samples: count("emitter_samples", shading as i64)?,
+            bsdf_samples: count("bsdf_samples", shading as i64)?,
+            hide_emitters: o.bool("hide_emitters", false)?,
+        };
+        if d.emitter_samples + d.bsdf_samples == 0 {
+            return Err(o.error("needs at least one emitter or BSDF sample"));
+        }
+        Ok(d)
     }
 }
 

@@ -18,6 +18,7 @@ pub use trace::{Mis, PathSettings};
 pub use volpath::VolPathIntegrator;
 
 use crate::math::{Ray, Rgb};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
@@ -86,6 +87,25 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::Radiosity => "radiosity", "radiosity: finite elements for diffuse scenes, solved then displayed";
     IntegratorKind::Volpath => "volpath", "volumetric path tracing: participating media (Mitsuba's `volpath`)";
 });
+
+/// An integrator plugin's constructor.
+pub type IntegratorPlugin = fn(&Obj) -> PropResult<AnyIntegrator>;
+
+/// Every integrator plugin by its name (Mitsuba's where it has one).
+pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
+    ("path", |o| {
+        Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
+    }),
+    ("volpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
+    ("ptracer", |o| Ok(AnyIntegrator::Ptracer(LightTracer { settings: PathSettings::from_props(o)? }))),
+    ("direct", |o| Ok(AnyIntegrator::Direct(DirectIntegrator::from_props(o)?))),
+    ("radiosity", |o| Ok(AnyIntegrator::Radiosity(radiosity::Options::from_props(o)?))),
+];
+
+/// The constructor of the integrator plugin `name`.
+pub fn integrator_plugin(name: &str) -> Option<IntegratorPlugin> {
+    INTEGRATOR_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
 
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).
 /// The render driver (`render::render_integrator`) renders it.

@@ -28,6 +28,7 @@ use crate::light::Light;
 use crate::material::Bsdf;
 use crate::math::float::{gamma, offset_ray_origin};
 use crate::math::{luminance, Frame, Ray, Rgb, Vec2, Vec3, PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_triangle, Pcg32, Sampler};
 use crate::scene::{Scene, SceneBuilder};
 use crate::texture::Texture;
@@ -435,6 +436,43 @@ impl Integrator for RadiosityIntegrator {
         let w0 = (1.0 - w1 - w2).max(0.0);
         let v = r.vertex_b[i];
         (v[0] * w0 + v[1] * w1 + v[2] * w2) / PI
+    }
+}
+
+impl Options {
+    /// neumann's `radiosity` integrator: `patch_size` (0.1), `rays_per_patch` (512, up to 2²⁴),
+    /// `method` (`gauss_seidel`, `jacobi`, `shooting`), `tolerance` (1e-4, in (0, 1)),
+    /// `max_iterations` (1000, up to 10⁶), `smooth` (false), `seed` (0).
+    pub fn from_props(o: &Obj) -> PropResult<Options> {
+        let d = Options::default();
+        let patch_size =
+            o.float_checked("patch_size", d.patch_size, |v| v > 0.0 && v.is_finite(), "a positive length")?;
+        let rays = o.int("rays_per_patch", d.rays_per_patch as i64)?;
+        if !(1..=1 << 24).contains(&rays) {
+            return Err(o.error_at("rays_per_patch", format!("rays_per_patch must be between 1 and 2^24, got {rays}")));
+        }
+        let tolerance =
+            o.float_checked("tolerance", d.tolerance as f32, |v| v > 0.0 && v < 1.0, "a number in (0, 1)")?;
+        let max_iterations = o.int("max_iterations", d.max_iterations as i64)?;
+        if !(1..=1_000_000).contains(&max_iterations) {
+            return Err(o.error_at(
+                "max_iterations",
+                format!("max_iterations must be between 1 and 10⁶, got {max_iterations}"),
+            ));
+        }
+        let method = o
+            .choice("method", &["gauss_seidel", "jacobi", "shooting"])?
+            .parse()
+            .map_err(|e: String| o.error_at("method", e))?;
+        Ok(Options {
+            patch_size,
+            rays_per_patch: rays as u32,
+            method,
+            tolerance: tolerance as f64,
+            max_iterations: max_iterations as usize,
+            smooth: o.bool("smooth", false)?,
+            seed: o.int("seed", 0)?.max(0) as u64,
+        })
     }
 }
 

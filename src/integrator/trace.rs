@@ -16,6 +16,7 @@
 use crate::geometry::SurfaceInteraction;
 use crate::light::{LightSample, LightSampleContext};
 use crate::math::{Ray, Rgb, Vec2, Vec3};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{balance_heuristic, power_heuristic};
 use crate::scene::Scene;
 
@@ -284,6 +285,14 @@ pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteract
         ray = si.spawn_ray(ray.d);
     }
     (None, ray)
+}
+
+impl PathSettings {
+    /// Mitsuba's `max_depth` (-1), `rr_depth` (5) and `hide_emitters` (false), checked.
+    pub fn from_props(o: &Obj) -> PropResult<PathSettings> {
+        PathSettings::new(o.int("max_depth", -1)?, o.int("rr_depth", 5)?, o.bool("hide_emitters", false)?)
+            .map_err(|(name, message)| o.error_at(name, message))
+    }
 }
 
 #[cfg(test)]

@@ -7,10 +7,12 @@
 
 mod bvh;
 mod envmap;
+mod registry;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::EnvMap;
+pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind};
 
 use crate::geometry::Geometry;

@@ -6,10 +6,13 @@
 //! (RGB scale, default 1); for `roughconductor` also `distribution` (`beckmann` | `ggx`), `alpha`
 //! or `alpha_u` / `alpha_v` (default 0.1), and `sample_visible` (always on here).
 
+use super::conductor_presets::{conductor_names, named_conductor};
 use super::fresnel::{fresnel_conductor, reflect, reflect_about};
 use super::microfacet::Microfacet;
-use super::BsdfSample;
+use super::{Bsdf, BsdfBuilder, BsdfSample};
+use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::props::{nearest, Obj, Result as PropResult};
 
 /// The Fresnel term of a conductor: complex IOR, or none (perfect reflector).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,5 +111,46 @@ impl RoughConductor {
         let pdf = m.pdf / (4.0 * wo.dot(m.value).abs());
         let weight = self.eval(wo, wi) / pdf;
         (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+    }
+}
+impl ConductorIor {
+    /// The complex index of a conductor: `eta` and `k` (defaults 0 and 1), or a named
+    /// `material` (default `none`, Mitsuba's perfect mirror: `None`), not both.
+    pub fn from_props(o: &Obj) -> PropResult<Option<ConductorIor>> {
+        if o.has("eta") || o.has("k") {
+            if o.has("material") {
+                return Err(o.error_at("material", "give either 'material' or 'eta'/'k'"));
+            }
+            let eta = o.rgb("eta", Rgb::ZERO, SpectrumKind::Reflectance)?;
+            let k = o.rgb("k", Rgb::ONE, SpectrumKind::Reflectance)?;
+            return Ok(Some(ConductorIor { eta, k }));
+        }
+        let name = o.string_opt("material")?.unwrap_or_else(|| "none".into());
+        named_conductor(&name).ok_or_else(|| {
+            let hint = nearest(&name, conductor_names()).map(|n| format!(" (did you mean '{n}'?)")).unwrap_or_default();
+            o.error_at("material", format!("unknown conductor material '{name}'{hint}"))
+        })
+    }
+}
+
+impl Conductor {
+    /// Mitsuba's `conductor`: `material` or `eta`/`k`, `specular_reflectance` (1).
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        Ok(Bsdf::Conductor(Conductor {
+            ior: ConductorIor::from_props(o)?,
+            specular_reflectance: o.rgb("specular_reflectance", Rgb::ONE, SpectrumKind::Reflectance)?,
+        }))
+    }
+}
+
+impl RoughConductor {
+    /// Mitsuba's `roughconductor`: the conductor's parameters and the microfacet distribution's
+    /// (anisotropic `alpha_u`/`alpha_v` allowed).
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        Ok(Bsdf::RoughConductor(RoughConductor {
+            distribution: Microfacet::from_props(o, true)?,
+            ior: ConductorIor::from_props(o)?,
+            specular_reflectance: o.rgb("specular_reflectance", Rgb::ONE, SpectrumKind::Reflectance)?,
+        }))
     }
 }

@@ -11,9 +11,12 @@
 //! and the sample reports the relative index `eta = η_it` so that Russian roulette can undo the
 //! scaling when judging the throughput.
 
+use super::fresnel::eta_from_props;
 use super::fresnel::{fresnel_dielectric, reflect, refract};
-use super::BsdfSample;
+use super::{Bsdf, BsdfBuilder, BsdfSample};
+use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec3};
+use crate::props::{Obj, Result as PropResult};
 
 /// Smooth dielectric interface.
 #[derive(Clone, Debug)]
@@ -85,6 +88,33 @@ impl ThinDielectric {
         } else {
             Some(BsdfSample { wi: -wo, pdf: 1.0 - r, weight: self.specular_transmittance, delta: true, eta: 1.0 })
         }
+    }
+}
+
+/// The parameters every dielectric plugin reads: `eta` from `int_ior` (BK7, 1.5046) and
+/// `ext_ior` (air), `specular_reflectance` and `specular_transmittance` (1).
+pub(crate) fn dielectric_props(o: &Obj) -> PropResult<(f32, Rgb, Rgb)> {
+    let refl = SpectrumKind::Reflectance;
+    Ok((
+        eta_from_props(o, 1.5046)?,
+        o.rgb("specular_reflectance", Rgb::ONE, refl)?,
+        o.rgb("specular_transmittance", Rgb::ONE, refl)?,
+    ))
+}
+
+impl Dielectric {
+    /// Mitsuba's `dielectric` : `int_ior` (BK7, 1.5046), `ext_ior` (air), `specular_reflectance`, `specular_transmittance` (1).
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (eta, specular_reflectance, specular_transmittance) = dielectric_props(o)?;
+        Ok(Bsdf::Dielectric(Dielectric { eta, specular_reflectance, specular_transmittance }))
+    }
+}
+
+impl ThinDielectric {
+    /// Mitsuba's `thindielectric` : `int_ior` (BK7, 1.5046), `ext_ior` (air), `specular_reflectance`, `specular_transmittance` (1).
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (eta, specular_reflectance, specular_transmittance) = dielectric_props(o)?;
+        Ok(Bsdf::ThinDielectric(ThinDielectric { eta, specular_reflectance, specular_transmittance }))
     }
 }
 

@@ -4,8 +4,9 @@
 //! hemisphere (Malley), so `f cos θᵢ / p = ρ`. Parameters (Mitsuba): `reflectance` (RGB in
 //! [0, 1] or a texture, default 0.5).
 
-use super::{BsdfContext, BsdfSample};
+use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{cosine_hemisphere_pdf, sample_cosine_hemisphere_malley};
 use crate::texture::Texture;
 
@@ -50,6 +51,13 @@ impl Diffuse {
         }
         let s = sample_cosine_hemisphere_malley(u);
         Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: self.reflectance.eval(ctx.uv), delta: false, eta: 1.0 })
+    }
+}
+
+impl Diffuse {
+    /// Mitsuba's `diffuse`: `reflectance` (texturable, default 0.5).
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        Ok(Bsdf::Diffuse(Diffuse { reflectance: b.texture(o, "reflectance", Rgb::splat(0.5))? }))
     }
 }
 

@@ -5,6 +5,7 @@
 //! exterior. Light is unpolarized.
 
 use crate::math::{Rgb, Vec3};
+use crate::props::{nearest, Obj, Result as PropResult, Value};
 
 /// Unpolarized Fresnel reflectance of a dielectric interface, with the refracted direction's
 /// cosine. Returns `(F, cos θₜ, η_it, η_ti)`: reflectance; the (signed, opposite to cos θᵢ) cosine
@@ -106,6 +107,32 @@ pub const NAMED_IORS: [(&str, f32); 23] = [
 pub fn lookup_ior(name: &str) -> Option<f32> {
     let n = name.trim().to_ascii_lowercase();
     NAMED_IORS.iter().find(|(k, _)| *k == n).map(|&(_, v)| v)
+}
+
+/// An index of refraction parameter `name` (Mitsuba's `int_ior` / `ext_ior`): a number or a
+/// named material ([`NAMED_IORS`]), positive; `default` if absent.
+pub fn ior_from_props(o: &Obj, name: &str, default: f32) -> PropResult<f32> {
+    let v = match o.get(name).map(|p| &p.value) {
+        None => default,
+        Some(Value::Float(f)) => *f as f32,
+        Some(Value::Integer(i)) => *i as f32,
+        Some(Value::String(s)) => lookup_ior(s).ok_or_else(|| {
+            let names = NAMED_IORS.iter().map(|n| n.0);
+            let hint = nearest(s, names).map(|n| format!(" (did you mean '{n}'?)")).unwrap_or_default();
+            o.error_at(name, format!("unknown index of refraction '{s}'{hint}"))
+        })?,
+        Some(_) => return Err(o.error_at(name, format!("'{name}' must be a number or a material name"))),
+    };
+    if !(v > 0.0 && v.is_finite()) {
+        return Err(o.error_at(name, format!("'{name}' must be positive, got {v}")));
+    }
+    Ok(v)
+}
+
+/// The relative index `int_ior / ext_ior` of a dielectric interface (defaults `default_int` and
+/// air, 1.000277).
+pub fn eta_from_props(o: &Obj, default_int: f32) -> PropResult<f32> {
+    Ok(ior_from_props(o, "int_ior", default_int)? / ior_from_props(o, "ext_ior", 1.000277)?)
 }
 
 #[cfg(test)]

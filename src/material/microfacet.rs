@@ -20,6 +20,7 @@
 
 use crate::math::special::{erf, erfinv};
 use crate::math::{safe_sqrt, Vec2, Vec3, INV_PI, PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_power, Sample};
 
 /// Which microfacet distribution (Mitsuba's `distribution` parameter, plus Blinn–Phong).
@@ -223,6 +224,44 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
         b -= value / derivative;
     }
     (erfinv(b), erfinv(2.0 * u.y.max(1e-6) - 1.0))
+}
+
+impl Microfacet {
+    /// Mitsuba's rough-surface parameters: `distribution` (`beckmann` (default), `ggx`, `phong`
+    /// with `exponent` or `alpha` → `n = 2/α² − 2`), `alpha` (0.1) or, if `anisotropic`,
+    /// `alpha_u` / `alpha_v`; `sample_visible` is read (visible normals are always sampled).
+    pub fn from_props(o: &Obj, anisotropic: bool) -> PropResult<Microfacet> {
+        let kind = match o.choice("distribution", &["beckmann", "ggx", "phong"])?.as_str() {
+            "beckmann" => MicrofacetType::Beckmann,
+            "ggx" => MicrofacetType::Ggx,
+            _ => {
+                // Blinn–Phong (Mitsuba 0.6's "phong"): exponent given, or from alpha by n = 2/α² - 2.
+                let n = match o.float_opt("exponent")? {
+                    Some(n) => n,
+                    None => {
+                        let a = o.float_checked("alpha", 0.1, |a| a > 0.0, "positive")?;
+                        2.0 / (a * a) - 2.0
+                    }
+                };
+                if !(n >= 0.0 && n.is_finite()) {
+                    return Err(o.error_at("exponent", format!("the Phong exponent must be ≥ 0, got {n}")));
+                }
+                return Ok(Microfacet::blinn_phong(n));
+            }
+        };
+        let rough = |name: &str, default: f32| o.float_checked(name, default, |a| a >= 0.0 && a.is_finite(), "≥ 0");
+        let (au, av) = if anisotropic && (o.has("alpha_u") || o.has("alpha_v")) {
+            if o.has("alpha") {
+                return Err(o.error_at("alpha", "give either 'alpha' or 'alpha_u'/'alpha_v'"));
+            }
+            (rough("alpha_u", 0.1)?, rough("alpha_v", 0.1)?)
+        } else {
+            let a = rough("alpha", 0.1)?;
+            (a, a)
+        };
+        o.bool("sample_visible", true)?;
+        Ok(Microfacet::new(kind, au, av))
+    }
 }
 
 #[cfg(test)]

@@ -14,6 +14,7 @@ mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
 mod plastic;
+mod registry;
 mod roughdielectric;
 mod roughplastic;
 
@@ -22,6 +23,7 @@ pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
+pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::RoughPlastic;
 

@@ -15,9 +15,12 @@
 //! Parameters (Mitsuba): `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior`
 //! (polypropylene, 1.49), `ext_ior` (air), `nonlinear` (false).
 
+use super::fresnel::eta_from_props;
 use super::fresnel::{fresnel_dielectric, reflect};
-use super::BsdfSample;
+use super::{Bsdf, BsdfBuilder, BsdfSample};
+use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_cosine_hemisphere_malley;
 
 /// Smooth plastic.
@@ -139,6 +142,26 @@ impl Plastic {
             }
             Some(BsdfSample { wi, pdf, weight: self.eval(wo, wi) / pdf, delta: false, eta: 1.0 })
         }
+    }
+}
+
+/// The parameters both plastics read: `diffuse_reflectance` (0.5), `specular_reflectance` (1),
+/// `eta` from `int_ior` (polypropylene, 1.49) and `ext_ior`, `nonlinear` (false).
+pub(crate) fn plastic_props(o: &Obj) -> PropResult<(Rgb, Rgb, f32, bool)> {
+    let refl = SpectrumKind::Reflectance;
+    Ok((
+        o.rgb("diffuse_reflectance", Rgb::splat(0.5), refl)?,
+        o.rgb("specular_reflectance", Rgb::ONE, refl)?,
+        eta_from_props(o, 1.49)?,
+        o.bool("nonlinear", false)?,
+    ))
+}
+
+impl Plastic {
+    /// Mitsuba's `plastic` : `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior` (1.49), `ext_ior` (air), `nonlinear` (false).
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (diffuse, specular, eta, nonlinear) = plastic_props(o)?;
+        Ok(Bsdf::Plastic(Plastic::new(diffuse, specular, eta, nonlinear)))
     }
 }
 

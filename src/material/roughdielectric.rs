@@ -16,8 +16,9 @@
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
 use super::microfacet::Microfacet;
-use super::BsdfSample;
+use super::{Bsdf, BsdfBuilder, BsdfSample};
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::props::{Obj, Result as PropResult};
 
 /// Rough dielectric interface.
 #[derive(Clone, Debug)]
@@ -129,5 +130,18 @@ impl RoughDielectric {
         }
         let weight = self.eval(wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
+    }
+}
+impl RoughDielectric {
+    /// Mitsuba's `roughdielectric`: the dielectric's parameters and the microfacet
+    /// distribution's.
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (eta, specular_reflectance, specular_transmittance) = super::dielectric::dielectric_props(o)?;
+        Ok(Bsdf::RoughDielectric(RoughDielectric {
+            distribution: Microfacet::from_props(o, true)?,
+            eta,
+            specular_reflectance,
+            specular_transmittance,
+        }))
     }
 }

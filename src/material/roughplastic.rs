@@ -17,8 +17,9 @@
 use super::fresnel::{fresnel_dielectric, reflect_about};
 use super::microfacet::Microfacet;
 use super::plastic::{coated_diffuse_albedo, specular_sampling_weight};
-use super::BsdfSample;
+use super::{Bsdf, BsdfBuilder, BsdfSample};
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_cosine_hemisphere_malley;
 
 const TABLE: usize = 64;
@@ -163,6 +164,15 @@ impl RoughPlastic {
         }
         let pdf = self.pdf(wo, wi);
         (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: self.eval(wo, wi) / pdf, delta: false, eta: 1.0 })
+    }
+}
+
+impl RoughPlastic {
+    /// Mitsuba's `roughplastic`: the plastic's parameters and an isotropic microfacet
+    /// distribution.
+    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (diffuse, specular, eta, nonlinear) = super::plastic::plastic_props(o)?;
+        Ok(Bsdf::RoughPlastic(RoughPlastic::new(Microfacet::from_props(o, false)?, diffuse, specular, eta, nonlinear)))
     }
 }
 

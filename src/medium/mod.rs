@@ -18,7 +18,9 @@ pub mod phase;
 
 pub use phase::PhaseFunction;
 
+use crate::math::spectrum::SpectrumKind;
 use crate::math::Rgb;
+use crate::props::{Obj, Result as PropResult, SceneError};
 use crate::sampling::sample_exponential;
 
 /// A homogeneous participating medium.
@@ -89,6 +91,38 @@ impl Medium {
             let p = tr.element_sum() / 3.0;
             FreeFlight::Pass { weight: if p > 0.0 { tr / p } else { Rgb::ZERO } }
         }
+    }
+}
+
+/// A medium plugin's constructor.
+pub type MediumPlugin = fn(&Obj) -> PropResult<Medium>;
+
+/// Every medium plugin by its (Mitsuba) name.
+pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] = &[("homogeneous", Medium::from_props)];
+
+impl Medium {
+    /// Mitsuba's `homogeneous`: `sigma_t` (1 m⁻¹) × `scale` (1), `albedo` (0.75), and one nested
+    /// `<phase>` (isotropic if none; see [`PhaseFunction::from_props`]).
+    pub fn from_props(o: &Obj) -> PropResult<Medium> {
+        o.check_children(&["phase"])?;
+        let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
+        let sigma_t = o.rgb("sigma_t", Rgb::ONE, SpectrumKind::Illuminant)? * scale;
+        if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
+            return Err(o.error_at("sigma_t", format!("sigma_t must be non-negative, got {sigma_t}")));
+        }
+        let albedo = o.rgb("albedo", Rgb::splat(0.75), SpectrumKind::Reflectance)?;
+        if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
+            return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
+        }
+        let phases = o.nested("phase");
+        if phases.len() > 1 {
+            return Err(SceneError::at(&phases[1].loc, "a medium takes one <phase>"));
+        }
+        let phase = match phases.first() {
+            None => PhaseFunction::Isotropic,
+            Some(p) => PhaseFunction::from_props(p)?,
+        };
+        Medium::new(sigma_t, albedo, phase).ok_or_else(|| o.error("invalid medium parameters"))
     }
 }
 

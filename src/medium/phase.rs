@@ -7,6 +7,7 @@
 //! Forward scattering (light continuing straight on) is `wi = -wo`.
 
 use crate::math::{Frame, Vec2, Vec3, INV_4PI, PI};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_uniform_sphere, Sample};
 
 /// A phase function (closed set).
@@ -70,6 +71,22 @@ impl PhaseFunction {
 fn hg(cos: f32, g: f32) -> f32 {
     let denom = 1.0 + g * g - 2.0 * g * cos;
     INV_4PI * (1.0 - g * g) / (denom * denom.max(1e-12).sqrt())
+}
+
+impl PhaseFunction {
+    /// Mitsuba's phase plugins: `isotropic`, and `hg` with `g` (0.8, in (-1, 1)).
+    pub fn from_props(p: &Obj) -> PropResult<PhaseFunction> {
+        p.built.set(true);
+        p.check_children(&[])?;
+        match p.ty.as_str() {
+            "isotropic" => Ok(PhaseFunction::Isotropic),
+            "hg" => {
+                let g = p.float_checked("g", 0.8, |g| g > -1.0 && g < 1.0, "a number in (-1, 1)")?;
+                Ok(PhaseFunction::HenyeyGreenstein { g })
+            }
+            _ => Err(p.unknown_plugin(&["isotropic", "hg"])),
+        }
+    }
 }
 
 #[cfg(test)]

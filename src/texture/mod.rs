@@ -7,8 +7,10 @@
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
 
-use crate::image::Image;
-use crate::math::{Mat3, Rgb, Vec2};
+use crate::image::{Image, ImageSource};
+use crate::math::spectrum::SpectrumKind;
+use crate::math::{Mat3, Rgb, Vec2, Vec3};
+use crate::props::{Obj, Result as PropResult};
 use std::sync::Arc;
 
 /// How lookups between texel centres are filtered.
@@ -150,6 +152,55 @@ impl Texture {
             Texture::Checkerboard { color0, color1, .. } => ok(*color0) && ok(*color1),
         }
     }
+}
+
+/// A texture plugin's constructor.
+pub type TexturePlugin = fn(&Obj, &mut dyn ImageSource) -> PropResult<Texture>;
+
+/// Every texture plugin by its (Mitsuba) name.
+pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
+    &[("bitmap", bitmap_from_props), ("checkerboard", checkerboard_from_props)];
+
+/// The constructor of the texture plugin `name`.
+pub fn texture_plugin(name: &str) -> Option<TexturePlugin> {
+    TEXTURE_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// A texture's `to_uv` (a `<transform>`, identity if absent) as a homogeneous 2D affine map.
+fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
+    let m = *o.transform("to_uv")?.matrix();
+    Ok(Mat3::from_cols(
+        Vec3::new(m.x_axis.x, m.x_axis.y, 0.0),
+        Vec3::new(m.y_axis.x, m.y_axis.y, 0.0),
+        Vec3::new(m.w_axis.x, m.w_axis.y, 1.0),
+    ))
+}
+
+/// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
+/// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`.
+fn bitmap_from_props(o: &Obj, images: &mut dyn ImageSource) -> PropResult<Texture> {
+    let raw = o.bool("raw", false)?;
+    let image = images.image(o, "filename", raw)?;
+    let filter = match o.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
+        "bilinear" => Filter::Bilinear,
+        _ => Filter::Nearest,
+    };
+    let wrap = match o.choice("wrap_mode", &["repeat", "mirror", "clamp"])?.as_str() {
+        "repeat" => Wrap::Repeat,
+        "mirror" => Wrap::Mirror,
+        _ => Wrap::Clamp,
+    };
+    Ok(Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? })
+}
+
+/// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`.
+fn checkerboard_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
+    let refl = SpectrumKind::Reflectance;
+    Ok(Texture::Checkerboard {
+        color0: o.rgb("color0", Rgb::splat(0.4), refl)?,
+        color1: o.rgb("color1", Rgb::splat(0.2), refl)?,
+        to_uv: to_uv_from_props(o)?,
+    })
 }
 
 #[cfg(test)]

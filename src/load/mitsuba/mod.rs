@@ -6,11 +6,9 @@
 //! no plugin read come back as warnings, like pbrt's unused-parameter check.
 
 mod build;
-pub mod error;
 pub mod parse;
-mod props;
 
-pub use error::SceneError;
+pub use crate::props::SceneError;
 
 use crate::film::filter::Filter;
 use crate::integrator::AnyIntegrator;
@@ -57,7 +55,7 @@ pub fn load_scene_text(path: &Path, text: &str, overrides: &[(String, String)]) 
     finish(parser, root)
 }
 
-fn finish(parser: parse::Parser, root: std::rc::Rc<parse::Obj>) -> Result<SceneFile, SceneError> {
+fn finish(parser: parse::Parser, root: std::rc::Rc<crate::props::Obj>) -> Result<SceneFile, SceneError> {
     let mut file = build::Builder::new().build(&root)?;
     let mut warnings = parser.warnings;
     warnings.append(&mut file.warnings);

@@ -22,6 +22,7 @@ pub use sobol::{sobol_2d, SobolSampler};
 pub use stratified::StratifiedSampler;
 
 use crate::math::Vec2;
+use crate::props::{Obj, Result as PropResult};
 
 /// How far apart in a PCG32 stream consecutive sample indices start: room for this many
 /// dimensions per sample.
@@ -55,6 +56,50 @@ crate::choices!(SamplerKind, "sampler", {
     SamplerKind::Stratified => "stratified", "jittered strata, randomly permuted per dimension";
     SamplerKind::Sobol => "sobol", "Owen-scrambled Sobol points, padded across dimension pairs";
 });
+
+/// What a sampler plugin asks for: the kind, samples per pixel and seed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SamplerSettings {
+    /// Which sampler.
+    pub kind: SamplerKind,
+    /// Samples per pixel (`sample_count`).
+    pub spp: u32,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for SamplerSettings {
+    /// Mitsuba's default: independent, 4 samples per pixel, seed 0.
+    fn default() -> Self {
+        SamplerSettings { kind: SamplerKind::Independent, spp: 4, seed: 0 }
+    }
+}
+
+/// Every sampler plugin name neumann reads (Mitsuba's; `multijitter` and `orthogonal` are
+/// stratified here, `ldsampler` Owen-scrambled Sobol).
+pub const SAMPLER_PLUGINS: &[&str] = &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"];
+
+impl SamplerSettings {
+    /// Mitsuba's sampler plugins: `sample_count` (4, up to 2²⁴), `seed` (0); the stratified
+    /// ones read `jitter`.
+    pub fn from_props(s: &Obj) -> PropResult<SamplerSettings> {
+        s.built.set(true);
+        let kind = match s.ty.as_str() {
+            "independent" => SamplerKind::Independent,
+            "stratified" | "multijitter" | "orthogonal" => {
+                s.bool("jitter", true)?;
+                SamplerKind::Stratified
+            }
+            "ldsampler" => SamplerKind::Sobol,
+            _ => return Err(s.unknown_plugin(SAMPLER_PLUGINS)),
+        };
+        let n = s.int("sample_count", 4)?;
+        if !(1..=1 << 24).contains(&n) {
+            return Err(s.error_at("sample_count", format!("sample_count must be between 1 and 2^24, got {n}")));
+        }
+        Ok(SamplerSettings { kind, spp: n as u32, seed: s.int("seed", 0)? as u64 })
+    }
+}
 
 /// The samplers (a closed set, dispatched by `match`).
 #[derive(Clone, Debug)]

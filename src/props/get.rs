@@ -3,12 +3,12 @@
 //! property's position.
 
 use super::error::{nearest, warning, SceneError};
-use super::parse::{Obj, Prop, SpectrumValue, Value};
+use super::value::{Obj, Prop, SpectrumValue, Value};
 use crate::math::spectrum::{spectrum_to_rgb, SpectrumKind};
 use crate::math::{Rgb, Transform, Vec3};
 use std::rc::Rc;
 
-type Result<T> = std::result::Result<T, SceneError>;
+use super::Result;
 
 impl Obj {
     /// The property `name`, marked as read.
@@ -40,6 +40,13 @@ impl Obj {
     pub fn error_at(&self, name: &str, message: impl Into<String>) -> SceneError {
         let loc = self.props.iter().find(|p| p.name == name).map_or(&self.loc, |p| &p.loc);
         SceneError::at(loc, format!("{} '{}': {}", self.tag, self.ty, message.into()))
+    }
+
+    /// The error for a plugin type that is not among `supported`, naming the nearest one.
+    pub fn unknown_plugin(&self, supported: &[&str]) -> SceneError {
+        let hint =
+            nearest(&self.ty, supported.iter().copied()).map(|n| format!("; the nearest is '{n}'")).unwrap_or_default();
+        self.error(format!("unsupported {} plugin (supported: {}{hint})", self.tag, supported.join(", ")))
     }
 
     /// An error at the object.

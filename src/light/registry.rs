@@ -1,0 +1,92 @@
+//! Emitter plugins by name: the registry the scene loaders look emitters up in. A new emitter
+//! adds its constructor here (or beside it) and one line to [`EMITTER_PLUGINS`].
+//!
+//! Mitsuba's `area` emitter is not here: it is a property of the shape that emits, whose loader
+//! reads its `radiance` ([`area_radiance_from_props`]).
+
+use super::{EnvMap, Light};
+use crate::image::ImageSource;
+use crate::math::spectrum::SpectrumKind;
+use crate::math::{Frame, Rgb, Vec3};
+use crate::props::{Obj, Result};
+
+/// An emitter plugin's constructor (lights at infinity get the scene's bounds when it is built).
+pub type EmitterPlugin = fn(&Obj, &mut dyn ImageSource) -> Result<Light>;
+
+/// Every emitter plugin that stands on its own, by its (Mitsuba) name.
+pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] =
+    &[("point", point), ("spot", spot), ("directional", directional), ("constant", constant), ("envmap", envmap)];
+
+/// The constructor of the emitter plugin `name`.
+pub fn emitter_plugin(name: &str) -> Option<EmitterPlugin> {
+    EMITTER_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// Mitsuba's `area` emitter: `radiance` (W m⁻² sr⁻¹, an emission spectrum, default 1).
+pub fn area_radiance_from_props(o: &Obj) -> Result<Rgb> {
+    o.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)
+}
+
+/// Mitsuba's `point`: `position` or `to_world` (not both), `intensity` (W sr⁻¹, 1).
+fn point(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+    let position = match o.point_opt("position")? {
+        Some(p) => {
+            if o.has("to_world") {
+                return Err(o.error_at("position", "give either 'position' or 'to_world'"));
+            }
+            p
+        }
+        None => o.transform("to_world")?.apply_point(Vec3::ZERO),
+    };
+    Ok(Light::Point { position, intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)? })
+}
+
+/// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
+/// (20°), `beam_width` (¾ of the cutoff).
+fn spot(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+    let to_world = o.transform("to_world")?;
+    let cutoff = o.float_checked("cutoff_angle", 20.0, |c| c > 0.0 && c <= 180.0, "in (0, 180] degrees")?;
+    let beam = o.float_checked("beam_width", cutoff * 0.75, |b| b >= 0.0 && b <= cutoff, "in [0, cutoff_angle]")?;
+    let axis = to_world.apply_vector(Vec3::Z).normalize();
+    Ok(Light::Spot {
+        position: to_world.apply_point(Vec3::ZERO),
+        frame: Frame::from_z(axis),
+        intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)?,
+        cutoff: cutoff.to_radians(),
+        beam: beam.to_radians(),
+    })
+}
+
+/// Mitsuba's `directional`: `direction` or `to_world` (local +z), `irradiance` (W m⁻², 1).
+fn directional(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+    let d = match o.point_opt("direction")? {
+        Some(d) => d,
+        None => o.transform("to_world")?.apply_vector(Vec3::Z),
+    };
+    if !(d.length() > 0.0 && d.is_finite()) {
+        return Err(o.error_at("direction", "the direction must be a non-zero vector"));
+    }
+    Ok(Light::Directional {
+        direction: d.normalize(),
+        irradiance: o.rgb("irradiance", Rgb::ONE, SpectrumKind::Illuminant)?,
+        center: Vec3::ZERO,
+        radius: 0.0,
+    })
+}
+
+/// Mitsuba's `constant`: `radiance` (1) from every direction.
+fn constant(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+    Ok(Light::Constant {
+        radiance: o.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)?,
+        center: Vec3::ZERO,
+        radius: 0.0,
+    })
+}
+
+/// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`.
+fn envmap(o: &Obj, images: &mut dyn ImageSource) -> Result<Light> {
+    let image = images.image(o, "filename", false)?;
+    let scale = o.float("scale", 1.0)?;
+    let map = EnvMap::new((*image).clone(), scale, o.transform("to_world")?).map_err(|e| o.error(e))?;
+    Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
+}

@@ -1,0 +1,74 @@
+//! BSDF plugins by name: the registry every scene format's loader looks BSDFs up in, and what a
+//! plugin needs from the loader to build itself ([`BsdfBuilder`]). A new BSDF adds its
+//! `from_props` beside itself and one line to [`BSDF_PLUGINS`].
+//!
+//! The wrappers, which only combine other BSDFs (Mitsuba's `twosided`, `blendbsdf`, `mask`, and
+//! `null`), are built here.
+
+use super::Bsdf;
+use crate::math::Rgb;
+use crate::props::{Obj, Result};
+use crate::texture::Texture;
+use std::ops::RangeInclusive;
+
+/// What a BSDF plugin needs from the loader that holds the scene's objects: its texture
+/// parameters and the BSDFs nested in it, built (and shared) by the loader.
+pub trait BsdfBuilder {
+    /// The parameter `name` of `o` as a texture: a nested or referenced `<texture>`, or a constant
+    /// colour (`default` if absent).
+    fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> Result<Texture>;
+
+    /// The BSDFs nested in `o`; an error unless their number is in `count`.
+    fn nested_bsdfs(&mut self, o: &Obj, count: RangeInclusive<usize>) -> Result<Vec<Bsdf>>;
+}
+
+/// A BSDF plugin's constructor.
+pub type BsdfPlugin = fn(&Obj, &mut dyn BsdfBuilder) -> Result<Bsdf>;
+
+/// Every BSDF plugin by its (Mitsuba) name.
+pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
+    ("diffuse", super::Diffuse::from_props),
+    ("conductor", super::Conductor::from_props),
+    ("roughconductor", super::RoughConductor::from_props),
+    ("dielectric", super::Dielectric::from_props),
+    ("thindielectric", super::ThinDielectric::from_props),
+    ("roughdielectric", super::RoughDielectric::from_props),
+    ("plastic", super::Plastic::from_props),
+    ("roughplastic", super::RoughPlastic::from_props),
+    ("twosided", two_sided),
+    ("blendbsdf", blend),
+    ("mask", mask),
+    ("null", null),
+];
+
+/// The constructor of the BSDF plugin `name`.
+pub fn bsdf_plugin(name: &str) -> Option<BsdfPlugin> {
+    BSDF_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// Mitsuba's `twosided`: one nested BSDF for both sides, or two (front, back).
+fn two_sided(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
+    let mut nested = b.nested_bsdfs(o, 1..=2)?;
+    let back = if nested.len() == 2 { nested.pop().expect("two") } else { nested[0].clone() };
+    Ok(Bsdf::TwoSided(Box::new([nested.pop().expect("one"), back])))
+}
+
+/// Mitsuba's `blendbsdf`: `weight` (texturable, 0.5) toward the second of two nested BSDFs.
+fn blend(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
+    let weight = b.texture(o, "weight", Rgb::splat(0.5))?;
+    let nested = b.nested_bsdfs(o, 2..=2)?;
+    let [first, second]: [Bsdf; 2] = nested.try_into().expect("two");
+    Ok(Bsdf::Blend { weight, bsdfs: Box::new([first, second]) })
+}
+
+/// Mitsuba's `mask`: `opacity` (texturable, 0.5) of one nested BSDF; the rest passes through.
+fn mask(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
+    let opacity = b.texture(o, "opacity", Rgb::splat(0.5))?;
+    let mut nested = b.nested_bsdfs(o, 1..=1)?;
+    Ok(Bsdf::Mask { opacity, bsdf: Box::new(nested.pop().expect("one")) })
+}
+
+/// Mitsuba's `null`: an index-matched boundary (a medium's surface).
+fn null(_: &Obj, _: &mut dyn BsdfBuilder) -> Result<Bsdf> {
+    Ok(Bsdf::Null)
+}
