@@ -1,6 +1,10 @@
-//! Mitsuba 3 plugins to neumann objects: sensor, film, sampler, integrator, shapes, BSDFs,
-//! textures and emitters. Parameter names, defaults and semantics are Mitsuba's; each plugin's
-//! parameters are listed in the README's scene-format table.
+//! The scene's structure, from the parsed objects: which objects are built and where they go
+//! (shapes with their BSDF, area emitter and media; ids shared by reference; shapegroups and
+//! instances; the default BSDFs), and the loader's services to plugins (textures, nested BSDFs,
+//! image and mesh files). Each plugin builds itself from its properties (`from_props` beside it)
+//! and is found by name in its layer's registry (`BSDF_PLUGINS`, `TEXTURE_PLUGINS`,
+//! `EMITTER_PLUGINS`, `SHAPE_PLUGINS`, `MEDIUM_PLUGINS`, `INTEGRATOR_PLUGINS`), so that every
+//! scene format shares them.
 
 use super::parse::resolve;
 use super::SceneFile;
@@ -8,7 +12,7 @@ use crate::camera::Camera;
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
-use crate::geometry::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
+use crate::geometry::{shape_plugin, MeshSource, TriangleMesh, SHAPE_PLUGINS};
 use crate::image::{Image, ImageSource};
 use crate::integrator::{integrator_plugin, AnyIntegrator, INTEGRATOR_PLUGINS};
 use crate::light::LightSamplerKind;
@@ -16,7 +20,7 @@ use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
 use crate::load::image::load_image;
 use crate::material::{bsdf_plugin, Bsdf, BsdfBuilder, Diffuse, BSDF_PLUGINS};
 use crate::math::spectrum::SpectrumKind;
-use crate::math::{Rgb, Transform, Vec3};
+use crate::math::{Rgb, Transform};
 use crate::medium::MEDIUM_PLUGINS;
 use crate::props::Obj;
 use crate::props::SceneError;
@@ -29,8 +33,6 @@ use std::rc::Rc;
 use std::sync::Arc;
 
 type Result<T> = std::result::Result<T, SceneError>;
-
-const SHAPES: &[&str] = &["obj", "ply", "rectangle", "disk", "cube", "sphere", "cylinder", "shapegroup", "instance"];
 
 /// What the sensor with its film and sampler asks for.
 struct SensorSettings {
@@ -203,54 +205,12 @@ impl Builder {
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let to_world = *outer * o.transform("to_world")?;
         let flip = o.bool("flip_normals", false)?;
-        let geometry = match o.ty.as_str() {
-            "obj" | "ply" => {
-                let name = o.string("filename")?;
-                let path = resolve(&o.loc, &name);
-                let mut mesh = crate::load::load_mesh(&path).map_err(|e| o.error_at("filename", e))?;
-                if o.bool("face_normals", false)? {
-                    mesh.normals.clear();
-                }
-                if o.ty == "obj" && o.bool("flip_tex_coords", true)? {
-                    for uv in &mut mesh.uvs {
-                        uv.y = 1.0 - uv.y;
-                    }
-                }
-                mesh.transform(&to_world);
-                mesh.flip_normals ^= flip;
-                Geometry::Mesh(mesh)
-            }
-            "rectangle" | "cube" => {
-                let mut mesh = if o.ty == "cube" { TriangleMesh::cube() } else { TriangleMesh::rectangle() };
-                mesh.transform(&to_world);
-                mesh.flip_normals ^= flip;
-                Geometry::Mesh(mesh)
-            }
-            "disk" => Geometry::Disk(
-                Disk::new(to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?,
-            ),
-            "sphere" => {
-                let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
-                let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
-                let t = to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
-                let (c, r) = similarity(&t).ok_or_else(|| {
-                    o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly")
-                })?;
-                Geometry::Sphere(Sphere { center: c, radius: r, flip })
-            }
-            "cylinder" => {
-                let p0 = o.point_opt("p0")?.unwrap_or(Vec3::ZERO);
-                let p1 = o.point_opt("p1")?.unwrap_or(Vec3::Z);
-                let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
-                Geometry::Cylinder(Cylinder::new(p0, p1, radius, to_world, flip).ok_or_else(|| {
-                    o.error_at(
-                        "to_world",
-                        "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
-                    )
-                })?)
-            }
-            _ => return Err(o.unknown_plugin(SHAPES)),
-        };
+        let plugin = shape_plugin(&o.ty).ok_or_else(|| {
+            let mut names: Vec<&str> = SHAPE_PLUGINS.iter().map(|p| p.0).collect();
+            names.extend(["shapegroup", "instance"]);
+            o.unknown_plugin(&names)
+        })?;
+        let geometry = plugin(o, &to_world, flip, self)?;
         let emitters = o.nested("emitter");
         if emitters.len() > 1 {
             return Err(SceneError::at(&emitters[1].loc, "a shape takes one <emitter>"));
@@ -387,17 +347,6 @@ impl Builder {
     }
 }
 
-/// Centre and radius of the unit sphere under `t`, if `t` is a similarity (uniform scale).
-fn similarity(t: &Transform) -> Option<(Vec3, f32)> {
-    let cols = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)];
-    let r = cols[0].length();
-    let uniform = cols.iter().all(|c| (c.length() - r).abs() <= 1e-4 * r);
-    let orthogonal = (cols[0].dot(cols[1])).abs() <= 1e-4 * r * r
-        && (cols[0].dot(cols[2])).abs() <= 1e-4 * r * r
-        && (cols[1].dot(cols[2])).abs() <= 1e-4 * r * r;
-    (uniform && orthogonal && r > 0.0).then(|| (t.apply_point(Vec3::ZERO), r))
-}
-
 impl BsdfBuilder for Builder {
     fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> Result<Texture> {
         Builder::texture(self, o, name, default)
@@ -418,5 +367,12 @@ impl ImageSource for Builder {
         let img = Arc::new(load_image(&path, raw).map_err(|e| o.error_at(name, e))?);
         self.images.insert(key, img.clone());
         Ok(img)
+    }
+}
+
+impl MeshSource for Builder {
+    fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh> {
+        let path = resolve(&o.loc, &o.string(name)?);
+        crate::load::load_mesh(&path).map_err(|e| o.error_at(name, e))
     }
 }

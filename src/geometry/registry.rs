@@ -1,0 +1,111 @@
+//! Shape plugins by name: the registry the scene loaders look shapes up in. A shape plugin builds
+//! the geometry in world space from its parameters, the shape's `to_world` (already composed
+//! with any instance transform) and `flip_normals`; mesh files come from the loader
+//! ([`MeshSource`]). What a shape is made of (BSDF, emitter, media) and instancing are the
+//! loader's business.
+
+use super::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
+use crate::math::{Transform, Vec3};
+use crate::props::{Obj, Result};
+
+/// Where mesh plugins get their files: the loader resolves the file that the string parameter
+/// `name` of `o` names (relative to the scene file) and reads it (OBJ or PLY).
+pub trait MeshSource {
+    /// The mesh named by parameter `name` of `o`, in its own coordinates; errors are located at
+    /// the parameter.
+    fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh>;
+}
+
+/// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
+pub type ShapePlugin = fn(&Obj, &Transform, bool, &mut dyn MeshSource) -> Result<Geometry>;
+
+/// Every geometric shape plugin by its (Mitsuba) name.
+pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
+    ("obj", mesh_file),
+    ("ply", mesh_file),
+    ("rectangle", rectangle),
+    ("cube", cube),
+    ("disk", disk),
+    ("sphere", sphere),
+    ("cylinder", cylinder),
+];
+
+/// The constructor of the shape plugin `name`.
+pub fn shape_plugin(name: &str) -> Option<ShapePlugin> {
+    SHAPE_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// Mitsuba's `obj` and `ply`: `filename`, `face_normals` (false: vertex normals are kept);
+/// `obj` also `flip_tex_coords` (true: v becomes 1 − v, as Mitsuba's OBJ loader does).
+fn mesh_file(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
+    let mut mesh = meshes.mesh(o, "filename")?;
+    if o.bool("face_normals", false)? {
+        mesh.normals.clear();
+    }
+    if o.ty == "obj" && o.bool("flip_tex_coords", true)? {
+        for uv in &mut mesh.uvs {
+            uv.y = 1.0 - uv.y;
+        }
+    }
+    mesh.transform(to_world);
+    mesh.flip_normals ^= flip;
+    Ok(Geometry::Mesh(mesh))
+}
+
+/// Mitsuba's `rectangle`: [-1, 1]² in the z = 0 plane, facing +z.
+fn rectangle(_: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    let mut mesh = TriangleMesh::rectangle();
+    mesh.transform(to_world);
+    mesh.flip_normals ^= flip;
+    Ok(Geometry::Mesh(mesh))
+}
+
+/// Mitsuba's `cube`: [-1, 1]³, facing out.
+fn cube(_: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    let mut mesh = TriangleMesh::cube();
+    mesh.transform(to_world);
+    mesh.flip_normals ^= flip;
+    Ok(Geometry::Mesh(mesh))
+}
+
+/// Mitsuba's `disk`: the unit disk in the z = 0 plane, facing +z.
+fn disk(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    Ok(Geometry::Disk(
+        Disk::new(*to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?,
+    ))
+}
+
+/// Mitsuba's `sphere`: `center` (origin), `radius` (1), and a `to_world` that may only
+/// translate, rotate and scale uniformly.
+fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
+    let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
+    let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
+    let (c, r) = similarity(&t)
+        .ok_or_else(|| o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly"))?;
+    Ok(Geometry::Sphere(Sphere { center: c, radius: r, flip }))
+}
+
+/// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open.
+fn cylinder(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    let p0 = o.point_opt("p0")?.unwrap_or(Vec3::ZERO);
+    let p1 = o.point_opt("p1")?.unwrap_or(Vec3::Z);
+    let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
+    Ok(Geometry::Cylinder(Cylinder::new(p0, p1, radius, *to_world, flip).ok_or_else(|| {
+        o.error_at(
+            "to_world",
+            "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
+        )
+    })?))
+}
+
+/// Centre and radius of the unit sphere under `t`, if `t` is a similarity (uniform scale).
+fn similarity(t: &Transform) -> Option<(Vec3, f32)> {
+    let cols = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)];
+    let r = cols[0].length();
+    let uniform = cols.iter().all(|c| (c.length() - r).abs() <= 1e-4 * r);
+    let orthogonal = (cols[0].dot(cols[1])).abs() <= 1e-4 * r * r
+        && (cols[0].dot(cols[2])).abs() <= 1e-4 * r * r
+        && (cols[1].dot(cols[2])).abs() <= 1e-4 * r * r;
+    (uniform && orthogonal && r > 0.0).then(|| (t.apply_point(Vec3::ZERO), r))
+}
