@@ -65,6 +65,7 @@ impl Integrator for DirectIntegrator {
         let frame = si.frame();
         let wo_local = frame.to_local(wo);
         let ctx = BsdfContext { uv: si.uv };
+        let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
         let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();
 
@@ -75,16 +76,7 @@ impl Integrator for DirectIntegrator {
             if delta_bsdf {
                 continue;
             }
-            l += trace::sample_direct(
-                scene,
-                &light_ctx,
-                u,
-                u2,
-                &mis,
-                |wi| bsdf.eval(&ctx, wo_local, frame.to_local(wi)),
-                |wi| bsdf.pdf(&ctx, wo_local, frame.to_local(wi)),
-                trace::occlusion(scene, &si),
-            );
+            l += trace::sample_direct_bsdf(scene, &light_ctx, (u, u2), &mis, &vertex, trace::occlusion(scene, &si));
         }
 
         // BSDF sampling: emission found along the sampled direction.

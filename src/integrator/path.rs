@@ -188,6 +188,7 @@ impl PathIntegrator {
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
             let ctx = BsdfContext { uv: si.uv };
+            let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
 
             // Direct light (its random numbers are drawn whether used or not, so that every
@@ -206,14 +207,12 @@ impl PathIntegrator {
                     DirectStrategy::Uniform | DirectStrategy::Cosine => {
                         self.direct_by_direction(scene, &si, &frame, bsdf, &ctx, wo_local, u_light2)
                     }
-                    DirectStrategy::Mis | DirectStrategy::Light => trace::sample_direct(
+                    DirectStrategy::Mis | DirectStrategy::Light => trace::sample_direct_bsdf(
                         scene,
                         &light_ctx,
-                        u_light,
-                        u_light2,
+                        (u_light, u_light2),
                         &mis,
-                        |wi| bsdf.eval(&ctx, wo_local, frame.to_local(wi)),
-                        |wi| bsdf.pdf(&ctx, wo_local, frame.to_local(wi)),
+                        &vertex,
                         trace::occlusion(scene, &si),
                     ),
                 };

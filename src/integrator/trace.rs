@@ -15,7 +15,8 @@
 
 use crate::geometry::SurfaceInteraction;
 use crate::light::{LightSample, LightSampleContext};
-use crate::math::{Ray, Rgb, Vec2, Vec3};
+use crate::material::{Bsdf, BsdfContext};
+use crate::math::{Frame, Ray, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{balance_heuristic, power_heuristic};
 use crate::scene::Scene;
@@ -126,16 +127,7 @@ impl Mis {
     #[inline]
     pub fn light_weight(&self, p_light: f32, p_bsdf: impl FnOnce() -> f32) -> f32 {
         match *self {
-            Mis::Combine { heuristic, n_light, n_bsdf } => {
-                if n_bsdf == 0 {
-                    return 1.0;
-                }
-                let pb = p_bsdf();
-                match heuristic {
-                    MisHeuristic::Power => power_heuristic(n_light, p_light, n_bsdf, pb),
-                    MisHeuristic::Balance => balance_heuristic(n_light, p_light, n_bsdf, pb),
-                }
-            }
+            Mis::Combine { heuristic, n_light, n_bsdf } => heuristic.weight(n_light, p_light, n_bsdf, p_bsdf),
             Mis::LightOnly => 1.0,
             Mis::BsdfOnly => 0.0,
         }
@@ -146,18 +138,25 @@ impl Mis {
     #[inline]
     pub fn bsdf_weight(&self, p_bsdf: f32, p_light: impl FnOnce() -> f32) -> f32 {
         match *self {
-            Mis::Combine { heuristic, n_light, n_bsdf } => {
-                if n_light == 0 {
-                    return 1.0;
-                }
-                let pl = p_light();
-                match heuristic {
-                    MisHeuristic::Power => power_heuristic(n_bsdf, p_bsdf, n_light, pl),
-                    MisHeuristic::Balance => balance_heuristic(n_bsdf, p_bsdf, n_light, pl),
-                }
-            }
+            Mis::Combine { heuristic, n_light, n_bsdf } => heuristic.weight(n_bsdf, p_bsdf, n_light, p_light),
             Mis::LightOnly => 0.0,
             Mis::BsdfOnly => 1.0,
+        }
+    }
+}
+
+impl MisHeuristic {
+    /// Weight of `n_a` samples of density `p_a` against `n_b` samples of the other strategy,
+    /// whose density `p_b()` is evaluated only if `n_b > 0` (else the weight is 1).
+    #[inline]
+    fn weight(self, n_a: u32, p_a: f32, n_b: u32, p_b: impl FnOnce() -> f32) -> f32 {
+        if n_b == 0 {
+            return 1.0;
+        }
+        let pb = p_b();
+        match self {
+            MisHeuristic::Power => power_heuristic(n_a, p_a, n_b, pb),
+            MisHeuristic::Balance => balance_heuristic(n_a, p_a, n_b, pb),
         }
     }
 }
@@ -263,6 +262,48 @@ pub fn sample_direct(
         let w = mis.light_weight(p_light, || pdf(ls.wi));
         f * ls.li * tr * (w / (p_light * n_light as f32))
     }
+}
+
+/// A surface vertex as its BSDF sees it: the BSDF, where on the surface, the shading frame and the
+/// outgoing direction in it.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceVertex<'a> {
+    /// The BSDF.
+    pub bsdf: &'a Bsdf,
+    /// Texture coordinates for textured parameters.
+    pub ctx: BsdfContext,
+    /// Shading frame (normal on +z).
+    pub frame: Frame,
+    /// Unit direction toward the previous vertex, in `frame`.
+    pub wo_local: Vec3,
+}
+
+impl SurfaceVertex<'_> {
+    /// BSDF × |cos θᵢ| toward the unit world direction `wi`.
+    #[inline]
+    pub fn eval(&self, wi: Vec3) -> Rgb {
+        self.bsdf.eval(&self.ctx, self.wo_local, self.frame.to_local(wi))
+    }
+
+    /// The BSDF's sampling density (solid angle) of the unit world direction `wi`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3) -> f32 {
+        self.bsdf.pdf(&self.ctx, self.wo_local, self.frame.to_local(wi))
+    }
+}
+
+/// [`sample_direct`] at a surface vertex `v`, with its BSDF as value and density; `u` are the
+/// light selection and position numbers.
+#[inline]
+pub fn sample_direct_bsdf(
+    scene: &Scene,
+    ctx: &LightSampleContext,
+    u: (f32, Vec2),
+    mis: &Mis,
+    v: &SurfaceVertex,
+    visibility: impl FnOnce(&LightSample) -> Rgb,
+) -> Rgb {
+    sample_direct(scene, ctx, u.0, u.1, mis, |wi| v.eval(wi), |wi| v.pdf(wi), visibility)
 }
 
 /// Visibility of a light sample from a surface point by a shadow ray (no media): 1 or 0.

@@ -200,6 +200,7 @@ impl Integrator for VolPathIntegrator {
             let frame: Frame = si.frame();
             let wo_local = frame.to_local(wo);
             let ctx = BsdfContext { uv: si.uv };
+            let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
             if !bsdf.is_delta() {
@@ -212,16 +213,9 @@ impl Integrator for VolPathIntegrator {
                     }
                 };
                 l += beta
-                    * trace::sample_direct(
-                        scene,
-                        &light_ctx,
-                        u_light,
-                        u_light2,
-                        &mis,
-                        |wi| bsdf.eval(&ctx, wo_local, frame.to_local(wi)),
-                        |wi| bsdf.pdf(&ctx, wo_local, frame.to_local(wi)),
-                        |ls| transmittance(scene, si.spawn_ray_to(ls.p, ls.n, ls.p_error), side_medium(ls.wi)),
-                    );
+                    * trace::sample_direct_bsdf(scene, &light_ctx, (u_light, u_light2), &mis, &vertex, |ls| {
+                        transmittance(scene, si.spawn_ray_to(ls.p, ls.n, ls.p_error), side_medium(ls.wi))
+                    });
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
             let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };

@@ -68,9 +68,9 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
         file_job(std::path::Path::new(&scene_arg), &defines)?
     };
     let (w, h) = parse_res(&a.res).map_err(usage)?;
-    let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
-    job.scene.set_camera(camera);
-    let base = match &job.integrator {
+    let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+    job.file.scene.set_camera(camera);
+    let base = match &job.file.integrator {
         AnyIntegrator::Path(p) => p.clone(),
         other => {
             return Err(usage(format!(
@@ -113,7 +113,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
                 progress: true,
                 ..Default::default()
             };
-            let out = render(&job.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+            let out = render(&job.file.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
             let image = out.film.image();
             write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0 })
                 .map_err(|e| Failure(1, e))?;
@@ -130,7 +130,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
                 PathIntegrator { settings: PathSettings { max_depth, ..base.settings }, strategy: d, ..base.clone() };
             let base = RenderSettings { sampler: s, seed: a.seed, threads: a.threads, ..Default::default() };
             let curve =
-                measure(&name, &job.scene, &integrator, &reference, &levels, &base).map_err(|e| Failure(1, e))?;
+                measure(&name, &job.file.scene, &integrator, &reference, &levels, &base).map_err(|e| Failure(1, e))?;
             let last = curve.points.last().copied().expect("at least one level");
             println!(
                 "{name:<24} {:>8.3} {:>12.4e} {:>10.3} {:>12.4e}",

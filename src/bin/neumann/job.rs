@@ -5,6 +5,7 @@ use crate::{usage, Failure};
 use neumann::film::filter::Filter;
 use neumann::integrator::{AnyIntegrator, PathIntegrator};
 use neumann::load::mitsuba::load_scene_file;
+use neumann::load::SceneFile;
 use neumann::sampling::sampler::SamplerKind;
 use neumann::scene::cornell;
 
@@ -28,17 +29,11 @@ pub fn parse_res(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// A scene ready to render with its settings (from the built-in Cornell box or a file).
+/// A scene ready to render with its settings (from the built-in Cornell box or a file), and the
+/// name outputs are named after.
 pub struct Job {
     pub name: String,
-    pub scene: neumann::scene::Scene,
-    pub integrator: AnyIntegrator,
-    pub spp: u32,
-    pub sampler: SamplerKind,
-    pub seed: u64,
-    pub filter: Filter,
-    pub window: Option<[u32; 4]>,
-    pub alpha: bool,
+    pub file: SceneFile,
 }
 
 /// Parses the `-D name=value` list.
@@ -71,8 +66,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
             }
         }
     }
-    Ok(Job {
-        name: name.to_string(),
+    let file = SceneFile {
         scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?,
         integrator: AnyIntegrator::Path(PathIntegrator::with_max_depth(max_depth)),
         spp,
@@ -81,7 +75,9 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         filter: Filter::Box,
         window: None,
         alpha: false,
-    })
+        warnings: Vec::new(),
+    };
+    Ok(Job { name: name.to_string(), file })
 }
 
 /// A Mitsuba XML scene file.
@@ -91,15 +87,5 @@ pub fn file_job(path: &std::path::Path, defines: &[(String, String)]) -> Result<
         eprintln!("{w}");
     }
     let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene").to_string();
-    Ok(Job {
-        name,
-        scene: file.scene,
-        integrator: file.integrator,
-        spp: file.spp,
-        sampler: file.sampler,
-        seed: file.seed,
-        filter: file.filter,
-        window: file.window,
-        alpha: file.alpha,
-    })
+    Ok(Job { name, file })
 }

@@ -111,28 +111,28 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     // Command-line flags override the scene's settings.
     if let Some(r) = &a.res {
         let (w, h) = parse_res(r).map_err(usage)?;
-        let camera = job.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
-        job.scene.set_camera(camera);
-        job.window = None;
+        let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+        job.file.scene.set_camera(camera);
+        job.file.window = None;
     }
     if let Some(s) = a.spp {
         if s == 0 {
             return Err(usage("--spp must be at least 1".into()));
         }
-        job.spp = s;
+        job.file.spp = s;
     }
-    select_integrator(&mut job.integrator, &a)?;
-    if job.scene.has_media() && !matches!(job.integrator, AnyIntegrator::VolPath(_)) {
+    select_integrator(&mut job.file.integrator, &a)?;
+    if job.file.scene.has_media() && !matches!(job.file.integrator, AnyIntegrator::VolPath(_)) {
         eprintln!(
             "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
-            job.integrator.name()
+            job.file.integrator.name()
         );
     }
     if let Some(d) = a.max_depth {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
-        match &mut job.integrator {
+        match &mut job.file.integrator {
             AnyIntegrator::Path(PathIntegrator { settings, .. })
             | AnyIntegrator::Ptracer(LightTracer { settings })
             | AnyIntegrator::VolPath(VolPathIntegrator { settings }) => settings.max_depth = d,
@@ -145,15 +145,15 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         }
     }
     if let Some(s) = a.seed {
-        job.seed = s;
+        job.file.seed = s;
     }
     if let Some(s) = a.sampler {
-        job.sampler = s;
+        job.file.sampler = s;
     }
     if let Some(kind) = a.light_sampler {
-        match &job.integrator {
+        match &job.file.integrator {
             AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::Direct(_) => {
-                job.scene.set_light_sampler(kind).map_err(|e| Failure(1, e))?
+                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e))?
             }
             other => {
                 return Err(usage(format!(
@@ -164,11 +164,11 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         }
     }
     if let Some(direct) = a.direct {
-        match &mut job.integrator {
+        match &mut job.file.integrator {
             AnyIntegrator::Path(p) => {
                 p.strategy = direct;
                 if matches!(direct, DirectStrategy::Uniform | DirectStrategy::Cosine)
-                    && job.scene.lights().iter().any(|l| l.is_delta())
+                    && job.file.scene.lights().iter().any(|l| l.is_delta())
                 {
                     eprintln!(
                         "warning: --direct {direct} samples directions, which never hit point, spot or directional lights: \
@@ -185,7 +185,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         }
     }
     if let Some(m) = a.mis {
-        match &mut job.integrator {
+        match &mut job.file.integrator {
             AnyIntegrator::Path(p) => p.heuristic = m,
             other => return Err(usage(format!("--mis applies to the path integrator, not '{}'", other.name()))),
         }
@@ -201,14 +201,14 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
-    if Format::from_path(&output).map_err(usage)? == Format::Pfm && job.alpha {
+    if Format::from_path(&output).map_err(usage)? == Format::Pfm && job.file.alpha {
         return Err(usage(format!(
             "the scene asks for an alpha channel (pixel_format rgba), which PFM cannot hold: write {}.exr or .png",
             job.name
         )));
     }
 
-    let term_count = match (&a.bounces_out, &job.integrator) {
+    let term_count = match (&a.bounces_out, &job.file.integrator) {
         (None, _) => 0,
         (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.settings.max_depth) => p.settings.max_depth as usize,
         (Some(_), AnyIntegrator::Path(_)) => 8,
@@ -220,15 +220,15 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         std::fs::create_dir_all(dir).map_err(|e| Failure(1, format!("cannot create '{}': {e}", dir.display())))?;
     }
     let settings = RenderSettings {
-        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.spp },
+        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
         time_budget,
-        seed: job.seed,
+        seed: job.file.seed,
         threads: a.threads,
-        sampler: job.sampler,
+        sampler: job.file.sampler,
         progress: !a.quiet,
-        filter: job.filter.clone(),
-        window: job.window,
-        alpha: job.alpha,
+        filter: job.file.filter.clone(),
+        window: job.file.window,
+        alpha: job.file.alpha,
         terms: term_count,
         ..Default::default()
     };
@@ -240,24 +240,25 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             "\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)"
         );
     });
-    let cam = job.scene.camera();
-    let [_, _, width, height] = job.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    let cam = job.file.scene.camera();
+    let [_, _, width, height] = job.file.window.unwrap_or([0, 0, cam.width(), cam.height()]);
     println!(
         "rendering {} at {width}x{height}, {}, {}, {} threads",
         job.name,
         match a.time {
             Some(t) => format!("for {t} s"),
-            None => format!("{} spp", job.spp),
+            None => format!("{} spp", job.file.spp),
         },
-        job.integrator.describe(),
+        job.file.integrator.describe(),
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
-    let out = render_integrator(&job.scene, &job.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    let out =
+        render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
     if let Some(sol) = &out.radiosity {
         report_radiosity(sol, a.patches_out.as_deref())?;
     }
     let (lo, hi) = out.film.spp_range();
-    let alpha = job.alpha.then(|| out.film.alpha());
+    let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
     write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info).map_err(|e| Failure(1, e))?;
     if let Some(dir) = &a.bounces_out {

@@ -10,35 +10,9 @@ pub mod parse;
 
 pub use crate::props::SceneError;
 
-use crate::film::filter::Filter;
-use crate::integrator::AnyIntegrator;
-use crate::sampling::sampler::SamplerKind;
-use crate::scene::Scene;
 use std::path::Path;
 
-/// A loaded scene file: the scene and the render settings it asks for.
-#[derive(Debug)]
-pub struct SceneFile {
-    /// The scene (camera included).
-    pub scene: Scene,
-    /// The integrator (`path` or `direct`; `path` when the file names none).
-    pub integrator: AnyIntegrator,
-    /// Samples per pixel (the sampler's `sample_count`).
-    pub spp: u32,
-    /// Sampler kind (`independent`; `stratified`, `multijitter`, `orthogonal` → stratified;
-    /// `ldsampler` → Sobol).
-    pub sampler: SamplerKind,
-    /// Sampler seed.
-    pub seed: u64,
-    /// Reconstruction filter (Mitsuba's default is a Gaussian of σ = 0.5).
-    pub filter: Filter,
-    /// Crop window `[x, y, w, h]`, if the film has one.
-    pub window: Option<[u32; 4]>,
-    /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
-    pub alpha: bool,
-    /// Warnings (unused parameters), formatted with their positions.
-    pub warnings: Vec<String>,
-}
+pub use super::SceneFile;
 
 /// Loads a Mitsuba 3 XML scene. `overrides` are `-D name=value` parameters; a name that no
 /// `<default>` declares is still substituted, but reported in the warnings.

@@ -1,10 +1,12 @@
 //! Loader tests: the shared scenes, every construct of the format, and the errors users meet.
 
 use super::*;
+use crate::film::filter::Filter;
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::material::Bsdf;
 use crate::math::{Ray, Rgb, Vec3};
+use crate::sampling::sampler::SamplerKind;
 use std::path::PathBuf;
 
 fn shared(name: &str) -> PathBuf {
