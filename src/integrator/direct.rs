@@ -9,7 +9,7 @@
 //! "BSDF sampling only" direct-lighting estimator.
 
 use super::trace::{self, Mis, MisHeuristic, PrevVertex};
-use super::Integrator;
+use super::{Integrator, RadianceSample};
 use crate::light::LightSampleContext;
 use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb};
@@ -40,20 +40,30 @@ impl Integrator for DirectIntegrator {
         "direct"
     }
 
-    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
+    fn sample(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, _terms: &mut [Rgb]) -> RadianceSample {
+        let (l, covered) = self.radiance(scene, camera_ray, sampler);
+        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
+    }
+}
+
+impl DirectIntegrator {
+    /// The radiance along `camera_ray` and whether the ray hit a surface.
+    fn radiance(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> (Rgb, bool) {
         let hide = self.hide_emitters;
         let (nl, nb) = (self.emitter_samples, self.bsdf_samples);
         let mis = Mis::Combine { heuristic: MisHeuristic::Power, n_light: nl, n_bsdf: nb };
         // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-        let (hit, ray) = if hide {
+        let (hit, ray, covered) = if hide {
             trace::skip_hidden_emitters(scene, camera_ray)
         } else {
-            (scene.intersect(camera_ray), *camera_ray)
+            let hit = scene.intersect(camera_ray);
+            let covered = hit.is_some();
+            (hit, *camera_ray, covered)
         };
         let Some(si) = hit else {
             let mut l = Rgb::ZERO;
             trace::escaped(scene, ray.d.normalize(), None, hide, &mis, |le, w| l += le * w);
-            return l;
+            return (l, covered);
         };
         let shape = scene.shapes()[si.shape as usize];
         let wo = -ray.d.normalize();
@@ -104,7 +114,7 @@ impl Integrator for DirectIntegrator {
             // bs.weight = f cos / pdf; divide by the number of BSDF samples.
             l += bs.weight * le / nb as f32;
         }
-        l
+        (l, covered)
     }
 }
 

@@ -22,26 +22,36 @@ use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 
+/// One camera sample's outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RadianceSample {
+    /// Radiance arriving along the camera ray (W m⁻² sr⁻¹ per channel).
+    pub l: Rgb,
+    /// Coverage: 1 if the camera ray hit a surface (hidden emitters included), 0 if it escaped.
+    pub alpha: f32,
+}
+
 /// An estimator of incident radiance along camera rays.
 pub trait Integrator: Sync {
     /// Name (Mitsuba's plugin name where one exists).
     fn name(&self) -> &'static str;
-    /// One sample of the radiance arriving along `ray` (toward its origin). The sampler is
-    /// positioned at the pixel sample; the integrator draws its dimensions in a fixed order.
-    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb;
 
-    /// Whether [`Integrator::li_terms`] separates the Neumann-series terms.
-    fn has_terms(&self) -> bool {
-        false
+    /// One sample along `ray` (toward its origin): the radiance and the coverage, with each
+    /// contribution also added to `terms[k - 1]`, k the number of path segments it took
+    /// (`terms[0]`: `Lₑ` seen directly, `terms[1]`: `T Lₑ`, …; the last entry collects all
+    /// longer paths; pass an empty slice to skip them). The sampler is positioned at the pixel
+    /// sample; the integrator draws its dimensions in a fixed order. The radiance is the same, bit
+    /// for bit, whether terms are kept or not.
+    fn sample(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> RadianceSample;
+
+    /// The radiance of [`Integrator::sample`] alone.
+    fn li(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler) -> Rgb {
+        self.sample(scene, ray, sampler, &mut []).l
     }
 
-    /// [`Integrator::li`], also adding each contribution to `terms[k - 1]` where k is the
-    /// number of path segments it took (`terms[0]`: `Lₑ` seen directly, `terms[1]`: `T Lₑ`,
-    /// …; the last entry collects all longer paths). Returns the same value, bit for bit, as
-    /// `li` with the same sampler state.
-    fn li_terms(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
-        let _ = terms;
-        self.li(scene, ray, sampler)
+    /// Whether [`Integrator::sample`] separates the Neumann-series terms.
+    fn has_terms(&self) -> bool {
+        false
     }
 }
 

@@ -15,7 +15,7 @@
 //! Parameters (Mitsuba): `max_depth` (default -1), `rr_depth` (5), `hide_emitters` (false).
 
 use super::trace::{self, Mis, PathSettings, PrevVertex};
-use super::Integrator;
+use super::{Integrator, RadianceSample};
 use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext};
 use crate::math::{Frame, Ray, Rgb, Vec3};
@@ -136,13 +136,21 @@ impl PathIntegrator {
 
     /// One sample of the radiance along `camera_ray`, handing each contribution to `record`
     /// with the number of path segments it took (`k`: the term `Tᵏ⁻¹ Lₑ` of the Neumann
-    /// series, k = 1 for emitters seen directly). [`Integrator::li`] sums them in order.
+    /// series, k = 1 for emitters seen directly). [`Integrator::sample`] sums them in order.
+    /// Returns whether the camera ray hit a surface (its coverage).
     #[inline]
-    pub fn trace(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, mut record: impl FnMut(u32, Rgb)) {
+    pub fn trace(
+        &self,
+        scene: &Scene,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        mut record: impl FnMut(u32, Rgb),
+    ) -> bool {
         let max_depth = self.settings.max_segments();
         if max_depth == 0 {
-            return;
+            return scene.intersect(camera_ray).is_some();
         }
+        let mut covered = false;
         let hide = self.settings.hide_emitters;
         let mis = self.mis();
         let mut beta = Rgb::ONE;
@@ -155,11 +163,14 @@ impl PathIntegrator {
         loop {
             let hit = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
+                let (hit, through, touched) = trace::skip_hidden_emitters(scene, &ray);
                 ray = through;
+                covered = touched;
                 hit
             } else {
-                scene.intersect(&ray)
+                let hit = scene.intersect(&ray);
+                covered |= depth == 0 && hit.is_some();
+                hit
             };
             let Some(si) = hit else {
                 // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
@@ -235,6 +246,7 @@ impl PathIntegrator {
                 break;
             }
         }
+        covered
     }
 }
 
@@ -244,26 +256,22 @@ impl Integrator for PathIntegrator {
     }
 
     #[inline]
-    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
+    fn sample(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> RadianceSample {
         let mut l = Rgb::ZERO;
-        self.trace(scene, camera_ray, sampler, |_, c| l += c);
-        l
+        let covered = if terms.is_empty() {
+            self.trace(scene, camera_ray, sampler, |_, c| l += c)
+        } else {
+            let last = terms.len() - 1;
+            self.trace(scene, camera_ray, sampler, |k, c| {
+                l += c;
+                terms[(k as usize - 1).min(last)] += c;
+            })
+        };
+        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
     }
 
     fn has_terms(&self) -> bool {
         true
-    }
-
-    fn li_terms(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> Rgb {
-        let mut l = Rgb::ZERO;
-        let last = terms.len().saturating_sub(1);
-        self.trace(scene, camera_ray, sampler, |k, c| {
-            l += c;
-            if let Some(t) = terms.get_mut((k as usize - 1).min(last)) {
-                *t += c;
-            }
-        });
-        l
     }
 }
 

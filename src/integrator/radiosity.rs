@@ -23,7 +23,7 @@
 
 use crate::camera::Camera;
 use crate::geometry::{Geometry, TriangleMesh};
-use crate::integrator::Integrator;
+use crate::integrator::{Integrator, RadianceSample};
 use crate::light::Light;
 use crate::material::Bsdf;
 use crate::math::float::{gamma, offset_ray_origin};
@@ -70,6 +70,8 @@ pub struct Options {
     pub smooth: bool,
     /// Seed of the form-factor rays.
     pub seed: u64,
+    /// Where to write the per-patch solution as CSV after the solve (none by default).
+    pub patches_out: Option<std::path::PathBuf>,
 }
 
 impl Default for Options {
@@ -82,7 +84,34 @@ impl Default for Options {
             max_iterations: 1000,
             smooth: false,
             seed: 0,
+            patches_out: None,
         }
+    }
+}
+
+impl Radiosity {
+    /// What the solve did, for the render's report: patches, form factors, iterations and
+    /// residuals, emitted and reflected power.
+    pub fn report_lines(&self) -> Vec<String> {
+        let last = self.history.last().copied().unwrap_or((0, 0.0));
+        let shown: Vec<String> = self
+            .history
+            .iter()
+            .filter(|(k, _)| k.is_power_of_two() || *k == last.0)
+            .map(|(k, r)| format!("{k}: {r:.2e}"))
+            .collect();
+        vec![
+            format!(
+                "radiosity: {} patches, {} non-zero form factors, {} iterations, residual {:.2e}; emitted {:.4} W, reflected {:.4} W (luminance)",
+                self.b.len(),
+                self.form_factor_entries,
+                last.0,
+                last.1,
+                self.emitted_power(),
+                self.reflected_power()
+            ),
+            format!("  residual by iteration: {}", shown.join(", ")),
+        ]
     }
 }
 
@@ -418,9 +447,18 @@ impl Integrator for RadiosityIntegrator {
         "radiosity"
     }
 
-    fn li(&self, _scene: &Scene, ray: &Ray, _sampler: &mut Sampler) -> Rgb {
+    fn sample(&self, _scene: &Scene, ray: &Ray, _sampler: &mut Sampler, _terms: &mut [Rgb]) -> RadianceSample {
         let r = &self.solution;
-        let Some(si) = r.scene.intersect(ray) else { return Rgb::ZERO };
+        let Some(si) = r.scene.intersect(ray) else { return RadianceSample { l: Rgb::ZERO, alpha: 0.0 } };
+        RadianceSample { l: self.radiance(&si, ray), alpha: 1.0 }
+    }
+}
+
+impl RadiosityIntegrator {
+    /// The displayed radiance at the camera ray's hit `si`: the patch's (or, smooth, the
+    /// interpolated vertices') radiosity over π.
+    fn radiance(&self, si: &crate::geometry::SurfaceInteraction, ray: &Ray) -> Rgb {
+        let r = &self.solution;
         if si.ng.dot(ray.d) >= 0.0 {
             return Rgb::ZERO; // back faces do not reflect (one-sided diffuse)
         }
@@ -472,6 +510,7 @@ impl Options {
             max_iterations: max_iterations as usize,
             smooth: o.bool("smooth", false)?,
             seed: o.int("seed", 0)?.max(0) as u64,
+            patches_out: None,
         })
     }
 }

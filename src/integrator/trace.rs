@@ -313,19 +313,20 @@ pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnc
 }
 
 /// Follows a camera ray through emitters hidden from the camera (`hide_emitters`): the first
-/// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them; `None` if the
-/// ray escapes or gives up. Returns the ray that reached it too (to take its direction).
+/// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them (`None` if the
+/// ray escapes or gives up), the ray that reached it (to take its direction), and whether the
+/// camera ray hit anything at all (its coverage, hidden emitters included).
 #[inline]
-pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray) {
+pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray, bool) {
     let mut ray = *ray;
-    for _ in 0..=MAX_HIDDEN_SKIPS {
-        let Some(si) = scene.intersect(&ray) else { return (None, ray) };
+    for k in 0..=MAX_HIDDEN_SKIPS {
+        let Some(si) = scene.intersect(&ray) else { return (None, ray, k > 0) };
         if scene.shapes()[si.shape as usize].light.is_none() {
-            return (Some(si), ray);
+            return (Some(si), ray, true);
         }
         ray = si.spawn_ray(ray.d);
     }
-    (None, ray)
+    (None, ray, true)
 }
 
 impl PathSettings {

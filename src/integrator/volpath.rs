@@ -19,7 +19,7 @@
 //! `hide_emitters` (false).
 
 use super::trace::{self, Mis, PathSettings, PrevVertex};
-use super::Integrator;
+use super::{Integrator, RadianceSample};
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext};
@@ -92,7 +92,8 @@ impl Integrator for VolPathIntegrator {
         "volpath"
     }
 
-    fn li(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler) -> Rgb {
+    fn sample(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, _terms: &mut [Rgb]) -> RadianceSample {
+        let mut covered = false;
         let max_depth = self.settings.max_segments();
         let hide = self.settings.hide_emitters;
         let mis = Mis::POWER;
@@ -108,10 +109,11 @@ impl Integrator for VolPathIntegrator {
         let mut depth = 0u32;
         let mut crossings = 0u32;
         if max_depth == 0 {
-            return l;
+            return RadianceSample { l, alpha: f32::from(u8::from(scene.intersect(camera_ray).is_some())) };
         }
         loop {
             let hit = scene.intersect(&ray);
+            covered |= depth == 0 && crossings == 0 && hit.is_some();
             let t_surface = hit.as_ref().map_or(f32::INFINITY, |si| si.t);
 
             // Free flight through the current medium.
@@ -233,7 +235,7 @@ impl Integrator for VolPathIntegrator {
                 break;
             }
         }
-        l
+        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
     }
 }
 

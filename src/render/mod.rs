@@ -6,7 +6,10 @@
 //! after each pass. The image is therefore bit-identical for a given seed and sample count
 //! whatever the number of threads.
 
+mod scheduler;
 mod splat;
+
+pub use scheduler::{Passes, Scheduler};
 
 pub use splat::render_light_paths;
 
@@ -17,9 +20,7 @@ use crate::integrator::{AnyIntegrator, Integrator};
 use crate::math::{Rgb, Vec2};
 use crate::sampling::sampler::SamplerKind;
 use crate::scene::Scene;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// Render settings.
@@ -39,13 +40,13 @@ pub struct RenderSettings {
     pub sampler: SamplerKind,
     /// Whether to draw a progress bar on the terminal.
     pub progress: bool,
-    /// Pixel reconstruction filter (importance-sampled).
+    /// Pixel reconstruction filter (applied by weighted splatting, see [`crate::film`]).
     pub filter: Filter,
     /// Crop window `[x0, y0, width, height]` of the camera's film to render (the output image is
     /// the window; default: the whole film).
     pub window: Option<[u32; 4]>,
-    /// Record per-pixel coverage (alpha; one extra intersection per sample): the fraction of
-    /// camera rays that hit a surface.
+    /// Record per-pixel coverage (alpha, which the integrators report with each sample): the
+    /// filter-weighted fraction of camera rays that hit a surface.
     pub alpha: bool,
     /// Keep this many Neumann-series terms per pixel (`Lₑ`, `T Lₑ`, …; the last collects all
     /// longer paths), if the integrator separates them; 0: off.
@@ -79,9 +80,9 @@ pub struct RenderOutcome {
     pub interrupted: bool,
     /// Wall-clock time spent.
     pub elapsed: Duration,
-    /// The radiosity solution, when the radiosity integrator rendered (its solve time is
-    /// included in `elapsed`).
-    pub radiosity: Option<Box<Radiosity>>,
+    /// What the integrator has to say about the render beyond the image (radiosity: the solve's
+    /// iterations, residuals and power), one line per entry.
+    pub report: Vec<String>,
 }
 
 impl RenderOutcome {
@@ -110,27 +111,6 @@ fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result
     Ok(window)
 }
 
-/// The progress bar (hidden unless `settings.progress`) and its length: with a time budget it
-/// measures milliseconds of the budget, else `work` items named `unit`.
-fn progress_bar(settings: &RenderSettings, work: u64, unit: &str) -> (ProgressBar, u64) {
-    let len = match settings.time_budget {
-        Some(b) => b.as_millis().max(1) as u64,
-        None => work,
-    };
-    if !settings.progress {
-        return (ProgressBar::hidden(), len);
-    }
-    let bar = ProgressBar::new(len);
-    bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
-    let template = if settings.time_budget.is_some() {
-        "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}".to_string()
-    } else {
-        format!("{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit}, ETA {{eta}} {{msg}}")
-    };
-    bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
-    (bar, len)
-}
-
 /// Renders `scene` with any of neumann's integrators: camera-ray integrators through
 /// [`render`], the light tracer through [`render_light_paths`], radiosity by solving first and
 /// then displaying the solution through [`render`].
@@ -148,10 +128,16 @@ pub fn render_integrator(
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
             let solution = Radiosity::solve(scene, opts)?;
+            let mut report = solution.report_lines();
+            if let Some(path) = &opts.patches_out {
+                std::fs::write(path, solution.to_csv())
+                    .map_err(|e| format!("cannot write '{}': {e}", path.display()))?;
+                report.push(format!("wrote the per-patch solution to {}", path.display()));
+            }
             let display = RadiosityIntegrator { solution };
             let mut out = render(scene, &display, settings, cancel)?;
             out.elapsed = start.elapsed();
-            out.radiosity = Some(Box::new(display.solution));
+            out.report = report;
             Ok(out)
         }
     }
@@ -167,115 +153,49 @@ pub fn render(
 ) -> Result<RenderOutcome, String> {
     let cam = scene.camera();
     let [wx, wy, width, height] = crop_window(settings, cam)?;
-    let spp = settings.spp.max(1);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads)
-        .build()
-        .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
     let ts = settings.tile_size.max(1);
     let tiles: Vec<(u32, u32, u32, u32)> = (0..height.div_ceil(ts))
         .flat_map(|ty| (0..width.div_ceil(ts)).map(move |tx| (tx * ts, ty * ts)))
         .map(|(x0, y0)| (x0, y0, ts.min(width - x0), ts.min(height - y0)))
         .collect();
-    let prototype = settings.sampler.make(spp, settings.seed);
-    let pixels = width as u64 * height as u64;
-
-    let (bar, bar_len) = progress_bar(settings, pixels * spp as u64, "samples");
-
-    let start = Instant::now();
+    let prototype = settings.sampler.make(settings.spp.max(1), settings.seed);
     let terms = if integrator.has_terms() { settings.terms } else { 0 };
     if settings.terms > 0 && terms == 0 {
         return Err(format!("the {} integrator does not separate the terms of the Neumann series", integrator.name()));
     }
+    let scheduler = Scheduler::new(settings, cancel, width as u64 * height as u64, "samples")?;
     let mut film = Film::new(width, height).with_terms(terms);
-    let mut done = 0u32; // complete passes' samples per pixel
-    let mut interrupted = false;
-    let samples_done = AtomicU64::new(0);
-    while done < spp {
-        let elapsed = start.elapsed();
-        let pass = match settings.time_budget {
-            None => (spp / 8).clamp(1, 16).min(spp - done),
-            Some(budget) => {
-                if elapsed >= budget {
-                    break;
-                }
-                if done == 0 {
-                    1
-                } else {
-                    // Whole passes that fit in the remaining time, at the measured rate.
-                    let per_spp = elapsed.as_secs_f64() / done as f64;
-                    let remaining = (budget - elapsed).as_secs_f64();
-                    let fit = (remaining / per_spp.max(1e-9)).floor() as u32;
-                    if fit == 0 {
-                        break;
-                    }
-                    fit.min(16).min(spp - done)
+    let render_tile = |k: usize, first: u32, count: u32| {
+        let (x0, y0, w, h) = tiles[k];
+        let mut sampler = prototype.clone();
+        let mut tile = TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]).with_terms(terms);
+        let mut sample_terms = vec![Rgb::ZERO; terms];
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                for i in first..first + count {
+                    sampler.start_pixel_sample([x + wx, y + wy], i, 0);
+                    // Uniform over the pixel; the filter weighs the sample where it is splatted
+                    // (Mitsuba 3's reconstruction).
+                    let u_film = sampler.next_2d();
+                    let centre = Vec2::new((x + wx) as f32 + 0.5, (y + wy) as f32 + 0.5);
+                    let film_pos = centre + (u_film - Vec2::splat(0.5));
+                    let u_lens = sampler.next_2d();
+                    let ray = cam.generate_ray(film_pos, u_lens);
+                    sample_terms.fill(Rgb::ZERO);
+                    let s = integrator.sample(scene, &ray, &mut sampler, &mut sample_terms);
+                    let alpha = settings.alpha.then_some(s.alpha);
+                    tile.put([x, y], u_film, &settings.filter, FilmSample { l: s.l, alpha, terms: &sample_terms });
                 }
             }
-        };
-        let results: Vec<Option<TileBuffer>> = pool.install(|| {
-            tiles
-                .par_iter()
-                .map(|&(x0, y0, w, h)| {
-                    if cancel.load(Ordering::Relaxed) {
-                        return None;
-                    }
-                    let mut sampler = prototype.clone();
-                    let mut tile =
-                        TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]).with_terms(terms);
-                    let mut sample_terms = vec![Rgb::ZERO; terms];
-                    for y in y0..y0 + h {
-                        for x in x0..x0 + w {
-                            for i in done..done + pass {
-                                sampler.start_pixel_sample([x + wx, y + wy], i, 0);
-                                // Uniform over the pixel; the filter weighs the sample where it
-                                // is splatted (Mitsuba 3's reconstruction).
-                                let u_film = sampler.next_2d();
-                                let centre = Vec2::new((x + wx) as f32 + 0.5, (y + wy) as f32 + 0.5);
-                                let film_pos = centre + (u_film - Vec2::splat(0.5));
-                                let u_lens = sampler.next_2d();
-                                let ray = cam.generate_ray(film_pos, u_lens);
-                                let alpha =
-                                    settings.alpha.then(|| f32::from(u8::from(scene.intersect(&ray).is_some())));
-                                let l = if terms == 0 {
-                                    integrator.li(scene, &ray, &mut sampler)
-                                } else {
-                                    sample_terms.fill(Rgb::ZERO);
-                                    integrator.li_terms(scene, &ray, &mut sampler, &mut sample_terms)
-                                };
-                                tile.put(
-                                    [x, y],
-                                    u_film,
-                                    &settings.filter,
-                                    FilmSample { l, alpha, terms: &sample_terms },
-                                );
-                            }
-                        }
-                    }
-                    let n = (w * h * pass) as u64;
-                    let total = samples_done.fetch_add(n, Ordering::Relaxed) + n;
-                    match settings.time_budget {
-                        Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
-                        None => bar.inc(n),
-                    }
-                    let secs = start.elapsed().as_secs_f64().max(1e-9);
-                    bar.set_message(format!("{:.2} Msamples/s", total as f64 / secs / 1e6));
-                    Some(tile)
-                })
-                .collect()
-        });
-        let complete = results.iter().all(Option::is_some);
+        }
+        (tile, (w * h * count) as u64)
+    };
+    let passes = scheduler.run(settings.spp, 16, tiles.len(), render_tile, |results, _| {
         for tile in results.iter().flatten() {
             film.merge(tile);
         }
-        if !complete {
-            interrupted = true;
-            break;
-        }
-        done += pass;
-    }
-    bar.finish_and_clear();
-    Ok(RenderOutcome { film, interrupted, elapsed: start.elapsed(), radiosity: None })
+    });
+    Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
 }
 
 #[cfg(test)]

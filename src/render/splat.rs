@@ -8,16 +8,14 @@
 //! of threads. Each pass is added to the film as one sample per pixel (its per-pixel variance
 //! is then the variance between passes).
 
-use super::{RenderOutcome, RenderSettings};
+use super::{RenderOutcome, RenderSettings, Scheduler};
 use crate::film::filter::Filter;
 use crate::film::Film;
 use crate::integrator::LightTracer;
 use crate::math::{Rgb, Vec2};
 use crate::sampling::Pcg32;
 use crate::scene::Scene;
-use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::sync::atomic::AtomicBool;
 
 /// A chunk's splats `(pixel, value)` in order, and its count of non-finite splats dropped.
 type ChunkSplats = (Vec<(u32, Rgb)>, u64);
@@ -93,76 +91,48 @@ pub fn render_light_paths(
     if scene.lights().is_empty() {
         return Err("light tracing needs at least one emitter".into());
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads)
-        .build()
-        .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
     let splatter = Splatter::new(&settings.filter, window);
     let paths_per_pass = cam.width() as u64 * cam.height() as u64;
     let chunks = paths_per_pass.div_ceil(CHUNK);
-    let spp = settings.spp.max(1);
-
-    let (bar, bar_len) = super::progress_bar(settings, paths_per_pass * spp as u64, "light paths");
-
-    let start = Instant::now();
+    let scheduler = Scheduler::new(settings, cancel, paths_per_pass, "light paths")?;
     let mut film = Film::new(width, height);
-    let mut interrupted = false;
     let mut image = vec![[0.0f64; 3]; (width * height) as usize];
-    for pass in 0..spp {
-        if let Some(budget) = settings.time_budget {
-            let elapsed = start.elapsed();
-            // Start a pass only if it fits at the rate measured so far.
-            if pass > 0 && elapsed + elapsed / pass > budget {
-                break;
+    // One pass per sample per pixel: each pass is added to the film as one sample per pixel.
+    let trace_chunk = |c: usize, pass: u32, _: u32| {
+        let c = c as u64;
+        let mut rng = Pcg32::new(settings.seed, ((pass as u64) << 32) | c);
+        let mut out = Vec::new();
+        let mut dropped = 0u64;
+        let n = CHUNK.min(paths_per_pass - c * CHUNK);
+        for _ in 0..n {
+            tracer.trace(scene, &mut rng, &mut |film, value| {
+                if value.is_finite() {
+                    splatter.splat(film, value, &mut out);
+                } else {
+                    dropped += 1;
+                }
+            });
+        }
+        ((out, dropped), n)
+    };
+    let passes =
+        scheduler.run(settings.spp, 1, chunks as usize, trace_chunk, |records: Vec<Option<ChunkSplats>>, _| {
+            // A pass that cancellation cut short is left out: its pixels would miss paths.
+            if records.iter().any(Option::is_none) {
+                return;
             }
-        }
-        let records: Vec<Option<ChunkSplats>> = pool.install(|| {
-            (0..chunks)
-                .into_par_iter()
-                .map(|c| {
-                    if cancel.load(Ordering::Relaxed) {
-                        return None;
+            image.fill([0.0; 3]);
+            let mut dropped = 0;
+            for (out, d) in records.into_iter().flatten() {
+                dropped += d;
+                for (i, v) in out {
+                    let px = &mut image[i as usize];
+                    for c in 0..3 {
+                        px[c] += v[c] as f64;
                     }
-                    let mut rng = Pcg32::new(settings.seed, ((pass as u64) << 32) | c);
-                    let mut out = Vec::new();
-                    let mut dropped = 0u64;
-                    let n = CHUNK.min(paths_per_pass - c * CHUNK);
-                    for _ in 0..n {
-                        tracer.trace(scene, &mut rng, &mut |film, value| {
-                            if value.is_finite() {
-                                splatter.splat(film, value, &mut out);
-                            } else {
-                                dropped += 1;
-                            }
-                        });
-                    }
-                    match settings.time_budget {
-                        Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
-                        None => bar.inc(n),
-                    }
-                    Some((out, dropped))
-                })
-                .collect()
-        });
-        if records.iter().any(Option::is_none) {
-            interrupted = true;
-            break;
-        }
-        image.fill([0.0; 3]);
-        let mut dropped = 0;
-        for (out, d) in records.into_iter().flatten() {
-            dropped += d;
-            for (i, v) in out {
-                let px = &mut image[i as usize];
-                for c in 0..3 {
-                    px[c] += v[c] as f64;
                 }
             }
-        }
-        film.add_pass(&image, dropped);
-        let secs = start.elapsed().as_secs_f64().max(1e-9);
-        bar.set_message(format!("{:.2} M paths/s", (pass as u64 + 1) as f64 * paths_per_pass as f64 / secs / 1e6));
-    }
-    bar.finish_and_clear();
-    Ok(RenderOutcome { film, interrupted, elapsed: start.elapsed(), radiosity: None })
+            film.add_pass(&image, dropped);
+        });
+    Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
 }

@@ -4,7 +4,7 @@
 use crate::job::{builtin_job, file_job, parse_defines, parse_res};
 use crate::{choice, usage, Failure, CANCEL};
 use neumann::film::output::{write_image_alpha, Format, ImageInfo};
-use neumann::integrator::radiosity::{self, Method};
+use neumann::integrator::radiosity::Method;
 use neumann::integrator::{
     AnyIntegrator, DirectStrategy, IntegratorKind, LightTracer, MisHeuristic, PathIntegrator, PathSettings,
     VolPathIntegrator,
@@ -254,8 +254,8 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     );
     let out =
         render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
-    if let Some(sol) = &out.radiosity {
-        report_radiosity(sol, a.patches_out.as_deref())?;
+    for line in &out.report {
+        println!("{line}");
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
@@ -323,6 +323,9 @@ fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), 
                 o.method = m;
             }
             o.smooth |= a.smooth;
+            if let Some(p) = &a.patches_out {
+                o.patches_out = Some(p.clone());
+            }
         }
         other if radiosity_flags => {
             return Err(usage(format!(
@@ -331,33 +334,6 @@ fn select_integrator(current: &mut AnyIntegrator, a: &RenderArgs) -> Result<(), 
             )))
         }
         _ => {}
-    }
-    Ok(())
-}
-
-/// Prints the radiosity solve (patches, form factors, iterations and residuals, power) and
-/// writes the per-patch CSV if asked.
-fn report_radiosity(sol: &radiosity::Radiosity, csv: Option<&std::path::Path>) -> Result<(), Failure> {
-    println!(
-        "radiosity: {} patches, {} non-zero form factors, {} iterations, residual {:.2e}; emitted {:.4} W, reflected {:.4} W (luminance)",
-        sol.b.len(),
-        sol.form_factor_entries,
-        sol.history.last().map_or(0, |h| h.0),
-        sol.history.last().map_or(0.0, |h| h.1),
-        sol.emitted_power(),
-        sol.reflected_power()
-    );
-    let shown: Vec<String> = sol
-        .history
-        .iter()
-        .filter(|(k, _)| k.is_power_of_two() || *k == sol.history.last().map_or(0, |h| h.0))
-        .map(|(k, r)| format!("{k}: {r:.2e}"))
-        .collect();
-    println!("  residual by iteration: {}", shown.join(", "));
-    if let Some(path) = csv {
-        std::fs::write(path, sol.to_csv())
-            .map_err(|e| Failure(1, format!("cannot write '{}': {e}", path.display())))?;
-        println!("wrote the per-patch solution to {}", path.display());
     }
     Ok(())
 }

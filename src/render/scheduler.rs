@@ -1,0 +1,196 @@
+//! The pass scheduler every render goes through: a worker pool, passes of samples per pixel sized
+//! to the sample target or the time budget, a progress bar, and cancellation (Ctrl-C) between
+//! work items. Camera-ray integrators render passes of tiles, the light tracer passes of light
+//! path chunks; both hand the scheduler a function that renders one work item of a pass and a
+//! function that merges a pass's results, in item order, into the film.
+//!
+//! Pass sizes: without a time budget, `clamp(spp / 8, 1, max_pass)` samples per pixel (the last
+//! pass takes what remains); with one, one sample first, then as many whole samples as fit in
+//! the remaining time at the rate measured so far (at most `max_pass`), stopping when not even
+//! one fits. Determinism does not depend on the thread count: results are merged in item order.
+
+use super::RenderSettings;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// What a run of passes did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Passes {
+    /// Samples per pixel of the passes that completed.
+    pub done: u32,
+    /// Whether cancellation stopped a pass before it completed.
+    pub interrupted: bool,
+    /// Wall-clock time of all passes.
+    pub elapsed: Duration,
+}
+
+/// A render's schedule: its settings, the cancellation flag, the worker pool and progress bar.
+pub struct Scheduler<'a> {
+    settings: &'a RenderSettings,
+    cancel: &'a AtomicBool,
+    pool: rayon::ThreadPool,
+    unit: &'static str,
+    /// Work units (samples, light paths) per sample per pixel, for the progress bar and the
+    /// rate it shows.
+    work_per_spp: u64,
+}
+
+impl<'a> Scheduler<'a> {
+    /// A schedule for `settings` whose passes do `work_per_spp` units of `unit` per sample per
+    /// pixel. Fails if the worker threads cannot start.
+    pub fn new(
+        settings: &'a RenderSettings,
+        cancel: &'a AtomicBool,
+        work_per_spp: u64,
+        unit: &'static str,
+    ) -> Result<Scheduler<'a>, String> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(settings.threads)
+            .build()
+            .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
+        Ok(Scheduler { settings, cancel, pool, unit, work_per_spp })
+    }
+
+    /// Runs passes until `spp` samples per pixel are done, the time budget is used or the render
+    /// is cancelled. Each pass calls `item(k, first, count)` for every work item `k < items` in
+    /// parallel (samples `first .. first + count` of each pixel; it returns its result and the
+    /// work units it did), then `merge(results, count)` in item order, where a `None` result is
+    /// an item that cancellation skipped. Passes hold at most `max_pass` samples per pixel.
+    pub fn run<W: Send>(
+        &self,
+        spp: u32,
+        max_pass: u32,
+        items: usize,
+        item: impl Fn(usize, u32, u32) -> (W, u64) + Sync,
+        mut merge: impl FnMut(Vec<Option<W>>, u32),
+    ) -> Passes {
+        let spp = spp.max(1);
+        let (bar, bar_len) = self.progress_bar(spp);
+        let start = Instant::now();
+        let work_done = AtomicU64::new(0);
+        let mut done = 0u32;
+        let mut interrupted = false;
+        while done < spp {
+            let Some(pass) = self.pass_size(spp, done, max_pass, start.elapsed()) else { break };
+            let results: Vec<Option<W>> = self.pool.install(|| {
+                (0..items)
+                    .into_par_iter()
+                    .map(|k| {
+                        if self.cancel.load(Ordering::Relaxed) {
+                            return None;
+                        }
+                        let (w, n) = item(k, done, pass);
+                        let total = work_done.fetch_add(n, Ordering::Relaxed) + n;
+                        match self.settings.time_budget {
+                            Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
+                            None => bar.inc(n),
+                        }
+                        let secs = start.elapsed().as_secs_f64().max(1e-9);
+                        bar.set_message(format!("{:.2} M {}/s", total as f64 / secs / 1e6, self.unit));
+                        Some(w)
+                    })
+                    .collect()
+            });
+            let complete = results.iter().all(Option::is_some);
+            merge(results, pass);
+            if !complete {
+                interrupted = true;
+                break;
+            }
+            done += pass;
+        }
+        bar.finish_and_clear();
+        Passes { done, interrupted, elapsed: start.elapsed() }
+    }
+
+    /// Samples per pixel of the next pass, or `None` when the time budget has no room for one.
+    fn pass_size(&self, spp: u32, done: u32, max_pass: u32, elapsed: Duration) -> Option<u32> {
+        let remaining_spp = spp - done;
+        match self.settings.time_budget {
+            None => Some((spp / 8).clamp(1, max_pass).min(remaining_spp)),
+            Some(budget) => {
+                if elapsed >= budget {
+                    return None;
+                }
+                if done == 0 {
+                    return Some(1);
+                }
+                // Whole samples that fit in the remaining time, at the measured rate.
+                let per_spp = elapsed.as_secs_f64() / done as f64;
+                let fit = ((budget - elapsed).as_secs_f64() / per_spp.max(1e-9)).floor() as u32;
+                (fit > 0).then(|| fit.min(max_pass).min(remaining_spp))
+            }
+        }
+    }
+
+    /// The progress bar (hidden unless `settings.progress`) and its length: with a time budget it
+    /// measures milliseconds of the budget, else the work of `spp` samples per pixel.
+    fn progress_bar(&self, spp: u32) -> (ProgressBar, u64) {
+        let len = match self.settings.time_budget {
+            Some(b) => b.as_millis().max(1) as u64,
+            None => self.work_per_spp * spp as u64,
+        };
+        if !self.settings.progress {
+            return (ProgressBar::hidden(), len);
+        }
+        let bar = ProgressBar::new(len);
+        bar.set_draw_target(ProgressDrawTarget::stderr_with_hz(4));
+        let template = if self.settings.time_budget.is_some() {
+            "{spinner} [{elapsed_precise}] {wide_bar} time budget {percent}% {msg}".to_string()
+        } else {
+            format!("{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {}, ETA {{eta}} {{msg}}", self.unit)
+        };
+        bar.set_style(ProgressStyle::with_template(&template).expect("valid template"));
+        (bar, len)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pass sizes follow the sample target (an eighth of it, 1 to `max_pass`, the last pass the
+    /// rest); items are merged in order; cancellation stops the run and reports it.
+    #[test]
+    fn passes_cover_the_target_in_order() {
+        let settings = RenderSettings { threads: 2, ..Default::default() };
+        let never = AtomicBool::new(false);
+        let s = Scheduler::new(&settings, &never, 10, "things").unwrap();
+        let mut passes = Vec::new();
+        let out = s.run(
+            100,
+            16,
+            7,
+            |k, first, count| ((k, first, count), 1),
+            |results, count| {
+                let got: Vec<usize> = results.iter().map(|r| r.unwrap().0).collect();
+                assert_eq!(got, (0..7).collect::<Vec<_>>(), "merged in item order");
+                passes.push(count);
+            },
+        );
+        assert_eq!(out.done, 100);
+        assert!(!out.interrupted);
+        assert_eq!(passes, [12, 12, 12, 12, 12, 12, 12, 12, 4]);
+        let light = s.run(5, 1, 3, |_, _, _| ((), 1), |_, count| assert_eq!(count, 1));
+        assert_eq!(light.done, 5);
+        let cancelled = AtomicBool::new(true);
+        let s = Scheduler::new(&settings, &cancelled, 10, "things").unwrap();
+        let out = s.run(100, 16, 4, |_, _, _| ((), 1), |results, _| assert!(results.iter().all(Option::is_none)));
+        assert!(out.interrupted && out.done == 0);
+    }
+
+    #[test]
+    fn time_budget_sizes_passes_by_the_measured_rate() {
+        let settings = RenderSettings { time_budget: Some(Duration::from_millis(100)), ..Default::default() };
+        let never = AtomicBool::new(false);
+        let s = Scheduler::new(&settings, &never, 1, "things").unwrap();
+        assert_eq!(s.pass_size(1000, 0, 16, Duration::ZERO), Some(1));
+        // 10 ms per sample so far, 60 ms left: 6 fit.
+        assert_eq!(s.pass_size(1000, 4, 16, Duration::from_millis(40)), Some(6));
+        assert_eq!(s.pass_size(1000, 4, 2, Duration::from_millis(40)), Some(2));
+        assert_eq!(s.pass_size(1000, 9, 16, Duration::from_millis(95)), None, "not one more fits");
+        assert_eq!(s.pass_size(1000, 9, 16, Duration::from_millis(120)), None);
+    }
+}
