@@ -1,6 +1,7 @@
 //! Image files as linear RGB: PNG (8- or 16-bit, sRGB-decoded unless `raw`) and OpenEXR (float,
 //! linear). Used by bitmap textures and environment maps.
 
+use super::LoadError;
 use crate::math::color::srgb_decode;
 use crate::math::Rgb;
 use std::path::Path;
@@ -9,13 +10,19 @@ pub use crate::image::Image;
 
 /// Loads a `.png` or `.exr` image. 8- and 16-bit PNGs are sRGB-encoded unless `raw` (data such as
 /// roughness maps), in which case values are only scaled to [0, 1].
-pub fn load_image(path: &Path, raw: bool) -> Result<Image, String> {
+pub fn load_image(path: &Path, raw: bool) -> Result<Image, LoadError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-    let fail = |e: String| format!("{}: {e}", path.display());
+    if matches!(ext.as_deref(), Some("png" | "exr")) {
+        // A file that cannot be opened is an I/O error, not a malformed image.
+        std::fs::File::open(path).map_err(|e| LoadError::io(path, e))?;
+    }
     match ext.as_deref() {
-        Some("png") => load_png(path, raw).map_err(fail),
-        Some("exr") => load_exr(path).map_err(fail),
-        _ => Err(fail("unsupported image format (expected .png or .exr)".into())),
+        Some("png") => load_png(path, raw).map_err(|e| LoadError::format(path, e)),
+        Some("exr") => load_exr(path).map_err(|e| LoadError::format(path, e)),
+        _ => Err(LoadError::Unsupported {
+            path: path.to_path_buf(),
+            message: "unsupported image format (expected .png or .exr)".into(),
+        }),
     }
 }
 
@@ -87,8 +94,10 @@ mod tests {
         for (a, b) in png.pixels.iter().zip(&px) {
             assert!((*a - b.clamp(Rgb::ZERO, Rgb::ONE)).abs().max_element() < 0.01, "{a} vs {b}");
         }
-        assert!(load_image(&dir.join("missing.png"), false).unwrap_err().contains("missing.png"));
-        assert!(load_image(&dir.join("a.tga"), false).is_err());
+        let missing = load_image(&dir.join("missing.png"), false).unwrap_err();
+        assert!(matches!(missing, LoadError::Io { .. }) && missing.to_string().contains("missing.png"), "{missing}");
+        let tga = load_image(&dir.join("a.tga"), false).unwrap_err();
+        assert!(matches!(tga, LoadError::Unsupported { .. }) && tga.to_string().contains("a.tga"), "{tga}");
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -3,10 +3,13 @@
 //! PLY meshes, PNG and OpenEXR images. Errors name the file, the line (for text formats) and what
 //! was expected.
 
+mod error;
 pub mod image;
 pub mod mitsuba;
 pub mod obj;
 pub mod ply;
+
+pub use error::LoadError;
 
 use crate::film::filter::Filter;
 use crate::geometry::TriangleMesh;
@@ -40,10 +43,13 @@ pub struct SceneFile {
 }
 
 /// Loads a triangle mesh from an `.obj` or `.ply` file (by extension).
-pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
+pub fn load_mesh(path: &Path) -> Result<TriangleMesh, LoadError> {
     match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
         Some("obj") => obj::load_obj(path),
         Some("ply") => ply::load_ply(path),
-        _ => Err(format!("{}: unknown mesh format (expected .obj or .ply)", path.display())),
+        _ => Err(LoadError::Unsupported {
+            path: path.to_path_buf(),
+            message: "unknown mesh format (expected .obj or .ply)".into(),
+        }),
     }
 }

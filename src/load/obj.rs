@@ -2,15 +2,20 @@
 //! indices count from the end); other records (groups, materials, smoothing) are ignored.
 //! Vertices are unified per distinct (position, uv, normal) triple.
 
+use super::LoadError;
 use crate::geometry::TriangleMesh;
 use crate::math::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
 /// Loads an OBJ file.
-pub fn load_obj(path: &Path) -> Result<TriangleMesh, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    parse_obj(&text).map_err(|(line, msg)| format!("{}:{line}: {msg}", path.display()))
+pub fn load_obj(path: &Path) -> Result<TriangleMesh, LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError::io(path, e))?;
+    parse_obj(&text).map_err(|(line, message)| LoadError::Format {
+        path: path.to_path_buf(),
+        line: Some(line),
+        message,
+    })
 }
 
 /// Parses OBJ text; errors carry the 1-based line number.
@@ -130,5 +135,19 @@ mod tests {
         assert!(e.1.contains("out of range"));
         let e = parse_obj("v 0 0 x\n").unwrap_err();
         assert!(e.1.contains("'x'"));
+    }
+
+    /// Errors from a file name the file and the line.
+    #[test]
+    fn file_errors_are_located() {
+        let dir = std::env::temp_dir().join(format!("neumann-obj-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("bad.obj");
+        std::fs::write(&path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n").unwrap();
+        let e = load_obj(&path).unwrap_err();
+        assert!(matches!(e, LoadError::Format { line: Some(4), .. }), "{e:?}");
+        assert!(e.to_string().starts_with(&format!("{}:4: ", path.display())), "{e}");
+        assert!(matches!(load_obj(&dir.join("none.obj")).unwrap_err(), LoadError::Io { .. }));
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

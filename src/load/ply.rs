@@ -3,6 +3,7 @@
 //! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Other elements and
 //! properties are read and skipped.
 
+use super::LoadError;
 use crate::geometry::TriangleMesh;
 use crate::math::{Vec2, Vec3};
 use std::path::Path;
@@ -66,9 +67,9 @@ enum Encoding {
 }
 
 /// Loads a PLY file.
-pub fn load_ply(path: &Path) -> Result<TriangleMesh, String> {
-    let data = std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    parse_ply(&data).map_err(|e| format!("{}: {e}", path.display()))
+pub fn load_ply(path: &Path) -> Result<TriangleMesh, LoadError> {
+    let data = std::fs::read(path).map_err(|e| LoadError::io(path, e))?;
+    parse_ply(&data).map_err(|e| LoadError::format(path, e))
 }
 
 /// A reader of property values from the body.

@@ -6,9 +6,11 @@
 //! after each pass. The image is therefore bit-identical for a given seed and sample count
 //! whatever the number of threads.
 
+mod error;
 mod scheduler;
 mod splat;
 
+pub use error::RenderError;
 pub use scheduler::{Passes, Scheduler};
 
 pub use splat::render_light_paths;
@@ -94,19 +96,22 @@ impl RenderOutcome {
 
 /// The crop window `[x0, y0, width, height]` of `settings` (default: the whole film), checked
 /// against the camera's film.
-fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result<[u32; 4], String> {
+fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result<[u32; 4], RenderError> {
     let window = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
-    let [wx, wy, width, height] = window;
+    let [x, y, width, height] = window;
     if width == 0
         || height == 0
-        || wx as u64 + width as u64 > cam.width() as u64
-        || wy as u64 + height as u64 > cam.height() as u64
+        || x as u64 + width as u64 > cam.width() as u64
+        || y as u64 + height as u64 > cam.height() as u64
     {
-        return Err(format!(
-            "crop window {width}x{height} at ({wx}, {wy}) does not fit in the {}x{} film",
-            cam.width(),
-            cam.height()
-        ));
+        return Err(RenderError::CropWindow {
+            x,
+            y,
+            width,
+            height,
+            film_width: cam.width(),
+            film_height: cam.height(),
+        });
     }
     Ok(window)
 }
@@ -119,7 +124,7 @@ pub fn render_integrator(
     integrator: &AnyIntegrator,
     settings: &RenderSettings,
     cancel: &AtomicBool,
-) -> Result<RenderOutcome, String> {
+) -> Result<RenderOutcome, RenderError> {
     match integrator {
         AnyIntegrator::Path(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
@@ -127,11 +132,11 @@ pub fn render_integrator(
         AnyIntegrator::VolPath(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
-            let solution = Radiosity::solve(scene, opts)?;
+            let solution = Radiosity::solve(scene, opts).map_err(RenderError::Radiosity)?;
             let mut report = solution.report_lines();
             if let Some(path) = &opts.patches_out {
                 std::fs::write(path, solution.to_csv())
-                    .map_err(|e| format!("cannot write '{}': {e}", path.display()))?;
+                    .map_err(|source| RenderError::Write { path: path.clone(), source })?;
                 report.push(format!("wrote the per-patch solution to {}", path.display()));
             }
             let display = RadiosityIntegrator { solution };
@@ -150,7 +155,7 @@ pub fn render(
     integrator: &dyn Integrator,
     settings: &RenderSettings,
     cancel: &AtomicBool,
-) -> Result<RenderOutcome, String> {
+) -> Result<RenderOutcome, RenderError> {
     let cam = scene.camera();
     let [wx, wy, width, height] = crop_window(settings, cam)?;
     let ts = settings.tile_size.max(1);
@@ -161,7 +166,7 @@ pub fn render(
     let prototype = settings.sampler.make(settings.spp.max(1), settings.seed);
     let terms = if integrator.has_terms() { settings.terms } else { 0 };
     if settings.terms > 0 && terms == 0 {
-        return Err(format!("the {} integrator does not separate the terms of the Neumann series", integrator.name()));
+        return Err(RenderError::NoTerms { integrator: integrator.name() });
     }
     let scheduler = Scheduler::new(settings, cancel, width as u64 * height as u64, "samples")?;
     let mut film = Film::new(width, height).with_terms(terms);
@@ -294,5 +299,19 @@ mod tests {
         let (lo, hi) = out.film.spp_range();
         assert!(lo >= 1 && lo == hi, "whole passes only: {lo}..{hi}");
         assert!(out.elapsed < Duration::from_millis(1500), "{:?}", out.elapsed);
+    }
+
+    /// Render errors are typed and say what is wrong.
+    #[test]
+    fn errors_are_typed() {
+        let scene = cornell_box(8, 8).unwrap();
+        let never = AtomicBool::new(false);
+        let settings = RenderSettings { window: Some([4, 4, 8, 8]), ..Default::default() };
+        let e = render(&scene, &PathIntegrator::default(), &settings, &never).unwrap_err();
+        assert!(matches!(e, RenderError::CropWindow { film_width: 8, x: 4, .. }), "{e:?}");
+        assert!(e.to_string().contains("does not fit in the 8x8 film"), "{e}");
+        let direct = crate::integrator::DirectIntegrator::default();
+        let e = render(&scene, &direct, &RenderSettings { terms: 3, ..Default::default() }, &never).unwrap_err();
+        assert!(matches!(e, RenderError::NoTerms { integrator: "direct" }), "{e:?}");
     }
 }

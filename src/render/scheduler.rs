@@ -9,7 +9,7 @@
 //! the remaining time at the rate measured so far (at most `max_pass`), stopping when not even
 //! one fits. Determinism does not depend on the thread count: results are merged in item order.
 
-use super::RenderSettings;
+use super::{RenderError, RenderSettings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -45,11 +45,11 @@ impl<'a> Scheduler<'a> {
         cancel: &'a AtomicBool,
         work_per_spp: u64,
         unit: &'static str,
-    ) -> Result<Scheduler<'a>, String> {
+    ) -> Result<Scheduler<'a>, RenderError> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(settings.threads)
             .build()
-            .map_err(|e| format!("cannot start {} worker threads: {e}", settings.threads))?;
+            .map_err(|e| RenderError::Threads { threads: settings.threads, message: e.to_string() })?;
         Ok(Scheduler { settings, cancel, pool, unit, work_per_spp })
     }
 

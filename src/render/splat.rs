@@ -8,7 +8,7 @@
 //! of threads. Each pass is added to the film as one sample per pixel (its per-pixel variance
 //! is then the variance between passes).
 
-use super::{RenderOutcome, RenderSettings, Scheduler};
+use super::{RenderError, RenderOutcome, RenderSettings, Scheduler};
 use crate::film::filter::Filter;
 use crate::film::Film;
 use crate::integrator::LightTracer;
@@ -81,15 +81,15 @@ pub fn render_light_paths(
     tracer: &LightTracer,
     settings: &RenderSettings,
     cancel: &AtomicBool,
-) -> Result<RenderOutcome, String> {
+) -> Result<RenderOutcome, RenderError> {
     let cam = scene.camera();
     let window = super::crop_window(settings, cam)?;
     let [_, _, width, height] = window;
     if settings.terms > 0 {
-        return Err("the ptracer integrator does not separate the terms of the Neumann series".into());
+        return Err(RenderError::NoTerms { integrator: "ptracer" });
     }
     if scene.lights().is_empty() {
-        return Err("light tracing needs at least one emitter".into());
+        return Err(RenderError::NoEmitters);
     }
     let splatter = Splatter::new(&settings.filter, window);
     let paths_per_pass = cam.width() as u64 * cam.height() as u64;

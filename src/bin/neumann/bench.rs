@@ -88,7 +88,7 @@ fn throughput(threads: usize, rays: &[Ray], trace: &(dyn Fn(&Ray) -> bool + Sync
 pub fn run(args: &BenchArgs) -> Result<(), String> {
     let all = rayon::current_num_threads();
     let mesh = match &args.mesh {
-        Some(path) => neumann::load::load_mesh(path)?,
+        Some(path) => neumann::load::load_mesh(path).map_err(|e| e.to_string())?,
         None => displaced_sphere(args.triangles as usize),
     };
     let name = args.mesh.as_ref().map_or("generated displaced sphere".to_string(), |p| p.display().to_string());
@@ -153,7 +153,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let scene = cornell::cornell_box(args.cbox_res, args.cbox_res)?;
         let integrator = PathIntegrator::with_max_depth(8);
         let settings = RenderSettings { spp: args.cbox_spp, seed: 0, ..Default::default() };
-        let out = render(&scene, &integrator, &settings, &AtomicBool::new(false))?;
+        let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).map_err(|e| e.to_string())?;
         println!(
             "Cornell box {r}x{r}, {} spp, max_depth 8, {all} threads: {:.2} s, {:.3} M samples/s",
             args.cbox_spp,

@@ -68,7 +68,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
         file_job(std::path::Path::new(&scene_arg), &defines)?
     };
     let (w, h) = parse_res(&a.res).map_err(usage)?;
-    let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+    let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;
     job.file.scene.set_camera(camera);
     let base = match &job.file.integrator {
         AnyIntegrator::Path(p) => p.clone(),
@@ -86,7 +86,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     std::fs::create_dir_all(&a.out).map_err(|e| Failure(1, format!("cannot create '{}': {e}", a.out.display())))?;
     let reference = match &a.reference {
         Some(path) => {
-            let img = neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e))?;
+            let img = neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e.to_string()))?;
             if (img.width, img.height) != (w, h) {
                 return Err(Failure(
                     1,
@@ -113,10 +113,11 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
                 progress: true,
                 ..Default::default()
             };
-            let out = render(&job.file.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+            let out =
+                render(&job.file.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e.to_string()))?;
             let image = out.film.image();
             write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0 })
-                .map_err(|e| Failure(1, e))?;
+                .map_err(|e| Failure(1, e.to_string()))?;
             image
         }
     };
@@ -129,8 +130,8 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
             let integrator =
                 PathIntegrator { settings: PathSettings { max_depth, ..base.settings }, strategy: d, ..base.clone() };
             let base = RenderSettings { sampler: s, seed: a.seed, threads: a.threads, ..Default::default() };
-            let curve =
-                measure(&name, &job.file.scene, &integrator, &reference, &levels, &base).map_err(|e| Failure(1, e))?;
+            let curve = measure(&name, &job.file.scene, &integrator, &reference, &levels, &base)
+                .map_err(|e| Failure(1, e.to_string()))?;
             let last = curve.points.last().copied().expect("at least one level");
             println!(
                 "{name:<24} {:>8.3} {:>12.4e} {:>10.3} {:>12.4e}",
@@ -142,9 +143,10 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
             curves.push(curve);
         }
     }
-    write_csv(&a.out.join("convergence.csv"), &curves).map_err(|e| Failure(1, e))?;
+    write_csv(&a.out.join("convergence.csv"), &curves).map_err(|e| Failure(1, e.to_string()))?;
     let title = format!("{} {w}x{h}, max_depth {max_depth}: MSE against a reference", job.name);
-    plot(&a.out.join("convergence.svg"), &a.out.join("convergence.png"), &title, &curves).map_err(|e| Failure(1, e))?;
+    plot(&a.out.join("convergence.svg"), &a.out.join("convergence.png"), &title, &curves)
+        .map_err(|e| Failure(1, e.to_string()))?;
     println!("wrote convergence.csv, convergence.svg and convergence.png to {}", a.out.display());
     Ok(())
 }
@@ -202,7 +204,7 @@ pub fn measure(
     let mut points = Vec::new();
     for &spp in levels {
         let settings = RenderSettings { spp, ..base.clone() };
-        let out = render(scene, integrator, &settings, &AtomicBool::new(false))?;
+        let out = render(scene, integrator, &settings, &AtomicBool::new(false)).map_err(|e| e.to_string())?;
         let image = out.film.image();
         if image.len() != reference.len() {
             return Err(format!("the reference has {} pixels, the render {}", reference.len(), image.len()));

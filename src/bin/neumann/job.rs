@@ -67,7 +67,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         }
     }
     let file = SceneFile {
-        scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e))?,
+        scene: cornell::cornell_box(res.0, res.1).map_err(|e| Failure(1, e.to_string()))?,
         integrator: AnyIntegrator::Path(PathIntegrator::with_max_depth(max_depth)),
         spp,
         sampler: SamplerKind::Independent,

@@ -84,7 +84,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
-        Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e)),
+        Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e.to_string())),
         Command::Converge(args) => converge::run(args),
         Command::Validate { scenes, scene_dir, reference_dir, seed } => {
             validate::run(&scenes, &scene_dir, &reference_dir, seed)

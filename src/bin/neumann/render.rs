@@ -111,7 +111,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     // Command-line flags override the scene's settings.
     if let Some(r) = &a.res {
         let (w, h) = parse_res(r).map_err(usage)?;
-        let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e))?;
+        let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;
         job.file.scene.set_camera(camera);
         job.file.window = None;
     }
@@ -153,7 +153,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     if let Some(kind) = a.light_sampler {
         match &job.file.integrator {
             AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::Direct(_) => {
-                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e))?
+                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
             }
             other => {
                 return Err(usage(format!(
@@ -252,17 +252,18 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         job.file.integrator.describe(),
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
     );
-    let out =
-        render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e))?;
+    let out = render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL)
+        .map_err(|e| Failure(1, e.to_string()))?;
     for line in &out.report {
         println!("{line}");
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
-    write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info).map_err(|e| Failure(1, e))?;
+    write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info)
+        .map_err(|e| Failure(1, e.to_string()))?;
     if let Some(dir) = &a.bounces_out {
-        write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e))?;
+        write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e.to_string()))?;
         println!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
     }
     let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };

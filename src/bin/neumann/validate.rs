@@ -120,9 +120,10 @@ pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u
         window: file.window,
         ..Default::default()
     };
-    let out = render_integrator(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))?;
+    let out = render_integrator(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))
+        .map_err(|e| e.to_string())?;
     let image = out.film.image();
-    let reference = load_image(&references_dir.join(format!("{}.exr", r.scene)), true)?;
+    let reference = load_image(&references_dir.join(format!("{}.exr", r.scene)), true).map_err(|e| e.to_string())?;
     if reference.pixels.len() != image.len() {
         return Err(format!(
             "reference {} is {}x{} but the render has {} pixels",
@@ -147,7 +148,7 @@ pub fn run(
     reference_dir: &std::path::Path,
     seed: u64,
 ) -> Result<(), Failure> {
-    let refs = read_references(reference_dir).map_err(|e| Failure(1, e))?;
+    let refs = read_references(reference_dir).map_err(|e| Failure(1, e.to_string()))?;
     if let Some(s) = scenes.iter().find(|s| !refs.iter().any(|r| &r.scene == *s)) {
         let names: Vec<&str> = refs.iter().map(|r| r.scene.as_str()).collect();
         return Err(usage(format!("no reference for scene '{s}' (references exist for: {})", names.join(", "))));
@@ -158,7 +159,7 @@ pub fn run(
     );
     let mut failed = 0;
     for r in refs.iter().filter(|r| scenes.is_empty() || scenes.contains(&r.scene)) {
-        let v = validate(scene_dir, reference_dir, r, seed).map_err(|e| Failure(1, e))?;
+        let v = validate(scene_dir, reference_dir, r, seed).map_err(|e| Failure(1, e.to_string()))?;
         let ok = v.passed();
         failed += usize::from(!ok);
         println!(

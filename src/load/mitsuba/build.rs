@@ -364,7 +364,7 @@ impl ImageSource for Builder {
         if let Some(i) = self.images.get(&key) {
             return Ok(i.clone());
         }
-        let img = Arc::new(load_image(&path, raw).map_err(|e| o.error_at(name, e))?);
+        let img = Arc::new(load_image(&path, raw).map_err(|e| o.error_at(name, e.to_string()))?);
         self.images.insert(key, img.clone());
         Ok(img)
     }
@@ -373,6 +373,6 @@ impl ImageSource for Builder {
 impl MeshSource for Builder {
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh> {
         let path = resolve(&o.loc, &o.string(name)?);
-        crate::load::load_mesh(&path).map_err(|e| o.error_at(name, e))
+        crate::load::load_mesh(&path).map_err(|e| o.error_at(name, e.to_string()))
     }
 }
