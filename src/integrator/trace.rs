@@ -124,7 +124,7 @@ impl Mis {
 
     /// Weight of a light sample of density `p_light` against BSDF density `p_bsdf()` (only
     /// evaluated when needed).
-    #[inline]
+    #[inline(always)]
     pub fn light_weight(&self, p_light: f32, p_bsdf: impl FnOnce() -> f32) -> f32 {
         match *self {
             Mis::Combine { heuristic, n_light, n_bsdf } => heuristic.weight(n_light, p_light, n_bsdf, p_bsdf),
@@ -135,7 +135,7 @@ impl Mis {
 
     /// Weight of emission found by a BSDF sample of density `p_bsdf` against the light-sampling
     /// density `p_light()` of the same direction (only evaluated when needed).
-    #[inline]
+    #[inline(always)]
     pub fn bsdf_weight(&self, p_bsdf: f32, p_light: impl FnOnce() -> f32) -> f32 {
         match *self {
             Mis::Combine { heuristic, n_light, n_bsdf } => heuristic.weight(n_bsdf, p_bsdf, n_light, p_light),
@@ -148,7 +148,7 @@ impl Mis {
 impl MisHeuristic {
     /// Weight of `n_a` samples of density `p_a` against `n_b` samples of the other strategy,
     /// whose density `p_b()` is evaluated only if `n_b > 0` (else the weight is 1).
-    #[inline]
+    #[inline(always)]
     fn weight(self, n_a: u32, p_a: f32, n_b: u32, p_b: impl FnOnce() -> f32) -> f32 {
         if n_b == 0 {
             return 1.0;
@@ -228,7 +228,7 @@ pub fn light_pdf_at(scene: &Scene, ctx: &LightSampleContext, i: u32, p: Vec3, ng
 /// transmittance through media; see [`occlusion`]). Returns
 /// `value Lₑ Tr w / (P(l) p_l n_light)` (module docs), zero when nothing arrives.
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 pub fn sample_direct(
     scene: &Scene,
     ctx: &LightSampleContext,
@@ -294,7 +294,7 @@ impl SurfaceVertex<'_> {
 
 /// [`sample_direct`] at a surface vertex `v`, with its BSDF as value and density; `u` are the
 /// light selection and position numbers.
-#[inline]
+#[inline(always)]
 pub fn sample_direct_bsdf(
     scene: &Scene,
     ctx: &LightSampleContext,
