@@ -24,18 +24,29 @@ pub enum FovAxis {
     Diagonal,
 }
 
-impl std::str::FromStr for FovAxis {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "x" => Ok(FovAxis::X),
-            "y" => Ok(FovAxis::Y),
-            "smaller" => Ok(FovAxis::Smaller),
-            "larger" => Ok(FovAxis::Larger),
-            "diagonal" => Ok(FovAxis::Diagonal),
-            _ => Err(format!("unknown fov_axis '{s}' (expected x, y, smaller, larger or diagonal)")),
-        }
-    }
+crate::choices!(FovAxis, "fov_axis", {
+    FovAxis::X => "x", "the image's width";
+    FovAxis::Y => "y", "the image's height";
+    FovAxis::Diagonal => "diagonal", "the image's diagonal";
+    FovAxis::Smaller => "smaller", "the shorter image side";
+    FovAxis::Larger => "larger", "the longer image side";
+});
+
+/// A camera that cannot be built from its parameters.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum CameraError {
+    /// The field of view is outside (0°, 180°).
+    #[error("field of view must be in (0, 180) degrees, got {0}")]
+    FieldOfView(f32),
+    /// A film side is zero.
+    #[error("film size must be positive, got {0}x{1}")]
+    FilmSize(u32, u32),
+    /// The clip range is empty or negative.
+    #[error("need 0 < near_clip < far_clip, got {0} and {1}")]
+    Clip(f32, f32),
+    /// The thin lens's aperture or focus distance is invalid.
+    #[error("need aperture_radius ≥ 0 and focus_distance > 0, got {0}, {1}")]
+    Lens(f32, f32),
 }
 
 /// A perspective camera, optionally with a thin lens.
@@ -66,12 +77,12 @@ impl Camera {
         fov_axis: FovAxis,
         width: u32,
         height: u32,
-    ) -> Result<Camera, String> {
+    ) -> Result<Camera, CameraError> {
         if !(fov_deg > 0.0 && fov_deg < 180.0) {
-            return Err(format!("field of view must be in (0, 180) degrees, got {fov_deg}"));
+            return Err(CameraError::FieldOfView(fov_deg));
         }
         if width == 0 || height == 0 {
-            return Err(format!("film size must be positive, got {width}x{height}"));
+            return Err(CameraError::FilmSize(width, height));
         }
         let t = (0.5 * fov_deg.to_radians()).tan();
         let aspect = width as f32 / height as f32;
@@ -106,15 +117,15 @@ impl Camera {
 
     /// The same camera on a `width × height` film: the field of view along its axis is kept, the
     /// other follows the new aspect ratio.
-    pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, String> {
+    pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
         Ok(Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() })
     }
 
     /// Sets the near and far clip distances (along the view axis).
-    pub fn with_clip(mut self, near: f32, far: f32) -> Result<Camera, String> {
+    pub fn with_clip(mut self, near: f32, far: f32) -> Result<Camera, CameraError> {
         if !(near > 0.0 && far > near) {
-            return Err(format!("need 0 < near_clip < far_clip, got {near} and {far}"));
+            return Err(CameraError::Clip(near, far));
         }
         self.near_clip = near;
         self.far_clip = far;
@@ -123,11 +134,9 @@ impl Camera {
 
     /// Makes it a thin-lens camera (Mitsuba's `thinlens`): `aperture_radius` and
     /// `focus_distance` in world units.
-    pub fn with_thin_lens(mut self, aperture_radius: f32, focus_distance: f32) -> Result<Camera, String> {
+    pub fn with_thin_lens(mut self, aperture_radius: f32, focus_distance: f32) -> Result<Camera, CameraError> {
         if !(aperture_radius >= 0.0 && focus_distance > 0.0) {
-            return Err(format!(
-                "need aperture_radius ≥ 0 and focus_distance > 0, got {aperture_radius}, {focus_distance}"
-            ));
+            return Err(CameraError::Lens(aperture_radius, focus_distance));
         }
         self.lens_radius = aperture_radius;
         self.focus_distance = focus_distance;
@@ -258,13 +267,8 @@ impl Camera {
                 return Err(SceneError::at(&p.loc, "give either 'fov' or 'focal_length', not both"));
             }
             (Some(fov), None) => {
-                let axis = match o.choice("fov_axis", &["x", "y", "diagonal", "smaller", "larger"])?.as_str() {
-                    "x" => FovAxis::X,
-                    "y" => FovAxis::Y,
-                    "diagonal" => FovAxis::Diagonal,
-                    "smaller" => FovAxis::Smaller,
-                    _ => FovAxis::Larger,
-                };
+                let names = <FovAxis as crate::choice::Choice>::names();
+                let axis = o.choice("fov_axis", &names)?.parse().map_err(|e: String| o.error_at("fov_axis", e))?;
                 (fov, axis)
             }
             (None, p) => {
@@ -282,14 +286,15 @@ impl Camera {
                 (2.0 * ((36.0f32.hypot(24.0)) / (2.0 * mm)).atan().to_degrees(), FovAxis::Diagonal)
             }
         };
-        let mut camera = Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e))?;
+        let mut camera =
+            Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e.to_string()))?;
         let near = o.float("near_clip", 0.01)?;
         let far = o.float("far_clip", 10000.0)?;
-        camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e))?;
+        camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()))?;
         if o.ty == "thinlens" {
             let r = o.float_opt("aperture_radius")?.ok_or_else(|| o.error("'aperture_radius' is required"))?;
             let d = o.float_opt("focus_distance")?.ok_or_else(|| o.error("'focus_distance' is required"))?;
-            camera = camera.with_thin_lens(r, d).map_err(|e| o.error_at("aperture_radius", e))?;
+            camera = camera.with_thin_lens(r, d).map_err(|e| o.error_at("aperture_radius", e.to_string()))?;
         }
         Ok(camera)
     }

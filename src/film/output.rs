@@ -3,7 +3,7 @@
 
 use crate::math::color::srgb_encode;
 use crate::math::Rgb;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Information stored alongside the pixels.
 #[derive(Clone, Debug, Default)]
@@ -25,25 +25,50 @@ pub enum Format {
     Pfm,
 }
 
+/// An image that could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// The file name's extension names no format neumann writes.
+    #[error("cannot tell the image format of '{}' from its extension {}: use .exr, .png or .pfm", path.display(), extension.as_ref().map_or("(none)".to_string(), |e| format!("'.{e}'")))]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its extension, if any.
+        extension: Option<String>,
+    },
+    /// The format cannot hold what was asked (an alpha channel in PFM).
+    #[error("cannot write '{}': {message}", path.display())]
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// What it cannot hold.
+        message: String,
+    },
+    /// Creating, encoding or writing the file failed.
+    #[error("cannot write '{}': {message}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// The encoder's or the operating system's message.
+        message: String,
+    },
+}
+
 impl Format {
     /// The format for a file name's extension (case-insensitive).
-    pub fn from_path(path: &Path) -> Result<Format, String> {
+    pub fn from_path(path: &Path) -> Result<Format, WriteError> {
         match path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
             Some("exr") => Ok(Format::Exr),
             Some("png") => Ok(Format::Png),
             Some("pfm") => Ok(Format::Pfm),
-            other => Err(format!(
-                "cannot tell the image format of '{}' from its extension {}: use .exr, .png or .pfm",
-                path.display(),
-                other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
-            )),
+            other => Err(WriteError::UnknownFormat { path: path.to_path_buf(), extension: other.map(str::to_string) }),
         }
     }
 }
 
 /// Writes `pixels` (row-major from the top-left, linear radiance) to `path` in the format its
 /// extension names. Non-finite values are written as 0.
-pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), String> {
+pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Rgb], info: &ImageInfo) -> Result<(), WriteError> {
     write_image_alpha(path, width, height, pixels, None, info)
 }
 
@@ -56,18 +81,19 @@ pub fn write_image_alpha(
     pixels: &[Rgb],
     alpha: Option<&[f32]>,
     info: &ImageInfo,
-) -> Result<(), String> {
+) -> Result<(), WriteError> {
     assert_eq!(pixels.len(), (width * height) as usize);
     if let Some(a) = alpha {
         assert_eq!(a.len(), pixels.len());
     }
-    let fail = |e: String| format!("cannot write '{}': {e}", path.display());
+    let fail = |message: String| WriteError::Write { path: path.to_path_buf(), message };
     match Format::from_path(path)? {
         Format::Exr => write_exr(path, width, height, pixels, alpha, info).map_err(fail),
         Format::Png => write_png(path, width, height, pixels, alpha, info).map_err(fail),
-        Format::Pfm if alpha.is_some() => {
-            Err(fail("PFM has no alpha channel: write .exr or .png for pixel_format rgba".into()))
-        }
+        Format::Pfm if alpha.is_some() => Err(WriteError::Unsupported {
+            path: path.to_path_buf(),
+            message: "PFM has no alpha channel: write .exr or .png for pixel_format rgba".into(),
+        }),
         Format::Pfm => write_pfm(path, width, height, pixels).map_err(fail),
     }
 }
@@ -246,8 +272,13 @@ mod tests {
     #[test]
     fn formats_by_extension_and_round_trips() {
         assert_eq!(Format::from_path(Path::new("a.EXR")).unwrap(), Format::Exr);
-        assert!(Format::from_path(Path::new("a.jpg")).unwrap_err().contains(".exr, .png or .pfm"));
-        assert!(Format::from_path(Path::new("noext")).is_err());
+        let jpg = Format::from_path(Path::new("a.jpg")).unwrap_err();
+        assert!(matches!(&jpg, WriteError::UnknownFormat { extension: Some(e), .. } if e == "jpg"));
+        assert!(jpg.to_string().contains("'.jpg': use .exr, .png or .pfm"), "{jpg}");
+        let none = Format::from_path(Path::new("noext")).unwrap_err();
+        assert!(none.to_string().contains("extension (none)"), "{none}");
+        let pfm_alpha = write_image_alpha(Path::new("x.pfm"), 1, 1, &[Rgb::ONE], Some(&[1.0]), &ImageInfo::default());
+        assert!(matches!(pfm_alpha, Err(WriteError::Unsupported { .. })));
         let dir = std::env::temp_dir().join(format!("neumann-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let px: Vec<Rgb> = (0..6).map(|i| Rgb::new(i as f32, 0.5, f32::NAN)).collect();

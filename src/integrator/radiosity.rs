@@ -222,7 +222,7 @@ impl Radiosity {
         }
         let camera: Camera = scene.camera().clone();
         b.set_camera(camera);
-        let patched = b.build()?;
+        let patched = b.build().map_err(|e| e.to_string())?;
         let n = area.len();
         if n == 0 {
             return Err("the scene has no surfaces to patch".into());

@@ -13,7 +13,7 @@ mod sampler;
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::EnvMap;
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
-pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind};
+pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
 
 use crate::geometry::Geometry;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};

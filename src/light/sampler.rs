@@ -15,6 +15,10 @@ use crate::geometry::Geometry;
 use crate::math::Vec3;
 use crate::sampling::AliasTable;
 
+/// Lights exist but none emits anything: nothing to choose by power or importance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NoLightPower;
+
 /// Which light sampler a render uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSamplerKind {
@@ -62,12 +66,12 @@ pub enum LightSampler {
 impl LightSampler {
     /// The sampler of `kind` for `lights` on `shapes`. Errors if lights exist but none has
     /// power (power and BVH selection would have nothing to choose).
-    pub fn new(kind: LightSamplerKind, lights: &[Light], shapes: &[Geometry]) -> Result<LightSampler, String> {
+    pub fn new(kind: LightSamplerKind, lights: &[Light], shapes: &[Geometry]) -> Result<LightSampler, NoLightPower> {
         if lights.is_empty() {
             return Ok(LightSampler::Empty);
         }
         let powers: Vec<f32> = lights.iter().map(|l| l.power(shapes)).collect();
-        let power = AliasTable::new(&powers).ok_or("every light has zero power")?;
+        let power = AliasTable::new(&powers).ok_or(NoLightPower)?;
         Ok(match kind {
             LightSamplerKind::Uniform => LightSampler::Uniform { count: lights.len() as u32 },
             LightSamplerKind::Power => LightSampler::Power(power),

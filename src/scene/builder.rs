@@ -1,6 +1,7 @@
 //! Assembles a [`Scene`]: collects shapes, BSDFs and emitters, then builds the BVH and the
 //! light distribution.
 
+use super::BuildError;
 use super::{LeafPrim, PrimRef, Primitive, Scene, Shape, TRIANGLE_BLOCKS};
 use crate::bvh::Bvh;
 use crate::camera::Camera;
@@ -89,23 +90,23 @@ impl SceneBuilder {
     /// Builds the scene: BVH, primitive arrays in leaf order, the light sampler (the light BVH;
     /// see [`Scene::set_light_sampler`]) and the power-proportional distribution that light
     /// tracing starts paths from. Errors name what is missing or inconsistent.
-    pub fn build(mut self) -> Result<Scene, String> {
-        let camera = self.camera.take().ok_or("the scene has no camera")?;
+    pub fn build(mut self) -> Result<Scene, BuildError> {
+        let camera = self.camera.take().ok_or(BuildError::NoCamera)?;
         for (i, s) in self.shapes.iter().enumerate() {
             if s.bsdf as usize >= self.bsdfs.len() {
-                return Err(format!("shape {i} refers to BSDF {} but only {} exist", s.bsdf, self.bsdfs.len()));
+                return Err(BuildError::MissingBsdf { shape: i, bsdf: s.bsdf, count: self.bsdfs.len() });
             }
         }
         let n_media = self.media.len() as u32;
         for (i, s) in self.shapes.iter().enumerate() {
             if s.interior.iter().chain(&s.exterior).chain(&self.camera_medium).any(|&m| m >= n_media) {
-                return Err(format!("shape {i} or the camera refers to a medium that does not exist"));
+                return Err(BuildError::MissingMedium(i));
             }
         }
         for l in &self.lights {
             if let Light::Area { shape, .. } = l {
                 if !self.geometries[*shape as usize].prepare_sampling() {
-                    return Err(format!("emitting shape {shape} has no area"));
+                    return Err(BuildError::EmitterWithoutArea(*shape));
                 }
             }
         }

@@ -3,7 +3,7 @@
 //! rescaled to `[-1, 1]³`, open front, camera at z = 3.9). Rectangles are `[-1, 1]²` with normal
 //! +z and cubes `[-1, 1]³`, placed by scale, then rotate, then translate.
 
-use super::{Scene, SceneBuilder};
+use super::{BuildError, Scene, SceneBuilder};
 use crate::camera::{Camera, FovAxis};
 use crate::geometry::{Geometry, TriangleMesh};
 use crate::material::{Bsdf, Diffuse};
@@ -25,7 +25,7 @@ fn placed(mut mesh: TriangleMesh, scale: Vec3, axis: Vec3, angle: f32, translate
 }
 
 /// The Cornell box rendered on a `width × height` film.
-pub fn cornell_box(width: u32, height: u32) -> Result<Scene, String> {
+pub fn cornell_box(width: u32, height: u32) -> Result<Scene, BuildError> {
     let mut b = SceneBuilder::new();
     let white = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.885809, 0.698859, 0.666422))));
     let green = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.105421, 0.37798, 0.076425))));

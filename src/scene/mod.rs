@@ -4,8 +4,10 @@
 
 mod builder;
 pub mod cornell;
+mod error;
 
 pub use builder::SceneBuilder;
+pub use error::BuildError;
 
 use crate::bvh::{prefetch, BuildOptions, Bvh};
 use crate::camera::Camera;
@@ -216,7 +218,7 @@ impl Scene {
     }
 
     /// Replaces the light sampler (default: the light BVH).
-    pub fn set_light_sampler(&mut self, kind: LightSamplerKind) -> Result<(), String> {
+    pub fn set_light_sampler(&mut self, kind: LightSamplerKind) -> Result<(), BuildError> {
         self.light_sampler = LightSampler::new(kind, &self.lights, &self.geometries)?;
         self.light_sampler_kind = kind;
         Ok(())

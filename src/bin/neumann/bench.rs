@@ -122,7 +122,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     let mut rng = Pcg32::new(1, 1);
     let side = ((args.rays as f64).sqrt() as u32).max(1);
     let to_world = Transform::look_at(center + Vec3::new(0.0, 0.3, 2.2) * radius, center, Vec3::Y).unwrap();
-    let cam = Camera::perspective(to_world, 50.0, FovAxis::X, side, side)?;
+    let cam = Camera::perspective(to_world, 50.0, FovAxis::X, side, side).map_err(|e| e.to_string())?;
     let primary: Vec<Ray> = (0..side * side)
         .map(|k| cam.generate_ray(Vec2::new((k % side) as f32 + 0.5, (k / side) as f32 + 0.5), Vec2::ZERO))
         .collect();
@@ -150,7 +150,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     }
 
     if !args.no_cbox {
-        let scene = cornell::cornell_box(args.cbox_res, args.cbox_res)?;
+        let scene = cornell::cornell_box(args.cbox_res, args.cbox_res).map_err(|e| e.to_string())?;
         let integrator = PathIntegrator::with_max_depth(8);
         let settings = RenderSettings { spp: args.cbox_spp, seed: 0, ..Default::default() };
         let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).map_err(|e| e.to_string())?;
@@ -169,6 +169,6 @@ fn mesh_scene(mesh: TriangleMesh) -> Result<Scene, String> {
     let mut b = SceneBuilder::new();
     let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
     b.add_shape(Geometry::Mesh(mesh), m, None);
-    b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1)?);
-    b.build()
+    b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1).map_err(|e| e.to_string())?);
+    b.build().map_err(|e| e.to_string())
 }

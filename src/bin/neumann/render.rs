@@ -3,7 +3,7 @@
 
 use crate::job::{builtin_job, file_job, parse_defines, parse_res};
 use crate::{choice, usage, Failure, CANCEL};
-use neumann::film::output::{write_image_alpha, Format, ImageInfo};
+use neumann::film::output::{write_image_alpha, Format, ImageInfo, WriteError};
 use neumann::integrator::radiosity::Method;
 use neumann::integrator::{
     AnyIntegrator, DirectStrategy, IntegratorKind, LightTracer, MisHeuristic, PathIntegrator, PathSettings,
@@ -201,7 +201,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
-    if Format::from_path(&output).map_err(usage)? == Format::Pfm && job.file.alpha {
+    if Format::from_path(&output).map_err(|e| usage(e.to_string()))? == Format::Pfm && job.file.alpha {
         return Err(usage(format!(
             "the scene asks for an alpha channel (pixel_format rgba), which PFM cannot hold: write {}.exr or .png",
             job.name
@@ -346,7 +346,7 @@ fn write_terms(
     w: u32,
     h: u32,
     info: &ImageInfo,
-) -> Result<(), String> {
+) -> Result<(), WriteError> {
     let mut panels = Vec::new();
     for k in 0..film.term_count() {
         let image = film.term_image(k);

@@ -1,0 +1,67 @@
+//! Why a scene could not be built.
+
+use crate::camera::CameraError;
+
+/// A scene that cannot be built from what was added to its builder.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum BuildError {
+    /// No camera was set.
+    #[error("the scene has no camera")]
+    NoCamera,
+    /// A shape names a BSDF that was not added.
+    #[error("shape {shape} refers to BSDF {bsdf} but only {count} exist")]
+    MissingBsdf {
+        /// The shape's index.
+        shape: usize,
+        /// The BSDF index it names.
+        bsdf: u32,
+        /// How many BSDFs exist.
+        count: usize,
+    },
+    /// A shape (or the camera) names a medium that was not added.
+    #[error("shape {0} or the camera refers to a medium that does not exist")]
+    MissingMedium(usize),
+    /// An emitting shape has no area to emit from.
+    #[error("emitting shape {0} has no area")]
+    EmitterWithoutArea(u32),
+    /// There are lights, but none emits anything.
+    #[error("every light has zero power")]
+    NoLightPower,
+    /// The camera's parameters are invalid.
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+}
+
+impl From<crate::light::NoLightPower> for BuildError {
+    fn from(_: crate::light::NoLightPower) -> BuildError {
+        BuildError::NoLightPower
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::{Camera, FovAxis};
+    use crate::geometry::{Geometry, Sphere};
+    use crate::material::{Bsdf, Diffuse};
+    use crate::math::{Rgb, Transform, Vec3};
+    use crate::scene::SceneBuilder;
+
+    #[test]
+    fn build_errors_are_typed() {
+        assert_eq!(SceneBuilder::new().build().unwrap_err(), BuildError::NoCamera);
+        let camera = Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap();
+        let mut b = SceneBuilder::new();
+        b.set_camera(camera.clone());
+        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::Z, radius: 1.0, flip: false }), 3, None);
+        assert_eq!(b.build().unwrap_err(), BuildError::MissingBsdf { shape: 0, bsdf: 3, count: 0 });
+        let mut b = SceneBuilder::new();
+        b.set_camera(camera);
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::Z, radius: 1.0, flip: false }), m, Some(Rgb::ZERO));
+        assert_eq!(b.build().unwrap_err(), BuildError::NoLightPower);
+        let e: BuildError = Camera::perspective(Transform::IDENTITY, 200.0, FovAxis::X, 4, 4).unwrap_err().into();
+        assert_eq!(e, BuildError::Camera(CameraError::FieldOfView(200.0)));
+        assert!(e.to_string().contains("(0, 180)"), "{e}");
+    }
+}
