@@ -8,8 +8,10 @@ pub mod image;
 pub mod mitsuba;
 pub mod obj;
 pub mod ply;
+mod resolver;
 
 pub use error::LoadError;
+pub use resolver::FileResolver;
 
 use crate::film::filter::Filter;
 use crate::geometry::TriangleMesh;

@@ -6,7 +6,6 @@
 //! `EMITTER_PLUGINS`, `SHAPE_PLUGINS`, `MEDIUM_PLUGINS`, `INTEGRATOR_PLUGINS`), so that every
 //! scene format shares them.
 
-use super::parse::resolve;
 use super::SceneFile;
 use crate::camera::Camera;
 use crate::choice::Choice;
@@ -18,6 +17,7 @@ use crate::integrator::{integrator_plugin, AnyIntegrator, INTEGRATOR_PLUGINS};
 use crate::light::LightSamplerKind;
 use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
 use crate::load::image::load_image;
+use crate::load::FileResolver;
 use crate::material::{bsdf_plugin, Bsdf, BsdfBuilder, Diffuse, BSDF_PLUGINS};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Transform};
@@ -55,10 +55,13 @@ pub struct Builder {
     medium_index: HashMap<*const Obj, u32>,
     /// The integrator's `light_sampler` (neumann's own parameter; default the light BVH).
     light_sampler: LightSamplerKind,
+    /// Where plugins' relative file names are looked for.
+    resolver: FileResolver,
 }
 
 impl Builder {
-    pub fn new() -> Builder {
+    /// A builder whose plugins find their files through `resolver`.
+    pub fn new(resolver: FileResolver) -> Builder {
         Builder {
             sb: SceneBuilder::new(),
             bsdf_index: HashMap::new(),
@@ -66,6 +69,7 @@ impl Builder {
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
             light_sampler: LightSamplerKind::default(),
+            resolver,
         }
     }
 
@@ -359,7 +363,7 @@ impl BsdfBuilder for Builder {
 
 impl ImageSource for Builder {
     fn image(&mut self, o: &Obj, name: &str, raw: bool) -> Result<Arc<Image>> {
-        let path = resolve(&o.loc, &o.string(name)?);
+        let path = self.resolver.resolve(&o.string(name)?);
         let key = (path.clone(), raw);
         if let Some(i) = self.images.get(&key) {
             return Ok(i.clone());
@@ -372,7 +376,7 @@ impl ImageSource for Builder {
 
 impl MeshSource for Builder {
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh> {
-        let path = resolve(&o.loc, &o.string(name)?);
+        let path = self.resolver.resolve(&o.string(name)?);
         crate::load::load_mesh(&path).map_err(|e| o.error_at(name, e.to_string()))
     }
 }

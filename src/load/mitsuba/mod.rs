@@ -30,7 +30,7 @@ pub fn load_scene_text(path: &Path, text: &str, overrides: &[(String, String)]) 
 }
 
 fn finish(parser: parse::Parser, root: std::rc::Rc<crate::props::Obj>) -> Result<SceneFile, SceneError> {
-    let mut file = build::Builder::new().build(&root)?;
+    let mut file = build::Builder::new(parser.resolver.clone()).build(&root)?;
     let mut warnings = parser.warnings;
     warnings.append(&mut file.warnings);
     file.warnings = warnings;

@@ -6,6 +6,7 @@
 //! `point`, `vector` and `transform` (with `translate`, `rotate`, `scale`, `matrix`, `lookat`
 //! applied in document order, each left-multiplying the ones before, as Mitsuba does).
 
+use crate::load::FileResolver;
 use crate::math::{Mat4, Rgb, Transform, Vec3, Vec4};
 use crate::props::{nearest, Loc, Obj, Prop, SceneError, SourceFile, SpectrumValue, Value, OBJECT_TAGS};
 use std::cell::Cell;
@@ -31,6 +32,9 @@ pub struct Parser {
     /// Warnings collected while parsing.
     pub warnings: Vec<String>,
     depth: usize,
+    /// Where relative file names are looked for (Mitsuba's file resolver: `<path>` folders, the
+    /// main scene's folder, the working directory).
+    pub resolver: FileResolver,
 }
 
 impl Parser {
@@ -42,6 +46,7 @@ impl Parser {
             ids: HashMap::new(),
             warnings: Vec::new(),
             depth: 0,
+            resolver: FileResolver::default(),
         }
     }
 
@@ -61,6 +66,9 @@ impl Parser {
 
     /// Parses scene text (`path` names it in messages and anchors relative paths).
     pub fn parse_text(&mut self, path: PathBuf, text: String) -> Result<Rc<Obj>> {
+        if self.depth == 0 {
+            self.resolver = FileResolver::for_scene(&path);
+        }
         let file = Arc::new(SourceFile { path, text });
         let doc = roxmltree::Document::parse(&file.text).map_err(|e| {
             let pos = e.pos();
@@ -113,7 +121,7 @@ impl Parser {
                         return Err(SceneError::at(&loc, "includes nested more than 16 deep (a cycle?)"));
                     }
                     let name = self.attr(file, child, "filename")?;
-                    let path = resolve(&loc, &name);
+                    let path = self.resolver.resolve(&name);
                     let included = std::fs::read_to_string(&path).map_err(|e| {
                         SceneError::at(&loc, format!("cannot read included file {}: {e}", path.display()))
                     })?;
@@ -125,6 +133,23 @@ impl Parser {
                     obj.props.extend(inner.props);
                     obj.children.extend(inner.children);
                 }
+                "path" if top => {
+                    // Mitsuba's <path value>: a relative folder is looked for beside the file
+                    // that names it, then through the search list; it must exist.
+                    let value = self.attr(file, child, "value")?;
+                    let mut folder = PathBuf::from(&value);
+                    if folder.is_relative() {
+                        folder = loc.dir().join(&value);
+                        if !folder.exists() {
+                            folder = self.resolver.resolve(&value);
+                        }
+                    }
+                    if !folder.is_dir() {
+                        return Err(SceneError::at(&loc, format!("<path>: folder \"{value}\" not found")));
+                    }
+                    self.resolver.prepend(folder);
+                }
+                "path" => return Err(SceneError::at(&loc, "a <path> must be a child of the <scene>")),
                 "alias" => {
                     let id = self.attr(file, child, "id")?;
                     let alias = self.attr(file, child, "as")?;
@@ -162,12 +187,13 @@ impl Parser {
                     // <spectrum type="…"> and <rgb> without a name are texture-like objects in
                     // Mitsuba; only named property forms are supported.
                     let name = self.attr(file, child, "name")?;
-                    let value = self.property(file, child, &loc)?;
+                    let value = self.property(file, child)?;
                     push_prop(obj, name, value, loc)?;
                 }
                 "default" => return Err(SceneError::at(&loc, "<default> is only allowed directly inside <scene>")),
                 other => {
-                    let known = OBJECT_TAGS.iter().chain(PROPERTY_TAGS).chain(&["ref", "include", "default", "alias"]);
+                    let known =
+                        OBJECT_TAGS.iter().chain(PROPERTY_TAGS).chain(&["ref", "include", "default", "alias", "path"]);
                     let hint =
                         nearest(other, known.copied()).map(|n| format!(" (did you mean <{n}>?)")).unwrap_or_default();
                     return Err(SceneError::at(&loc, format!("unknown element <{other}>{hint}")));
@@ -248,7 +274,7 @@ impl Parser {
         Ok(out)
     }
 
-    fn property(&self, file: &Arc<SourceFile>, node: roxmltree::Node, loc: &Loc) -> Result<Value> {
+    fn property(&self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Value> {
         let tag = node.tag_name().name();
         let value_loc = |n: &str| Loc {
             file: file.clone(),
@@ -286,7 +312,7 @@ impl Parser {
             "spectrum" => {
                 if node.attribute("filename").is_some() {
                     let name = self.attr(file, node, "filename")?;
-                    let path = resolve(loc, &name);
+                    let path = self.resolver.resolve(&name);
                     let text = std::fs::read_to_string(&path).map_err(|e| {
                         SceneError::at(
                             &value_loc("filename"),
@@ -441,16 +467,6 @@ fn push_prop(obj: &mut Obj, name: String, value: Value, loc: Loc) -> Result<()> 
     }
     obj.props.push(Prop { name, value, loc, used: Cell::new(false) });
     Ok(())
-}
-
-/// A path relative to the scene file that mentions it (absolute paths stay as they are).
-pub fn resolve(loc: &Loc, name: &str) -> PathBuf {
-    let p = Path::new(name);
-    if p.is_absolute() {
-        p.to_path_buf()
-    } else {
-        loc.dir().join(p)
-    }
 }
 
 /// Byte offset of 1-based (row, col).

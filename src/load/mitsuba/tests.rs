@@ -232,6 +232,66 @@ fn includes_resolve_against_the_including_file() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Mitsuba's file resolution: `<path>` folders come first, then the main scene's folder; files
+/// named inside an included file (nested includes, textures) resolve through that list, not
+/// against the included file's own folder; a missing `<path>` folder and a `<path>` outside the
+/// scene's root are located errors.
+#[test]
+fn paths_and_includes_resolve_as_mitsuba() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-path-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("parts")).unwrap();
+    std::fs::create_dir_all(dir.join("assets")).unwrap();
+    crate::film::output::write_image(
+        &dir.join("assets/tex.png"),
+        1,
+        1,
+        &[Rgb::new(1.0, 0.0, 0.0)],
+        &crate::film::output::ImageInfo::default(),
+    )
+    .unwrap();
+    // parts/a.xml includes parts/b.xml by its path from the scene's folder, and names a texture
+    // that only the <path> folder holds.
+    std::fs::write(
+        dir.join("parts/a.xml"),
+        r#"<scene version="3.0.0"><include filename="parts/b.xml"/>
+           <bsdf type="diffuse" id="tex"><texture type="bitmap" name="reflectance"><string name="filename" value="tex.png"/></texture></bsdf></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("parts/b.xml"),
+        r#"<scene version="3.0.0"><bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("main.xml"),
+        scene(
+            r#"<path value="assets"/><include filename="parts/a.xml"/>
+            <shape type="sphere"><ref id="tex"/></shape><shape type="sphere"><ref id="red"/></shape>"#,
+        ),
+    )
+    .unwrap();
+    let f = load_scene_file(&dir.join("main.xml"), &[]).unwrap();
+    let means: Vec<Rgb> = f
+        .scene
+        .bsdfs()
+        .iter()
+        .map(|b| match b {
+            Bsdf::Diffuse(d) => d.reflectance.mean(),
+            b => panic!("{b:?}"),
+        })
+        .collect();
+    assert_eq!(means.len(), 2);
+    assert!(means.iter().any(|m| (*m - Rgb::new(1.0, 0.0, 0.0)).abs().max_element() < 1e-3), "{means:?}");
+    assert!(means.contains(&Rgb::new(0.8, 0.1, 0.1)), "{means:?}");
+    std::fs::write(dir.join("nofolder.xml"), scene(r#"<path value="nowhere"/>"#)).unwrap();
+    let e = load_scene_file(&dir.join("nofolder.xml"), &[]).unwrap_err().to_string();
+    assert!(e.contains("nofolder.xml:7:") && e.contains("folder \"nowhere\" not found"), "{e}");
+    std::fs::write(dir.join("nested.xml"), scene(r#"<shape type="sphere"><path value="assets"/></shape>"#)).unwrap();
+    let e = load_scene_file(&dir.join("nested.xml"), &[]).unwrap_err().to_string();
+    assert!(e.contains("must be a child of the <scene>"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Each user mistake gives file:line:col, what was expected, and the source line.
 #[test]
 fn errors_name_the_place_and_the_expectation() {
