@@ -93,6 +93,8 @@ impl Builder {
                     sensor = Some(c.clone());
                 }
                 "shape" => self.shape(c, &Transform::IDENTITY)?,
+                // An area emitter with an id is attached to the shapes that <ref> it.
+                "emitter" if c.ty == "area" && c.id.is_some() => {}
                 "emitter" => self.emitter(c)?,
                 "bsdf" => {
                     self.bsdf_index(c)?;
@@ -111,6 +113,13 @@ impl Builder {
                     ))
                 }
             }
+        }
+        // An area emitter declared apart must light some shape: dropping it would change the image.
+        if let Some(e) = root.children.iter().find(|c| c.tag == "emitter" && c.ty == "area" && !c.built.get()) {
+            return Err(e.error(format!(
+                "no shape references this area emitter (add <ref id=\"{}\"/> to the shape that emits)",
+                e.id.as_deref().unwrap_or("")
+            )));
         }
         let sensor = sensor.ok_or_else(|| SceneError::at(&root.loc, "the scene has no <sensor> (camera)"))?;
         let SensorSettings { camera, spp, sampler, seed, filter, window, alpha } = self.sensor(&sensor)?;
@@ -338,7 +347,9 @@ impl Builder {
         o.built.set(true);
         o.check_children(&["texture"])?;
         if o.ty == "area" {
-            return Err(o.error("an area emitter must be nested in the <shape> that emits"));
+            return Err(o.error(
+                "an area emitter must be nested in the <shape> that emits, or given an id and referenced from it",
+            ));
         }
         let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
             let mut names: Vec<&str> = EMITTER_PLUGINS.iter().map(|p| p.0).collect();

@@ -292,6 +292,30 @@ fn paths_and_includes_resolve_as_mitsuba() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// An area emitter declared at the top level with an id lights every shape that references it;
+/// without an id it is an error.
+#[test]
+fn area_emitters_by_reference() {
+    let f = load(&scene(
+        r#"<emitter type="area" id="lamp"><rgb name="radiance" value="2, 3, 4"/></emitter>
+           <shape type="sphere"><ref id="lamp"/></shape>
+           <shape type="rectangle"><ref id="lamp"/></shape>
+           <shape type="sphere"><point name="center" x="3" y="0" z="0"/></shape>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert_eq!(f.scene.lights().len(), 2);
+    assert!(f
+        .scene
+        .lights()
+        .iter()
+        .all(|l| matches!(l, Light::Area { radiance, .. } if *radiance == Rgb::new(2.0, 3.0, 4.0))));
+    let e = load(&scene(r#"<emitter type="area"><rgb name="radiance" value="1"/></emitter>"#)).unwrap_err();
+    assert!(e.to_string().contains("nested in the <shape> that emits, or given an id"), "{e}");
+    let e = load(&scene(r#"<emitter type="area" id="lost"><rgb name="radiance" value="1"/></emitter>"#)).unwrap_err();
+    assert!(e.to_string().contains("no shape references this area emitter") && e.to_string().contains("lost"), "{e}");
+}
+
 /// Each user mistake gives file:line:col, what was expected, and the source line.
 #[test]
 fn errors_name_the_place_and_the_expectation() {
