@@ -35,6 +35,11 @@ pub struct Parser {
     /// Where relative file names are looked for (Mitsuba's file resolver: `<path>` folders, the
     /// main scene's folder, the working directory).
     pub resolver: FileResolver,
+    /// Objects parsed ahead of their place because a `<ref>` before them named their id, by
+    /// (file, offset): where the document reaches them, they are used as parsed.
+    early: HashMap<(usize, usize), Rc<Obj>>,
+    /// Objects being parsed ahead, by (file, offset): a reference back to one is a cycle.
+    in_progress: Vec<(usize, usize)>,
 }
 
 impl Parser {
@@ -47,6 +52,8 @@ impl Parser {
             warnings: Vec::new(),
             depth: 0,
             resolver: FileResolver::default(),
+            early: HashMap::new(),
+            in_progress: Vec::new(),
         }
     }
 
@@ -158,7 +165,10 @@ impl Parser {
                 }
                 "ref" => {
                     let id = self.attr(file, child, "id")?;
-                    let target = self.lookup(&loc, &id)?;
+                    let target = match self.ids.get(&id) {
+                        Some(t) => t.clone(),
+                        None => self.forward(file, child, &id, &loc)?,
+                    };
                     match child.attribute("name") {
                         Some(_) => {
                             let name = self.attr(file, child, "name")?;
@@ -168,13 +178,21 @@ impl Parser {
                     }
                 }
                 t if OBJECT_TAGS.contains(&t) => {
-                    let nested = Rc::new(self.object(file, child)?);
-                    if let Some(id) = &nested.id {
-                        if self.ids.contains_key(id) {
-                            return Err(SceneError::at(&loc, format!("duplicate id '{id}'")));
+                    let key = (Arc::as_ptr(file) as usize, child.range().start);
+                    let nested = match self.early.remove(&key) {
+                        // Parsed already, for a reference before it.
+                        Some(parsed) => parsed,
+                        None => {
+                            let nested = Rc::new(self.object(file, child)?);
+                            if let Some(id) = &nested.id {
+                                if self.ids.contains_key(id) {
+                                    return Err(SceneError::at(&loc, format!("duplicate id '{id}'")));
+                                }
+                                self.ids.insert(id.clone(), nested.clone());
+                            }
+                            nested
                         }
-                        self.ids.insert(id.clone(), nested.clone());
-                    }
+                    };
                     match child.attribute("name") {
                         Some(_) => {
                             let name = self.attr(file, child, "name")?;
@@ -204,12 +222,39 @@ impl Parser {
     }
 
     fn lookup(&self, loc: &Loc, id: &str) -> Result<Rc<Obj>> {
-        self.ids.get(id).cloned().ok_or_else(|| {
-            let hint = nearest(id, self.ids.keys().map(String::as_str))
-                .map(|n| format!(" (did you mean '{n}'?)"))
-                .unwrap_or_default();
-            SceneError::at(loc, format!("reference to unknown id '{id}'{hint}; objects must be declared before use"))
-        })
+        self.ids.get(id).cloned().ok_or_else(|| self.unknown_id(loc, id))
+    }
+
+    fn unknown_id(&self, loc: &Loc, id: &str) -> SceneError {
+        let hint = nearest(id, self.ids.keys().map(String::as_str))
+            .map(|n| format!(" (did you mean '{n}'?)"))
+            .unwrap_or_default();
+        SceneError::at(loc, format!("reference to unknown id '{id}'{hint}"))
+    }
+
+    /// A `<ref>` (at `loc`, in the document of `node`) to an id declared later in the same file,
+    /// as Mitsuba allows: the object is parsed now and used where the document reaches it.
+    fn forward(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node, id: &str, loc: &Loc) -> Result<Rc<Obj>> {
+        let target = node
+            .document()
+            .descendants()
+            .find(|n| n.is_element() && OBJECT_TAGS.contains(&n.tag_name().name()) && n.attribute("id") == Some(id));
+        let Some(target) = target else { return Err(self.unknown_id(loc, id)) };
+        let key = (Arc::as_ptr(file) as usize, target.range().start);
+        if self.in_progress.contains(&key) {
+            return Err(SceneError::at(loc, format!("circular reference to '{id}'")));
+        }
+        // Each forward reference parses its target on the stack: bound the chain.
+        if self.in_progress.len() >= 256 {
+            return Err(SceneError::at(loc, "forward references chained more than 256 deep"));
+        }
+        self.in_progress.push(key);
+        let parsed = self.object(file, target);
+        self.in_progress.pop();
+        let parsed = Rc::new(parsed?);
+        self.ids.insert(id.to_string(), parsed.clone());
+        self.early.insert(key, parsed.clone());
+        Ok(parsed)
     }
 
     fn object(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Obj> {

@@ -316,6 +316,30 @@ fn area_emitters_by_reference() {
     assert!(e.to_string().contains("no shape references this area emitter") && e.to_string().contains("lost"), "{e}");
 }
 
+/// References to objects declared later in the file work, as in Mitsuba (nested objects too);
+/// the object is built once; a reference cycle and an id declared nowhere are located errors.
+#[test]
+fn forward_references() {
+    let f = load(&scene(
+        r#"<shape type="sphere"><ref id="later"/></shape>
+           <shape type="rectangle"><bsdf type="blendbsdf"><ref name="weight" id="w"/><ref id="later"/><ref id="later"/></bsdf></shape>
+           <bsdf type="diffuse" id="later"><rgb name="reflectance" value="0.25, 0.5, 0.75"/></bsdf>
+           <texture type="checkerboard" id="w"/>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert!(matches!(&f.scene.bsdfs()[0], Bsdf::Diffuse(d) if d.reflectance.mean() == Rgb::new(0.25, 0.5, 0.75)));
+    assert!(matches!(&f.scene.bsdfs()[1], Bsdf::Blend { .. }));
+    let cycle = load(&scene(
+        r#"<bsdf type="twosided" id="a"><ref id="b"/></bsdf><bsdf type="twosided" id="b"><ref id="a"/></bsdf>"#,
+    ))
+    .unwrap_err()
+    .to_string();
+    assert!(cycle.contains("circular reference") && cycle.contains("test.xml:7:"), "{cycle}");
+    let missing = load(&scene(r#"<shape type="sphere"><ref id="nowhere"/></shape>"#)).unwrap_err().to_string();
+    assert!(missing.contains("unknown id 'nowhere'"), "{missing}");
+}
+
 /// Each user mistake gives file:line:col, what was expected, and the source line.
 #[test]
 fn errors_name_the_place_and_the_expectation() {
