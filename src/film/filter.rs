@@ -9,6 +9,7 @@
 //! - `gaussian` (standard deviation σ, default ½; radius 4σ as in Mitsuba):
 //!   `f₁(x) = max(0, exp(−x²/2σ²) − exp(−8))` (shifted to reach zero at the radius).
 
+use crate::math::Vec2;
 use crate::props::{Obj, Result as PropResult};
 
 /// Largest border (pixels beyond a tile) a filter footprint may need: radii up to
@@ -72,6 +73,46 @@ impl Filter {
                     ((-x * x / (2.0 * stddev * stddev)).exp() - (-8.0f32).exp()).max(0.0)
                 } else {
                     0.0
+                }
+            }
+        }
+    }
+}
+
+impl Filter {
+    /// Visits the footprint of a sample at `origin + offset` (pixel units; pixel `k` spans
+    /// `[k, k + 1)`): every pixel whose centre lies within the radius, clipped to the inclusive
+    /// range `lo ..= hi`, row by row, as `visit(x, y, w)` with the separable weight
+    /// `w = f₁(x + ½ − pₓ) f₁(y + ½ − p_y) > 0`. Weights are computed relative to `origin`, so a
+    /// small `offset` keeps them exact at any image size.
+    #[inline]
+    pub fn footprint(
+        &self,
+        origin: [i64; 2],
+        offset: Vec2,
+        lo: [i64; 2],
+        hi: [i64; 2],
+        mut visit: impl FnMut(i64, i64, f32),
+    ) {
+        let r = self.radius();
+        let d0x = ((offset.x - r - 0.5).ceil() as i64).max(lo[0] - origin[0]);
+        let d1x = ((offset.x + r - 0.5).floor() as i64).min(hi[0] - origin[0]);
+        let d0y = ((offset.y - r - 0.5).ceil() as i64).max(lo[1] - origin[1]);
+        let d1y = ((offset.y + r - 0.5).floor() as i64).min(hi[1] - origin[1]);
+        const MAX: usize = 2 * MAX_BORDER as usize + 2;
+        let mut wx = [0.0f32; MAX];
+        for d in d0x..=d1x {
+            wx[(d - d0x) as usize] = self.eval_1d(d as f32 + 0.5 - offset.x);
+        }
+        for dy in d0y..=d1y {
+            let wy = self.eval_1d(dy as f32 + 0.5 - offset.y);
+            if wy == 0.0 {
+                continue;
+            }
+            for dx in d0x..=d1x {
+                let w = wy * wx[(dx - d0x) as usize];
+                if w > 0.0 {
+                    visit(origin[0] + dx, origin[1] + dy, w);
                 }
             }
         }

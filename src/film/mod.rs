@@ -179,31 +179,11 @@ impl TileBuffer {
             self.px.put(own, 1.0, sample.l, sample.alpha, terms);
             return;
         }
-        // Pixels lx + d whose centres (d + ½ from the sample's pixel corner) lie within the
-        // radius, clipped to the buffer.
-        let r = filter.radius();
-        let d0x = ((offset.x - r - 0.5).ceil() as i64).max(-lx);
-        let d1x = ((offset.x + r - 0.5).floor() as i64).min(self.width as i64 - 1 - lx);
-        let d0y = ((offset.y - r - 0.5).ceil() as i64).max(-ly);
-        let d1y = ((offset.y + r - 0.5).floor() as i64).min(self.height as i64 - 1 - ly);
-        const MAX: usize = 2 * filter::MAX_BORDER as usize + 2;
-        let mut wx = [0.0f32; MAX];
-        for d in d0x..=d1x {
-            wx[(d - d0x) as usize] = filter.eval_1d(d as f32 + 0.5 - offset.x);
-        }
-        for dy in d0y..=d1y {
-            let wy = filter.eval_1d(dy as f32 + 0.5 - offset.y);
-            if wy == 0.0 {
-                continue;
-            }
-            let row = (ly + dy) as usize * self.width as usize;
-            for dx in d0x..=d1x {
-                let w = wy * wx[(dx - d0x) as usize];
-                if w > 0.0 {
-                    self.px.put(row + (lx + dx) as usize, w as f64, sample.l, sample.alpha, terms);
-                }
-            }
-        }
+        let (width, height) = (self.width as i64, self.height as i64);
+        let px = &mut self.px;
+        filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
+            px.put((y * width + x) as usize, w as f64, sample.l, sample.alpha, terms);
+        });
     }
 
     /// Adds a radiance sample with unit weight to pixel `(x, y)` alone (image coordinates,

@@ -28,7 +28,6 @@ const CHUNK: u64 = 4096;
 /// integral (so the splat's total over pixels is its value, as filter importance sampling's).
 struct Splatter {
     filter: Filter,
-    radius: f32,
     /// `1 / (∫ f₁)²`.
     norm: f32,
     window: [u32; 4],
@@ -41,7 +40,7 @@ impl Splatter {
         let integral: f64 =
             (0..n).map(|i| filter.eval_1d(-radius + (i as f32 + 0.5) * 2.0 * radius / n as f32) as f64).sum::<f64>()
                 * (2.0 * radius as f64 / n as f64);
-        Splatter { filter: filter.clone(), radius, norm: (1.0 / (integral * integral)) as f32, window }
+        Splatter { filter: filter.clone(), norm: (1.0 / (integral * integral)) as f32, window }
     }
 
     fn splat(&self, film: Vec2, value: Rgb, out: &mut Vec<(u32, Rgb)>) {
@@ -53,23 +52,11 @@ impl Splatter {
             }
             return;
         }
-        // Pixel centres (x + ½) within the radius.
-        let x0 = (film.x - self.radius - 0.5).ceil().max(wx as f32) as i64;
-        let x1 = (film.x + self.radius - 0.5).floor().min((wx + w) as f32 - 1.0) as i64;
-        let y0 = (film.y - self.radius - 0.5).ceil().max(wy as f32) as i64;
-        let y1 = (film.y + self.radius - 0.5).floor().min((wy + h) as f32 - 1.0) as i64;
-        for y in y0..=y1 {
-            let fy = self.filter.eval_1d(y as f32 + 0.5 - film.y);
-            if fy == 0.0 {
-                continue;
-            }
-            for x in x0..=x1 {
-                let f = fy * self.filter.eval_1d(x as f32 + 0.5 - film.x) * self.norm;
-                if f > 0.0 {
-                    out.push((((y - wy as i64) as u32) * w + (x - wx as i64) as u32, value * f));
-                }
-            }
-        }
+        let lo = [wx as i64, wy as i64];
+        let hi = [(wx + w) as i64 - 1, (wy + h) as i64 - 1];
+        self.filter.footprint([0, 0], film, lo, hi, |x, y, f| {
+            out.push((((y - wy as i64) as u32) * w + (x - wx as i64) as u32, value * (f * self.norm)));
+        });
     }
 }
 
