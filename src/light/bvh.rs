@@ -22,6 +22,7 @@
 
 use super::Light;
 use crate::geometry::Geometry;
+use crate::math::cone::cos_subtended;
 use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, PI};
 
 /// Spatial and directional bounds of a set of emitters.
@@ -165,8 +166,7 @@ impl NodeBounds {
         let cos_w = self.w.dot(wi);
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
         // The cone of directions from p to the bounding sphere (the whole sphere from inside).
-        let r2 = self.radius * self.radius;
-        let cos_b = if dist2 < r2 { -1.0 } else { safe_sqrt(1.0 - r2 / dist2) };
+        let cos_b = cos_subtended(dist2, self.radius * self.radius);
         let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
         let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
@@ -182,6 +182,15 @@ impl NodeBounds {
         }
         importance.max(0.0)
     }
+}
+
+/// Buckets per axis of the light BVH's split search.
+const BUCKETS: usize = 12;
+
+/// The split bucket of `b`'s centroid along `axis`, whose centroids span `[lo, hi]`.
+#[inline]
+fn bucket(b: &LightBounds, axis: usize, lo: f32, hi: f32) -> usize {
+    (((b.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize).min(BUCKETS - 1)
 }
 
 /// A node: its bounds, and either its second child (the first follows it) or its light.
@@ -274,7 +283,6 @@ impl LightBvh {
             bounds = bounds.union(&b.bounds);
             centroids = centroids.union_point(b.bounds.centroid());
         }
-        const BUCKETS: usize = 12;
         let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
         if depth < MAX_DEPTH {
             for axis in 0..3 {
@@ -282,9 +290,7 @@ impl LightBvh {
                 if hi <= lo {
                     continue;
                 }
-                let bucket_of = |b: &LightBounds| {
-                    (((b.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize).min(BUCKETS - 1)
-                };
+                let bucket_of = |b: &LightBounds| bucket(b, axis, lo, hi);
                 let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
                 for (_, b) in &items[start..end] {
                     let k = bucket_of(b);
@@ -316,8 +322,7 @@ impl LightBvh {
             let slice = &mut items[start..end];
             let mut k = 0;
             for i in 0..slice.len() {
-                let b = (((slice[i].1.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize)
-                    .min(BUCKETS - 1);
+                let b = bucket(&slice[i].1, axis, lo, hi);
                 if b <= split {
                     slice.swap(i, k);
                     k += 1;

@@ -33,8 +33,10 @@ pub struct EnvMap {
 }
 
 impl EnvMap {
-    /// An environment from `image`, radiance multiplied by `scale`, rotated by `to_world`.
-    pub fn new(image: Image, scale: f32, to_world: Transform) -> Result<EnvMap, String> {
+    /// An environment from `image` (owned or shared), radiance multiplied by `scale`, rotated by
+    /// `to_world`.
+    pub fn new(image: impl Into<Arc<Image>>, scale: f32, to_world: Transform) -> Result<EnvMap, String> {
+        let image: Arc<Image> = image.into();
         if image.width == 0 || image.height == 0 {
             return Err("environment map image is empty".into());
         }
@@ -67,7 +69,7 @@ impl EnvMap {
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
         Ok(EnvMap {
-            image: Arc::new(image),
+            image,
             distribution: Arc::new(distribution),
             integral,
             scale,

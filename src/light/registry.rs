@@ -87,6 +87,6 @@ fn constant(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
 fn envmap(o: &Obj, images: &mut dyn ImageSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
-    let map = EnvMap::new((*image).clone(), scale, o.transform("to_world")?).map_err(|e| o.error(e))?;
+    let map = EnvMap::new(image, scale, o.transform("to_world")?).map_err(|e| o.error(e))?;
     Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
 }

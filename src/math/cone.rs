@@ -76,17 +76,23 @@ impl DirectionCone {
     pub fn subtended_by(b: &Bounds3, p: Vec3) -> DirectionCone {
         let (center, radius) = b.bounding_sphere();
         let d2 = (p - center).length_squared();
-        if d2 < radius * radius {
-            return DirectionCone::ENTIRE_SPHERE;
-        }
-        let sin2 = radius * radius / d2;
-        let cos = (1.0 - sin2).max(0.0).sqrt();
-        DirectionCone { w: (center - p).normalize_or(Vec3::Z), cos_theta: cos }
+        DirectionCone { w: (center - p).normalize_or(Vec3::Z), cos_theta: cos_subtended(d2, radius * radius) }
     }
 
     /// Whether the unit direction `v` lies in the cone.
     pub fn contains(&self, v: Vec3) -> bool {
         !self.is_empty() && v.dot(self.w) >= self.cos_theta
+    }
+}
+
+/// Cosine of the half-angle of the cone a sphere of squared radius `r2` subtends from a point at
+/// squared distance `d2` from its centre; -1 (every direction) from inside.
+#[inline]
+pub fn cos_subtended(d2: f32, r2: f32) -> f32 {
+    if d2 < r2 {
+        -1.0
+    } else {
+        (1.0 - r2 / d2).max(0.0).sqrt()
     }
 }
 
