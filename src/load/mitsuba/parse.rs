@@ -40,6 +40,9 @@ pub struct Parser {
     early: HashMap<(usize, usize), Rc<Obj>>,
     /// Objects being parsed ahead, by (file, offset): a reference back to one is a cycle.
     in_progress: Vec<(usize, usize)>,
+    /// For each document being parsed (the innermost include last), its objects' ids and nodes,
+    /// indexed once at its first forward reference, however many follow.
+    id_index: Vec<Option<HashMap<String, roxmltree::NodeId>>>,
 }
 
 impl Parser {
@@ -54,6 +57,7 @@ impl Parser {
             resolver: FileResolver::default(),
             early: HashMap::new(),
             in_progress: Vec::new(),
+            id_index: Vec::new(),
         }
     }
 
@@ -106,7 +110,10 @@ impl Parser {
             children: Vec::new(),
             built: Cell::new(false),
         };
-        self.fill(&file, root, &mut scene, true)?;
+        self.id_index.push(None);
+        let filled = self.fill(&file, root, &mut scene, true);
+        self.id_index.pop();
+        filled?;
         Ok(Rc::new(scene))
     }
 
@@ -235,11 +242,17 @@ impl Parser {
     /// A `<ref>` (at `loc`, in the document of `node`) to an id declared later in the same file,
     /// as Mitsuba allows: the object is parsed now and used where the document reaches it.
     fn forward(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node, id: &str, loc: &Loc) -> Result<Rc<Obj>> {
-        let target = node
-            .document()
-            .descendants()
-            .find(|n| n.is_element() && OBJECT_TAGS.contains(&n.tag_name().name()) && n.attribute("id") == Some(id));
-        let Some(target) = target else { return Err(self.unknown_id(loc, id)) };
+        let doc = node.document();
+        let index = self.id_index.last_mut().expect("inside a document").get_or_insert_with(|| {
+            let mut index = HashMap::new();
+            for n in doc.descendants().filter(|n| n.is_element() && OBJECT_TAGS.contains(&n.tag_name().name())) {
+                if let Some(i) = n.attribute("id") {
+                    index.entry(i.to_string()).or_insert(n.id());
+                }
+            }
+            index
+        });
+        let Some(target) = index.get(id).and_then(|&n| doc.get_node(n)) else { return Err(self.unknown_id(loc, id)) };
         let key = (Arc::as_ptr(file) as usize, target.range().start);
         if self.in_progress.contains(&key) {
             return Err(SceneError::at(loc, format!("circular reference to '{id}'")));
