@@ -87,8 +87,10 @@ impl<'a> Scheduler<'a> {
                             Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
                             None => bar.inc(n),
                         }
-                        let secs = start.elapsed().as_secs_f64().max(1e-9);
-                        bar.set_message(format!("{:.2} M {}/s", total as f64 / secs / 1e6, self.unit));
+                        if self.settings.progress {
+                            let secs = start.elapsed().as_secs_f64().max(1e-9);
+                            bar.set_message(format!("{:.2} M {}/s", total as f64 / secs / 1e6, self.unit));
+                        }
                         Some(w)
                     })
                     .collect()
