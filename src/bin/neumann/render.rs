@@ -5,10 +5,7 @@ use crate::job::{builtin_job, file_job, parse_defines, parse_res};
 use crate::{choice, usage, Failure, CANCEL};
 use neumann::film::output::{write_image_alpha, Format, ImageInfo, WriteError};
 use neumann::integrator::radiosity::Method;
-use neumann::integrator::{
-    AnyIntegrator, DirectStrategy, IntegratorKind, LightTracer, MisHeuristic, PathIntegrator, PathSettings,
-    VolPathIntegrator,
-};
+use neumann::integrator::{AnyIntegrator, DirectStrategy, IntegratorKind, MisHeuristic, PathSettings};
 use neumann::light::LightSamplerKind;
 use neumann::render::{render_integrator, RenderSettings};
 use neumann::sampling::sampler::SamplerKind;
@@ -132,14 +129,12 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         if d < -1 {
             return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
         }
-        match &mut job.file.integrator {
-            AnyIntegrator::Path(PathIntegrator { settings, .. })
-            | AnyIntegrator::Ptracer(LightTracer { settings })
-            | AnyIntegrator::VolPath(VolPathIntegrator { settings }) => settings.max_depth = d,
-            other => {
+        let name = job.file.integrator.name();
+        match job.file.integrator.path_settings_mut() {
+            Some(settings) => settings.max_depth = d,
+            None => {
                 return Err(usage(format!(
-                    "--max-depth applies to the path, volpath and ptracer integrators, not '{}'",
-                    other.name()
+                    "--max-depth applies to the path, volpath and ptracer integrators, not '{name}'"
                 )))
             }
         }
