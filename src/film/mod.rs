@@ -53,12 +53,28 @@ struct Pixels {
     /// `term_count` sums `Σ w T` per pixel.
     terms: Vec<[f64; 3]>,
     term_count: usize,
+    /// `aov_count` sums `Σ w v` per pixel (arbitrary output variables: named channels).
+    aovs: Vec<f64>,
+    aov_count: usize,
     dropped: u64,
 }
 
 impl Pixels {
     fn new(n: usize) -> Pixels {
-        Pixels { acc: vec![Acc::default(); n], count: vec![0; n], terms: Vec::new(), term_count: 0, dropped: 0 }
+        Pixels {
+            acc: vec![Acc::default(); n],
+            count: vec![0; n],
+            terms: Vec::new(),
+            term_count: 0,
+            aovs: Vec::new(),
+            aov_count: 0,
+            dropped: 0,
+        }
+    }
+
+    fn keep_aovs(&mut self, count: usize) {
+        self.aovs = vec![0.0; self.count.len() * count];
+        self.aov_count = count;
     }
 
     fn keep_terms(&mut self, count: usize) {
@@ -66,9 +82,9 @@ impl Pixels {
         self.term_count = count;
     }
 
-    /// Adds `w L` (and `w a`, `w T`) to pixel `i`.
+    /// Adds `w L` (and `w a`, `w T`, `w v`) to pixel `i`.
     #[inline]
-    fn put(&mut self, i: usize, w: f64, l: Rgb, alpha: Option<f32>, terms: &[Rgb]) {
+    fn put(&mut self, i: usize, w: f64, l: Rgb, alpha: Option<f32>, terms: &[Rgb], aovs: &[f32]) {
         let a = &mut self.acc[i];
         for c in 0..3 {
             let wv = w * l[c] as f64;
@@ -85,6 +101,15 @@ impl Pixels {
             for (k, t) in terms.iter().take(self.term_count).enumerate() {
                 for c in 0..3 {
                     self.terms[base + k][c] += w * t[c] as f64;
+                }
+            }
+        }
+        if self.aov_count > 0 {
+            let out = &mut self.aovs[i * self.aov_count..(i + 1) * self.aov_count];
+            for (o, &v) in out.iter_mut().zip(aovs) {
+                // A non-finite value is dropped alone (counted as 0), not the whole sample.
+                if v.is_finite() {
+                    *o += w * v as f64;
                 }
             }
         }
@@ -107,6 +132,9 @@ impl Pixels {
                 self.terms[a][c] += other.terms[b][c];
             }
         }
+        for k in 0..self.aov_count.min(other.aov_count) {
+            self.aovs[i * self.aov_count + k] += other.aovs[j * other.aov_count + k];
+        }
     }
 }
 
@@ -125,8 +153,8 @@ pub struct TileBuffer {
     px: Pixels,
 }
 
-/// Samples accepted by [`TileBuffer::put`]: the radiance, its coverage and its terms.
-#[derive(Clone, Copy, Debug)]
+/// Samples accepted by [`TileBuffer::put`]: the radiance, its coverage, its terms and its AOVs.
+#[derive(Clone, Copy, Debug, Default)]
 pub struct FilmSample<'a> {
     /// Radiance (W m⁻² sr⁻¹ per channel).
     pub l: Rgb,
@@ -134,6 +162,9 @@ pub struct FilmSample<'a> {
     pub alpha: Option<f32>,
     /// Neumann-series terms (empty if not recorded).
     pub terms: &'a [Rgb],
+    /// Values of the arbitrary output variables, one per channel of
+    /// [`Film::with_aovs`] (empty if none are kept).
+    pub aovs: &'a [f32],
 }
 
 impl TileBuffer {
@@ -159,6 +190,12 @@ impl TileBuffer {
         self
     }
 
+    /// The same buffer keeping `count` AOV channels per pixel.
+    pub fn with_aovs(mut self, count: usize) -> TileBuffer {
+        self.px.keep_aovs(count);
+        self
+    }
+
     /// Adds a sample taken in pixel `pixel` (image coordinates, a pixel of this buffer) at
     /// `offset ∈ [0, 1)²` from the pixel's corner, through `filter`: Mitsuba's weighted splat
     /// over the pixels whose centres lie within the filter's radius, clipped to the buffer.
@@ -176,13 +213,13 @@ impl TileBuffer {
         }
         let terms = if sample.terms.iter().all(|t| t.is_finite()) { sample.terms } else { &[] };
         if let Filter::Box = filter {
-            self.px.put(own, 1.0, sample.l, sample.alpha, terms);
+            self.px.put(own, 1.0, sample.l, sample.alpha, terms, sample.aovs);
             return;
         }
         let (width, height) = (self.width as i64, self.height as i64);
         let px = &mut self.px;
         filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
-            px.put((y * width + x) as usize, w as f64, sample.l, sample.alpha, terms);
+            px.put((y * width + x) as usize, w as f64, sample.l, sample.alpha, terms, sample.aovs);
         });
     }
 
@@ -190,7 +227,7 @@ impl TileBuffer {
     /// inside the buffer). Samples with a NaN or infinite component are dropped and counted.
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Rgb) {
-        self.put([x, y], Vec2::splat(0.5), &Filter::Box, FilmSample { l, alpha: None, terms: &[] });
+        self.put([x, y], Vec2::splat(0.5), &Filter::Box, FilmSample { l, ..Default::default() });
     }
 
     /// Non-finite samples dropped so far.
@@ -205,12 +242,39 @@ pub struct Film {
     width: u32,
     height: u32,
     px: Pixels,
+    aov_names: Vec<String>,
 }
 
 impl Film {
     /// An empty `width × height` film.
     pub fn new(width: u32, height: u32) -> Film {
-        Film { width, height, px: Pixels::new((width as usize) * (height as usize)) }
+        Film { width, height, px: Pixels::new((width as usize) * (height as usize)), aov_names: Vec::new() }
+    }
+
+    /// The same film keeping one AOV channel per name (the integrator's
+    /// [`aov_names`](crate::integrator::Integrator::aov_names), in the order its samples give
+    /// the values).
+    pub fn with_aovs(mut self, names: Vec<String>) -> Film {
+        self.px.keep_aovs(names.len());
+        self.aov_names = names;
+        self
+    }
+
+    /// The AOV channels: each name with its image (filter-weighted mean per pixel, like the
+    /// radiance; 0 where no sample reached), row-major from the top-left.
+    pub fn aov_channels(&self) -> Vec<(String, Vec<f32>)> {
+        let n = self.px.aov_count;
+        self.aov_names
+            .iter()
+            .enumerate()
+            .map(|(k, name)| {
+                let values = (self.px.acc.iter().enumerate())
+                    .map(|(i, a)| if a.w > 0.0 { (self.px.aovs[i * n + k] / a.w) as f32 } else { 0.0 })
+                    .map(|v| if v.is_finite() { v } else { 0.0 })
+                    .collect();
+                (name.clone(), values)
+            })
+            .collect()
     }
 
     /// The same film keeping `count` Neumann-series terms per pixel.
@@ -472,7 +536,7 @@ mod tests {
         ];
         for &(px, off, v) in &samples {
             let tile = if px[0] < 4 { &mut left } else { &mut right };
-            tile.put(px, off, &filter, FilmSample { l: Rgb::splat(v), alpha: None, terms: &[] });
+            tile.put(px, off, &filter, FilmSample { l: Rgb::splat(v), ..Default::default() });
         }
         let mut film = Film::new(size[0], size[1]);
         film.merge(&left);
@@ -521,7 +585,7 @@ mod tests {
                 px,
                 crate::testkit::u2(&mut rng),
                 &filter,
-                FilmSample { l: Rgb::splat(2.0), alpha: None, terms: &[] },
+                FilmSample { l: Rgb::splat(2.0), ..Default::default() },
             );
         }
         let mut f = Film::new(3, 3);

@@ -1,5 +1,6 @@
-//! Image files: OpenEXR (float32 RGB or RGBA, linear), PNG (8-bit sRGB-encoded, with exposure;
-//! RGB or RGBA) and PFM (float32 RGB, linear), chosen by the file extension.
+//! Image files: OpenEXR (float32 RGB or RGBA, linear, plus any named AOV channels such as
+//! `albedo.R` or `m2__arg_0.X`), PNG (8-bit sRGB-encoded, with exposure; RGB or RGBA) and PFM
+//! (float32 RGB, linear), chosen by the file extension.
 
 use crate::math::color::srgb_encode;
 use crate::math::Rgb;
@@ -82,12 +83,41 @@ pub fn write_image_alpha(
     alpha: Option<&[f32]>,
     info: &ImageInfo,
 ) -> Result<(), WriteError> {
+    write_image_layers(path, width, height, pixels, alpha, &[], info)
+}
+
+/// One named image channel beyond R, G, B and A (an AOV): its name (`albedo.R`, `dd.T`, …) and
+/// its values, row-major from the top-left.
+pub type Channel = (String, Vec<f32>);
+
+/// [`write_image_alpha`] with further named channels, written beside R, G, B (and A) in one
+/// EXR, as Mitsuba 3 writes its AOVs; PNG and PFM hold no extra channels and refuse them.
+pub fn write_image_layers(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Rgb],
+    alpha: Option<&[f32]>,
+    channels: &[Channel],
+    info: &ImageInfo,
+) -> Result<(), WriteError> {
     assert_eq!(pixels.len(), (width * height) as usize);
     if let Some(a) = alpha {
         assert_eq!(a.len(), pixels.len());
     }
+    for (_, v) in channels {
+        assert_eq!(v.len(), pixels.len());
+    }
     let fail = |message: String| WriteError::Write { path: path.to_path_buf(), message };
-    match Format::from_path(path)? {
+    let format = Format::from_path(path)?;
+    if !channels.is_empty() && format != Format::Exr {
+        return Err(WriteError::Unsupported {
+            path: path.to_path_buf(),
+            message: format!("only OpenEXR holds the {} AOV channels: write .exr", channels.len()),
+        });
+    }
+    match format {
+        Format::Exr if !channels.is_empty() => write_exr_channels(path, width, height, pixels, alpha, channels, info).map_err(fail),
         Format::Exr => write_exr(path, width, height, pixels, alpha, info).map_err(fail),
         Format::Png => write_png(path, width, height, pixels, alpha, info).map_err(fail),
         Format::Pfm if alpha.is_some() => Err(WriteError::Unsupported {
@@ -142,6 +172,44 @@ fn write_exr(
             image.write().to_file(path).map_err(|e| e.to_string())
         }
     }
+}
+
+/// An EXR of arbitrary channels: R, G, B, (A), then `channels` (the file lists them sorted by
+/// name, as OpenEXR requires).
+fn write_exr_channels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixels: &[Rgb],
+    alpha: Option<&[f32]>,
+    channels: &[Channel],
+    info: &ImageInfo,
+) -> Result<(), String> {
+    use exr::prelude::*;
+    let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
+    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+        .iter()
+        .enumerate()
+        .map(|(c, name)| AnyChannel::new(*name, FlatSamples::F32(pixels.iter().map(|p| finite(p[c])).collect())))
+        .collect();
+    if let Some(a) = alpha {
+        list.push(AnyChannel::new("A", FlatSamples::F32(a.iter().map(|&v| finite(v).clamp(0.0, 1.0)).collect())));
+    }
+    for (name, values) in channels {
+        let text = Text::new_or_none(name.as_str()).ok_or_else(|| format!("channel name '{name}' is not ASCII"))?;
+        list.push(AnyChannel::new(text, FlatSamples::F32(values.iter().map(|&v| finite(v)).collect())));
+    }
+    let mut attributes = LayerAttributes::named("");
+    attributes.software_name = Some(Text::from("neumann"));
+    let layer = Layer::new(
+        (width as usize, height as usize),
+        attributes,
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list.into_iter().collect()),
+    );
+    let mut image = Image::from_layer(layer);
+    image.attributes.other.insert(Text::from("spp"), exr::meta::attribute::AttributeValue::I32(info.spp as i32));
+    image.write().to_file(path).map_err(|e| e.to_string())
 }
 
 fn write_png(
@@ -266,6 +334,32 @@ mod tests {
         let pixels = &image.layer_data.channel_data.pixels;
         assert_eq!(pixels[1], [0.2, 0.4, 0.6, 0.25]);
         assert!(write_image_alpha(&dir.join("a.pfm"), 2, 1, &px, Some(&alpha), &info).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// AOV channels travel in one EXR beside R, G, B (A), by name; PNG refuses them.
+    #[test]
+    fn aov_channels_are_written_by_name() {
+        let dir = std::env::temp_dir().join(format!("neumann-aov-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px = vec![Rgb::new(0.2, 0.4, 0.6), Rgb::new(f32::NAN, 1.0, 2.0)];
+        let channels: Vec<Channel> =
+            vec![("dd.T".into(), vec![3.0, 4.0]), ("m2__arg_0.X".into(), vec![0.5, f32::INFINITY])];
+        let info = ImageInfo::default();
+        write_image_layers(&dir.join("a.exr"), 2, 1, &px, Some(&[1.0, 0.5]), &channels, &info).unwrap();
+        let image = exr::prelude::read_all_flat_layers_from_file(dir.join("a.exr")).unwrap();
+        let layer = &image.layer_data[0];
+        let get = |name: &str| -> Vec<f32> {
+            let c = layer.channel_data.list.iter().find(|c| c.name == exr::prelude::Text::from(name)).unwrap();
+            c.sample_data.values_as_f32().collect()
+        };
+        assert_eq!(layer.channel_data.list.len(), 6);
+        assert_eq!(get("R"), [0.2, 0.0], "non-finite values are written as 0");
+        assert_eq!(get("A"), [1.0, 0.5]);
+        assert_eq!(get("dd.T"), [3.0, 4.0]);
+        assert_eq!(get("m2__arg_0.X"), [0.5, 0.0]);
+        let e = write_image_layers(&dir.join("a.png"), 2, 1, &px, None, &channels, &info).unwrap_err();
+        assert!(e.to_string().contains("only OpenEXR"), "{e}");
         std::fs::remove_dir_all(&dir).ok();
     }
 

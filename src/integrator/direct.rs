@@ -42,7 +42,7 @@ impl Integrator for DirectIntegrator {
 
     fn sample(&self, scene: &Scene, camera_ray: &Ray, sampler: &mut Sampler, _terms: &mut [Rgb]) -> RadianceSample {
         let (l, covered) = self.radiance(scene, camera_ray, sampler);
-        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
+        RadianceSample { l, alpha: trace::coverage(scene, covered, self.hide_emitters) }
     }
 }
 

@@ -4,14 +4,18 @@
 //! camera ray; the render driver averages them per pixel. The path tracer samples the Neumann
 //! series `L = Σₖ Tᵏ Lₑ` term by term along one path per sample.
 
+pub mod aov;
 pub mod direct;
+pub mod moment;
 pub mod path;
 pub mod ptracer;
 pub mod radiosity;
 pub mod trace;
 pub mod volpath;
 
+pub use aov::AovIntegrator;
 pub use direct::DirectIntegrator;
+pub use moment::MomentIntegrator;
 pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
 pub use ptracer::LightTracer;
 pub use trace::{Mis, PathSettings};
@@ -53,6 +57,26 @@ pub trait Integrator: Sync {
     fn has_terms(&self) -> bool {
         false
     }
+
+    /// Names of the arbitrary output variables (AOVs) written by
+    /// [`Integrator::sample_aovs`], one per image channel, as Mitsuba names them (`nn.X`,
+    /// `m2__arg_0.Y`, …). Empty for integrators that estimate radiance alone.
+    fn aov_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    /// [`Integrator::sample`] that also writes one value per [`Integrator::aov_names`] entry
+    /// into `aovs` (which has that length). The render driver calls this one.
+    fn sample_aovs(
+        &self,
+        scene: &Scene,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        terms: &mut [Rgb],
+        _aovs: &mut [f32],
+    ) -> RadianceSample {
+        self.sample(scene, ray, sampler, terms)
+    }
 }
 
 /// Russian roulette for camera paths from `rr_depth` on: survival probability
@@ -88,6 +112,10 @@ pub enum IntegratorKind {
     Radiosity,
     /// Volumetric path tracing.
     Volpath,
+    /// Mean and second moment of nested integrators' samples.
+    Moment,
+    /// Arbitrary output variables (geometry, albedo) beside nested integrators' images.
+    Aov,
 }
 
 crate::choices!(IntegratorKind, "integrator", {
@@ -96,6 +124,8 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::Ptracer => "ptracer", "light tracing (forward, from the emitters; Mitsuba's `ptracer`)";
     IntegratorKind::Radiosity => "radiosity", "radiosity: finite elements for diffuse scenes, solved then displayed";
     IntegratorKind::Volpath => "volpath", "volumetric path tracing: participating media (Mitsuba's `volpath`)";
+    IntegratorKind::Moment => "moment", "path tracing that also records each pixel's second moment as EXR layers (Mitsuba's `moment`)";
+    IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices) as EXR layers (Mitsuba's `aov`)";
 });
 
 /// An integrator plugin's constructor.
@@ -110,7 +140,50 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("ptracer", |o| Ok(AnyIntegrator::Ptracer(LightTracer { settings: PathSettings::from_props(o)? }))),
     ("direct", |o| Ok(AnyIntegrator::Direct(DirectIntegrator::from_props(o)?))),
     ("radiosity", |o| Ok(AnyIntegrator::Radiosity(radiosity::Options::from_props(o)?))),
+    ("moment", |o| Ok(AnyIntegrator::Moment(MomentIntegrator::from_props(o)?))),
+    ("aov", |o| Ok(AnyIntegrator::Aov(AovIntegrator::from_props(o)?))),
 ];
+
+/// The integrators nested in `o` (Mitsuba's `moment` and `aov`), in document order, each with
+/// its name: the `name` attribute, else `_arg_0`, `_arg_1`, … counting the unnamed ones (as
+/// Mitsuba 3 names them). Only camera-ray integrators may be nested.
+pub fn nested_integrators(o: &Obj) -> PropResult<Vec<(String, AnyIntegrator)>> {
+    o.check_children(&["integrator"])?;
+    let mut found: Vec<(usize, Option<String>, std::rc::Rc<Obj>)> =
+        o.children.iter().map(|c| (c.loc.offset, None, c.clone())).collect();
+    for p in &o.props {
+        if let crate::props::Value::Object(c) = &p.value {
+            if c.tag == "integrator" {
+                p.used.set(true);
+                found.push((p.loc.offset, Some(p.name.clone()), c.clone()));
+            }
+        }
+    }
+    found.sort_by_key(|f| f.0);
+    let mut unnamed = 0;
+    let mut out = Vec::new();
+    for (_, name, c) in found {
+        let name = name.unwrap_or_else(|| {
+            unnamed += 1;
+            format!("_arg_{}", unnamed - 1)
+        });
+        c.built.set(true);
+        let plugin = integrator_plugin(&c.ty)
+            .ok_or_else(|| c.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
+        let integrator = plugin(&c)?;
+        if integrator.camera().is_none() {
+            return Err(crate::props::SceneError::at(
+                &c.loc,
+                format!(
+                    "the {} integrator cannot be nested in '{}': only integrators that trace camera rays can",
+                    c.ty, o.ty
+                ),
+            ));
+        }
+        out.push((name, integrator));
+    }
+    Ok(out)
+}
 
 /// The constructor of the integrator plugin `name`.
 pub fn integrator_plugin(name: &str) -> Option<IntegratorPlugin> {
@@ -131,6 +204,10 @@ pub enum AnyIntegrator {
     Radiosity(radiosity::Options),
     /// Mitsuba's `volpath` (path tracing with participating media).
     VolPath(VolPathIntegrator),
+    /// Mitsuba's `moment` (nested integrators' mean and second moment).
+    Moment(MomentIntegrator),
+    /// Mitsuba's `aov` (arbitrary output variables).
+    Aov(AovIntegrator),
 }
 
 impl Default for AnyIntegrator {
@@ -148,6 +225,21 @@ impl AnyIntegrator {
             AnyIntegrator::Ptracer(_) => IntegratorKind::Ptracer,
             AnyIntegrator::Radiosity(_) => IntegratorKind::Radiosity,
             AnyIntegrator::VolPath(_) => IntegratorKind::Volpath,
+            AnyIntegrator::Moment(_) => IntegratorKind::Moment,
+            AnyIntegrator::Aov(_) => IntegratorKind::Aov,
+        }
+    }
+
+    /// The integrator as a camera-ray integrator (all but the light tracer and radiosity, which
+    /// the render driver runs its own way).
+    pub fn camera(&self) -> Option<&dyn Integrator> {
+        match self {
+            AnyIntegrator::Path(i) => Some(i),
+            AnyIntegrator::Direct(i) => Some(i),
+            AnyIntegrator::VolPath(i) => Some(i),
+            AnyIntegrator::Moment(i) => Some(i),
+            AnyIntegrator::Aov(i) => Some(i),
+            AnyIntegrator::Ptracer(_) | AnyIntegrator::Radiosity(_) => None,
         }
     }
 
@@ -157,7 +249,8 @@ impl AnyIntegrator {
     }
 
     /// The integrator `kind` with its default settings, keeping the path-length settings
-    /// `settings` where it has them (`hide_emitters` for `direct`).
+    /// `settings` where it has them (`hide_emitters` for `direct`). `moment` wraps a path tracer;
+    /// `aov` wraps a path tracer and records every AOV type, each named after its type.
     pub fn with_kind(kind: IntegratorKind, settings: PathSettings) -> AnyIntegrator {
         match kind {
             IntegratorKind::Path => AnyIntegrator::Path(PathIntegrator { settings, ..Default::default() }),
@@ -167,6 +260,16 @@ impl AnyIntegrator {
             IntegratorKind::Ptracer => AnyIntegrator::Ptracer(LightTracer { settings }),
             IntegratorKind::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
             IntegratorKind::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
+            IntegratorKind::Moment => {
+                let path = AnyIntegrator::with_kind(IntegratorKind::Path, settings);
+                AnyIntegrator::Moment(MomentIntegrator { nested: vec![("_arg_0".into(), path)] })
+            }
+            IntegratorKind::Aov => {
+                use crate::choice::Choice;
+                let path = AnyIntegrator::with_kind(IntegratorKind::Path, settings);
+                let aovs = aov::AovKind::CHOICES.iter().map(|c| (c.1.to_string(), c.0)).collect();
+                AnyIntegrator::Aov(AovIntegrator { aovs, nested: vec![("_arg_0".into(), path)] })
+            }
         }
     }
 
@@ -176,6 +279,8 @@ impl AnyIntegrator {
             AnyIntegrator::Path(p) => Some(&p.settings),
             AnyIntegrator::Ptracer(t) => Some(&t.settings),
             AnyIntegrator::VolPath(v) => Some(&v.settings),
+            AnyIntegrator::Moment(m) => m.nested[0].1.path_settings(),
+            AnyIntegrator::Aov(a) => a.nested.first()?.1.path_settings(),
             AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
         }
     }
@@ -186,6 +291,8 @@ impl AnyIntegrator {
             AnyIntegrator::Path(p) => Some(&mut p.settings),
             AnyIntegrator::Ptracer(t) => Some(&mut t.settings),
             AnyIntegrator::VolPath(v) => Some(&mut v.settings),
+            AnyIntegrator::Moment(m) => m.nested[0].1.path_settings_mut(),
+            AnyIntegrator::Aov(a) => a.nested.first_mut()?.1.path_settings_mut(),
             AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
         }
     }
@@ -206,6 +313,20 @@ impl AnyIntegrator {
                 o.method,
                 if o.smooth { ", smooth" } else { ", flat" }
             ),
+            AnyIntegrator::Moment(m) => format!("moments of {}", describe_nested(&m.nested)),
+            AnyIntegrator::Aov(a) => format!(
+                "AOVs [{}] beside {}",
+                a.aovs.iter().map(|(n, k)| format!("{n}:{k}")).collect::<Vec<_>>().join(", "),
+                describe_nested(&a.nested)
+            ),
         }
     }
+}
+
+/// "name (description), …" of nested integrators.
+fn describe_nested(nested: &[(String, AnyIntegrator)]) -> String {
+    if nested.is_empty() {
+        return "no nested integrator".into();
+    }
+    nested.iter().map(|(n, i)| format!("{n} ({})", i.describe())).collect::<Vec<_>>().join(", ")
 }

@@ -267,7 +267,7 @@ impl Integrator for PathIntegrator {
                 terms[(k as usize - 1).min(last)] += c;
             })
         };
-        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
+        RadianceSample { l, alpha: super::trace::coverage(scene, covered, self.settings.hide_emitters) }
     }
 
     fn has_terms(&self) -> bool {

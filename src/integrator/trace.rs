@@ -371,3 +371,11 @@ mod tests {
         assert!(PathSettings::default().allows(u32::MAX) && PathSettings::default().depth_text() == "unlimited");
     }
 }
+
+/// A camera sample's coverage (the alpha channel), Mitsuba 3's rule: 1 if the path hit a
+/// surface, or if an environment (constant or envmap emitter) is there to be seen
+/// (`hide_emitters` off); else 0.
+#[inline]
+pub fn coverage(scene: &Scene, hit_surface: bool, hide_emitters: bool) -> f32 {
+    f32::from(u8::from(hit_surface || (!hide_emitters && !scene.infinite_lights().is_empty())))
+}

@@ -109,7 +109,8 @@ impl Integrator for VolPathIntegrator {
         let mut depth = 0u32;
         let mut crossings = 0u32;
         if max_depth == 0 {
-            return RadianceSample { l, alpha: f32::from(u8::from(scene.intersect(camera_ray).is_some())) };
+            let hit = scene.intersect(camera_ray).is_some();
+            return RadianceSample { l, alpha: trace::coverage(scene, hit, self.settings.hide_emitters) };
         }
         loop {
             let hit = scene.intersect(&ray);
@@ -235,7 +236,7 @@ impl Integrator for VolPathIntegrator {
                 break;
             }
         }
-        RadianceSample { l, alpha: f32::from(u8::from(covered)) }
+        RadianceSample { l, alpha: trace::coverage(scene, covered, self.settings.hide_emitters) }
     }
 }
 

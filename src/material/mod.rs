@@ -234,6 +234,30 @@ impl Bsdf {
         }
     }
 
+    /// The diffuse reflectance seen from `wo` (local frame), Mitsuba's
+    /// `eval_diffuse_reflectance` (the `albedo` AOV): the reflectance texture of the diffuse
+    /// and plastic bases, blended and sided like the BSDF; for the others `π f(wo, n) cos θ` with
+    /// the incident direction along the normal (0 for delta BSDFs).
+    pub fn diffuse_reflectance(&self, ctx: &BsdfContext, wo: Vec3) -> Rgb {
+        match self {
+            Bsdf::Diffuse(b) => b.reflectance.eval(ctx.uv),
+            Bsdf::Plastic(b) => b.diffuse_reflectance,
+            Bsdf::RoughPlastic(b) => b.diffuse_reflectance,
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w
+            }
+            Bsdf::TwoSided(b) => {
+                if wo.z > 0.0 {
+                    b[0].diffuse_reflectance(ctx, wo)
+                } else {
+                    b[1].diffuse_reflectance(ctx, flip(wo))
+                }
+            }
+            _ => self.eval(ctx, wo, Vec3::new(0.0, 0.0, 1.0)) * std::f32::consts::PI,
+        }
+    }
+
     /// Whether the BSDF has only delta lobes (light sampling is useless on it).
     #[inline]
     pub fn is_delta(&self) -> bool {

@@ -8,6 +8,16 @@ use glam::Vec3;
 /// A linear RGB triple (radiance W m⁻² sr⁻¹, reflectance, intensity W sr⁻¹, …, per channel).
 pub type Rgb = Vec3;
 
+/// CIE XYZ of a linear sRGB (Rec. 709 primaries, D65 white) triple: Mitsuba's `srgb_to_xyz`.
+#[inline]
+pub fn srgb_to_xyz(c: Rgb) -> Rgb {
+    Rgb::new(
+        0.412453 * c.x + 0.357580 * c.y + 0.180423 * c.z,
+        0.212671 * c.x + 0.715160 * c.y + 0.072169 * c.z,
+        0.019334 * c.x + 0.119193 * c.y + 0.950227 * c.z,
+    )
+}
+
 /// Luminance (relative, Y of CIE XYZ) of a linear Rec.709 RGB triple.
 #[inline]
 pub fn luminance(c: Rgb) -> f32 {

@@ -130,6 +130,8 @@ pub fn render_integrator(
         AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Ptracer(t) => render_light_paths(scene, t, settings, cancel),
         AnyIntegrator::VolPath(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::Moment(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::Aov(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
             let solution = Radiosity::solve(scene, opts).map_err(RenderError::Radiosity)?;
@@ -169,12 +171,17 @@ pub fn render(
         return Err(RenderError::NoTerms { integrator: integrator.name() });
     }
     let scheduler = Scheduler::new(settings, cancel, width as u64 * height as u64, "samples")?;
-    let mut film = Film::new(width, height).with_terms(terms);
+    let aov_names = integrator.aov_names();
+    let aov_count = aov_names.len();
+    let mut film = Film::new(width, height).with_terms(terms).with_aovs(aov_names);
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
-        let mut tile = TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]).with_terms(terms);
+        let mut tile = (TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]))
+            .with_terms(terms)
+            .with_aovs(aov_count);
         let mut sample_terms = vec![Rgb::ZERO; terms];
+        let mut aovs = vec![0.0f32; aov_count];
         for y in y0..y0 + h {
             for x in x0..x0 + w {
                 for i in first..first + count {
@@ -187,9 +194,11 @@ pub fn render(
                     let u_lens = sampler.next_2d();
                     let ray = cam.generate_ray(film_pos, u_lens);
                     sample_terms.fill(Rgb::ZERO);
-                    let s = integrator.sample(scene, &ray, &mut sampler, &mut sample_terms);
+                    aovs.fill(0.0);
+                    let s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
                     let alpha = settings.alpha.then_some(s.alpha);
-                    tile.put([x, y], u_film, &settings.filter, FilmSample { l: s.l, alpha, terms: &sample_terms });
+                    let sample = FilmSample { l: s.l, alpha, terms: &sample_terms, aovs: &aovs };
+                    tile.put([x, y], u_film, &settings.filter, sample);
                 }
             }
         }

@@ -3,7 +3,7 @@
 
 use crate::job::{builtin_job, file_job, parse_defines, parse_res};
 use crate::{choice, usage, Failure, CANCEL};
-use neumann::film::output::{write_image_alpha, Format, ImageInfo, WriteError};
+use neumann::film::output::{write_image_alpha, write_image_layers, Channel, Format, ImageInfo, WriteError};
 use neumann::integrator::radiosity::Method;
 use neumann::integrator::{AnyIntegrator, DirectStrategy, IntegratorKind, MisHeuristic, PathSettings};
 use neumann::light::LightSamplerKind;
@@ -255,8 +255,20 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
-    write_image_alpha(&output, width, height, &out.film.image(), alpha.as_deref(), &info)
+    let mut channels = out.film.aov_channels();
+    if !channels.is_empty() && Format::from_path(&output).ok() != Some(Format::Exr) {
+        println!(
+            "warning: the {} AOV channels of the {} integrator are not written: only .exr holds them",
+            channels.len(),
+            job.file.integrator.name()
+        );
+        channels.clear();
+    }
+    write_image_layers(&output, width, height, &out.film.image(), alpha.as_deref(), &channels, &info)
         .map_err(|e| Failure(1, e.to_string()))?;
+    if !channels.is_empty() {
+        println!("wrote {} AOV channels beside R, G, B: {}", channels.len(), aov_summary(&channels));
+    }
     if let Some(dir) = &a.bounces_out {
         write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e.to_string()))?;
         println!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
@@ -364,4 +376,16 @@ fn write_terms(
         }
     }
     write_image_alpha(&dir.join("terms.png"), sheet_w, h, &sheet, None, info)
+}
+
+/// The AOV layers of `channels` (`albedo.R`, `albedo.G`, … → `albedo`), in order.
+fn aov_summary(channels: &[Channel]) -> String {
+    let mut layers: Vec<&str> = Vec::new();
+    for (name, _) in channels {
+        let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
+        if layers.last() != Some(&layer) {
+            layers.push(layer);
+        }
+    }
+    layers.join(", ")
 }

@@ -148,14 +148,26 @@ impl Builder {
 
     fn integrator(&mut self, o: &Obj) -> Result<AnyIntegrator> {
         o.built.set(true);
-        o.check_children(&[])?;
+        if !matches!(o.ty.as_str(), "moment" | "aov") {
+            o.check_children(&[])?;
+        }
+        self.read_light_sampler(o)?;
+        let plugin = integrator_plugin(&o.ty)
+            .ok_or_else(|| o.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
+        plugin(o)
+    }
+
+    /// The `light_sampler` of the integrators that sample lights (also nested in `moment`
+    /// and `aov`).
+    fn read_light_sampler(&mut self, o: &Obj) -> Result<()> {
         if matches!(o.ty.as_str(), "path" | "volpath" | "direct") {
             self.light_sampler =
                 o.choice("light_sampler", &LightSamplerKind::names())?.parse().map_err(|e: String| o.error(e))?;
         }
-        let plugin = integrator_plugin(&o.ty)
-            .ok_or_else(|| o.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-        plugin(o)
+        for c in o.nested("integrator") {
+            self.read_light_sampler(&c)?;
+        }
+        Ok(())
     }
 
     fn sensor(&mut self, o: &Obj) -> Result<SensorSettings> {
