@@ -350,7 +350,7 @@ mod tests {
         let image = exr::prelude::read_all_flat_layers_from_file(dir.join("a.exr")).unwrap();
         let layer = &image.layer_data[0];
         let get = |name: &str| -> Vec<f32> {
-            let c = layer.channel_data.list.iter().find(|c| c.name == exr::prelude::Text::from(name)).unwrap();
+            let c = layer.channel_data.list.iter().find(|c| c.name.eq(name)).unwrap();
             c.sample_data.values_as_f32().collect()
         };
         assert_eq!(layer.channel_data.list.len(), 6);

@@ -337,6 +337,15 @@ impl PathSettings {
     }
 }
 
+/// A camera sample's coverage (the alpha channel), Mitsuba 3's rule: 1 if the path hit a
+/// surface, or if an environment (constant or envmap emitter) is there to be seen
+/// (`hide_emitters` off); else 0.
+#[inline]
+pub fn coverage(scene: &Scene, hit_surface: bool, hide_emitters: bool) -> f32 {
+    f32::from(u8::from(hit_surface || (!hide_emitters && !scene.infinite_lights().is_empty())))
+}
+
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -370,12 +379,4 @@ mod tests {
         assert!(s.allows(2) && !s.allows(3) && s.max_segments() == 2 && s.depth_text() == "2");
         assert!(PathSettings::default().allows(u32::MAX) && PathSettings::default().depth_text() == "unlimited");
     }
-}
-
-/// A camera sample's coverage (the alpha channel), Mitsuba 3's rule: 1 if the path hit a
-/// surface, or if an environment (constant or envmap emitter) is there to be seen
-/// (`hide_emitters` off); else 0.
-#[inline]
-pub fn coverage(scene: &Scene, hit_surface: bool, hide_emitters: bool) -> f32 {
-    f32::from(u8::from(hit_surface || (!hide_emitters && !scene.infinite_lights().is_empty())))
 }
