@@ -49,9 +49,20 @@ pub enum CameraError {
     Lens(f32, f32),
 }
 
-/// A perspective camera, optionally with a thin lens.
+/// How camera space maps to rays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// Rays from the centre of projection (or the lens) through the plane z = 1.
+    Perspective,
+    /// Parallel rays along +z from the near-clip plane; the film spans x ∈ [-1, 1] and
+    /// y ∈ [-1/aspect, 1/aspect] of camera space (Mitsuba's `orthographic`; `to_world` scales it).
+    Orthographic,
+}
+
+/// A perspective camera, optionally with a thin lens, or an orthographic one.
 #[derive(Clone, Debug)]
 pub struct Camera {
+    projection: Projection,
     to_world: Transform,
     fov_deg: f32,
     fov_axis: FovAxis,
@@ -101,6 +112,7 @@ impl Camera {
         // x_plane = -(2 x / width - 1) tan_x (camera +x is left, film x grows right); likewise y.
         let plane_scale = Vec2::new(-2.0 * tan_half.x / width as f32, -2.0 * tan_half.y / height as f32);
         Ok(Camera {
+            projection: Projection::Perspective,
             to_world,
             fov_deg,
             fov_axis,
@@ -115,8 +127,23 @@ impl Camera {
         })
     }
 
+    /// Mitsuba's orthographic camera placed (and scaled) by `to_world` for a `width × height`
+    /// film: camera-space x ∈ [-1, 1] spans the film's width, y ∈ [-1/aspect, 1/aspect] its
+    /// height; rays are parallel to +z.
+    pub fn orthographic(to_world: Transform, width: u32, height: u32) -> Result<Camera, CameraError> {
+        // The same film-to-plane mapping as a perspective camera whose half-extents at z = 1
+        // are (1, 1/aspect), i.e. a 90° horizontal field of view.
+        let c = Camera::perspective(to_world, 90.0, FovAxis::X, width, height)?;
+        Ok(Camera { projection: Projection::Orthographic, ..c })
+    }
+
+    /// The projection.
+    pub fn projection(&self) -> Projection {
+        self.projection
+    }
+
     /// The same camera on a `width × height` film: the field of view along its axis is kept, the
-    /// other follows the new aspect ratio.
+    /// other follows the new aspect ratio (orthographic: the width keeps its extent).
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
         Ok(Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() })
@@ -165,6 +192,13 @@ impl Camera {
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
         // +x is left and +y is up in camera space; film x grows right and y grows down.
         let xy = film * self.plane_scale + self.tan_half;
+        if self.projection == Projection::Orthographic {
+            // Mitsuba: the origin on the near plane, through to_world (which may scale it);
+            // the direction is to_world's +z, normalized; the ray spans far − near.
+            let o = self.to_world.apply_point(Vec3::new(xy.x, xy.y, self.near_clip));
+            let d = self.to_world.apply_vector(Vec3::Z).normalize();
+            return Ray::bounded(o, d, self.far_clip - self.near_clip);
+        }
         let d = Vec3::new(xy.x, xy.y, 1.0);
         let (o, d) = if self.lens_radius > 0.0 {
             let lens = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
@@ -213,6 +247,11 @@ impl Camera {
     /// on the plane at unit distance; the camera ray's solid angle is `dω = cos³θ dA_film`, and
     /// from the scene point's side `dω = |cos θ_y| dA_y / r²`.
     pub fn sample_wi(&self, p: Vec3, u_lens: Vec2) -> Option<CameraSample> {
+        if self.projection == Projection::Orthographic {
+            // A parallel projection has no point to connect to (Mitsuba's orthographic sensor
+            // cannot be sampled by direction either); the light tracer refuses it up front.
+            return None;
+        }
         let local = self.to_world.inverse().apply_point(p);
         if !(local.z >= self.near_clip && local.z <= self.far_clip) {
             return None;
@@ -250,18 +289,25 @@ impl Camera {
 }
 
 /// Camera plugins by their (Mitsuba) names.
-pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens"];
+pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
     /// `fov` + `fov_axis` (`x` default, `y`, `diagonal`, `smaller`, `larger`) or `focal_length`
     /// (default `50mm`: the diagonal field of view of a 36 × 24 mm frame), `near_clip` (0.01),
     /// `far_clip` (10⁴); thin lens: `aperture_radius`, `focus_distance` (both required).
+    /// `orthographic`: `to_world` (its scale sets the extent: camera-space x ∈ [-1, 1] spans the
+    /// film's width), `near_clip`, `far_clip`.
     pub fn from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
         if !CAMERA_PLUGINS.contains(&o.ty.as_str()) {
             return Err(o.unknown_plugin(CAMERA_PLUGINS));
         }
         let to_world = o.transform("to_world")?;
+        if o.ty == "orthographic" {
+            let camera = Camera::orthographic(to_world, width, height).map_err(|e| o.error(e.to_string()))?;
+            let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
+            return camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()));
+        }
         let (fov, axis) = match (o.float_opt("fov")?, o.get("focal_length")) {
             (Some(_), Some(p)) => {
                 return Err(SceneError::at(&p.loc, "give either 'fov' or 'focal_length', not both"));
@@ -319,6 +365,26 @@ mod tests {
         assert!(right.d.x > 0.0 && (right.d.x / -right.d.z - 1.0).abs() < 1e-5, "{}", right.d);
         let top = c.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO);
         assert!(top.d.y > 0.0 && (top.d.y / -top.d.z - 0.5).abs() < 1e-5, "{}", top.d);
+    }
+
+    /// Mitsuba's orthographic sensor: parallel rays along the view axis, starting on the
+    /// near plane; camera-space x ∈ [-1, 1] spans the width (scaled by `to_world`), y the height
+    /// at the same scale, and the image is not mirrored.
+    #[test]
+    fn orthographic_rays_are_parallel_and_span_the_scaled_film() {
+        let look = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
+        let t = look * Transform::scale(Vec3::new(2.0, 2.0, 1.0)).unwrap();
+        let c = Camera::orthographic(t, 200, 100).unwrap().with_clip(0.5, 100.0).unwrap();
+        assert_eq!(c.projection(), Projection::Orthographic);
+        let centre = c.generate_ray(Vec2::new(100.0, 50.0), Vec2::ZERO);
+        assert!((centre.o - Vec3::new(0.0, 0.0, 4.5)).length() < 1e-5, "{}", centre.o);
+        assert!((centre.d + Vec3::Z).length() < 1e-6);
+        assert!((centre.t_max - 99.5).abs() < 1e-3);
+        let right = c.generate_ray(Vec2::new(200.0, 50.0), Vec2::ZERO);
+        assert!((right.o.x - 2.0).abs() < 1e-5 && (right.d - centre.d).length() < 1e-6, "{}", right.o);
+        let top = c.generate_ray(Vec2::new(100.0, 0.0), Vec2::ZERO);
+        assert!((top.o.y - 1.0).abs() < 1e-5, "{}", top.o);
+        assert!(c.sample_wi(Vec3::ZERO, Vec2::ZERO).is_none());
     }
 
     #[test]

@@ -204,6 +204,46 @@ impl TriangleMesh {
         })
     }
 
+    /// Gives a mesh without vertex normals smooth ones, as Mitsuba 3 does for OBJ and PLY files
+    /// unless `face_normals` is set: each vertex gets the unit sum of the unit normals of the
+    /// triangles around it, each weighted by the triangle's angle at the vertex (Thürmer and
+    /// Wüthrich, "Computing Vertex Normals from Polygonal Facets", 1998); degenerate triangles
+    /// add nothing and a vertex with no valid triangle gets (1, 0, 0), as in Mitsuba. Computed
+    /// from the current (world-space) positions and winding, so apply transforms first. A mesh
+    /// whose every vertex normal equals the normals of its triangles (a planar or unwelded,
+    /// faceted mesh) keeps flat shading, which is the same image.
+    pub fn compute_vertex_normals(&mut self) {
+        if !self.normals.is_empty() {
+            return;
+        }
+        let mut sums = vec![Vec3::ZERO; self.positions.len()];
+        let mut face = Vec::with_capacity(self.len());
+        for (i, tri) in self.indices.iter().enumerate() {
+            let p = self.triangle(i);
+            let n = (p[1] - p[0]).cross(p[2] - p[0]);
+            let len2 = n.length_squared();
+            if !(len2 > 0.0) || !len2.is_finite() {
+                face.push(Vec3::ZERO);
+                continue;
+            }
+            let n = n / len2.sqrt();
+            face.push(n);
+            for k in 0..3 {
+                let (d0, d1) = ((p[(k + 1) % 3] - p[k]).normalize_or_zero(), (p[(k + 2) % 3] - p[k]).normalize_or_zero());
+                let angle = d0.dot(d1).clamp(-1.0, 1.0).acos();
+                sums[tri[k] as usize] += n * angle;
+            }
+        }
+        let normals: Vec<Vec3> =
+            sums.into_iter().map(|n| if n.length() > 0.0 { n.normalize() } else { Vec3::X }).collect();
+        let faceted = self.indices.iter().zip(&face).all(|(tri, &n)| {
+            n == Vec3::ZERO || tri.iter().all(|&v| normals[v as usize].dot(n) >= 1.0 - 1e-6)
+        });
+        if !faceted {
+            self.normals = normals;
+        }
+    }
+
     /// Caches every triangle's unit geometric normal for [`TriangleMesh::face_normal`]. Call it
     /// after the last change of positions, indices or `flip_normals` (a transform clears it).
     pub fn prepare_normals(&mut self) {
@@ -328,6 +368,40 @@ mod tests {
         for i in 0..c.len() {
             assert_eq!(c.face_normal(i), c.normal_of(&c.triangle(i)), "stale normal of face {i}");
         }
+    }
+
+    /// Mitsuba's vertex normals of a mesh without any: on a welded octahedron each vertex has
+    /// four faces meeting at equal angles, so its normal points along the vertex; a square pyramid
+    /// with a non-uniform base shows the angle weighting (not area, not plain average); a
+    /// planar mesh stays flat (no normals).
+    #[test]
+    fn smooth_vertex_normals_are_angle_weighted() {
+        let p = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+        let idx = vec![[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]];
+        let mut octa = TriangleMesh::new(p.clone(), Vec::new(), Vec::new(), idx).unwrap();
+        octa.compute_vertex_normals();
+        for (n, v) in octa.normals.iter().zip(&p) {
+            assert!((*n - *v).length() < 1e-6, "{n} at {v}");
+        }
+        // Apex (0, 0, 1) over the base corners (±1, 0, 0), (0, ±1, 0), (2, 0, 0)-stretched on +x:
+        // the faces meet the corner (2, 0, 0) at different angles.
+        let p = vec![Vec3::new(2.0, 0.0, 0.0), Vec3::Y, -Vec3::X, -Vec3::Y, Vec3::Z];
+        let idx = vec![[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
+        let mut pyramid = TriangleMesh::new(p.clone(), Vec::new(), Vec::new(), idx.clone()).unwrap();
+        pyramid.compute_vertex_normals();
+        let apex = pyramid.normals[4];
+        let mut want = Vec3::ZERO;
+        for t in &idx {
+            let q = [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]];
+            let n = (q[1] - q[0]).cross(q[2] - q[0]).normalize();
+            want += n * (q[0] - q[2]).normalize().dot((q[1] - q[2]).normalize()).acos();
+        }
+        assert!((apex - want.normalize()).length() < 1e-5, "{apex} vs {}", want.normalize());
+        assert!(apex.x < 0.0, "the wide faces on +x meet the apex at small angles: {apex}");
+        let mut quad = TriangleMesh::rectangle();
+        quad.normals.clear();
+        quad.compute_vertex_normals();
+        assert!(quad.normals.is_empty(), "a planar mesh stays flat");
     }
 
     #[test]

@@ -35,11 +35,14 @@ pub fn shape_plugin(name: &str) -> Option<ShapePlugin> {
     SHAPE_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
 }
 
-/// Mitsuba's `obj` and `ply`: `filename`, `face_normals` (false: vertex normals are kept);
-/// `obj` also `flip_tex_coords` (true: v becomes 1 − v, as Mitsuba's OBJ loader does).
+/// Mitsuba's `obj` and `ply`: `filename`, `face_normals` (false: the file's vertex normals
+/// are kept, and a file without them gets smooth angle-weighted ones, as Mitsuba computes;
+/// true: flat shading); `obj` also `flip_tex_coords` (true: v becomes 1 − v, as Mitsuba's OBJ
+/// loader does).
 fn mesh_file(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
     let mut mesh = meshes.mesh(o, "filename")?;
-    if o.bool("face_normals", false)? {
+    let face_normals = o.bool("face_normals", false)?;
+    if face_normals {
         mesh.normals.clear();
     }
     if o.ty == "obj" && o.bool("flip_tex_coords", true)? {
@@ -48,6 +51,9 @@ fn mesh_file(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSou
         }
     }
     mesh.transform(to_world);
+    if !face_normals {
+        mesh.compute_vertex_normals();
+    }
     mesh.flip_normals ^= flip;
     Ok(Geometry::Mesh(mesh))
 }

@@ -11,6 +11,7 @@ pub mod color;
 pub mod cone;
 pub mod float;
 pub mod frame;
+pub mod quadrature;
 pub mod ray;
 pub mod special;
 pub mod spectrum;

@@ -35,6 +35,10 @@ pub enum RenderError {
         /// The integrator's name.
         integrator: &'static str,
     },
+    /// The integrator cannot render this scene's setup (say, light tracing through an
+    /// orthographic camera).
+    #[error("{0}")]
+    Unsupported(String),
     /// Light tracing needs something to start paths from.
     #[error("light tracing needs at least one emitter")]
     NoEmitters,

@@ -78,6 +78,11 @@ pub fn render_light_paths(
     if scene.lights().is_empty() {
         return Err(RenderError::NoEmitters);
     }
+    if cam.projection() != crate::camera::Projection::Perspective {
+        return Err(RenderError::Unsupported(
+            "the light tracer (ptracer) needs a perspective or thin-lens camera: an orthographic one cannot be connected to".into(),
+        ));
+    }
     let splatter = Splatter::new(&settings.filter, window);
     let paths_per_pass = cam.width() as u64 * cam.height() as u64;
     let chunks = paths_per_pass.div_ceil(CHUNK);
