@@ -222,7 +222,7 @@ impl TriangleMesh {
             let p = self.triangle(i);
             let n = (p[1] - p[0]).cross(p[2] - p[0]);
             let len2 = n.length_squared();
-            if !(len2 > 0.0) || !len2.is_finite() {
+            if len2 <= 0.0 || !len2.is_finite() {
                 face.push(Vec3::ZERO);
                 continue;
             }

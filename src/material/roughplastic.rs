@@ -62,7 +62,7 @@ fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32) -> (f32, f32) {
         for (&xj, &wj) in nodes.iter().zip(&weights) {
             let u = Vec2::new((0.5 * xi + 0.5) as f32, (0.5 * xj + 0.5) as f32);
             let m = distribution.sample(wo, u);
-            if !(m.pdf > 0.0) {
+            if m.pdf <= 0.0 || m.pdf.is_nan() {
                 continue;
             }
             let m = m.value;
@@ -96,7 +96,8 @@ fn coating_tables(distribution: Microfacet, eta: f32) -> std::sync::Arc<(Vec<f32
     use std::collections::HashMap;
     use std::sync::{Arc, Mutex, OnceLock};
     type Key = (u8, u32, u32, u32, u32);
-    static CACHE: OnceLock<Mutex<HashMap<Key, Arc<(Vec<f32>, f32)>>>> = OnceLock::new();
+    type Tables = Arc<(Vec<f32>, f32)>;
+    static CACHE: OnceLock<Mutex<HashMap<Key, Tables>>> = OnceLock::new();
     let (kind, exponent) = match distribution.kind {
         MicrofacetType::Beckmann => (0, 0.0),
         MicrofacetType::Ggx => (1, 0.0),
