@@ -89,7 +89,9 @@ fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> 
     let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
     let (c, r) = similarity(&t)
         .ok_or_else(|| o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly"))?;
-    Ok(Geometry::Sphere(Sphere { center: c, radius: r, flip }))
+    let axes = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)].map(|a| a / r);
+    let rotation = crate::math::Mat3::from_cols(axes[0], axes[1], axes[2]);
+    Ok(Geometry::Sphere(Sphere { rotation, ..Sphere::new(c, r, flip) }))
 }
 
 /// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open.

@@ -2,7 +2,7 @@
 //! they subtend from a reference point.
 
 use crate::math::float::gamma;
-use crate::math::{safe_sqrt, spherical_direction, Frame, Ray, Vec2, Vec3, INV_4PI, PI};
+use crate::math::{safe_sqrt, spherical_direction, Frame, Mat3, Ray, Vec2, Vec3, INV_4PI, PI};
 use crate::sampling::sample_uniform_sphere;
 
 /// A sphere in world space. `flip` turns normals inward (Mitsuba's `flip_normals`): the
@@ -15,6 +15,9 @@ pub struct Sphere {
     pub radius: f32,
     /// Whether normals point inward.
     pub flip: bool,
+    /// The object's axes in world space (columns; orthonormal, a reflection allowed): `to_world`'s
+    /// rotation, which orients the (u, v) parameterization as Mitsuba's does.
+    pub rotation: Mat3,
 }
 
 /// A hit on a sphere: ray parameter.
@@ -36,6 +39,11 @@ pub struct SurfacePoint {
 }
 
 impl Sphere {
+    /// A sphere with its parameterization aligned with the world axes.
+    pub fn new(center: Vec3, radius: f32, flip: bool) -> Sphere {
+        Sphere { center, radius, flip, rotation: Mat3::IDENTITY }
+    }
+
     /// Surface area `4π r²`.
     pub fn area(&self) -> f32 {
         4.0 * PI * self.radius * self.radius
@@ -69,11 +77,13 @@ impl Sphere {
     }
 
     /// Reprojects the hit at `ray.at(t)` onto the sphere: point, error bound, outward-or-flipped
-    /// unit normal, and (u, v) = (φ / 2π, θ / π) of the outward direction.
+    /// unit normal, and (u, v) = (φ / 2π, θ / π) of the outward direction in the object's frame
+    /// (Mitsuba's parameterization, turned with `to_world`).
     #[inline]
     pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
         let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
-        let uv = Vec2::new(crate::math::spherical_phi(v) / (2.0 * PI), crate::math::spherical_theta(v) / PI);
+        let local = self.rotation.transpose() * v;
+        let uv = Vec2::new(crate::math::spherical_phi(local) / (2.0 * PI), crate::math::spherical_theta(local) / PI);
         (self.point(v), uv)
     }
 
@@ -152,9 +162,25 @@ mod tests {
     use super::*;
     use crate::testkit::{chi2_2d, u2, Chi2Config, SphericalCap};
 
+    /// The (u, v) parameterization turns with the sphere: a sphere rotated 90° about x has its
+    /// pole (v = 0) where the unrotated one has its equator facing −y.
+    #[test]
+    fn parameterization_follows_the_rotation() {
+        let rot = Mat3::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let s = Sphere { rotation: rot, ..Sphere::new(Vec3::ZERO, 2.0, false) };
+        // The object's +z axis now points along world −y.
+        let ray = Ray::new(Vec3::new(0.0, -5.0, 0.0), Vec3::Y);
+        let t = s.intersect(&ray, f32::INFINITY).unwrap().t;
+        let (p, uv) = s.surface(&ray, t);
+        assert!((p.p - Vec3::new(0.0, -2.0, 0.0)).length() < 1e-5);
+        assert!(uv.y < 1e-3, "{uv}");
+        let (_, uv0) = Sphere::new(Vec3::ZERO, 2.0, false).surface(&ray, t);
+        assert!((uv0.y - 0.5).abs() < 1e-5 && (uv0.x - 0.75).abs() < 1e-5, "{uv0}");
+    }
+
     #[test]
     fn intersect_from_outside_and_inside() {
-        let s = Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, flip: false };
+        let s = Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0, false);
         let h = s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), f32::INFINITY).unwrap();
         assert!((h.t - 4.0).abs() < 1e-5);
         let inside = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::X);
@@ -167,7 +193,7 @@ mod tests {
     fn leaving_the_surface_never_hits_it_again() {
         // Rays leaving points of a sphere outward (from outside) must not re-hit it, and rays
         // going inward must hit the far side, not the start point.
-        let s = Sphere { center: Vec3::new(3.0, -2.0, 1.0), radius: 2.5, flip: false };
+        let s = Sphere::new(Vec3::new(3.0, -2.0, 1.0), 2.5, false);
         let mut rng = crate::sampling::Pcg32::new(3, 3);
         for _ in 0..20_000 {
             let (sp, _) = s.sample_area(u2(&mut rng));
@@ -184,7 +210,7 @@ mod tests {
 
     #[test]
     fn cone_sampling_chi2_and_pdf() {
-        let s = Sphere { center: Vec3::new(0.0, 0.0, 4.0), radius: 1.5, flip: false };
+        let s = Sphere::new(Vec3::new(0.0, 0.0, 4.0), 1.5, false);
         let p_ref = Vec3::ZERO;
         let cos_max = (1.0 - (1.5f64 / 4.0).powi(2)).sqrt();
         let out = chi2_2d(
@@ -229,7 +255,7 @@ mod tests {
         let axis = Vec3::new(0.48, 0.6, -0.64); // unit
         for (k, sin_max) in [0.1f64, 1e-2, 1e-3, 1e-4].into_iter().enumerate() {
             let dist = 4.0f32;
-            let s = Sphere { center: p_ref + axis * dist, radius: (sin_max * dist as f64) as f32, flip: false };
+            let s = Sphere::new(p_ref + axis * dist, (sin_max * dist as f64) as f32, false);
             let c = (s.center - p_ref).as_dvec3();
             let (dc, r) = (c.length(), s.radius as f64);
             let w = c / dc;
@@ -287,7 +313,7 @@ mod tests {
         let axis = Vec3::Z;
         let n = Vec3::new(0.75f32.sqrt(), 0.0, 0.5); // 60° from the axis
         for (k, sin_max) in [0.2f64, 0.03, 3e-3, 3e-4].into_iter().enumerate() {
-            let s = Sphere { center: axis * 2.0, radius: (2.0 * sin_max) as f32, flip: false };
+            let s = Sphere::new(axis * 2.0, (2.0 * sin_max) as f32, false);
             let cos_max = (1.0 - sin_max * sin_max).sqrt();
             let omega = 2.0 * std::f64::consts::PI * (1.0 - cos_max);
             // Moments of cos θ_n over the cone by midpoint quadrature in (θ, φ).

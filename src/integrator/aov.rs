@@ -210,7 +210,7 @@ mod tests {
     fn geometric_aovs_of_a_sphere() {
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.2, 0.4, 0.6))));
-        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), m, None);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), m, None);
         b.add_constant_environment(Rgb::splat(1.0));
         let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y).unwrap();
         b.set_camera(Camera::perspective(to_world, 40.0, FovAxis::X, 9, 9).unwrap());

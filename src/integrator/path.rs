@@ -304,7 +304,7 @@ mod tests {
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(rho))));
         let c = Vec3::new(0.3, -0.2, 1.0);
-        b.add_shape(Geometry::Sphere(Sphere { center: c, radius: r, flip: true }), m, None);
+        b.add_shape(Geometry::Sphere(Sphere::new(c, r, true)), m, None);
         b.add_point_light(c, Rgb::splat(intensity));
         let to_world = Transform::look_at(c, c + Vec3::new(0.2, 0.1, 1.0), Vec3::Y).unwrap();
         b.set_camera(Camera::perspective(to_world, 100.0, FovAxis::X, 16, 12).unwrap());
@@ -481,7 +481,7 @@ mod tests {
         for (k, (name, bsdf, max_depth, expected)) in cases.into_iter().enumerate() {
             let mut b = SceneBuilder::new();
             let m = b.add_bsdf(bsdf);
-            b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), m, None);
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), m, None);
             b.add_constant_environment(Rgb::ONE);
             let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
             b.set_camera(Camera::perspective(to_world, 10.0, FovAxis::X, 12, 12).unwrap());
@@ -508,7 +508,7 @@ mod tests {
         floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));
         b.add_shape(Geometry::Mesh(floor), m, None);
         let black = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::ZERO)));
-        let sphere = Sphere { center: Vec3::new(0.0, 0.5, -0.5), radius: 0.2, flip: false };
+        let sphere = Sphere::new(Vec3::new(0.0, 0.5, -0.5), 0.2, false);
         b.add_shape(Geometry::Sphere(sphere), black, Some(Rgb::splat(7.0)));
         let d = Vec3::new(1.0, -1.0, 0.0).normalize();
         b.add_light(Light::Directional { direction: d, irradiance: Rgb::ONE, center: Vec3::ZERO, radius: 0.0 });
@@ -612,7 +612,7 @@ mod tests {
         let image = Image { width: 8, height: 4, pixels: vec![Rgb::ONE; 32] };
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), m, None);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), m, None);
         let map = EnvMap::new(image, 1.0, Transform::rotate(Vec3::X, 30.0).unwrap()).unwrap();
         b.add_light(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 });
         let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();

@@ -266,7 +266,7 @@ mod tests {
             let mut b = SceneBuilder::new();
             let null = b.add_bsdf(Bsdf::Null);
             let m = b.add_medium(Medium::new(Rgb::new(1.0, 2.0, 3.0), Rgb::ONE, phase).unwrap());
-            let s = b.add_shape(Geometry::Sphere(Sphere { center: Vec3::ZERO, radius: 1.0, flip: false }), null, None);
+            let s = b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
             b.set_shape_media(s, Some(m), None);
             b.add_constant_environment(Rgb::ONE);
             b.set_camera(camera(12, 12, 30.0));

@@ -451,7 +451,7 @@ mod tests {
                     Disk::new(Transform::translate(c) * Transform::rotate(Vec3::X, 90.0).unwrap(), false).unwrap(),
                 )
             } else {
-                Geometry::Sphere(Sphere { center: c, radius: 0.01 + 0.3 * r(), flip: false })
+                Geometry::Sphere(Sphere::new(c, 0.01 + 0.3 * r(), false))
             };
             assert!(g.prepare_sampling());
             if let Geometry::Mesh(m) = &mut g {

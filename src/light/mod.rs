@@ -448,7 +448,7 @@ mod tests {
         disk_geo.prepare_sampling();
         let mut shapes = vec![
             Geometry::Mesh(rect),
-            Geometry::Sphere(Sphere { center: Vec3::new(0.0, 0.3, 2.0), radius: 0.7, flip: false }),
+            Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.3, 2.0), 0.7, false)),
             disk_geo,
         ];
         for s in &mut shapes {

@@ -129,8 +129,8 @@ mod tests {
         .unwrap();
         let mut shapes = vec![
             Geometry::Mesh(quad),
-            Geometry::Sphere(Sphere { center: p + Vec3::new(0.0, -2.0, -1.0), radius: 0.8, flip: false }),
-            Geometry::Sphere(Sphere { center: p + Vec3::new(3.0, 1.0, 0.0), radius: 0.05, flip: false }),
+            Geometry::Sphere(Sphere::new(p + Vec3::new(0.0, -2.0, -1.0), 0.8, false)),
+            Geometry::Sphere(Sphere::new(p + Vec3::new(3.0, 1.0, 0.0), 0.05, false)),
             Geometry::Disk(disk),
         ];
         for s in &mut shapes {

@@ -246,7 +246,7 @@ mod tests {
         use crate::math::{Rgb, Transform, Vec3};
         let mut b = crate::scene::SceneBuilder::new();
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, flip: false }), m, None);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0, false)), m, None);
         b.add_point_light(Vec3::ZERO, Rgb::ONE);
         b.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 9, 9).unwrap());
         let scene = b.build().unwrap();

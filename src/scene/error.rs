@@ -53,12 +53,12 @@ mod tests {
         let camera = Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap();
         let mut b = SceneBuilder::new();
         b.set_camera(camera.clone());
-        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::Z, radius: 1.0, flip: false }), 3, None);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), 3, None);
         assert_eq!(b.build().unwrap_err(), BuildError::MissingBsdf { shape: 0, bsdf: 3, count: 0 });
         let mut b = SceneBuilder::new();
         b.set_camera(camera);
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        b.add_shape(Geometry::Sphere(Sphere { center: Vec3::Z, radius: 1.0, flip: false }), m, Some(Rgb::ZERO));
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), m, Some(Rgb::ZERO));
         assert_eq!(b.build().unwrap_err(), BuildError::NoLightPower);
         let e: BuildError = Camera::perspective(Transform::IDENTITY, 200.0, FovAxis::X, 4, 4).unwrap_err().into();
         assert_eq!(e, BuildError::Camera(CameraError::FieldOfView(200.0)));

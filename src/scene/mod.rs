@@ -409,7 +409,7 @@ mod tests {
         let mesh = TriangleMesh::new(positions, vec![], vec![], indices).unwrap();
         let tris: Vec<[Vec3; 3]> = (0..mesh.len()).map(|i| mesh.triangle(i)).collect();
         let spheres: Vec<Sphere> = (0..40)
-            .map(|_| Sphere { center: v(&mut rng, 8.0), radius: 0.1 + 0.3 * rng.next_f32(), flip: false })
+            .map(|_| Sphere::new(v(&mut rng, 8.0), 0.1 + 0.3 * rng.next_f32(), false))
             .collect();
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
