@@ -18,6 +18,6 @@ pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
-pub use registry::{shape_plugin, MeshSource, ShapePlugin, SHAPE_PLUGINS};
+pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
 pub use shape::{Geometry, ShapeSample};
 pub use sphere::Sphere;

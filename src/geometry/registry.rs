@@ -8,12 +8,22 @@ use super::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
 use crate::math::{Transform, Vec3};
 use crate::props::{Obj, Result};
 
+/// A mesh read from a file, and whether the file asks for flat shading (Mitsuba's serialized
+/// format has a flag for it).
+#[derive(Debug)]
+pub struct MeshFile {
+    /// The mesh, in its own coordinates.
+    pub mesh: TriangleMesh,
+    /// The file asks for face normals.
+    pub face_normals: bool,
+}
+
 /// Where mesh plugins get their files: the loader resolves the file that the string parameter
-/// `name` of `o` names (relative to the scene file) and reads it (OBJ or PLY).
+/// `name` of `o` names and reads it in the format of `o`'s plugin (`obj`, `ply`, or
+/// `serialized` with its `shape_index`).
 pub trait MeshSource {
-    /// The mesh named by parameter `name` of `o`, in its own coordinates; errors are located at
-    /// the parameter.
-    fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh>;
+    /// The mesh named by parameter `name` of `o`; errors are located at the parameter.
+    fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile>;
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
@@ -23,6 +33,7 @@ pub type ShapePlugin = fn(&Obj, &Transform, bool, &mut dyn MeshSource) -> Result
 pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("obj", mesh_file),
     ("ply", mesh_file),
+    ("serialized", mesh_file),
     ("rectangle", rectangle),
     ("cube", cube),
     ("disk", disk),
@@ -35,13 +46,14 @@ pub fn shape_plugin(name: &str) -> Option<ShapePlugin> {
     SHAPE_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
 }
 
-/// Mitsuba's `obj` and `ply`: `filename`, `face_normals` (false: the file's vertex normals
-/// are kept, and a file without them gets smooth angle-weighted ones, as Mitsuba computes;
-/// true: flat shading); `obj` also `flip_tex_coords` (true: v becomes 1 − v, as Mitsuba's OBJ
-/// loader does).
+/// Mitsuba's `obj`, `ply` and `serialized`: `filename`, `face_normals` (false: the file's
+/// vertex normals are kept, and a file without them gets smooth angle-weighted ones, as Mitsuba
+/// computes; true, or a serialized file's face-normal flag: flat shading); `obj` also
+/// `flip_tex_coords` (true: v becomes 1 − v, as Mitsuba's OBJ loader does); `serialized` also
+/// `shape_index` (0; read by the loader).
 fn mesh_file(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
-    let mut mesh = meshes.mesh(o, "filename")?;
-    let face_normals = o.bool("face_normals", false)?;
+    let MeshFile { mut mesh, face_normals: flat_file } = meshes.mesh(o, "filename")?;
+    let face_normals = o.bool("face_normals", false)? || flat_file;
     if face_normals {
         mesh.normals.clear();
     }

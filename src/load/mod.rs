@@ -1,6 +1,6 @@
 //! Loading files, the top layer: scene formats (Mitsuba 3 XML, [`mitsuba`]), which construct
-//! scenes, integrators and render settings, and the files they name: Wavefront OBJ and Stanford
-//! PLY meshes, PNG and OpenEXR images. Errors name the file, the line (for text formats) and what
+//! scenes, integrators and render settings, and the files they name: Wavefront OBJ, Stanford
+//! PLY and Mitsuba serialized meshes, and images. Errors name the file, the line (for text formats) and what
 //! was expected.
 
 mod error;
@@ -9,6 +9,7 @@ pub mod mitsuba;
 pub mod obj;
 pub mod ply;
 mod resolver;
+pub mod serialized;
 
 pub use error::LoadError;
 pub use resolver::FileResolver;

@@ -125,8 +125,8 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval(wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
-            Bsdf::Plastic(b) => b.eval(wo, wi),
-            Bsdf::RoughPlastic(b) => b.eval(wo, wi),
+            Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
+            Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -177,8 +177,8 @@ impl Bsdf {
             Bsdf::RoughConductor(b) => b.sample(wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
-            Bsdf::Plastic(b) => b.sample(wo, u1, u),
-            Bsdf::RoughPlastic(b) => b.sample(wo, u1, u),
+            Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
@@ -241,8 +241,8 @@ impl Bsdf {
     pub fn diffuse_reflectance(&self, ctx: &BsdfContext, wo: Vec3) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.reflectance.eval(ctx.uv),
-            Bsdf::Plastic(b) => b.diffuse_reflectance,
-            Bsdf::RoughPlastic(b) => b.diffuse_reflectance,
+            Bsdf::Plastic(b) => b.diffuse_reflectance.eval(ctx.uv),
+            Bsdf::RoughPlastic(b) => b.diffuse_reflectance.eval(ctx.uv),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w

@@ -12,12 +12,13 @@
 //! `F(cos θₒ) · s / (s + d)` against `(1 - F(cos θₒ)) · d / (s + d)`, `s` and `d` being the mean
 //! specular and diffuse reflectances (Mitsuba's rule).
 //!
-//! Parameters (Mitsuba): `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior`
+//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1), `int_ior`
 //! (polypropylene, 1.49), `ext_ior` (air), `nonlinear` (false).
 
 use super::fresnel::eta_from_props;
 use super::fresnel::{fresnel_dielectric, reflect};
-use super::{Bsdf, BsdfBuilder, BsdfSample};
+use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
+use crate::texture::Texture;
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
 use crate::props::{Obj, Result as PropResult};
@@ -26,8 +27,8 @@ use crate::sampling::sample_cosine_hemisphere_malley;
 /// Smooth plastic.
 #[derive(Clone, Debug)]
 pub struct Plastic {
-    /// Base albedo ρ.
-    pub diffuse_reflectance: Rgb,
+    /// Base albedo ρ (texturable).
+    pub diffuse_reflectance: Texture,
     /// Specular scale.
     pub specular_reflectance: Rgb,
     /// `int_ior / ext_ior` of the coating.
@@ -78,19 +79,21 @@ pub(super) fn coated_diffuse_albedo(rho: Rgb, r_int: f32, nonlinear: bool) -> Rg
 
 impl Plastic {
     /// Plastic with the given parameters.
-    pub fn new(diffuse_reflectance: Rgb, specular_reflectance: Rgb, eta: f32, nonlinear: bool) -> Plastic {
+    pub fn new(diffuse_reflectance: impl Into<Texture>, specular_reflectance: Rgb, eta: f32, nonlinear: bool) -> Plastic {
+        let diffuse_reflectance = diffuse_reflectance.into();
+        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance);
         Plastic {
             diffuse_reflectance,
             specular_reflectance,
             eta,
             nonlinear,
             fdr_int: diffuse_fresnel_reflectance(1.0 / eta),
-            specular_weight: specular_sampling_weight(diffuse_reflectance, specular_reflectance),
+            specular_weight,
         }
     }
 
-    fn diffuse_albedo(&self) -> Rgb {
-        coated_diffuse_albedo(self.diffuse_reflectance, self.fdr_int, self.nonlinear)
+    fn diffuse_albedo(&self, ctx: &BsdfContext) -> Rgb {
+        coated_diffuse_albedo(self.diffuse_reflectance.eval(ctx.uv), self.fdr_int, self.nonlinear)
     }
 
     fn probabilities(&self, cos_o: f32) -> (f32, f32) {
@@ -102,13 +105,13 @@ impl Plastic {
     }
 
     /// The diffuse part `f_d cos θᵢ` (the specular part is a delta).
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
         let fo = fresnel_dielectric(wo.z, self.eta).0;
         let fi = fresnel_dielectric(wi.z, self.eta).0;
-        self.diffuse_albedo() * ((1.0 - fo) * (1.0 - fi) * INV_PI / (self.eta * self.eta) * wi.z)
+        self.diffuse_albedo(ctx) * ((1.0 - fo) * (1.0 - fi) * INV_PI / (self.eta * self.eta) * wi.z)
     }
 
     /// Density of the diffuse lobe's directions (the specular lobe has none).
@@ -120,7 +123,7 @@ impl Plastic {
     }
 
     /// Specular reflection (delta) or a cosine-weighted diffuse direction.
-    pub fn sample(&self, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -140,17 +143,18 @@ impl Plastic {
             if pdf <= 0.0 {
                 return None;
             }
-            Some(BsdfSample { wi, pdf, weight: self.eval(wo, wi) / pdf, delta: false, eta: 1.0 })
+            Some(BsdfSample { wi, pdf, weight: self.eval(ctx, wo, wi) / pdf, delta: false, eta: 1.0 })
         }
     }
 }
 
-/// The parameters both plastics read: `diffuse_reflectance` (0.5), `specular_reflectance` (1),
-/// `eta` from `int_ior` (polypropylene, 1.49) and `ext_ior`, `nonlinear` (false).
-pub(crate) fn plastic_props(o: &Obj) -> PropResult<(Rgb, Rgb, f32, bool)> {
+/// The parameters both plastics read: `diffuse_reflectance` (0.5, texturable),
+/// `specular_reflectance` (1), `eta` from `int_ior` (polypropylene, 1.49) and `ext_ior`,
+/// `nonlinear` (false).
+pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Texture, Rgb, f32, bool)> {
     let refl = SpectrumKind::Reflectance;
     Ok((
-        o.rgb("diffuse_reflectance", Rgb::splat(0.5), refl)?,
+        b.texture(o, "diffuse_reflectance", Rgb::splat(0.5))?,
         o.rgb("specular_reflectance", Rgb::ONE, refl)?,
         eta_from_props(o, 1.49)?,
         o.bool("nonlinear", false)?,
@@ -159,8 +163,8 @@ pub(crate) fn plastic_props(o: &Obj) -> PropResult<(Rgb, Rgb, f32, bool)> {
 
 impl Plastic {
     /// Mitsuba's `plastic` : `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior` (1.49), `ext_ior` (air), `nonlinear` (false).
-    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
-        let (diffuse, specular, eta, nonlinear) = plastic_props(o)?;
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (diffuse, specular, eta, nonlinear) = plastic_props(o, b)?;
         Ok(Bsdf::Plastic(Plastic::new(diffuse, specular, eta, nonlinear)))
     }
 }
@@ -188,7 +192,7 @@ mod tests {
             let n = 100_000;
             let mut sum = 0.0f64;
             for _ in 0..n {
-                if let Some(s) = p.sample(wo, rng.next_f32(), crate::testkit::u2(&mut rng)) {
+                if let Some(s) = p.sample(&BsdfContext::default(), wo, rng.next_f32(), crate::testkit::u2(&mut rng)) {
                     sum += s.weight.x as f64;
                 }
             }

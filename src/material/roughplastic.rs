@@ -13,14 +13,15 @@
 //! Sampling picks the specular lobe with probability ∝ `(1 - T(cos θₒ)) s / (s + d)` against
 //! `T(cos θₒ) d / (s + d)`.
 //!
-//! Parameters (Mitsuba): `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior`
+//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1), `int_ior`
 //! (1.49), `ext_ior`, `distribution` (beckmann, ggx), `alpha` (0.1), `nonlinear` (false).
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
 use crate::math::quadrature::gauss_legendre;
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::plastic::{coated_diffuse_albedo, specular_sampling_weight};
-use super::{Bsdf, BsdfBuilder, BsdfSample};
+use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
+use crate::texture::Texture;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_cosine_hemisphere_malley;
@@ -32,8 +33,8 @@ const TABLE: usize = 64;
 pub struct RoughPlastic {
     /// Microfacet distribution of the coating.
     pub distribution: Microfacet,
-    /// Base albedo ρ.
-    pub diffuse_reflectance: Rgb,
+    /// Base albedo ρ (texturable).
+    pub diffuse_reflectance: Texture,
     /// Specular scale.
     pub specular_reflectance: Rgb,
     /// `int_ior / ext_ior`.
@@ -123,11 +124,13 @@ impl RoughPlastic {
     /// Rough plastic with the given parameters (tables computed here, or reused).
     pub fn new(
         distribution: Microfacet,
-        diffuse_reflectance: Rgb,
+        diffuse_reflectance: impl Into<Texture>,
         specular_reflectance: Rgb,
         eta: f32,
         nonlinear: bool,
     ) -> Self {
+        let diffuse_reflectance = diffuse_reflectance.into();
+        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance);
         let tables = coating_tables(distribution, eta);
         let (external_transmittance, internal_reflectance) = (tables.0.clone(), tables.1);
         RoughPlastic {
@@ -138,7 +141,7 @@ impl RoughPlastic {
             nonlinear,
             external_transmittance,
             internal_reflectance,
-            specular_weight: specular_sampling_weight(diffuse_reflectance, specular_reflectance),
+            specular_weight,
         }
     }
 
@@ -161,12 +164,12 @@ impl RoughPlastic {
         (ps / total, pd / total)
     }
 
-    fn diffuse_albedo(&self) -> Rgb {
-        coated_diffuse_albedo(self.diffuse_reflectance, self.internal_reflectance, self.nonlinear)
+    fn diffuse_albedo(&self, ctx: &BsdfContext) -> Rgb {
+        coated_diffuse_albedo(self.diffuse_reflectance.eval(ctx.uv), self.internal_reflectance, self.nonlinear)
     }
 
     /// `f cos θᵢ` (specular + diffuse).
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
@@ -174,7 +177,7 @@ impl RoughPlastic {
         let f = fresnel_dielectric(wo.dot(m), self.eta).0;
         let spec = f * self.distribution.d(m) * self.distribution.g(wi, wo, m) / (4.0 * wo.z);
         let diff = self.transmittance(wo.z) * self.transmittance(wi.z) * INV_PI / (self.eta * self.eta) * wi.z;
-        self.specular_reflectance * spec + self.diffuse_albedo() * diff
+        self.specular_reflectance * spec + self.diffuse_albedo(ctx) * diff
     }
 
     /// Density of [`RoughPlastic::sample`].
@@ -189,7 +192,7 @@ impl RoughPlastic {
 
     /// Specular (visible normal, reflected) or diffuse (cosine) direction, weighted by the full
     /// mixture.
-    pub fn sample(&self, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -203,15 +206,15 @@ impl RoughPlastic {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: self.eval(wo, wi) / pdf, delta: false, eta: 1.0 })
+        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: self.eval(ctx, wo, wi) / pdf, delta: false, eta: 1.0 })
     }
 }
 
 impl RoughPlastic {
     /// Mitsuba's `roughplastic`: the plastic's parameters and an isotropic microfacet
     /// distribution.
-    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
-        let (diffuse, specular, eta, nonlinear) = super::plastic::plastic_props(o)?;
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (diffuse, specular, eta, nonlinear) = super::plastic::plastic_props(o, b)?;
         Ok(Bsdf::RoughPlastic(RoughPlastic::new(Microfacet::from_props(o, false)?, diffuse, specular, eta, nonlinear)))
     }
 }

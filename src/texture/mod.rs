@@ -1,8 +1,8 @@
 //! Textures: spatially varying parameters of materials, looked up by surface uv.
 //!
 //! Mitsuba 3's plugins: `bitmap` (an image; bilinear or nearest filtering; repeat, mirror or
-//! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`) and constant
-//! values. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
+//! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`),
+//! `rawconstant` and constant values. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
 //! Image convention (Mitsuba 3's, checked against it): uv (0, 0) is the *top-left* corner of the
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
@@ -159,7 +159,7 @@ pub type TexturePlugin = fn(&Obj, &mut dyn ImageSource) -> PropResult<Texture>;
 
 /// Every texture plugin by its (Mitsuba) name.
 pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
-    &[("bitmap", bitmap_from_props), ("checkerboard", checkerboard_from_props)];
+    &[("bitmap", bitmap_from_props), ("checkerboard", checkerboard_from_props), ("rawconstant", rawconstant_from_props)];
 
 /// The constructor of the texture plugin `name`.
 pub fn texture_plugin(name: &str) -> Option<TexturePlugin> {
@@ -201,6 +201,22 @@ fn checkerboard_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Textu
         color1: o.rgb("color1", Rgb::splat(0.2), refl)?,
         to_uv: to_uv_from_props(o)?,
     })
+}
+
+/// Mitsuba's `rawconstant`: `value` (required), a `<float>` or an `<rgb>`/`<vector>` triple,
+/// used as given (no spectral conversion).
+fn rawconstant_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
+    use crate::props::Value;
+    let p = o.get("value").ok_or_else(|| o.error("rawconstant needs a 'value' (a <float> or an <rgb>)"))?;
+    p.used.set(true);
+    let v = match &p.value {
+        Value::Float(f) => Rgb::splat(*f as f32),
+        Value::Integer(i) => Rgb::splat(*i as f32),
+        Value::Rgb(c) => *c,
+        Value::Vector(v) | Value::Point(v) => *v,
+        other => return Err(o.error_at("value", format!("'value' must be a <float> or an <rgb>, not a <{}>", other.kind()))),
+    };
+    Ok(Texture::Constant(v))
 }
 
 #[cfg(test)]

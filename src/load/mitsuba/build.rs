@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
-use crate::geometry::{shape_plugin, MeshSource, TriangleMesh, SHAPE_PLUGINS};
+use crate::geometry::{shape_plugin, MeshFile, MeshSource, SHAPE_PLUGINS};
 use crate::image::{Image, ImageSource};
 use crate::integrator::{integrator_plugin, AnyIntegrator, INTEGRATOR_PLUGINS};
 use crate::light::LightSamplerKind;
@@ -398,8 +398,20 @@ impl ImageSource for Builder {
 }
 
 impl MeshSource for Builder {
-    fn mesh(&mut self, o: &Obj, name: &str) -> Result<TriangleMesh> {
+    fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile> {
         let path = self.resolver.resolve(&o.string(name)?);
-        crate::load::load_mesh(&path).map_err(|e| o.error_at(name, e.to_string()))
+        let located = |e: crate::load::LoadError| o.error_at(name, e.to_string());
+        match o.ty.as_str() {
+            "obj" => Ok(MeshFile { mesh: crate::load::obj::load_obj(&path).map_err(located)?, face_normals: false }),
+            "ply" => Ok(MeshFile { mesh: crate::load::ply::load_ply(&path).map_err(located)?, face_normals: false }),
+            _ => {
+                let index = o.int("shape_index", 0)?;
+                let index = usize::try_from(index)
+                    .map_err(|_| o.error_at("shape_index", format!("shape_index must be ≥ 0, got {index}")))?;
+                // Vertex colours only matter to `mesh_attribute` textures, which are an error.
+                let s = crate::load::serialized::load_serialized(&path, index).map_err(located)?;
+                Ok(MeshFile { mesh: s.mesh, face_normals: s.face_normals })
+            }
+        }
     }
 }
