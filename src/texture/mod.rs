@@ -203,18 +203,19 @@ fn checkerboard_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Textu
     })
 }
 
-/// Mitsuba's `rawconstant`: `value` (required), a `<float>` or an `<rgb>`/`<vector>` triple,
-/// used as given (no spectral conversion).
+/// Mitsuba's `rawconstant`: `value` (required), a `<float>` or a `<vector>` (three channels),
+/// used as given (no spectral conversion); Mitsuba refuses an `<rgb>` here, and so does neumann.
 fn rawconstant_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
     use crate::props::Value;
-    let p = o.get("value").ok_or_else(|| o.error("rawconstant needs a 'value' (a <float> or an <rgb>)"))?;
+    let p = o.get("value").ok_or_else(|| o.error("rawconstant needs a 'value' (a <float> or a <vector>)"))?;
     p.used.set(true);
     let v = match &p.value {
         Value::Float(f) => Rgb::splat(*f as f32),
         Value::Integer(i) => Rgb::splat(*i as f32),
-        Value::Rgb(c) => *c,
-        Value::Vector(v) | Value::Point(v) => *v,
-        other => return Err(o.error_at("value", format!("'value' must be a <float> or an <rgb>, not a <{}>", other.kind()))),
+        Value::Vector(v) => *v,
+        other => {
+            return Err(o.error_at("value", format!("'value' must be a <float> or a <vector>, not a <{}>", other.kind())))
+        }
     };
     Ok(Texture::Constant(v))
 }

@@ -5,8 +5,13 @@
   short-render comparison).
 - tiles.png: a 64x64 sRGB texture that is not symmetric (an 'F' of coloured blocks on a grid),
   so a flipped or mirrored lookup shows.
+- knot.obj and knot.serialized: a low-polygon torus knot without normals (Mitsuba computes smooth
+  vertex normals for such meshes; faceted shading would show), the serialized file (zlib,
+  version 4) holding a small triangle first so that shape_index 1 picks the knot.
 Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
 import math
+import struct
+import zlib
 import numpy as np
 import mitsuba as mi
 
@@ -42,4 +47,45 @@ tex[8:18, 20:52] = [0.1, 0.2, 0.8]
 tex[28:36, 20:42] = [0.1, 0.6, 0.15]
 img = mi.Bitmap(tex).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
 img.write("scenes/assets/tiles.png")
-print("wrote scenes/assets/sky.exr and scenes/assets/tiles.png")
+
+# A (2, 3) torus knot tube: 64 segments around the curve, 6 around the tube.
+seg, ring, r_tube = 64, 6, 0.18
+verts, faces = [], []
+def knot(t):
+    r = 0.6 + 0.3 * math.cos(3 * t)
+    return np.array([r * math.cos(2 * t), 0.3 * math.sin(3 * t), r * math.sin(2 * t)])
+for i in range(seg):
+    t = 2 * math.pi * i / seg
+    p, q = knot(t), knot(t + 1e-3)
+    tangent = (q - p) / np.linalg.norm(q - p)
+    side = np.cross(tangent, [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+    up = np.cross(side, tangent)
+    for j in range(ring):
+        a = 2 * math.pi * j / ring
+        verts.append(p + r_tube * (math.cos(a) * side + math.sin(a) * up))
+for i in range(seg):
+    for j in range(ring):
+        a, b = i * ring + j, ((i + 1) % seg) * ring + j
+        c, d = ((i + 1) % seg) * ring + (j + 1) % ring, i * ring + (j + 1) % ring
+        faces += [(a, b, c), (a, c, d)]
+with open("scenes/assets/knot.obj", "w") as f:
+    f.write("# (2, 3) torus knot, no normals: written by tools/mitsuba/make_assets.py\n")
+    for v in verts:
+        f.write("v %.5f %.5f %.5f\n" % tuple(v))
+    for a, b, c in faces:
+        f.write("f %d %d %d\n" % (a + 1, b + 1, c + 1))
+
+
+def serialized_mesh(vs, fs, name):
+    raw = struct.pack("<I", 0x1000) + name + b"\0" + struct.pack("<QQ", len(vs), len(fs))
+    raw += b"".join(struct.pack("<fff", *map(float, v)) for v in vs)
+    raw += b"".join(struct.pack("<III", *f) for f in fs)
+    return struct.pack("<HH", 0x041C, 4) + zlib.compress(raw)
+
+
+first = serialized_mesh([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 2)], b"triangle")
+second = serialized_mesh(verts, faces, b"knot")
+with open("scenes/assets/knot.serialized", "wb") as f:
+    f.write(first + second + struct.pack("<QQI", 0, len(first), 2))
+print("wrote scenes/assets/sky.exr, tiles.png, knot.obj and knot.serialized")

@@ -39,6 +39,10 @@ SCENES = {
     "small_lights": (16384, 64, {}, 1.2),
     "small_light_env": (16384, 256, {}, 1.2),
     "many_lights": (32768, 64, {}, 0.5),
+    # Mitsuba conventions: moment and aov integrators, meshes without normals (OBJ, serialized),
+    # rotated sphere textures, textured rough plastic, rawconstant, the orthographic sensor.
+    "mitsuba_compat": (8192, 64, {}, 1.5),
+    "orthographic": (4096, 64, {}, 1.5),
 }
 SEEDS = 4
 

@@ -597,3 +597,67 @@ fn light_sampler_parameter() {
     .unwrap();
     assert!(f.warnings.iter().any(|w| w.contains("light_sampler")), "{:?}", f.warnings);
 }
+
+/// `moment` and `aov` nest camera-ray integrators, named as Mitsuba names them; a light tracer
+/// cannot be nested; bad AOV lists are located errors.
+#[test]
+fn moment_and_aov_integrators() {
+    use crate::integrator::{AnyIntegrator, Integrator};
+    let f = load(&scene(
+        r#"<integrator type="moment"><integrator type="direct" name="d"/><integrator type="path"/><integrator type="path"/></integrator>"#,
+    ))
+    .unwrap();
+    let AnyIntegrator::Moment(m) = &f.integrator else { panic!("{:?}", f.integrator) };
+    let names: Vec<&str> = m.nested.iter().map(|n| n.0.as_str()).collect();
+    assert_eq!(names, ["d", "_arg_0", "_arg_1"]);
+    assert_eq!(m.aov_names().len(), 18);
+    assert_eq!(m.aov_names()[9], "m2_d.X");
+    let f = load(&scene(
+        r#"<integrator type="aov"><string name="aovs" value="dd.y:depth, nn:sh_normal"/><integrator type="path" name="img"/></integrator>"#,
+    ))
+    .unwrap();
+    let AnyIntegrator::Aov(a) = &f.integrator else { panic!() };
+    assert_eq!(a.aov_names(), ["img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]);
+    let e = err(&scene(r#"<integrator type="moment"><integrator type="ptracer"/></integrator>"#));
+    assert!(e.contains("ptracer integrator cannot be nested"), "{e}");
+    let e = err(&scene(r#"<integrator type="aov"><string name="aovs" value="x:curvature"/></integrator>"#));
+    assert!(e.contains("unknown AOV type 'curvature'") && e.contains("test.xml:"), "{e}");
+    let e = err(&scene(r#"<integrator type="aov"><string name="aovs" value="x:dp_du"/></integrator>"#));
+    assert!(e.contains("not implemented"), "{e}");
+    let e = err(&scene(r#"<integrator type="moment"/>"#));
+    assert!(e.contains("needs a nested <integrator>"), "{e}");
+}
+
+/// The orthographic sensor, `rawconstant` (a float or a vector, not an rgb, as Mitsuba) and
+/// serialized meshes picked by `shape_index` (which the plugin type, not the extension, selects).
+#[test]
+fn orthographic_rawconstant_and_serialized() {
+    use crate::camera::Projection;
+    let f = load(
+        r#"<scene version="3.0.0"><sensor type="orthographic"><transform name="to_world"><scale value="2"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+        <shape type="sphere"><bsdf type="plastic"><texture name="diffuse_reflectance" type="rawconstant">
+        <float name="value" value="0.25"/></texture></bsdf></shape></scene>"#,
+    )
+    .unwrap();
+    assert_eq!(f.scene.camera().projection(), Projection::Orthographic);
+    let e = err(&scene(
+        r#"<shape type="sphere"><bsdf type="diffuse"><texture name="reflectance" type="rawconstant"><rgb name="value" value="1,0,0"/></texture></bsdf></shape>"#,
+    ));
+    assert!(e.contains("must be a <float> or a <vector>"), "{e}");
+    let dir = std::env::temp_dir().join(format!("neumann-ser-xml-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cube = crate::geometry::TriangleMesh::cube();
+    let quad = crate::geometry::TriangleMesh::rectangle();
+    let bytes = crate::load::serialized::tests::write_serialized(&[(&quad, false), (&cube, true)]);
+    std::fs::write(dir.join("m.data"), bytes).unwrap();
+    let text = scene(
+        r#"<shape type="serialized"><string name="filename" value="m.data"/><integer name="shape_index" value="1"/></shape>"#,
+    );
+    let f = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap();
+    assert_eq!(f.scene.primitive_count(), 12, "the cube, mesh 1");
+    let text = scene(r#"<shape type="serialized"><string name="filename" value="m.data"/><integer name="shape_index" value="5"/></shape>"#);
+    let e = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap_err().to_string();
+    assert!(e.contains("shape_index 5 is out of range") && e.contains("s.xml:"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
