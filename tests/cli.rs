@@ -226,3 +226,41 @@ fn light_sampler_flag() {
         assert!((m / means[0] - 1.0).abs() < 0.05, "{means:?}");
     }
 }
+
+/// A closed standard output (`neumann render | head -1`) is no reason to panic: the render
+/// finishes and writes its image.
+#[test]
+fn a_closed_stdout_does_not_stop_the_render() {
+    let out = temp("closed-stdout.png");
+    let mut child = neumann()
+        .args(["render", "--res", "16", "--spp", "4", "-o"])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before anything is printed
+    let r = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(std::fs::metadata(&out).unwrap().len() > 0);
+}
+
+/// `--integrator moment` writes Mitsuba's moment layers beside R, G, B in the EXR (and a PNG
+/// output says it leaves them out).
+#[test]
+fn moment_layers_go_to_the_exr() {
+    let out = temp("moment.exr");
+    let r = neumann().args(["render", "--res", "8", "--spp", "4", "--integrator", "moment", "-o"]).arg(&out).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let image = exr::prelude::read_all_flat_layers_from_file(&out).unwrap();
+    let names: Vec<String> = image.layer_data[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    for n in ["R", "G", "B", "_arg_0.X", "_arg_0.Y", "_arg_0.Z", "m2__arg_0.X", "m2__arg_0.Y", "m2__arg_0.Z"] {
+        assert!(names.iter().any(|c| c == n), "{n} missing from {names:?}");
+    }
+    let png = temp("moment.png");
+    let r = neumann().args(["render", "--res", "8", "--spp", "4", "--integrator", "moment", "-o"]).arg(&png).output().unwrap();
+    assert!(r.status.success());
+    assert!(String::from_utf8_lossy(&r.stdout).contains("are not written: only .exr holds them"));
+}

@@ -92,7 +92,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         None => displaced_sphere(args.triangles as usize),
     };
     let name = args.mesh.as_ref().map_or("generated displaced sphere".to_string(), |p| p.display().to_string());
-    println!("mesh: {name}, {} triangles", mesh.len());
+    say!("mesh: {name}, {} triangles", mesh.len());
 
     // BVH build alone.
     let bounds: Vec<Bounds3> = (0..mesh.len())
@@ -105,7 +105,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let t = Instant::now();
         let bvh = pool(threads).install(|| Bvh::build(&bounds, &neumann::scene::bvh_options(bounds.len())));
         let s = bvh.stats();
-        println!(
+        say!(
             "BVH build ({threads} thread{}): {:.3} s  ({} nodes, {} leaves, depth {}, SAH cost {:.1})",
             if threads == 1 { "" } else { "s" },
             t.elapsed().as_secs_f64(),
@@ -132,7 +132,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
             Ray::new(o, sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value)
         })
         .collect();
-    println!("{:<28} {:>12} {:>12}   hit rate", "rays (Mrays/s)", "1 thread", format!("{all} threads"));
+    say!("{:<28} {:>12} {:>12}   hit rate", "rays (Mrays/s)", "1 thread", format!("{all} threads"));
     // Closest-hit as ray-tracing kernels time it (Embree's rtcIntersect1): distance, primitive
     // and barycentrics; and with the surface interaction the renderer then computes.
     let closest = |r: &Ray| scene.intersect_hit(r).is_some();
@@ -146,7 +146,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     ] {
         let (one, hits) = throughput(1, rays, f);
         let (many, _) = throughput(all, rays, f);
-        println!("{label:<28} {one:>12.2} {many:>12.2}   {:.0} %", 100.0 * hits as f64 / rays.len() as f64);
+        say!("{label:<28} {one:>12.2} {many:>12.2}   {:.0} %", 100.0 * hits as f64 / rays.len() as f64);
     }
 
     if !args.no_cbox {
@@ -154,7 +154,7 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         let integrator = PathIntegrator::with_max_depth(8);
         let settings = RenderSettings { spp: args.cbox_spp, seed: 0, ..Default::default() };
         let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).map_err(|e| e.to_string())?;
-        println!(
+        say!(
             "Cornell box {r}x{r}, {} spp, max_depth 8, {all} threads: {:.2} s, {:.3} M samples/s",
             args.cbox_spp,
             out.elapsed.as_secs_f64(),

@@ -97,7 +97,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
         }
         None => {
             let spp = a.max_spp.saturating_mul(16).min(1 << 16);
-            println!(
+            say!(
                 "no --ref: rendering a reference with MIS at {spp} spp (seed {}), written to reference.exr",
                 a.seed + 1_000_003
             );
@@ -123,7 +123,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     };
     let levels = spp_levels(a.max_spp);
     let mut curves = Vec::new();
-    println!("{:<24} {:>8} {:>12} {:>10} {:>12}", "estimator", "slope", "MSE (max)", "seconds", "1/(MSE·s)");
+    say!("{:<24} {:>8} {:>12} {:>10} {:>12}", "estimator", "slope", "MSE (max)", "seconds", "1/(MSE·s)");
     for &d in &a.direct {
         for &s in &a.sampler {
             let name = if a.sampler.len() > 1 { format!("{d} / {s}") } else { format!("{d}") };
@@ -133,7 +133,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
             let curve = measure(&name, &job.file.scene, &integrator, &reference, &levels, &base)
                 .map_err(|e| Failure(1, e.to_string()))?;
             let last = curve.points.last().copied().expect("at least one level");
-            println!(
+            say!(
                 "{name:<24} {:>8.3} {:>12.4e} {:>10.3} {:>12.4e}",
                 curve.slope().unwrap_or(f64::NAN),
                 last.mse,
@@ -147,7 +147,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     let title = format!("{} {w}x{h}, max_depth {max_depth}: MSE against a reference", job.name);
     plot(&a.out.join("convergence.svg"), &a.out.join("convergence.png"), &title, &curves)
         .map_err(|e| Failure(1, e.to_string()))?;
-    println!("wrote convergence.csv, convergence.svg and convergence.png to {}", a.out.display());
+    say!("wrote convergence.csv, convergence.svg and convergence.png to {}", a.out.display());
     Ok(())
 }
 

@@ -9,6 +9,15 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::atomic::AtomicBool;
 
+/// `println!` that ignores a closed standard output (`neumann render … | head` must not panic
+/// on a broken pipe: the render goes on and its image is written).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod bench;
 mod converge;
 mod job;

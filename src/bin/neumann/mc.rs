@@ -19,7 +19,7 @@ fn mc_rows(
         let estimates: Vec<f64> = (0..runs).map(|_| run(n, &mut rng)).collect();
         let mean = estimates.iter().sum::<f64>() / runs as f64;
         let rmse = (estimates.iter().map(|e| (e - exact) * (e - exact)).sum::<f64>() / runs as f64).sqrt();
-        println!("{name:<28} {n:>8} {mean:>12.6} {exact:>12.6} {rmse:>12.3e}");
+        say!("{name:<28} {n:>8} {mean:>12.6} {exact:>12.6} {rmse:>12.3e}");
     }
 }
 
@@ -30,9 +30,9 @@ pub fn run(runs: u32, seed: u64, radiance: f64) {
     use neumann::estimators::irradiance::{
         estimate_sphere_light_irradiance, estimate_uniform_sky_irradiance_stratified, SphereLightStrategy,
     };
-    let header = || println!("{:<28} {:>8} {:>12} {:>12} {:>12}", "estimator", "N", "estimate", "exact", "RMSE");
+    let header = || say!("{:<28} {:>8} {:>12} {:>12} {:>12}", "estimator", "N", "estimate", "exact", "RMSE");
     let exact = radiance * std::f64::consts::PI;
-    println!("Irradiance under a uniform sky of radiance L = {radiance}: E = ∫ L cos θ dω = L π = {exact:.6}");
+    say!("Irradiance under a uniform sky of radiance L = {radiance}: E = ∫ L cos θ dω = L π = {exact:.6}");
     header();
     let counts = [16usize, 256, 4096, 65536];
     for (name, strategy) in
@@ -49,8 +49,8 @@ pub fn run(runs: u32, seed: u64, radiance: f64) {
 
     let (r, h) = (0.25, 2.0);
     let exact = std::f64::consts::PI * radiance * (r / h) * (r / h);
-    println!();
-    println!(
+    say!();
+    say!(
         "Irradiance from a sphere of radiance L = {radiance}, radius {r}, at height {h}: E = π L (r/h)² = {exact:.6}"
     );
     header();
@@ -65,9 +65,9 @@ pub fn run(runs: u32, seed: u64, radiance: f64) {
         });
     }
 
-    println!();
-    println!("Uniformity of warps: Pearson χ² of 200 000 samples against the uniform density (20×20 cells)");
-    println!("{:<36} {:>12} {:>6} {:>10}", "warp", "χ²", "dof", "p-value");
+    say!();
+    say!("Uniformity of warps: Pearson χ² of 200 000 samples against the uniform density (20×20 cells)");
+    say!("{:<36} {:>12} {:>6} {:>10}", "warp", "χ²", "dof", "p-value");
     use neumann::testkit::{chi2_2d, Chi2Config, Disk, Triangle};
     let cfg = Chi2Config::default().with_seed(seed);
     let u2 = |r: &mut Pcg32| neumann::math::Vec2::new(r.next_f32(), r.next_f32());
@@ -140,7 +140,7 @@ pub fn run(runs: u32, seed: u64, radiance: f64) {
         ),
     ];
     for (name, out) in rows {
-        println!("{name:<36} {:>12.1} {:>6} {:>10.3e}", out.statistic, out.dof, out.p_value);
+        say!("{name:<36} {:>12.1} {:>6} {:>10.3e}", out.statistic, out.dof, out.p_value);
     }
-    println!("(a uniform warp gives χ² ≈ dof; the naive warps are rejected with p ≈ 0)");
+    say!("(a uniform warp gives χ² ≈ dof; the naive warps are rejected with p ≈ 0)");
 }

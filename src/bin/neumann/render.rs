@@ -237,7 +237,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     });
     let cam = job.file.scene.camera();
     let [_, _, width, height] = job.file.window.unwrap_or([0, 0, cam.width(), cam.height()]);
-    println!(
+    say!(
         "rendering {} at {width}x{height}, {}, {}, {} threads",
         job.name,
         match a.time {
@@ -250,14 +250,14 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let out = render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL)
         .map_err(|e| Failure(1, e.to_string()))?;
     for line in &out.report {
-        println!("{line}");
+        say!("{line}");
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
     let mut channels = out.film.aov_channels();
     if !channels.is_empty() && Format::from_path(&output).ok() != Some(Format::Exr) {
-        println!(
+        say!(
             "warning: the {} AOV channels of the {} integrator are not written: only .exr holds them",
             channels.len(),
             job.file.integrator.name()
@@ -267,24 +267,24 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     write_image_layers(&output, width, height, &out.film.image(), alpha.as_deref(), &channels, &info)
         .map_err(|e| Failure(1, e.to_string()))?;
     if !channels.is_empty() {
-        println!("wrote {} AOV channels beside R, G, B: {}", channels.len(), aov_summary(&channels));
+        say!("wrote {} AOV channels beside R, G, B: {}", channels.len(), aov_summary(&channels));
     }
     if let Some(dir) = &a.bounces_out {
         write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e.to_string()))?;
-        println!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
+        say!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
     }
     let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
-    println!(
+    say!(
         "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",
         output.display(),
         out.elapsed.as_secs_f64(),
         out.samples_per_second() / 1e6
     );
     if out.interrupted {
-        println!("render interrupted: the image holds {spp_text}");
+        say!("render interrupted: the image holds {spp_text}");
     }
     if out.film.dropped() > 0 {
-        println!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+        say!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
     }
     Ok(())
 }

@@ -153,7 +153,7 @@ pub fn run(
         let names: Vec<&str> = refs.iter().map(|r| r.scene.as_str()).collect();
         return Err(usage(format!("no reference for scene '{s}' (references exist for: {})", names.join(", "))));
     }
-    println!(
+    say!(
         "{:<16} {:>5} {:>6} {:>12} {:>12} {:>7} {:>6} {:>9} {:>10} {:>10}  verdict",
         "scene", "res", "spp", "relMSE", "Mitsuba", "ratio", "bound", "mean diff", "Msamp/s", "Mitsuba"
     );
@@ -162,7 +162,7 @@ pub fn run(
         let v = validate(scene_dir, reference_dir, r, seed).map_err(|e| Failure(1, e.to_string()))?;
         let ok = v.passed();
         failed += usize::from(!ok);
-        println!(
+        say!(
             "{:<16} {:>5} {:>6} {:>12.4e} {:>12.4e} {:>7.3} {:>6.2} {:>+8.3}% {:>10.2} {:>10.2}  {}",
             r.scene,
             r.res,
@@ -177,7 +177,7 @@ pub fn run(
             if ok { "ok" } else { "FAIL" }
         );
     }
-    println!("(pass: relMSE ≤ bound × Mitsuba's at equal spp and |mean diff| ≤ 0.5 %; Mitsuba's speed as recorded with the references)");
+    say!("(pass: relMSE ≤ bound × Mitsuba's at equal spp and |mean diff| ≤ 0.5 %; Mitsuba's speed as recorded with the references)");
     if failed > 0 {
         return Err(Failure(1, format!("{failed} scene(s) failed validation")));
     }
