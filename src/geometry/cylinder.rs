@@ -118,6 +118,12 @@ impl Cylinder {
         (SurfacePoint { p, n, p_error }, Vec2::new(phi / (2.0 * PI), q.z))
     }
 
+    /// `∂p/∂u` at the local point `local` (u = φ / 2π: around the axis, Mitsuba's).
+    #[inline]
+    pub fn dpdu(&self, local: Vec3) -> Vec3 {
+        self.to_world.apply_vector(Vec3::new(-local.y, local.x, 0.0))
+    }
+
     /// Uniform point on the surface; pdf `1 / area` per unit area.
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
         let (s, c) = crate::math::sin_cos_2pi(u.x);

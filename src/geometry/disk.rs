@@ -75,6 +75,15 @@ impl Disk {
         (SurfacePoint { p, n: self.n, p_error }, Vec2::new(q.length(), phi / (2.0 * PI)))
     }
 
+    /// `∂p/∂u` at the local point `q` (u = r: the radial direction, Mitsuba's; local +x at the
+    /// centre).
+    #[inline]
+    pub fn dpdu(&self, q: Vec2) -> Vec3 {
+        let r = q.length();
+        let radial = if r > 0.0 { q / r } else { Vec2::X };
+        self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0))
+    }
+
     /// Uniform point on the disk (concentric map); pdf `1 / area` per unit area.
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
         let q = sample_uniform_disk_concentric(u).value;

@@ -20,6 +20,10 @@ pub struct SurfaceInteraction {
     pub ns: Vec3,
     /// Surface parameterization (texture coordinates).
     pub uv: Vec2,
+    /// `∂p/∂u` (world space, not normalized; zero where the parameterization is degenerate):
+    /// the shading frame's first tangent is this made perpendicular to `ns`, as in Mitsuba, which
+    /// orients anisotropic BSDFs.
+    pub dpdu: Vec3,
     /// Index of the shape in the scene.
     pub shape: u32,
     /// Index of the primitive (triangle) within the shape.
@@ -27,10 +31,11 @@ pub struct SurfaceInteraction {
 }
 
 impl SurfaceInteraction {
-    /// The shading frame (z = `ns`).
+    /// The shading frame: z = `ns`, x along `dpdu` made perpendicular to it (Gram–Schmidt, as
+    /// Mitsuba builds `sh_frame`); where `dpdu` is zero or along `ns`, Duff et al.'s basis.
     #[inline]
     pub fn frame(&self) -> Frame {
-        Frame::from_z(self.ns)
+        Frame::from_zx(self.ns, self.dpdu)
     }
 
     /// Origin for a ray leaving this point toward `w`, offset past the error bounds.

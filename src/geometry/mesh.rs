@@ -289,13 +289,36 @@ impl TriangleMesh {
         }
     }
 
+    /// `∂p/∂u` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba 3.9
+    /// computes it: from the vertices' texture coordinates where they span the triangle (else
+    /// the first tangent of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
+    /// without texture coordinates the barycentric parameterization uv = (b1, b2) gives
+    /// `p1 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes change frame from
+    /// triangle to triangle there, and so they do here).
+    #[inline]
+    pub fn dpdu(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> Vec3 {
+        if self.uvs.is_empty() {
+            return p[1] - p[0];
+        }
+        let [a, b, c] = self.indices[i].map(|v| v as usize);
+        let (duv0, duv1) = (self.uvs[b] - self.uvs[a], self.uvs[c] - self.uvs[a]);
+        let det = duv0.x * duv1.y - duv0.y * duv1.x;
+        if det != 0.0 {
+            let d = ((p[1] - p[0]) * duv1.y - (p[2] - p[0]) * duv0.y) / det;
+            if d.is_finite() {
+                return d;
+            }
+        }
+        crate::math::Frame::from_z(ng).s
+    }
+
     /// Shading normal and uv at barycentrics `(b0, b1, b2)` of triangle `i`, given its face
-    /// normal `ng`.
+    /// normal `ng`. Without texture coordinates uv is `(b1, b2)`, as in Mitsuba.
     #[inline]
     pub fn shading(&self, i: usize, b: [f32; 3], ng: Vec3) -> (Vec3, Vec2) {
         if self.normals.is_empty() && self.uvs.is_empty() {
             // No vertex data to interpolate: no need to fetch the indices.
-            return (ng, Vec2::new(b[1] + b[2], b[2]));
+            return (ng, Vec2::new(b[1], b[2]));
         }
         let [a, bb, c] = self.indices[i].map(|v| v as usize);
         let ns = if self.normals.is_empty() {
@@ -309,7 +332,7 @@ impl TriangleMesh {
             }
         };
         let uv = if self.uvs.is_empty() {
-            Vec2::new(b[1] + b[2], b[2])
+            Vec2::new(b[1], b[2])
         } else {
             self.uvs[a] * b[0] + self.uvs[bb] * b[1] + self.uvs[c] * b[2]
         };

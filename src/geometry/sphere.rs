@@ -87,6 +87,14 @@ impl Sphere {
         (self.point(v), uv)
     }
 
+    /// `∂p/∂u` at the surface point `p` (direction only): Mitsuba's `(-y, x, 0)` of the object
+    /// frame, turned to world space; zero at the poles.
+    #[inline]
+    pub fn dpdu(&self, p: Vec3) -> Vec3 {
+        let local = self.rotation.transpose() * (p - self.center);
+        self.rotation * Vec3::new(-local.y, local.x, 0.0)
+    }
+
     /// The point in unit direction `v` from the centre, its normal and error bound.
     fn point(&self, v: Vec3) -> SurfacePoint {
         let p = self.center + self.radius * v;

@@ -31,11 +31,13 @@ impl Frame {
     }
 
     /// Frame with normal `n` and first tangent as close as possible to `s` (Gram–Schmidt).
-    /// Falls back to [`Frame::from_z`] when `s` is parallel to `n`.
+    /// Falls back to [`Frame::from_z`] when `s` is zero or parallel to `n` (or not finite).
+    #[inline]
     pub fn from_zx(n: Vec3, s: Vec3) -> Frame {
+        let s2 = s.length_squared();
         let s = s - n * n.dot(s);
         let len2 = s.length_squared();
-        if len2 < 1e-12 {
+        if s2 == 0.0 || len2.is_nan() || len2 <= 1e-12 * s2 || !s2.is_finite() {
             return Frame::from_z(n);
         }
         let s = s / len2.sqrt();

@@ -330,19 +330,23 @@ impl Scene {
             ng,
             ns,
             uv,
+            dpdu: m.dpdu(i, &p, ng),
             shape: r.shape,
             prim: r.index,
         }
     }
 
     fn analytic_interaction(&self, ray: &Ray, t: f32, kind: HitKind, r: PrimRef) -> SurfaceInteraction {
-        let (sp, uv) = match (kind, &self.geometries[r.shape as usize]) {
-            (HitKind::Sphere(_), Geometry::Sphere(s)) => s.surface(ray, t),
-            (HitKind::Disk(q, _), Geometry::Disk(d)) => d.surface(q),
-            (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => c.surface(q),
+        let ((sp, uv), dpdu) = match (kind, &self.geometries[r.shape as usize]) {
+            (HitKind::Sphere(_), Geometry::Sphere(s)) => {
+                let surface = s.surface(ray, t);
+                (surface, s.dpdu(surface.0.p))
+            }
+            (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpdu(q)),
+            (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpdu(q)),
             _ => unreachable!("primitive kind and shape geometry always agree"),
         };
-        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, shape: r.shape, prim: 0 }
+        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, shape: r.shape, prim: 0 }
     }
 
     /// Whether anything blocks `ray` within `(0, ray.t_max)`.
@@ -384,6 +388,38 @@ mod tests {
     use crate::material::Diffuse;
     use crate::math::{Rgb, Transform};
     use crate::sampling::{sample_uniform_sphere, Pcg32};
+
+    /// Shading frames follow `∂p/∂u` as Mitsuba's do (what orients anisotropic BSDFs): along
+    /// the texture's u axis on a turned rectangle, around the axis on a sphere, and along the
+    /// first edge `p1 − p0` on a mesh without texture coordinates (whose uv are then the
+    /// barycentrics `(b1, b2)`).
+    #[test]
+    fn shading_frames_follow_the_parameterization() {
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        let mut quad = TriangleMesh::rectangle();
+        let turn = Transform::rotate(Vec3::Z, 30.0).unwrap();
+        quad.transform(&(Transform::translate(Vec3::new(0.0, 0.0, -3.0)) * turn));
+        b.add_shape(Geometry::Mesh(quad), m, None);
+        b.add_shape(Geometry::Sphere(crate::geometry::Sphere::new(Vec3::new(5.0, 0.0, 0.0), 1.0, false)), m, None);
+        let mut bare = TriangleMesh::rectangle();
+        bare.uvs.clear();
+        bare.transform(&Transform::translate(Vec3::new(-5.0, 0.0, 0.0)));
+        b.add_shape(Geometry::Mesh(bare), m, None);
+        let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 40.0, FovAxis::X, 4, 4).unwrap());
+        let scene = b.build().unwrap();
+        let hit = |o: Vec3, d: Vec3| scene.intersect(&Ray::new(o, d)).unwrap();
+        let si = hit(Vec3::new(0.1, 0.2, 0.0), -Vec3::Z);
+        let u_axis = turn.apply_vector(Vec3::X);
+        assert!((si.frame().s - u_axis).length() < 1e-5, "{} vs {u_axis}", si.frame().s);
+        let si = hit(Vec3::new(5.0, -5.0, 0.0), Vec3::Y);
+        assert!((si.frame().s - Vec3::X).length() < 1e-5, "around the z axis at (0, -1, 0): {}", si.frame().s);
+        let si = hit(Vec3::new(-5.2, 0.3, 4.0), -Vec3::Z);
+        let tri = TriangleMesh::rectangle().triangle(si.prim as usize);
+        assert!((si.frame().s - (tri[1] - tri[0]).normalize()).length() < 1e-6, "{}", si.frame().s);
+        assert!(si.uv.x >= 0.0 && si.uv.y >= 0.0 && si.uv.x + si.uv.y <= 1.0 + 1e-6, "{}", si.uv);
+    }
 
     /// A triangle soup with spheres among the triangles: leaves of triangles only (SIMD blocks)
     /// and mixed leaves (primitive lists) both occur, and both answer like brute force.

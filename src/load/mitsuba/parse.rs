@@ -43,6 +43,9 @@ pub struct Parser {
     /// For each document being parsed (the innermost include last), its objects' ids and nodes,
     /// indexed once at its first forward reference, however many follow.
     id_index: Vec<Option<HashMap<String, roxmltree::NodeId>>>,
+    /// For each document being parsed, whether its `version` is older than 2.0.0 (Mitsuba 0.x),
+    /// which Mitsuba upgrades as it reads (see [`Parser::upgraded_name`]).
+    legacy: Vec<bool>,
 }
 
 impl Parser {
@@ -58,6 +61,7 @@ impl Parser {
             early: HashMap::new(),
             in_progress: Vec::new(),
             id_index: Vec::new(),
+            legacy: Vec::new(),
         }
     }
 
@@ -94,13 +98,18 @@ impl Parser {
                 format!("expected a <scene> root element, found <{}>", root.tag_name().name()),
             ));
         }
-        match root.attribute("version") {
+        let legacy = match root.attribute("version") {
             None => return Err(SceneError::at(&loc, "<scene> needs a version attribute, e.g. version=\"3.0.0\"")),
-            Some(v) if !(v.starts_with("2.") || v.starts_with("3.")) => {
-                return Err(SceneError::at(&loc, format!("unsupported scene version {v:?}: expected 2.x or 3.x")))
-            }
-            _ => {}
-        }
+            Some(v) => match parse_version(v) {
+                Some(version) => version < (2, 0, 0),
+                None => {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!("version {v:?} must have three period-separated numbers, e.g. \"3.0.0\""),
+                    ))
+                }
+            },
+        };
         let mut scene = Obj {
             tag: "scene".into(),
             ty: "scene".into(),
@@ -111,7 +120,9 @@ impl Parser {
             built: Cell::new(false),
         };
         self.id_index.push(None);
+        self.legacy.push(legacy);
         let filled = self.fill(&file, root, &mut scene, true);
+        self.legacy.pop();
         self.id_index.pop();
         filled?;
         Ok(Rc::new(scene))
@@ -178,7 +189,7 @@ impl Parser {
                     };
                     match child.attribute("name") {
                         Some(_) => {
-                            let name = self.attr(file, child, "name")?;
+                            let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                             push_prop(obj, name, Value::Object(target), loc)?;
                         }
                         None => obj.children.push(target),
@@ -202,7 +213,7 @@ impl Parser {
                     };
                     match child.attribute("name") {
                         Some(_) => {
-                            let name = self.attr(file, child, "name")?;
+                            let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                             push_prop(obj, name, Value::Object(nested), loc)?;
                         }
                         None => obj.children.push(nested),
@@ -211,7 +222,7 @@ impl Parser {
                 t if PROPERTY_TAGS.contains(&t) => {
                     // <spectrum type="…"> and <rgb> without a name are texture-like objects in
                     // Mitsuba; only named property forms are supported.
-                    let name = self.attr(file, child, "name")?;
+                    let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                     let value = self.property(file, child)?;
                     push_prop(obj, name, value, loc)?;
                 }
@@ -283,8 +294,32 @@ impl Parser {
         };
         let mut obj = Obj { tag, ty, id, loc, props: Vec::new(), children: Vec::new(), built: Cell::new(false) };
         self.fill(file, node, &mut obj, false)?;
+        if self.is_legacy() {
+            upgrade_uv_transform(&mut obj);
+        }
         Ok(obj)
     }
+
+    /// Whether the document being parsed is a Mitsuba 0.x scene (version < 2.0.0).
+    fn is_legacy(&self) -> bool {
+        self.legacy.last().copied().unwrap_or(false)
+    }
+
+    /// A parameter name of a child of `parent` as Mitsuba 3.9 reads it from the current
+    /// document: in a 0.x scene camelCase becomes snake_case (`toWorld` → `to_world`, `intIOR`
+    /// → `int_ior`), and a diffuse BSDF's `diffuse_reflectance` becomes `reflectance` (Mitsuba's
+    /// upgrade pass; it renames nothing else: `<lookAt>` stays an error, as in Mitsuba 3.9).
+    fn upgraded_name(&self, parent: &Obj, name: String) -> String {
+        if !self.is_legacy() {
+            return name;
+        }
+        let name = snake_case(&name);
+        if parent.tag == "bsdf" && parent.ty == "diffuse" && name == "diffuse_reflectance" {
+            return "reflectance".into();
+        }
+        name
+    }
+
 
     /// The attribute's raw text (no `$` substitution), or an error naming it.
     fn raw_attr(&self, file: &Arc<SourceFile>, node: roxmltree::Node, name: &str) -> Result<String> {
@@ -498,7 +533,13 @@ impl Parser {
                 "lookat" => {
                     let origin = self.vec3_attr(file, op, "origin")?;
                     let target = self.vec3_attr(file, op, "target")?;
-                    let up = if op.attribute("up").is_some() { self.vec3_attr(file, op, "up")? } else { Vec3::Y };
+                    // Mitsuba 3.9: without an up vector (or a zero one), the first tangent of the
+                    // view direction's coordinate system.
+                    let up = if op.attribute("up").is_some() { self.vec3_attr(file, op, "up")? } else { Vec3::ZERO };
+                    let up = match (up == Vec3::ZERO, (target - origin).try_normalize()) {
+                        (true, Some(dir)) => crate::math::Frame::from_z(dir).s,
+                        _ => up,
+                    };
                     Transform::look_at(origin, target, up).ok_or_else(|| {
                         invalid("lookat needs origin ≠ target and an up vector not parallel to the view direction")
                     })?
@@ -516,6 +557,61 @@ impl Parser {
         }
         Ok(t)
     }
+}
+
+/// `major.minor.patch` of a scene's `version` attribute.
+fn parse_version(v: &str) -> Option<(u32, u32, u32)> {
+    let parts: Vec<&str> = v.split(['.', ' ']).filter(|p| !p.is_empty()).collect();
+    match parts.as_slice() {
+        [a, b, c] => Some((a.parse().ok()?, b.parse().ok()?, c.parse().ok()?)),
+        _ => None,
+    }
+}
+
+/// Mitsuba's camelCase → snake_case of 0.x parameter names: an underscore before an upper-case
+/// letter that follows a lower-case one, and that run of upper-case letters lowered
+/// (`toWorld` → `to_world`, `intIOR` → `int_ior`, `sampleCount` → `sample_count`).
+fn snake_case(name: &str) -> String {
+    let mut c: Vec<char> = name.chars().collect();
+    let mut i = 0;
+    while i + 1 < c.len() {
+        if c[i].is_ascii_lowercase() && c[i + 1].is_ascii_uppercase() {
+            c.insert(i + 1, '_');
+            i += 2;
+            while i < c.len() && c[i].is_ascii_uppercase() {
+                c[i] = c[i].to_ascii_lowercase();
+                i += 1;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    c.into_iter().collect()
+}
+
+/// Mitsuba's upgrade of 0.x texture offsets and scales: `<float>`s `uoffset`, `voffset`,
+/// `uscale`, `vscale` become a `to_uv` transform (the translation first, then the scale).
+fn upgrade_uv_transform(obj: &mut Obj) {
+    let names = ["uoffset", "voffset", "uscale", "vscale"];
+    if !obj.props.iter().any(|p| names.contains(&p.name.as_str()) && matches!(p.value, Value::Float(_))) {
+        return;
+    }
+    let mut v = [0.0f32, 0.0, 1.0, 1.0];
+    let mut loc = obj.loc.clone();
+    obj.props.retain(|p| match (names.iter().position(|n| *n == p.name), &p.value) {
+        (Some(k), Value::Float(f)) => {
+            v[k] = *f as f32;
+            loc = p.loc.clone();
+            false
+        }
+        _ => true,
+    });
+    let translate = Transform::translate(Vec3::new(v[0], v[1], 0.0));
+    let t = match Transform::scale(Vec3::new(v[2], v[3], 1.0)) {
+        Some(scale) => scale * translate,
+        None => translate,
+    };
+    obj.props.push(Prop { name: "to_uv".into(), value: Value::Transform(t), loc, used: Cell::new(false) });
 }
 
 /// Adds a property, rejecting a second one of the same name.

@@ -661,3 +661,36 @@ fn orthographic_rawconstant_and_serialized() {
     assert!(e.contains("shape_index 5 is out of range") && e.contains("s.xml:"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Mitsuba 0.x scenes (version < 2.0.0) are read as Mitsuba 3.9 upgrades them: camelCase
+/// parameter names become snake_case, a diffuse BSDF's `diffuseReflectance` its `reflectance`,
+/// and `uoffset`/`uscale`… a `to_uv` transform; newer files keep their names. A version must have
+/// three numbers.
+#[test]
+fn version_upgrade_of_old_scenes() {
+    let old = r#"<scene version="0.6.0">
+        <integrator type="path"><integer name="maxDepth" value="3"/></integrator>
+        <sensor type="perspective"><float name="fov" value="40"/><string name="fovAxis" value="y"/>
+            <transform name="toWorld"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform>
+            <sampler type="independent"><integer name="sampleCount" value="7"/></sampler>
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
+        <shape type="sphere"><bsdf type="diffuse"><texture name="diffuseReflectance" type="checkerboard">
+            <float name="uscale" value="4"/><float name="voffset" value="0.5"/></texture></bsdf></shape>
+        <shape type="sphere"><float name="radius" value="0.5"/><bsdf type="roughplastic"><float name="intIOR" value="1.6"/></bsdf></shape>
+    </scene>"#;
+    let f = load(old).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    assert_eq!(f.spp, 7);
+    assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.max_depth == 3));
+    let Bsdf::Diffuse(d) = &f.scene.bsdfs()[0] else { panic!("{:?}", f.scene.bsdfs()[0]) };
+    // to_uv = scale(4, 1) · translate(0, 0.5): (0.1, 0.1) → (0.4, 0.6): color1 (0.2) at (fu < ½, fv > ½).
+    assert_eq!(d.reflectance.eval(crate::math::Vec2::new(0.1, 0.1)), Rgb::splat(0.2));
+    assert_eq!(d.reflectance.eval(crate::math::Vec2::new(0.1, 0.6)), Rgb::splat(0.4));
+    let newer = load(&old.replace("0.6.0", "3.0.0")).unwrap();
+    assert!(newer.warnings.iter().any(|w| w.contains("maxDepth")), "{:?}", newer.warnings);
+    assert!(err(&scene("").replace("3.0.0", "3.0")).contains("three period-separated numbers"));
+    // lookat without an up vector: Mitsuba's coordinate system of the view direction.
+    let f = load(&scene("").replace(r#" up="0, 1, 0""#, "")).unwrap();
+    let r = f.scene.camera().generate_ray(crate::math::Vec2::new(16.0, 0.0), crate::math::Vec2::ZERO);
+    assert!(r.d.is_finite());
+}
