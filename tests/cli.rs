@@ -118,8 +118,8 @@ fn scene_files_render_and_bad_ones_fail_with_their_position() {
     .unwrap();
     let r = neumann().arg("render").arg(&warn).args(["--quiet", "-o"]).arg(temp("warn.png")).output().unwrap();
     let err = String::from_utf8_lossy(&r.stderr);
-    assert!(r.status.success(), "{err}");
-    assert!(err.contains("warn.xml:5:") && err.contains("unused parameter 'raidus'"), "{err}");
+    assert_eq!(r.status.code(), Some(1), "a parameter no plugin reads is an error, as in Mitsuba 3: {err}");
+    assert!(err.contains("warn.xml:5:") && err.contains("does not take the parameter float 'raidus'"), "{err}");
 }
 
 /// `--bounces-out` writes one image per Neumann-series term, their sum and a contact sheet.

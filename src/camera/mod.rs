@@ -303,6 +303,11 @@ impl Camera {
             return Err(o.unknown_plugin(CAMERA_PLUGINS));
         }
         let to_world = o.transform("to_world")?;
+        // The shutter interval only matters for animated transforms, which neumann does not have.
+        let (open, close) = (o.float("shutter_open", 0.0)?, o.float("shutter_close", 0.0)?);
+        if !(open.is_finite() && close.is_finite() && close >= open) {
+            return Err(o.error_at("shutter_close", format!("need shutter_open ≤ shutter_close, got {open} and {close}")));
+        }
         if o.ty == "orthographic" {
             let camera = Camera::orthographic(to_world, width, height).map_err(|e| o.error(e.to_string()))?;
             let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);

@@ -83,10 +83,13 @@ fn constant(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
     })
 }
 
-/// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`.
+/// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
+/// (`mis_compensation` is read and has no effect on the expected image).
 fn envmap(o: &Obj, images: &mut dyn ImageSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
+    // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).
+    o.bool("mis_compensation", false)?;
     let map = EnvMap::new(image, scale, o.transform("to_world")?).map_err(|e| o.error(e))?;
     Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
 }

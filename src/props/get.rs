@@ -2,7 +2,7 @@
 //! property as read (for the unused-parameter warnings) and reports a wrong type at the
 //! property's position.
 
-use super::error::{nearest, warning, SceneError};
+use super::error::{nearest, SceneError};
 use super::value::{Obj, Prop, SpectrumValue, Value};
 use crate::math::spectrum::{spectrum_to_rgb, SpectrumKind};
 use crate::math::{Rgb, Transform, Vec3};
@@ -224,24 +224,40 @@ impl Obj {
         Ok(())
     }
 
-    /// Warnings for parameters no plugin read, in objects that were built (recursively).
-    pub fn unused_warnings(&self, out: &mut Vec<String>, seen: &mut Vec<*const Obj>) {
+    /// An error at the first parameter that no plugin read, in objects that were built
+    /// (recursively), listing every such parameter of that object: Mitsuba 3's "unreferenced
+    /// property" check (a misspelt name, a parameter of another plugin, or a feature neumann
+    /// does not implement).
+    pub fn check_unused(&self, seen: &mut Vec<*const Obj>) -> Result<()> {
         if seen.contains(&(self as *const Obj)) {
-            return;
+            return Ok(());
         }
         seen.push(self as *const Obj);
         if self.built.get() {
-            for p in self.props.iter().filter(|p| !p.used.get()) {
-                out.push(warning(&p.loc, &format!("unused parameter '{}' of {} '{}'", p.name, self.tag, self.ty)));
+            let unused: Vec<&Prop> = self.props.iter().filter(|p| !p.used.get()).collect();
+            if let Some(first) = unused.first() {
+                let list: Vec<String> = unused.iter().map(|p| format!("{} '{}'", p.value.kind(), p.name)).collect();
+                let s = if unused.len() == 1 { "" } else { "s" };
+                return Err(SceneError::at(
+                    &first.loc,
+                    format!(
+                        "{} '{}' does not take the parameter{s} {} (Mitsuba 3 also rejects unreferenced parameters; \
+                         a misspelt name, or a parameter neumann does not implement)",
+                        self.tag,
+                        self.ty,
+                        list.join(", ")
+                    ),
+                ));
             }
         }
         for p in &self.props {
             if let Value::Object(o) = &p.value {
-                o.unused_warnings(out, seen);
+                o.check_unused(seen)?;
             }
         }
         for c in &self.children {
-            c.unused_warnings(out, seen);
+            c.check_unused(seen)?;
         }
+        Ok(())
     }
 }

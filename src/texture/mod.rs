@@ -180,6 +180,8 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 /// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`.
 fn bitmap_from_props(o: &Obj, images: &mut dyn ImageSource) -> PropResult<Texture> {
     let raw = o.bool("raw", false)?;
+    // Mitsuba's `accel` (hardware texture lookups on GPUs) changes no value.
+    o.bool("accel", true)?;
     let image = images.image(o, "filename", raw)?;
     let filter = match o.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
         "bilinear" => Filter::Bilinear,

@@ -131,8 +131,10 @@ impl Builder {
                 .set_light_sampler(self.light_sampler)
                 .map_err(|e| SceneError::at(&root.loc, format!("cannot build the light sampler: {e}")))?;
         }
-        let mut warnings = Vec::new();
-        root.unused_warnings(&mut warnings, &mut Vec::new());
+        // Mitsuba 3 rejects parameters that no plugin reads ("unreferenced property"), and so
+        // does neumann: such a parameter is a typo or a feature neumann does not implement.
+        root.check_unused(&mut Vec::new())?;
+        let warnings = Vec::new();
         Ok(SceneFile {
             scene,
             integrator: integrator.unwrap_or_default(),
@@ -152,6 +154,10 @@ impl Builder {
             o.check_children(&[])?;
         }
         self.read_light_sampler(o)?;
+        // Mitsuba's rendering-loop parameters that cannot change the image: the block (tile) size
+        // and the samples per pass.
+        o.int("block_size", 0)?;
+        o.int("samples_per_pass", -1)?;
         let plugin = integrator_plugin(&o.ty)
             .ok_or_else(|| o.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
         plugin(o)
@@ -166,6 +172,8 @@ impl Builder {
         }
         for c in o.nested("integrator") {
             self.read_light_sampler(&c)?;
+            c.int("block_size", 0)?;
+            c.int("samples_per_pass", -1)?;
         }
         Ok(())
     }
@@ -245,6 +253,7 @@ impl Builder {
             Some(e) if e.ty == "area" => {
                 e.built.set(true);
                 e.check_children(&[])?;
+                read_sampling_weight(e)?;
                 Some(area_radiance_from_props(e)?)
             }
             Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
@@ -368,10 +377,19 @@ impl Builder {
             names.push("area");
             o.unknown_plugin(&names)
         })?;
+        read_sampling_weight(o)?;
         let light = plugin(o, self)?;
         self.sb.add_light(light);
         Ok(())
     }
+}
+
+/// Mitsuba's `sampling_weight` of an emitter (default 1): it only steers which light Mitsuba's
+/// uniform light selection picks, never the expected image, and neumann's light samplers choose
+/// by their own rule; read and checked, not used.
+fn read_sampling_weight(o: &Obj) -> Result<()> {
+    o.float_checked("sampling_weight", 1.0, |w| w >= 0.0 && w.is_finite(), "non-negative")?;
+    Ok(())
 }
 
 impl BsdfBuilder for Builder {

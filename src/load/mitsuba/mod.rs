@@ -2,8 +2,8 @@
 //!
 //! [`load_scene_file`] parses the file ([`parse`]: defaults, `$` substitution, includes, ids and
 //! references, transforms, typed properties with positions) and builds the plugins (`build.rs`).
-//! Every problem is a [`SceneError`] naming `file:line:col` with the source line; parameters that
-//! no plugin read come back as warnings, like pbrt's unused-parameter check.
+//! Every problem is a [`SceneError`] naming `file:line:col` with the source line, parameters that
+//! no plugin reads included (Mitsuba 3 rejects unreferenced properties too).
 
 mod build;
 pub mod parse;

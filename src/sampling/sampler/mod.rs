@@ -88,6 +88,9 @@ impl SamplerSettings {
             "independent" => SamplerKind::Independent,
             "stratified" | "multijitter" | "orthogonal" => {
                 s.bool("jitter", true)?;
+                if s.ty == "orthogonal" {
+                    s.int("strength", 2)?;
+                }
                 SamplerKind::Stratified
             }
             "ldsampler" => SamplerKind::Sobol,
