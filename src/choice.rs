@@ -71,7 +71,7 @@ macro_rules! choices {
         }
         impl ::std::str::FromStr for $ty {
             type Err = String;
-            fn from_str(s: &str) -> Result<Self, String> {
+            fn from_str(s: &str) -> ::std::result::Result<Self, String> {
                 <$ty as $crate::choice::Choice>::parse_name(s)
             }
         }

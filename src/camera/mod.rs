@@ -6,31 +6,10 @@
 //! [`FovAxis`].
 
 use crate::math::{Ray, Transform, Vec2, Vec3};
-use crate::props::{Obj, Result as PropResult, SceneError, Value};
+use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_uniform_disk_concentric;
 
-/// Which image axis the field of view spans (Mitsuba's `fov_axis`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FovAxis {
-    /// Horizontal.
-    X,
-    /// Vertical.
-    Y,
-    /// The shorter image side.
-    Smaller,
-    /// The longer image side.
-    Larger,
-    /// The diagonal.
-    Diagonal,
-}
-
-crate::choices!(FovAxis, "fov_axis", {
-    FovAxis::X => "x", "the image's width";
-    FovAxis::Y => "y", "the image's height";
-    FovAxis::Diagonal => "diagonal", "the image's diagonal";
-    FovAxis::Smaller => "smaller", "the shorter image side";
-    FovAxis::Larger => "larger", "the longer image side";
-});
+pub use crate::props::fov::FovAxis;
 
 /// A camera that cannot be built from its parameters.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -95,20 +74,7 @@ impl Camera {
         if width == 0 || height == 0 {
             return Err(CameraError::FilmSize(width, height));
         }
-        let t = (0.5 * fov_deg.to_radians()).tan();
-        let aspect = width as f32 / height as f32;
-        let tan_half = match fov_axis {
-            FovAxis::X => Vec2::new(t, t / aspect),
-            FovAxis::Y => Vec2::new(t * aspect, t),
-            FovAxis::Smaller if aspect >= 1.0 => Vec2::new(t * aspect, t),
-            FovAxis::Smaller => Vec2::new(t, t / aspect),
-            FovAxis::Larger if aspect >= 1.0 => Vec2::new(t, t / aspect),
-            FovAxis::Larger => Vec2::new(t * aspect, t),
-            FovAxis::Diagonal => {
-                let diag = (aspect * aspect + 1.0).sqrt();
-                Vec2::new(t * aspect / diag, t / diag)
-            }
-        };
+        let tan_half = crate::props::fov::tan_half(fov_deg, fov_axis, width as f32 / height as f32);
         // x_plane = -(2 x / width - 1) tan_x (camera +x is left, film x grows right); likewise y.
         let plane_scale = Vec2::new(-2.0 * tan_half.x / width as f32, -2.0 * tan_half.y / height as f32);
         Ok(Camera {
@@ -313,30 +279,7 @@ impl Camera {
             let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
             return camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()));
         }
-        let (fov, axis) = match (o.float_opt("fov")?, o.get("focal_length")) {
-            (Some(_), Some(p)) => {
-                return Err(SceneError::at(&p.loc, "give either 'fov' or 'focal_length', not both"));
-            }
-            (Some(fov), None) => {
-                let names = <FovAxis as crate::choice::Choice>::names();
-                let axis = o.choice("fov_axis", &names)?.parse().map_err(|e: String| o.error_at("fov_axis", e))?;
-                (fov, axis)
-            }
-            (None, p) => {
-                // Mitsuba: a 35 mm focal length gives the diagonal field of view of a 36 × 24 mm frame.
-                let mm = match p.map(|p| &p.value) {
-                    None => 50.0,
-                    Some(Value::String(s)) => {
-                        s.trim().trim_end_matches("mm").trim().parse::<f32>().ok().filter(|f| *f > 0.0).ok_or_else(
-                            || o.error_at("focal_length", format!("focal_length must be like \"50mm\", got {s:?}")),
-                        )?
-                    }
-                    Some(Value::Float(f)) if *f > 0.0 => *f as f32,
-                    Some(_) => return Err(o.error_at("focal_length", "focal_length must be a string like \"50mm\"")),
-                };
-                (2.0 * ((36.0f32.hypot(24.0)) / (2.0 * mm)).atan().to_degrees(), FovAxis::Diagonal)
-            }
-        };
+        let (fov, axis) = crate::props::fov::fov_from_props(o)?;
         let mut camera =
             Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e.to_string()))?;
         let near = o.float("near_clip", 0.01)?;

@@ -584,6 +584,7 @@ mod tests {
             intensity: Rgb::splat(8.0),
             cutoff,
             beam,
+            texture: None,
         });
         for theta_deg in [0.0f32, 10.0, 25.0, 35.0] {
             let theta = theta_deg.to_radians();

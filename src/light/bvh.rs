@@ -68,6 +68,11 @@ impl LightBounds {
                 cos_theta_o: beam.cos(),
                 cos_theta_e: (cutoff - beam).cos(),
             }),
+            Light::Projector(p) => {
+                let (w, cos_theta_o) = p.cone();
+                // Nothing beyond the image's frustum (pbrt-v4's projection light bound).
+                Some(LightBounds { bounds: Bounds3::from_point(p.position()), phi, w, cos_theta_o, cos_theta_e: 1.0 })
+            }
             Light::Constant { .. } | Light::EnvMap { .. } | Light::Directional { .. } => None,
         }
     }
@@ -171,7 +176,9 @@ impl NodeBounds {
         let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
-        if cos_p <= self.cos_theta_e {
+        // Nothing beyond θo + θe. Strictly beyond: a light that stops sharply at its cone (θe = 0,
+        // a spot whose beam width is its cutoff, a projector) still lights the inside.
+        if cos_p < self.cos_theta_e {
             return 0.0;
         }
         let mut importance = self.phi * cos_p / d2;
@@ -468,7 +475,25 @@ mod tests {
             intensity: Rgb::splat(20.0),
             cutoff: 0.5,
             beam: 0.3,
+            texture: None,
         });
+        // Lights that stop sharply at their cone: a spot whose beam is its cutoff, a projector.
+        lights.push(Light::Spot {
+            position: Vec3::new(2.0, 3.0, 1.0),
+            frame: Frame::from_z(Vec3::new(-0.2, -1.0, 0.1).normalize()),
+            intensity: Rgb::splat(5.0),
+            cutoff: 0.4,
+            beam: 0.4,
+            texture: None,
+        });
+        let to_world = crate::math::Transform::look_at(Vec3::new(-2.0, 3.0, 0.0), Vec3::new(-1.0, 0.0, 0.5), Vec3::Y).unwrap();
+        lights.push(Light::Projector(Box::new(crate::light::Projector::new(
+            to_world,
+            30.0,
+            crate::props::fov::FovAxis::X,
+            crate::texture::Texture::Constant(Rgb::splat(2.0)),
+            1.0,
+        ))));
         lights.push(Light::Constant { radiance: Rgb::splat(0.2), center: Vec3::ZERO, radius: 6.0 });
         (lights, shapes)
     }

@@ -7,11 +7,13 @@
 
 mod bvh;
 mod envmap;
+mod projector;
 mod registry;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::EnvMap;
+pub use projector::Projector;
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
 
@@ -76,7 +78,12 @@ pub enum Light {
         cutoff: f32,
         /// Beam width (radians, ≤ cutoff).
         beam: f32,
+        /// An image projected over the cutoff cone (Mitsuba's `texture`), multiplying the
+        /// intensity.
+        texture: Option<Box<crate::texture::Texture>>,
     },
+    /// Mitsuba's `projector` emitter (see [`Projector`]).
+    Projector(Box<Projector>),
     /// Mitsuba's `point` emitter: an isotropic point source. Parameters: `position`,
     /// `intensity` (W sr⁻¹ per channel).
     Point {
@@ -159,15 +166,31 @@ impl Light {
             // Flux through the scene's cross-section.
             Light::Directional { irradiance, radius, .. } => PI * radius * radius * luminance(*irradiance),
             // ∫ falloff dω, with the transition band counted at half strength.
-            Light::Spot { intensity, cutoff, beam, .. } => {
-                2.0 * PI * (1.0 - 0.5 * (cutoff.cos() + beam.cos())) * luminance(*intensity)
+            Light::Spot { intensity, cutoff, beam, texture, .. } => {
+                let tex = texture.as_ref().map_or(1.0, |t| luminance(t.mean()));
+                2.0 * PI * (1.0 - 0.5 * (cutoff.cos() + beam.cos())) * luminance(*intensity) * tex
             }
+            Light::Projector(p) => p.power(),
         }
     }
 
     /// Whether the light is a delta distribution (cannot be hit by rays).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. })
+        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } | Light::Projector(_))
+    }
+
+    /// A spot light's emission toward the unit direction `w_local` of its frame: the falloff,
+    /// times its texture where it has one (Mitsuba's uv: ½ + ½ (x, y) / (z tan cutoff)).
+    #[inline]
+    fn spot_profile(w_local: Vec3, cutoff: f32, beam: f32, texture: &Option<Box<crate::texture::Texture>>) -> Rgb {
+        let falloff = Self::spot_falloff(w_local.z, cutoff, beam);
+        match texture {
+            Some(t) if falloff > 0.0 => {
+                let k = 0.5 / (w_local.z * cutoff.tan());
+                t.eval(Vec2::new(0.5 + w_local.x * k, 0.5 + w_local.y * k)) * falloff
+            }
+            _ => Rgb::splat(falloff),
+        }
     }
 
     /// Spot falloff for a unit direction `w_local` in the spot's frame: 1 inside the beam, 0
@@ -242,20 +265,20 @@ impl Light {
                     delta: true,
                 })
             }
-            Light::Spot { position, frame, intensity, cutoff, beam } => {
+            Light::Spot { position, frame, intensity, cutoff, beam, texture } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
                 if dist2 == 0.0 {
                     return None;
                 }
                 let wi = d / dist2.sqrt();
-                let falloff = Self::spot_falloff(frame.to_local(-wi).z, *cutoff, *beam);
-                if falloff == 0.0 {
+                let profile = Self::spot_profile(frame.to_local(-wi), *cutoff, *beam, texture);
+                if profile.max_element() <= 0.0 {
                     return None;
                 }
                 Some(LightSample {
                     wi,
-                    li: *intensity * (falloff / dist2),
+                    li: *intensity * profile / dist2,
                     pdf: 1.0,
                     p: *position,
                     n: Vec3::ZERO,
@@ -263,6 +286,7 @@ impl Light {
                     delta: true,
                 })
             }
+            Light::Projector(p) => p.sample_li(p_ref),
             Light::Point { position, intensity } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
@@ -289,7 +313,7 @@ impl Light {
     pub fn pdf_li(&self, shapes: &[Geometry], p_ref: Vec3, p: Vec3, ng: Vec3) -> f32 {
         match self {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
-            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } => 0.0,
+            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } | Light::Projector(_) => 0.0,
             Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction((p - p_ref).normalize_or_zero()),
         }
     }
@@ -341,15 +365,16 @@ impl Light {
                     weight: *intensity / d.pdf,
                 }
             }
-            Light::Spot { position, frame, intensity, cutoff, beam } => {
+            Light::Spot { position, frame, intensity, cutoff, beam, texture } => {
                 let d = sample_uniform_cone(u_dir, cutoff.cos());
-                let falloff = Self::spot_falloff(d.value.z, *cutoff, *beam);
-                if falloff == 0.0 || d.pdf <= 0.0 {
+                let profile = Self::spot_profile(d.value, *cutoff, *beam, texture);
+                if profile.max_element() <= 0.0 || d.pdf <= 0.0 {
                     return None;
                 }
-                let weight = *intensity * (falloff / d.pdf);
+                let weight = *intensity * profile / d.pdf;
                 EmissionSample { p: *position, p_error: Vec3::ZERO, n: Vec3::ZERO, d: frame.to_world(d.value), weight }
             }
+            Light::Projector(p) => p.sample_le(u_dir)?,
             Light::Directional { direction, irradiance, center, radius } => {
                 let (p, area) = parallel(*direction, *center, *radius);
                 EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: *direction, weight: *irradiance * area }
@@ -390,6 +415,13 @@ impl Light {
                     inv_pdf: 1.0 / s.pdf,
                 })
             }
+            Light::Projector(p) => Some(EmissionPosition {
+                p: p.position(),
+                p_error: Vec3::ZERO,
+                ng: Vec3::ZERO,
+                ns: Vec3::ZERO,
+                inv_pdf: 1.0,
+            }),
             Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition {
                 p: *position,
                 p_error: Vec3::ZERO,
@@ -407,9 +439,10 @@ impl Light {
         match self {
             Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => *radiance,
             Light::Point { intensity, .. } => *intensity,
-            Light::Spot { frame, intensity, cutoff, beam, .. } => {
-                *intensity * Self::spot_falloff(frame.to_local(d).z, *cutoff, *beam)
+            Light::Spot { frame, intensity, cutoff, beam, texture, .. } => {
+                *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture)
             }
+            Light::Projector(p) => p.intensity_toward(d),
             _ => Rgb::ZERO,
         }
     }
@@ -546,6 +579,7 @@ mod tests {
                     intensity: Rgb::new(1.0, 2.0, 3.0),
                     cutoff,
                     beam,
+                    texture: None,
                 },
                 spot_integral,
             ),

@@ -4,18 +4,19 @@
 //! Mitsuba's `area` emitter is not here: it is a property of the shape that emits, whose loader
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
-use super::{EnvMap, Light};
-use crate::image::ImageSource;
+use super::{EnvMap, Light, Projector};
+use crate::texture::TextureSource;
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::props::{Obj, Result};
 
-/// An emitter plugin's constructor (lights at infinity get the scene's bounds when it is built).
-pub type EmitterPlugin = fn(&Obj, &mut dyn ImageSource) -> Result<Light>;
+/// An emitter plugin's constructor (lights at infinity get the scene's bounds when it is built);
+/// textured parameters and images come from the loader ([`TextureSource`]).
+pub type EmitterPlugin = fn(&Obj, &mut dyn TextureSource) -> Result<Light>;
 
 /// Every emitter plugin that stands on its own, by its (Mitsuba) name.
 pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] =
-    &[("point", point), ("spot", spot), ("directional", directional), ("constant", constant), ("envmap", envmap)];
+    &[("point", point), ("spot", spot), ("projector", projector), ("directional", directional), ("constant", constant), ("envmap", envmap)];
 
 /// The constructor of the emitter plugin `name`.
 pub fn emitter_plugin(name: &str) -> Option<EmitterPlugin> {
@@ -28,7 +29,7 @@ pub fn area_radiance_from_props(o: &Obj) -> Result<Rgb> {
 }
 
 /// Mitsuba's `point`: `position` or `to_world` (not both), `intensity` (W sr⁻¹, 1).
-fn point(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+fn point(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
     let position = match o.point_opt("position")? {
         Some(p) => {
             if o.has("to_world") {
@@ -42,23 +43,36 @@ fn point(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
 }
 
 /// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
-/// (20°), `beam_width` (¾ of the cutoff).
-fn spot(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+/// (20°), `beam_width` (¾ of the cutoff), `texture` (optional: an image projected over the
+/// cutoff cone, multiplying the intensity; uv = ½ + ½ (x, y) / (z tan cutoff) in the local frame).
+fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     let to_world = o.transform("to_world")?;
     let cutoff = o.float_checked("cutoff_angle", 20.0, |c| c > 0.0 && c <= 180.0, "in (0, 180] degrees")?;
     let beam = o.float_checked("beam_width", cutoff * 0.75, |b| b >= 0.0 && b <= cutoff, "in [0, cutoff_angle]")?;
     let axis = to_world.apply_vector(Vec3::Z).normalize();
+    // The local frame's x and y orient a texture: to_world's axes, made orthonormal.
+    let frame = Frame::from_zx(axis, to_world.apply_vector(Vec3::X));
     Ok(Light::Spot {
         position: to_world.apply_point(Vec3::ZERO),
-        frame: Frame::from_z(axis),
+        frame,
         intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)?,
         cutoff: cutoff.to_radians(),
         beam: beam.to_radians(),
+        texture: textures.texture_opt(o, "texture", SpectrumKind::Reflectance)?.map(Box::new),
     })
 }
 
+/// Mitsuba's `projector` (see [`Projector`]): `irradiance` (a texture, required), `scale`,
+/// `to_world`, `fov` / `fov_axis` / `focal_length`.
+fn projector(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
+    let irradiance = textures
+        .texture_opt(o, "irradiance", SpectrumKind::Illuminant)?
+        .ok_or_else(|| o.error("the projector needs an 'irradiance' (a texture or a colour)"))?;
+    Ok(Light::Projector(Box::new(Projector::from_props(o, irradiance)?)))
+}
+
 /// Mitsuba's `directional`: `direction` or `to_world` (local +z), `irradiance` (W m⁻², 1).
-fn directional(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+fn directional(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
     let d = match o.point_opt("direction")? {
         Some(d) => d,
         None => o.transform("to_world")?.apply_vector(Vec3::Z),
@@ -75,7 +89,7 @@ fn directional(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
 }
 
 /// Mitsuba's `constant`: `radiance` (1) from every direction.
-fn constant(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
+fn constant(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
     Ok(Light::Constant {
         radiance: o.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)?,
         center: Vec3::ZERO,
@@ -85,7 +99,7 @@ fn constant(o: &Obj, _: &mut dyn ImageSource) -> Result<Light> {
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
 /// (`mis_compensation` is read and has no effect on the expected image).
-fn envmap(o: &Obj, images: &mut dyn ImageSource) -> Result<Light> {
+fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
     // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).

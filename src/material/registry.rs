@@ -8,16 +8,12 @@
 use super::Bsdf;
 use crate::math::Rgb;
 use crate::props::{Obj, Result};
-use crate::texture::Texture;
+use crate::texture::TextureSource;
 use std::ops::RangeInclusive;
 
 /// What a BSDF plugin needs from the loader that holds the scene's objects: its texture
-/// parameters and the BSDFs nested in it, built (and shared) by the loader.
-pub trait BsdfBuilder {
-    /// The parameter `name` of `o` as a texture: a nested or referenced `<texture>`, or a constant
-    /// colour (`default` if absent).
-    fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> Result<Texture>;
-
+/// parameters ([`TextureSource`]) and the BSDFs nested in it, built (and shared) by the loader.
+pub trait BsdfBuilder: TextureSource {
     /// The BSDFs nested in `o`; an error unless their number is in `count`.
     fn nested_bsdfs(&mut self, o: &Obj, count: RangeInclusive<usize>) -> Result<Vec<Bsdf>>;
 }

@@ -5,6 +5,7 @@
 //! `file:line:col`.
 
 pub mod error;
+pub mod fov;
 mod get;
 pub mod value;
 

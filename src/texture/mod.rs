@@ -154,6 +154,39 @@ impl Texture {
     }
 }
 
+/// Where plugins get their texturable parameters: a nested or referenced `<texture>` (built
+/// by the loader, which holds the scene's objects), or a constant colour. Images come through
+/// the [`ImageSource`] it extends.
+pub trait TextureSource: ImageSource {
+    /// The parameter `name` of `o` as a texture: a nested or referenced `<texture>`, or a
+    /// constant colour (`default` if absent) whose spectra reduce to RGB as `kind` says.
+    fn texture_of(&mut self, o: &Obj, name: &str, default: Rgb, kind: SpectrumKind) -> PropResult<Texture>;
+
+    /// [`TextureSource::texture_of`] for a reflectance-like parameter.
+    fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> PropResult<Texture> {
+        self.texture_of(o, name, default, SpectrumKind::Reflectance)
+    }
+
+    /// [`TextureSource::texture_of`] without a default: `None` if `o` has no parameter `name`.
+    fn texture_opt(&mut self, o: &Obj, name: &str, kind: SpectrumKind) -> PropResult<Option<Texture>> {
+        if o.has(name) {
+            self.texture_of(o, name, Rgb::ONE, kind).map(Some)
+        } else {
+            Ok(None)
+        }
+    }
+}
+
+impl Texture {
+    /// Mitsuba's `resolution()`: an image's size in texels, (1, 1) for procedural textures.
+    pub fn resolution(&self) -> (u32, u32) {
+        match self {
+            Texture::Bitmap { bitmap, .. } => (bitmap.image.width, bitmap.image.height),
+            _ => (1, 1),
+        }
+    }
+}
+
 /// A texture plugin's constructor.
 pub type TexturePlugin = fn(&Obj, &mut dyn ImageSource) -> PropResult<Texture>;
 

@@ -43,6 +43,8 @@ SCENES = {
     # rotated sphere textures, textured rough plastic, rawconstant, the orthographic sensor.
     "mitsuba_compat": (8192, 64, {}, 1.5),
     "orthographic": (4096, 64, {}, 1.5),
+    # Projected light: textured spot, projectors (textured and constant).
+    "projector": (4096, 64, {}, 1.5),
 }
 SEEDS = 4
 

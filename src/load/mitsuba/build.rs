@@ -26,7 +26,7 @@ use crate::props::Obj;
 use crate::props::SceneError;
 use crate::sampling::sampler::{SamplerKind, SamplerSettings};
 use crate::scene::SceneBuilder;
-use crate::texture::{texture_plugin, Texture, TEXTURE_PLUGINS};
+use crate::texture::{texture_plugin, Texture, TextureSource, TEXTURE_PLUGINS};
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::rc::Rc;
@@ -346,11 +346,11 @@ impl Builder {
     // ---------------------------------------------------------------- textures
 
     /// A texturable parameter: a nested/referenced `<texture>`, or a constant colour.
-    fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> Result<Texture> {
+    fn texture(&mut self, o: &Obj, name: &str, default: Rgb, kind: SpectrumKind) -> Result<Texture> {
         if let Some(t) = o.object_opt(name, "texture").ok().flatten() {
             return self.texture_obj(&t);
         }
-        let c = o.rgb(name, default, SpectrumKind::Reflectance)?;
+        let c = o.rgb(name, default, kind)?;
         Ok(Texture::Constant(c))
     }
 
@@ -392,11 +392,13 @@ fn read_sampling_weight(o: &Obj) -> Result<()> {
     Ok(())
 }
 
-impl BsdfBuilder for Builder {
-    fn texture(&mut self, o: &Obj, name: &str, default: Rgb) -> Result<Texture> {
-        Builder::texture(self, o, name, default)
+impl TextureSource for Builder {
+    fn texture_of(&mut self, o: &Obj, name: &str, default: Rgb, kind: SpectrumKind) -> Result<Texture> {
+        Builder::texture(self, o, name, default, kind)
     }
+}
 
+impl BsdfBuilder for Builder {
     fn nested_bsdfs(&mut self, o: &Obj, count: std::ops::RangeInclusive<usize>) -> Result<Vec<Bsdf>> {
         Builder::nested_bsdfs(self, o, count)
     }

@@ -1,0 +1,185 @@
+//! Mitsuba's `projector` emitter: a point light that projects an image through a pinhole, like a
+//! slide projector (the adjoint of the perspective camera, with the same field-of-view
+//! parameters).
+//!
+//! In its local frame (`to_world`) it shines along +z; a point `x` in local coordinates (z > 0)
+//! sees the texel at `uv = ((1 − x/(z tanₓ)) / 2, (1 − y/(z tan_y)) / 2)` (the perspective
+//! camera's film mapping, u right and v down, over the texture's aspect ratio). Mitsuba scales
+//! the arriving light so that the *irradiance* on the plane z = 1 facing the projector is
+//! `π · scale · texture(uv)`: the radiance-like value of a light sample is
+//! `π · scale · texture(uv) / (z² cos θ)` (θ from the axis), i.e. an intensity
+//! `I(ω) = π · scale · texture / cos³θ` for a unit-scale `to_world`. Nothing is emitted outside the
+//! image's frustum.
+
+use super::{EmissionSample, LightSample};
+use crate::math::{Frame, Rgb, Transform, Vec2, Vec3, PI};
+use crate::props::fov::{fov_from_props, tan_half, FovAxis};
+use crate::props::{Obj, Result};
+use crate::texture::Texture;
+
+/// A projector light.
+#[derive(Clone, Debug)]
+pub struct Projector {
+    /// Local frame → world.
+    to_world: Transform,
+    /// World → local frame.
+    to_local: Transform,
+    /// Position (world).
+    position: Vec3,
+    /// `to_world` applied to +z (not normalized, as Mitsuba's cosine uses it).
+    axis: Vec3,
+    /// Tangents of the half fields of view along local x and y.
+    tan_half: Vec2,
+    /// The projected image (irradiance at unit distance, before `π · scale`).
+    irradiance: Texture,
+    /// `scale`.
+    scale: f32,
+}
+
+impl Projector {
+    /// A projector placed by `to_world` with a full field of view `fov_deg` (in (0°, 180°))
+    /// along `axis` of its image, projecting `irradiance` (whose resolution sets the aspect
+    /// ratio) times `scale`.
+    pub fn new(to_world: Transform, fov_deg: f32, axis: FovAxis, irradiance: Texture, scale: f32) -> Projector {
+        let (w, h) = irradiance.resolution();
+        Projector {
+            position: to_world.apply_point(Vec3::ZERO),
+            axis: to_world.apply_vector(Vec3::Z),
+            to_local: to_world.inverse(),
+            to_world,
+            tan_half: tan_half(fov_deg, axis, w as f32 / h as f32),
+            irradiance,
+            scale,
+        }
+    }
+
+    /// Mitsuba's `projector`: `irradiance` (a texture, required; its resolution sets the aspect
+    /// ratio), `scale` (1), `to_world`, and the perspective camera's `fov` / `fov_axis` /
+    /// `focal_length`.
+    pub fn from_props(o: &Obj, irradiance: Texture) -> Result<Projector> {
+        let to_world = o.transform("to_world")?;
+        let scale = o.float("scale", 1.0)?;
+        let (fov, axis) = fov_from_props(o)?;
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(o.error_at("fov", format!("field of view must be in (0, 180) degrees, got {fov}")));
+        }
+        Ok(Projector::new(to_world, fov, axis, irradiance, scale))
+    }
+
+    /// The texture coordinates of the local point `local` (`None` behind the projector or
+    /// outside the image).
+    fn uv(&self, local: Vec3) -> Option<Vec2> {
+        if local.z <= 0.0 {
+            return None;
+        }
+        let uv = Vec2::new(
+            0.5 * (1.0 - local.x / (local.z * self.tan_half.x)),
+            0.5 * (1.0 - local.y / (local.z * self.tan_half.y)),
+        );
+        (uv.x >= 0.0 && uv.x <= 1.0 && uv.y >= 0.0 && uv.y <= 1.0).then_some(uv)
+    }
+
+    /// Light arriving at `p_ref` (a delta light: `pdf` 1).
+    pub fn sample_li(&self, p_ref: Vec3) -> Option<LightSample> {
+        let local = self.to_local.apply_point(p_ref);
+        let uv = self.uv(local)?;
+        let d = self.position - p_ref;
+        let dist = d.length();
+        if dist == 0.0 {
+            return None;
+        }
+        let wi = d / dist;
+        let cos = -self.axis.dot(wi);
+        let li = self.irradiance.eval(uv) * (PI * self.scale / (local.z * local.z * cos));
+        (cos > 0.0 && li.is_finite()).then_some(LightSample {
+            wi,
+            li,
+            pdf: 1.0,
+            p: self.position,
+            n: Vec3::ZERO,
+            p_error: Vec3::ZERO,
+            delta: true,
+        })
+    }
+
+    /// Intensity (W sr⁻¹) toward the unit world direction `d`.
+    pub fn intensity_toward(&self, d: Vec3) -> Rgb {
+        // The light arriving at unit distance along d, times distance² = 1.
+        self.sample_li(self.position + d).map_or(Rgb::ZERO, |s| s.li)
+    }
+
+    /// A ray of projected light: its image position uniform in uv, through the pinhole; the
+    /// weight `π · scale · area · texture(uv)` (`area` the image's extent at unit distance), whose
+    /// mean is the emitted power.
+    pub fn sample_le(&self, u_dir: Vec2) -> Option<EmissionSample> {
+        let x = (1.0 - 2.0 * u_dir.x) * self.tan_half.x;
+        let y = (1.0 - 2.0 * u_dir.y) * self.tan_half.y;
+        let d = self.to_world.apply_vector(Vec3::new(x, y, 1.0)).try_normalize()?;
+        let weight = self.irradiance.eval(u_dir) * (PI * self.scale * self.area());
+        Some(EmissionSample { p: self.position, p_error: Vec3::ZERO, n: Vec3::ZERO, d, weight })
+    }
+
+    /// The image's extent on the plane at unit distance.
+    fn area(&self) -> f32 {
+        4.0 * self.tan_half.x * self.tan_half.y
+    }
+
+    /// Emitted power (luminance, W): `π · scale · area · mean(texture)`.
+    pub fn power(&self) -> f32 {
+        PI * self.scale * self.area() * crate::math::luminance(self.irradiance.mean())
+    }
+
+    /// Position (world).
+    pub fn position(&self) -> Vec3 {
+        self.position
+    }
+
+    /// The unit axis, and the cosine of the widest angle of the image's frustum from it.
+    pub fn cone(&self) -> (Vec3, f32) {
+        let corner = Vec3::new(self.tan_half.x, self.tan_half.y, 1.0);
+        (Frame::from_z(self.axis.normalize()).n, 1.0 / corner.length())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Transform;
+
+    fn projector(texture: Texture) -> Projector {
+        let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y).unwrap();
+        Projector::new(to_world, 60.0, FovAxis::X, texture, 2.0)
+    }
+
+    /// The irradiance on the plane at unit distance facing a constant projector is π·scale·E;
+    /// the weights of emitted rays average to the power, which integrating the intensity
+    /// over the frustum gives too; points outside the frustum get nothing.
+    #[test]
+    fn irradiance_power_and_frustum() {
+        let p = projector(Texture::Constant(Rgb::splat(0.5)));
+        // Point on the axis at distance 3 (the plane z = 3 in the projector's frame).
+        let s = p.sample_li(Vec3::new(0.0, 0.0, 1.0)).unwrap();
+        assert!((s.li.x - PI * 2.0 * 0.5 / 9.0).abs() < 1e-5, "{}", s.li.x);
+        // Off axis on the same plane: E = li cos θ, the same 1/z² law times cos θ / cos θ.
+        let off = Vec3::new(1.0, 0.5, 1.0);
+        let s = p.sample_li(off).unwrap();
+        let cos = s.wi.dot(Vec3::Z);
+        assert!((s.li.x * cos * 9.0 - PI * 2.0 * 0.5).abs() < 1e-4, "irradiance on the plane z = 3 is uniform");
+        assert!(p.sample_li(Vec3::new(5.0, 0.0, 1.0)).is_none(), "outside the frustum");
+        assert!(p.sample_li(Vec3::new(0.0, 0.0, 6.0)).is_none(), "behind");
+        // Power: mean emitted weight vs the integral of the intensity over the sphere.
+        let mut rng = crate::sampling::Pcg32::new(3, 5);
+        let n = 200_000;
+        let mut mean = 0.0f64;
+        let mut integral = 0.0f64;
+        for _ in 0..n {
+            mean += p.sample_le(crate::testkit::u2(&mut rng)).unwrap().weight.x as f64 / n as f64;
+            let w = crate::sampling::sample_uniform_sphere(crate::testkit::u2(&mut rng));
+            integral += p.intensity_toward(w.value).x as f64 / w.pdf as f64 / n as f64;
+        }
+        let want = (PI * 2.0 * 0.5 * p.area()) as f64;
+        assert!((mean - want).abs() < 1e-3 * want, "{mean} vs {want}");
+        assert!((integral - want).abs() < 0.03 * want, "{integral} vs {want}");
+        assert!((p.power() as f64 - want).abs() < 1e-3 * want);
+    }
+}
