@@ -344,12 +344,20 @@ impl TriangleMesh {
     /// area. Returns the point (with its geometric normal), the
     /// shading normal there, and the pdf. `None` before [`TriangleMesh::prepare_sampling`].
     pub fn sample_area(&self, u: Vec2) -> Option<(SurfacePoint, Vec3, f32)> {
-        let dist = self.area_distribution.as_ref()?;
         if let Some(q) = &self.parallelogram {
+            self.area_distribution.as_ref()?;
             let (a, b) = (q.e1 * u.x, q.e2 * u.y);
             let err = crate::math::float::gamma(6) * (q.o.abs() + a.abs() + b.abs()) + q.mismatch;
             return Some((SurfacePoint { p: q.o + a + b, n: q.n, p_error: err }, q.n, 1.0 / self.total_area));
         }
+        self.sample_area_uv(u).map(|(sp, ns, pdf, _)| (sp, ns, pdf))
+    }
+
+    /// [`TriangleMesh::sample_area`] that also gives the point's texture coordinates (a
+    /// triangle by area, then a uniform point in it; the same density, without the
+    /// parallelogram shortcut): for emitters whose radiance is a texture.
+    pub fn sample_area_uv(&self, u: Vec2) -> Option<(SurfacePoint, Vec3, f32, Vec2)> {
+        let dist = self.area_distribution.as_ref()?;
         let (tri, u_rest) = dist.sample(u.x);
         let i = tri.value;
         let b = sample_uniform_triangle(Vec2::new(u_rest, u.y)).value;
@@ -357,8 +365,8 @@ impl TriangleMesh {
         let x = p[0] * b.x + p[1] * b.y + p[2] * b.z;
         let err = crate::math::float::gamma(6) * ((b.x * p[0]).abs() + (b.y * p[1]).abs() + (b.z * p[2]).abs());
         let ng = self.face_normal(i);
-        let ns = if self.normals.is_empty() { ng } else { self.shading(i, [b.x, b.y, b.z], ng).0 };
-        Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area))
+        let (ns, uv) = self.shading(i, [b.x, b.y, b.z], ng);
+        Some((SurfacePoint { p: x, n: ng, p_error: err }, ns, 1.0 / self.total_area, uv))
     }
 }
 

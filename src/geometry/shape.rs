@@ -120,6 +120,40 @@ impl Geometry {
         Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
     }
 
+    /// [`Geometry::sample_area`] that also gives the point's texture coordinates (for emitters
+    /// whose radiance is a texture); the same density.
+    pub fn sample_area_uv(&self, u: Vec2) -> Option<(ShapeSample, Vec2)> {
+        let (sp, ns, pdf, uv) = match self {
+            Geometry::Mesh(m) => m.sample_area_uv(u)?,
+            Geometry::Sphere(s) => {
+                let (sp, pdf) = s.sample_area(u);
+                (sp, sp.n, pdf, s.uv_of_direction((sp.p - s.center) / s.radius))
+            }
+            Geometry::Disk(d) => {
+                let q = crate::sampling::sample_uniform_disk_concentric(u).value;
+                let (sp, uv) = d.surface(q);
+                (sp, sp.n, 1.0 / d.area(), uv)
+            }
+            Geometry::Cylinder(c) => {
+                let (sin, cos) = crate::math::sin_cos_2pi(u.x);
+                let (sp, uv) = c.surface(Vec3::new(cos, sin, u.y));
+                (sp, sp.n, 1.0 / c.area(), uv)
+            }
+        };
+        Some((ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf }, uv))
+    }
+
+    /// [`Geometry::sample_solid_angle`] that also gives the point's texture coordinates.
+    pub fn sample_solid_angle_uv(&self, p_ref: Vec3, u: Vec2) -> Option<(ShapeSample, Vec3, Vec2)> {
+        if let Geometry::Sphere(s) = self {
+            let (ss, wi) = self.sample_solid_angle(p_ref, u)?;
+            return Some((ss, wi, s.uv_of_direction((ss.p - s.center) / s.radius)));
+        }
+        let (area_sample, uv) = self.sample_area_uv(u)?;
+        let (ss, wi) = area_to_solid_angle_sample(area_sample, p_ref)?;
+        Some((ss, wi, uv))
+    }
+
     /// A point on the shape for direct lighting at `p_ref`, with its solid-angle pdf, and the
     /// unit direction from `p_ref` to it. Spheres sample the cone they subtend; meshes and
     /// disks sample area uniformly and convert (`p_ω = p_A r² / |cos θ|`). `None` if nothing
@@ -131,15 +165,7 @@ impl Geometry {
             return (wi != Vec3::ZERO)
                 .then_some((ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf }, wi));
         }
-        let ShapeSample { p, ng, ns, p_error, pdf: pdf_area } = self.sample_area(u)?;
-        let d = p - p_ref;
-        let dist2 = d.length_squared();
-        // p_ω = p_A r² / |cos θ| = p_A r³ / |n·d|; ω = d / r. The two divisions only wait for
-        // the square root, not for each other (a shorter dependency chain than normalizing first).
-        let dist = dist2.sqrt();
-        let wi = d / dist;
-        let pdf = pdf_area * dist2 * dist / ng.dot(d).abs();
-        (pdf > 0.0 && pdf.is_finite()).then_some((ShapeSample { p, ng, ns, p_error, pdf }, wi))
+        area_to_solid_angle_sample(self.sample_area(u)?, p_ref)
     }
 
     /// Solid-angle density of [`Geometry::sample_solid_angle`] from `p_ref` for the point `p` with
@@ -155,4 +181,19 @@ impl Geometry {
         }
         area_to_solid_angle(1.0 / self.area(), dist2, ng.dot(d).abs() / dist2.sqrt())
     }
+}
+
+/// An area sample (pdf per unit area) seen from `p_ref`: the same point with its density per
+/// unit solid angle there, and the unit direction to it.
+#[inline]
+fn area_to_solid_angle_sample(s: ShapeSample, p_ref: Vec3) -> Option<(ShapeSample, Vec3)> {
+    let ShapeSample { p, ng, ns, p_error, pdf: pdf_area } = s;
+    let d = p - p_ref;
+    let dist2 = d.length_squared();
+    // p_ω = p_A r² / |cos θ| = p_A r³ / |n·d|; ω = d / r. The two divisions only wait for
+    // the square root, not for each other (a shorter dependency chain than normalizing first).
+    let dist = dist2.sqrt();
+    let wi = d / dist;
+    let pdf = pdf_area * dist2 * dist / ng.dot(d).abs();
+    (pdf > 0.0 && pdf.is_finite()).then_some((ShapeSample { p, ng, ns, p_error, pdf }, wi))
 }

@@ -82,9 +82,15 @@ impl Sphere {
     #[inline]
     pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
         let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
+        (self.point(v), self.uv_of_direction(v))
+    }
+
+    /// (u, v) = (φ / 2π, θ / π) of the point in unit direction `v` from the centre (world),
+    /// in the object's frame.
+    #[inline]
+    pub fn uv_of_direction(&self, v: Vec3) -> Vec2 {
         let local = self.rotation.transpose() * v;
-        let uv = Vec2::new(crate::math::spherical_phi(local) / (2.0 * PI), crate::math::spherical_theta(local) / PI);
-        (self.point(v), uv)
+        Vec2::new(crate::math::spherical_phi(local) / (2.0 * PI), crate::math::spherical_theta(local) / PI)
     }
 
     /// `∂p/∂u` at the surface point `p` (direction only): Mitsuba's `(-y, x, 0)` of the object

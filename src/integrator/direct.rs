@@ -69,7 +69,7 @@ impl DirectIntegrator {
         let wo = -ray.d.normalize();
         let mut l = Rgb::ZERO;
         if let (Some(i), false) = (shape.light, hide) {
-            l += scene.lights()[i as usize].le(si.ns, wo);
+            l += scene.lights()[i as usize].le(si.ns, wo, si.uv);
         }
         let bsdf = &scene.bsdfs()[shape.bsdf as usize];
         let frame = si.frame();
@@ -100,7 +100,7 @@ impl DirectIntegrator {
             match scene.intersect(&si.spawn_ray(wi)) {
                 Some(hit) => {
                     if let Some(i) = scene.shapes()[hit.shape as usize].light {
-                        let e = scene.lights()[i as usize].le(hit.ns, -wi);
+                        let e = scene.lights()[i as usize].le(hit.ns, -wi, hit.uv);
                         if e != Rgb::ZERO {
                             let w = trace::emission_weight(Some(&prev), false, &mis, |c| {
                                 trace::light_pdf_at(scene, c, i, hit.p, hit.ng)

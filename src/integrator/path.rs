@@ -125,7 +125,7 @@ impl PathIntegrator {
         w = frame.to_world(w).normalize();
         let le = match scene.intersect(&si.spawn_ray(w)) {
             Some(hit) => match scene.shapes()[hit.shape as usize].light {
-                Some(i) => scene.lights()[i as usize].le(hit.ns, -w),
+                Some(i) => scene.lights()[i as usize].le(hit.ns, -w, hit.uv),
                 None => Rgb::ZERO,
             },
             None => scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(w)).sum(),
@@ -183,7 +183,7 @@ impl PathIntegrator {
 
             // Emission found by the path itself.
             if let Some(light_index) = shape.light {
-                let le = scene.lights()[light_index as usize].le(si.ns, wo);
+                let le = scene.lights()[light_index as usize].le(si.ns, wo, si.uv);
                 if le != Rgb::ZERO {
                     let weight = trace::emission_weight(prev.as_ref(), hide, &mis, |c| {
                         trace::light_pdf_at(scene, c, light_index, si.p, si.ng)

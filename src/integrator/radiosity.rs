@@ -154,7 +154,7 @@ fn subdivide(p: [Vec3; 3], max_edge: f32, depth: u32, out: &mut Vec<[Vec3; 3]>) 
 /// Radiance of an area light attached to a shape, if any.
 fn shape_emission(scene: &Scene, shape: usize) -> Rgb {
     match scene.shapes()[shape].light.map(|i| &scene.lights()[i as usize]) {
-        Some(Light::Area { radiance, .. }) => *radiance,
+        Some(Light::Area { radiance, .. }) => radiance.mean(),
         _ => Rgb::ZERO,
     }
 }
@@ -166,6 +166,9 @@ impl Radiosity {
         if !(opts.patch_size > 0.0 && opts.patch_size.is_finite()) {
             return Err(format!("patch size must be positive, got {}", opts.patch_size));
         }
+        if scene.lights().iter().any(|l| matches!(l, Light::Area { radiance, .. } if !matches!(radiance, crate::texture::Texture::Constant(_)))) {
+            return Err("radiosity needs constant emission: an area emitter's radiance is a texture".into());
+        }
         if let Some(l) = scene.lights().iter().find(|l| !matches!(l, Light::Area { .. })) {
             return Err(format!(
                 "radiosity handles area emitters only; the scene has a {} light",
@@ -173,6 +176,7 @@ impl Radiosity {
                     Light::Point { .. } => "point",
                     Light::Spot { .. } => "spot",
                     Light::Directional { .. } => "directional",
+                    Light::Projector(_) => "projector",
                     Light::Constant { .. } => "constant environment",
                     _ => "environment map",
                 }

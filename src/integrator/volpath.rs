@@ -177,7 +177,7 @@ impl Integrator for VolPathIntegrator {
             // Emission found by the path (not for hidden emitters seen by the camera).
             let hidden = depth == 0 && hide && shape.light.is_some();
             if let Some(li) = shape.light.filter(|_| !hidden) {
-                let le = scene.lights()[li as usize].le(si.ns, wo);
+                let le = scene.lights()[li as usize].le(si.ns, wo, si.uv);
                 if le != Rgb::ZERO {
                     let w = trace::emission_weight(prev.as_ref(), hide, &mis, |c| {
                         trace::light_pdf_at(scene, c, li, si.p, si.ng)

@@ -465,7 +465,7 @@ mod tests {
                 m.prepare_normals();
             }
             shapes.push(g);
-            lights.push(Light::Area { shape: k, radiance });
+            lights.push(Light::Area { shape: k, radiance: radiance.into() });
         }
         lights.push(Light::Point { position: Vec3::new(1.0, 2.0, -1.0), intensity: Rgb::splat(3.0) });
         lights.push(Light::Point { position: Vec3::new(-3.0, 0.5, 2.0), intensity: Rgb::new(0.1, 0.5, 0.2) });
@@ -591,7 +591,7 @@ mod tests {
         let mut quad = TriangleMesh::rectangle(); // faces +z
         quad.prepare_normals();
         let shapes = [Geometry::Mesh(quad)];
-        let lights = [Light::Area { shape: 0, radiance: Rgb::ONE }];
+        let lights = [Light::Area { shape: 0, radiance: Rgb::ONE.into() }];
         let bvh = LightBvh::new(&lights, &shapes);
         // Behind it, outside its bounding sphere (radius √2), nothing can arrive: the bound
         // says so. (A lone light is still chosen there: its pmf is one everywhere.)

@@ -19,17 +19,18 @@ pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPow
 
 use crate::geometry::Geometry;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
+use crate::texture::Texture;
 
 /// An emitter.
 #[derive(Clone, Debug)]
 pub enum Light {
-    /// Mitsuba's `area` emitter: constant radiance leaving the front side of a shape.
-    /// Parameters: `radiance` (W m⁻² sr⁻¹ per channel).
+    /// Mitsuba's `area` emitter: radiance leaving the front side of a shape, constant or a
+    /// texture over the shape's (u, v). Parameters: `radiance` (W m⁻² sr⁻¹ per channel).
     Area {
         /// Index of the emitting shape.
         shape: u32,
         /// Emitted radiance.
-        radiance: Rgb,
+        radiance: Texture,
     },
     /// Mitsuba's `constant` emitter: uniform radiance arriving from every direction at
     /// infinity. Parameters: `radiance` (W m⁻² sr⁻¹ per channel). `center` / `radius` bound the
@@ -144,6 +145,8 @@ pub struct EmissionPosition {
     pub ns: Vec3,
     /// `1 / p_A(p)` (area lights) or 1 (point lights): divides the emitted radiance or intensity.
     pub inv_pdf: f32,
+    /// Texture coordinates of `p` (area lights with a textured radiance; zero otherwise).
+    pub uv: Vec2,
 }
 
 /// A distance from `p_ref` that reaches past everything in the scene (bounding sphere `center`,
@@ -158,7 +161,7 @@ impl Light {
     /// `π A L` for a one-sided Lambertian area emitter of area `A`, `4π I` for a point light.
     pub fn power(&self, shapes: &[Geometry]) -> f32 {
         match self {
-            Light::Area { shape, radiance } => PI * shapes[*shape as usize].area() * luminance(*radiance),
+            Light::Area { shape, radiance } => PI * shapes[*shape as usize].area() * luminance(radiance.mean()),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
@@ -227,11 +230,21 @@ impl Light {
     pub fn sample_li(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
             Light::Area { shape, radiance } => {
-                let (s, wi) = shapes[*shape as usize].sample_solid_angle(p_ref, u)?;
+                let shape = &shapes[*shape as usize];
+                let (s, wi, li) = match radiance {
+                    Texture::Constant(c) => {
+                        let (s, wi) = shape.sample_solid_angle(p_ref, u)?;
+                        (s, wi, *c)
+                    }
+                    t => {
+                        let (s, wi, uv) = shape.sample_solid_angle_uv(p_ref, u)?;
+                        (s, wi, t.eval(uv))
+                    }
+                };
                 if s.ns.dot(wi) >= 0.0 {
                     return None; // one-sided: the back does not emit
                 }
-                Some(LightSample { wi, li: *radiance, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
+                Some(LightSample { wi, li, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
             }
             Light::Constant { radiance, center, radius } => {
                 let s = crate::sampling::sample_uniform_sphere(u);
@@ -346,14 +359,20 @@ impl Light {
         };
         let s = match self {
             Light::Area { shape, radiance } => {
-                let ps = shapes[*shape as usize].sample_area(u_pos)?;
+                let (ps, le) = match radiance {
+                    Texture::Constant(c) => (shapes[*shape as usize].sample_area(u_pos)?, *c),
+                    t => {
+                        let (ps, uv) = shapes[*shape as usize].sample_area_uv(u_pos)?;
+                        (ps, t.eval(uv))
+                    }
+                };
                 let local = sample_cosine_hemisphere_malley(u_dir);
                 if local.pdf <= 0.0 || ps.pdf <= 0.0 {
                     return None;
                 }
                 let d = crate::math::Frame::from_z(ps.ns).to_world(local.value);
                 // Le cos θ / (p_A · cos θ / π) = π Le / p_A.
-                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: *radiance * (PI / ps.pdf) }
+                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: le * (PI / ps.pdf) }
             }
             Light::Point { position, intensity } => {
                 let d = sample_uniform_sphere(u_dir);
@@ -405,14 +424,18 @@ impl Light {
     /// thin-lens camera can be connected to.
     pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
         match self {
-            Light::Area { shape, .. } => {
-                let s = shapes[*shape as usize].sample_area(u_pos)?;
+            Light::Area { shape, radiance } => {
+                let (s, uv) = match radiance {
+                    Texture::Constant(_) => (shapes[*shape as usize].sample_area(u_pos)?, Vec2::ZERO),
+                    _ => shapes[*shape as usize].sample_area_uv(u_pos)?,
+                };
                 (s.pdf > 0.0).then(|| EmissionPosition {
                     p: s.p,
                     p_error: s.p_error,
                     ng: s.ng,
                     ns: s.ns,
                     inv_pdf: 1.0 / s.pdf,
+                    uv,
                 })
             }
             Light::Projector(p) => Some(EmissionPosition {
@@ -421,6 +444,7 @@ impl Light {
                 ng: Vec3::ZERO,
                 ns: Vec3::ZERO,
                 inv_pdf: 1.0,
+                uv: Vec2::ZERO,
             }),
             Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition {
                 p: *position,
@@ -428,6 +452,7 @@ impl Light {
                 ng: Vec3::ZERO,
                 ns: Vec3::ZERO,
                 inv_pdf: 1.0,
+                uv: Vec2::ZERO,
             }),
             _ => None,
         }
@@ -437,7 +462,7 @@ impl Light {
     /// lights (front side only), intensity (W sr⁻¹) for point and spot lights.
     pub fn emitted_toward(&self, pos: &EmissionPosition, d: Vec3) -> Rgb {
         match self {
-            Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => *radiance,
+            Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => radiance.eval(pos.uv),
             Light::Point { intensity, .. } => *intensity,
             Light::Spot { frame, intensity, cutoff, beam, texture, .. } => {
                 *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture)
@@ -447,11 +472,12 @@ impl Light {
         }
     }
 
-    /// Radiance emitted from a surface point with shading normal `ns` toward `wo` (world).
+    /// Radiance emitted from a surface point with shading normal `ns` and texture coordinates
+    /// `uv` toward `wo` (world).
     #[inline]
-    pub fn le(&self, ns: Vec3, wo: Vec3) -> Rgb {
+    pub fn le(&self, ns: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
         match self {
-            Light::Area { radiance, .. } if ns.dot(wo) > 0.0 => *radiance,
+            Light::Area { radiance, .. } if ns.dot(wo) > 0.0 => radiance.eval(uv),
             _ => Rgb::ZERO,
         }
     }
@@ -489,7 +515,7 @@ mod tests {
         }
         let p_ref = Vec3::new(0.0, 0.0, 0.0);
         for k in 0..shapes.len() {
-            let light = Light::Area { shape: k as u32, radiance: Rgb::ONE };
+            let light = Light::Area { shape: k as u32, radiance: Rgb::ONE.into() };
             // pdf over directions: find the hit on this shape along w (brute force, one shape).
             let pdf = |w: &Vec3| -> f64 {
                 let ray = crate::math::Ray::new(p_ref, *w);
@@ -531,6 +557,44 @@ mod tests {
         }
     }
 
+    /// An area light whose radiance is a texture: light samples carry the texture's value at the
+    /// sampled point (the rectangle's u grows along +x: a checkerboard of two columns gives the
+    /// left colour on the left), and emitted rays carry π ∫ L dA (the texture's mean here).
+    #[test]
+    fn textured_area_light() {
+        let mut rect = TriangleMesh::rectangle();
+        rect.transform(&Transform::translate(Vec3::new(0.0, 0.0, 2.0)));
+        rect.flip_normals = true; // facing −z, toward the origin
+        let mut g = Geometry::Mesh(rect);
+        assert!(g.prepare_sampling());
+        let shapes = [g];
+        let (c0, c1) = (Rgb::new(4.0, 1.0, 0.5), Rgb::new(0.5, 1.0, 4.0));
+        let texture = Texture::Checkerboard {
+            color0: c0,
+            color1: c1,
+            to_uv: crate::math::Mat3::from_scale(Vec2::new(1.0, 0.5)),
+        };
+        let light = Light::Area { shape: 0, radiance: texture };
+        let mut rng = crate::sampling::Pcg32::new(4, 4);
+        let mut seen = [false; 2];
+        for _ in 0..200 {
+            let s = light.sample_li(&shapes, Vec3::ZERO, u2(&mut rng)).unwrap();
+            // u < ½ (x < 0) is colour 0 (u and v both below ½ after the v scale).
+            let want = if s.p.x < 0.0 { c0 } else { c1 };
+            assert_eq!(s.li, want, "at {}", s.p);
+            seen[usize::from(s.p.x >= 0.0)] = true;
+        }
+        assert!(seen[0] && seen[1]);
+        let n = 100_000;
+        let mean: f64 = (0..n)
+            .map(|_| light.sample_le(&shapes, u2(&mut rng), u2(&mut rng)).map_or(0.0, |e| e.weight.x as f64))
+            .sum::<f64>()
+            / n as f64;
+        let want = (PI * 4.0 * 0.5 * (c0.x + c1.x)) as f64;
+        assert!((mean - want).abs() < 0.02 * want, "{mean} vs {want}");
+        assert!((light.power(&shapes) - PI * 4.0 * luminance(0.5 * (c0 + c1))).abs() < 1e-3);
+    }
+
     #[test]
     fn point_light_falls_off_with_distance_squared() {
         let l = Light::Point { position: Vec3::new(0.0, 0.0, 2.0), intensity: Rgb::splat(8.0) };
@@ -570,7 +634,7 @@ mod tests {
                 * std::f64::consts::PI
         };
         let lights = [
-            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0) }, PI as f64 * 4.0 * 0.5 * 2.0),
+            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into() }, PI as f64 * 4.0 * 0.5 * 2.0),
             (Light::Point { position: Vec3::ONE, intensity: Rgb::new(1.0, 2.0, 3.0) }, 4.0 * PI as f64),
             (
                 Light::Spot {

@@ -23,9 +23,10 @@ pub fn emitter_plugin(name: &str) -> Option<EmitterPlugin> {
     EMITTER_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
 }
 
-/// Mitsuba's `area` emitter: `radiance` (W m⁻² sr⁻¹, an emission spectrum, default 1).
-pub fn area_radiance_from_props(o: &Obj) -> Result<Rgb> {
-    o.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)
+/// Mitsuba's `area` emitter: `radiance` (W m⁻² sr⁻¹, an emission spectrum, default 1), a
+/// colour or a texture over the shape's (u, v).
+pub fn area_radiance_from_props(o: &Obj, textures: &mut dyn TextureSource) -> Result<crate::texture::Texture> {
+    textures.texture_of(o, "radiance", Rgb::ONE, SpectrumKind::Illuminant)
 }
 
 /// Mitsuba's `point`: `position` or `to_world` (not both), `intensity` (W sr⁻¹, 1).

@@ -10,6 +10,7 @@ use crate::geometry::Geometry;
 use crate::light::{Light, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
 use crate::math::{Rgb, Vec3};
+use crate::texture::Texture;
 use crate::sampling::AliasTable;
 
 /// Collects the parts of a scene.
@@ -39,6 +40,12 @@ impl SceneBuilder {
     /// Adds a shape with BSDF `bsdf`; with `Some(radiance)` it is also an area emitter (front
     /// side). Returns the shape index.
     pub fn add_shape(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Rgb>) -> u32 {
+        self.add_shape_textured(geometry, bsdf, emission.map(Texture::Constant))
+    }
+
+    /// [`SceneBuilder::add_shape`] with an emitted radiance that may be a texture over the
+    /// shape's (u, v).
+    pub fn add_shape_textured(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Texture>) -> u32 {
         let index = self.shapes.len() as u32;
         let light = emission.map(|radiance| {
             self.lights.push(Light::Area { shape: index, radiance });

@@ -254,7 +254,7 @@ impl Builder {
                 e.built.set(true);
                 e.check_children(&[])?;
                 read_sampling_weight(e)?;
-                Some(area_radiance_from_props(e)?)
+                Some(area_radiance_from_props(e, self)?)
             }
             Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
         };
@@ -279,7 +279,7 @@ impl Builder {
                 }
             }
         };
-        let index = self.sb.add_shape(geometry, bsdf, emission);
+        let index = self.sb.add_shape_textured(geometry, bsdf, emission);
         self.sb.set_shape_media(index, interior, exterior);
         Ok(())
     }

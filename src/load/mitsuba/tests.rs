@@ -191,7 +191,7 @@ fn defaults_references_spectra_and_plugins() {
     // The emission spectrum is an illuminant (illuminant E is pinkish in sRGB), the constant
     // environment too, as in Mitsuba.
     let area = f.scene.lights().iter().find_map(|l| match l {
-        Light::Area { radiance, .. } => Some(*radiance),
+        Light::Area { radiance: crate::texture::Texture::Constant(c), .. } => Some(*c),
         _ => None,
     });
     let area = area.unwrap();
@@ -309,7 +309,7 @@ fn area_emitters_by_reference() {
         .scene
         .lights()
         .iter()
-        .all(|l| matches!(l, Light::Area { radiance, .. } if *radiance == Rgb::new(2.0, 3.0, 4.0))));
+        .all(|l| matches!(l, Light::Area { radiance: crate::texture::Texture::Constant(c), .. } if *c == Rgb::new(2.0, 3.0, 4.0))));
     let e = load(&scene(r#"<emitter type="area"><rgb name="radiance" value="1"/></emitter>"#)).unwrap_err();
     assert!(e.to_string().contains("nested in the <shape> that emits, or given an id"), "{e}");
     let e = load(&scene(r#"<emitter type="area" id="lost"><rgb name="radiance" value="1"/></emitter>"#)).unwrap_err();
