@@ -117,8 +117,7 @@ pub fn write_image_layers(
         });
     }
     match format {
-        Format::Exr if !channels.is_empty() => write_exr_channels(path, width, height, pixels, alpha, channels, info).map_err(fail),
-        Format::Exr => write_exr(path, width, height, pixels, alpha, info).map_err(fail),
+        Format::Exr => write_exr(path, width, height, pixels, alpha, channels, info).map_err(fail),
         Format::Png => write_png(path, width, height, pixels, alpha, info).map_err(fail),
         Format::Pfm if alpha.is_some() => Err(WriteError::Unsupported {
             path: path.to_path_buf(),
@@ -136,47 +135,9 @@ fn clean(c: Rgb) -> Rgb {
     )
 }
 
+/// An EXR (float32, lossless compression, the actual `spp` in the header) of R, G, B, (A) and
+/// then `channels` (the file lists them sorted by name, as OpenEXR requires).
 fn write_exr(
-    path: &Path,
-    width: u32,
-    height: u32,
-    pixels: &[Rgb],
-    alpha: Option<&[f32]>,
-    info: &ImageInfo,
-) -> Result<(), String> {
-    use exr::prelude::*;
-    let w = width as usize;
-    let mut attributes = LayerAttributes::named("");
-    attributes.software_name = Some(Text::from("neumann"));
-    let spp = (Text::from("spp"), exr::meta::attribute::AttributeValue::I32(info.spp as i32));
-    match alpha {
-        None => {
-            let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
-                let c = clean(pixels[pos.y() * w + pos.x()]);
-                (c.x, c.y, c.z)
-            });
-            let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
-            let mut image = Image::from_layer(layer);
-            image.attributes.other.insert(spp.0, spp.1);
-            image.write().to_file(path).map_err(|e| e.to_string())
-        }
-        Some(a) => {
-            let channels = SpecificChannels::rgba(|pos: Vec2<usize>| {
-                let i = pos.y() * w + pos.x();
-                let c = clean(pixels[i]);
-                (c.x, c.y, c.z, if a[i].is_finite() { a[i].clamp(0.0, 1.0) } else { 0.0 })
-            });
-            let layer = Layer::new((w, height as usize), attributes, Encoding::FAST_LOSSLESS, channels);
-            let mut image = Image::from_layer(layer);
-            image.attributes.other.insert(spp.0, spp.1);
-            image.write().to_file(path).map_err(|e| e.to_string())
-        }
-    }
-}
-
-/// An EXR of arbitrary channels: R, G, B, (A), then `channels` (the file lists them sorted by
-/// name, as OpenEXR requires).
-fn write_exr_channels(
     path: &Path,
     width: u32,
     height: u32,

@@ -79,6 +79,19 @@ pub trait Integrator: Sync {
     }
 }
 
+/// [`Integrator::sample`] of an integrator that writes AOVs, with them computed and dropped
+/// (for callers that want the radiance alone).
+pub(crate) fn sample_without_aovs(
+    i: &dyn Integrator,
+    scene: &Scene,
+    ray: &Ray,
+    sampler: &mut Sampler,
+    terms: &mut [Rgb],
+) -> RadianceSample {
+    let mut aovs = vec![0.0; i.aov_names().len()];
+    i.sample_aovs(scene, ray, sampler, terms, &mut aovs)
+}
+
 /// Russian roulette for camera paths from `rr_depth` on: survival probability
 /// `q = min(max(β) η², 0.95)` and `β /= q` (η: product of the relative IORs crossed, undoing the
 /// η² radiance scaling of refraction), drawn with `u`. Returns false when the path ends, also

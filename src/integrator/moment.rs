@@ -52,8 +52,7 @@ impl Integrator for MomentIntegrator {
     }
 
     fn sample(&self, scene: &Scene, ray: &Ray, sampler: &mut Sampler, terms: &mut [Rgb]) -> RadianceSample {
-        let mut aovs = vec![0.0; self.aov_names().len()];
-        self.sample_aovs(scene, ray, sampler, terms, &mut aovs)
+        super::sample_without_aovs(self, scene, ray, sampler, terms)
     }
 
     fn has_terms(&self) -> bool {
