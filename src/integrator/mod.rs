@@ -153,6 +153,15 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("ptracer", |o| Ok(AnyIntegrator::Ptracer(LightTracer { settings: PathSettings::from_props(o)? }))),
     ("direct", |o| Ok(AnyIntegrator::Direct(DirectIntegrator::from_props(o)?))),
     ("radiosity", |o| Ok(AnyIntegrator::Radiosity(radiosity::Options::from_props(o)?))),
+    // Mitsuba's differentiable and MIS variants render, in primal mode, the same expected image
+    // as the estimator they extend (they differ in gradients or in noise): neumann renders them
+    // with that estimator.
+    ("prb", |o| Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))),
+    ("prb_basic", |o| {
+        Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
+    }),
+    ("volpathmis", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
+    ("prbvolpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
     ("moment", |o| Ok(AnyIntegrator::Moment(MomentIntegrator::from_props(o)?))),
     ("aov", |o| Ok(AnyIntegrator::Aov(AovIntegrator::from_props(o)?))),
 ];

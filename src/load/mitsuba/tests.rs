@@ -630,6 +630,12 @@ fn moment_and_aov_integrators() {
     assert!(e.contains("not implemented"), "{e}");
     let e = err(&scene(r#"<integrator type="moment"/>"#));
     assert!(e.contains("needs a nested <integrator>"), "{e}");
+    // Mitsuba's MIS and differentiable variants render with the estimator they extend.
+    for (ty, kind) in [("volpathmis", "volpath"), ("prbvolpath", "volpath"), ("prb", "path"), ("prb_basic", "path")] {
+        let f = load(&scene(&format!(r#"<integrator type="{ty}"><integer name="max_depth" value="4"/></integrator>"#))).unwrap();
+        assert_eq!(f.integrator.name(), kind);
+        assert_eq!(f.integrator.path_settings().unwrap().max_depth, 4);
+    }
 }
 
 /// The orthographic sensor, `rawconstant` (a float or a vector, not an rgb, as Mitsuba) and
