@@ -28,6 +28,8 @@ pub struct SurfaceInteraction {
     pub shape: u32,
     /// Index of the primitive (triangle) within the shape.
     pub prim: u32,
+    /// Barycentric coordinates (b1, b2) of the hit in its triangle (zero on analytic shapes).
+    pub bary: Vec2,
 }
 
 impl SurfaceInteraction {

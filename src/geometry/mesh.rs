@@ -28,6 +28,46 @@ pub struct TriangleMesh {
     /// Set by [`TriangleMesh::prepare_sampling`] when the mesh is a flat parallelogram of two
     /// triangles (Mitsuba's `rectangle`, most quad lights): then sampled directly.
     parallelogram: Option<Parallelogram>,
+    /// Named per-vertex or per-triangle values (Mitsuba's mesh attributes, e.g. `vertex_color`).
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// A named value per vertex (interpolated across triangles) or per triangle (Mitsuba's
+/// `vertex_*` and `face_*` mesh attributes); one to three channels, kept as RGB (a single
+/// channel in all three).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    /// The name (`vertex_color`, `face_color`, …).
+    pub name: String,
+    /// One value per triangle (else one per vertex).
+    pub per_face: bool,
+    /// The values.
+    pub values: Vec<Vec3>,
+}
+
+/// A point on a mesh triangle where textures may look up mesh attributes.
+#[derive(Clone, Copy, Debug)]
+pub struct MeshPoint<'a> {
+    /// The mesh.
+    pub mesh: &'a TriangleMesh,
+    /// The triangle.
+    pub tri: u32,
+    /// Barycentric coordinates (b1, b2) of the point (b0 = 1 − b1 − b2).
+    pub bary: Vec2,
+}
+
+impl MeshPoint<'_> {
+    /// The value of attribute `name` here (interpolated per-vertex values, or the triangle's),
+    /// if the mesh has it.
+    pub fn attribute(&self, name: &str) -> Option<Vec3> {
+        let a = self.mesh.attributes.iter().find(|a| a.name == name)?;
+        if a.per_face {
+            return a.values.get(self.tri as usize).copied();
+        }
+        let [i0, i1, i2] = self.mesh.indices[self.tri as usize].map(|v| v as usize);
+        let (b1, b2) = (self.bary.x, self.bary.y);
+        Some(a.values[i0] * (1.0 - b1 - b2) + a.values[i1] * b1 + a.values[i2] * b2)
+    }
 }
 
 /// A parallelogram `o + s e1 + t e2`, `(s, t) ∈ [0, 1]²`, with unit normal `n` (that of the
@@ -75,6 +115,7 @@ impl TriangleMesh {
             area_distribution: None,
             total_area: 0.0,
             face_normals: Vec::new(),
+            attributes: Vec::new(),
             parallelogram: None,
         })
     }

@@ -15,7 +15,6 @@
 //! differentiable rendering) are errors.
 
 use super::{nested_integrators, AnyIntegrator, Integrator, RadianceSample};
-use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
@@ -173,7 +172,7 @@ impl Integrator for AovIntegrator {
                     let shape = &scene.shapes()[si.shape as usize];
                     let bsdf = &scene.bsdfs()[shape.bsdf as usize];
                     let wo = si.frame().to_local(-ray.d.normalize());
-                    let a = bsdf.diffuse_reflectance(&BsdfContext { uv: si.uv }, wo);
+                    let a = bsdf.diffuse_reflectance(&scene.bsdf_context(&si), wo);
                     put(&[a.x, a.y, a.z]);
                 }
                 AovKind::Depth => put(&[si.t * ray.d.length()]),

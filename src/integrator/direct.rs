@@ -11,7 +11,6 @@
 use super::trace::{self, Mis, MisHeuristic, PrevVertex};
 use super::{Integrator, RadianceSample};
 use crate::light::LightSampleContext;
-use crate::material::BsdfContext;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
@@ -74,7 +73,7 @@ impl DirectIntegrator {
         let bsdf = &scene.bsdfs()[shape.bsdf as usize];
         let frame = si.frame();
         let wo_local = frame.to_local(wo);
-        let ctx = BsdfContext { uv: si.uv };
+        let ctx = scene.bsdf_context(&si);
         let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
         let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();

@@ -198,7 +198,7 @@ impl PathIntegrator {
             let bsdf = &scene.bsdfs()[shape.bsdf as usize];
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
-            let ctx = BsdfContext { uv: si.uv };
+            let ctx = scene.bsdf_context(&si);
             let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
 

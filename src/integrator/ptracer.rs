@@ -26,7 +26,6 @@
 use super::trace::PathSettings;
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::Light;
-use crate::material::BsdfContext;
 use crate::math::float::offset_ray_origin;
 use crate::math::{luminance, Ray, Rgb, Vec2, Vec3};
 use crate::sampling::Pcg32;
@@ -108,7 +107,7 @@ impl LightTracer {
             let frame = si.frame();
             let w_prev = -ray.d;
             let wo = frame.to_local(w_prev);
-            let ctx = BsdfContext { uv: si.uv };
+            let ctx = scene.bsdf_context(&si);
             let (u_lens, u_lobe, u_bsdf, u_rr) = (u2(), u2().x, u2(), u2().x);
 
             // Connect this vertex to the camera.

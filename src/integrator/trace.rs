@@ -271,7 +271,7 @@ pub struct SurfaceVertex<'a> {
     /// The BSDF.
     pub bsdf: &'a Bsdf,
     /// Texture coordinates for textured parameters.
-    pub ctx: BsdfContext,
+    pub ctx: BsdfContext<'a>,
     /// Shading frame (normal on +z).
     pub frame: Frame,
     /// Unit direction toward the previous vertex, in `frame`.

@@ -59,15 +59,26 @@ fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
         intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)?,
         cutoff: cutoff.to_radians(),
         beam: beam.to_radians(),
-        texture: textures.texture_opt(o, "texture", SpectrumKind::Reflectance)?.map(Box::new),
+        texture: without_mesh_attributes(o, "texture", textures.texture_opt(o, "texture", SpectrumKind::Reflectance)?)?
+            .map(Box::new),
     })
+}
+
+/// Rejects a `mesh_attribute` texture where there is no mesh to read it from.
+fn without_mesh_attributes(o: &Obj, name: &str, t: Option<crate::texture::Texture>) -> Result<Option<crate::texture::Texture>> {
+    match t {
+        Some(t) if !t.mesh_attributes().is_empty() => {
+            Err(o.error_at(name, format!("a mesh_attribute texture cannot be the '{name}' of a {} emitter", o.ty)))
+        }
+        t => Ok(t),
+    }
 }
 
 /// Mitsuba's `projector` (see [`Projector`]): `irradiance` (a texture, required), `scale`,
 /// `to_world`, `fov` / `fov_axis` / `focal_length`.
 fn projector(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
-    let irradiance = textures
-        .texture_opt(o, "irradiance", SpectrumKind::Illuminant)?
+    let irradiance = textures.texture_opt(o, "irradiance", SpectrumKind::Illuminant)?;
+    let irradiance = without_mesh_attributes(o, "irradiance", irradiance)?
         .ok_or_else(|| o.error("the projector needs an 'irradiance' (a texture or a colour)"))?;
     Ok(Light::Projector(Box::new(Projector::from_props(o, irradiance)?)))
 }

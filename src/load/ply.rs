@@ -1,9 +1,12 @@
 //! Stanford PLY meshes, ASCII and binary (little- and big-endian): `vertex` elements with
 //! `x y z`, optional `nx ny nz` and `u v` / `s t` / `texture_u texture_v`, and `face` elements
-//! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Other elements and
+//! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Colours `r g b` (or
+//! `red green blue`) of vertices and faces become the mesh attributes `vertex_color` and
+//! `face_color` (raw values, as Mitsuba reads them), which `mesh_attribute` textures look up. Other elements and
 //! properties are read and skipped.
 
 use super::LoadError;
+use crate::geometry::mesh::MeshAttribute;
 use crate::geometry::TriangleMesh;
 use crate::math::{Vec2, Vec3};
 use std::path::Path;
@@ -180,12 +183,19 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
     let enc = enc.ok_or("header has no 'format' line")?;
     let mut body = Body { data, pos, enc };
     let (mut positions, mut normals, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // Mitsuba's colour attributes: r, g, b (or red, green, blue) of vertices and faces, raw
+    // values (not rescaled from integers), one per triangle of a face's fan.
+    let (mut vertex_color, mut face_color) = (Vec::new(), Vec::new());
     for el in &elements {
         let find = |names: &[&str]| el.props.iter().position(|p| names.contains(&p.name.as_str()));
         let (ix, iy, iz) = (find(&["x"]), find(&["y"]), find(&["z"]));
         let (inx, iny, inz) = (find(&["nx"]), find(&["ny"]), find(&["nz"]));
         let (iu, iv) = (find(&["u", "s", "texture_u", "texture_s"]), find(&["v", "t", "texture_v", "texture_t"]));
         let iface = find(&["vertex_indices", "vertex_index"]);
+        let color = match (find(&["r", "red"]), find(&["g", "green"]), find(&["b", "blue"])) {
+            (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+            _ => None,
+        };
         let mut vals = vec![0.0f64; el.props.len()];
         let mut list: Vec<u32> = Vec::new();
         for item in 0..el.count {
@@ -218,17 +228,30 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
                 if let (Some(a), Some(b)) = (iu, iv) {
                     uvs.push(Vec2::new(vals[a] as f32, vals[b] as f32));
                 }
+                if let Some(c) = color {
+                    vertex_color.push(Vec3::from_array(c.map(|k| vals[k] as f32)));
+                }
             } else if el.name == "face" && iface.is_some() {
                 if list.len() < 3 {
                     return Err(format!("face {item} has {} vertices (need at least 3)", list.len()));
                 }
                 for k in 1..list.len() - 1 {
                     indices.push([list[0], list[k], list[k + 1]]);
+                    if let Some(c) = color {
+                        face_color.push(Vec3::from_array(c.map(|k| vals[k] as f32)));
+                    }
                 }
             }
         }
     }
-    TriangleMesh::new(positions, normals, uvs, indices)
+    let mut mesh = TriangleMesh::new(positions, normals, uvs, indices)?;
+    if !vertex_color.is_empty() {
+        mesh.attributes.push(MeshAttribute { name: "vertex_color".into(), per_face: false, values: vertex_color });
+    }
+    if !face_color.is_empty() {
+        mesh.attributes.push(MeshAttribute { name: "face_color".into(), per_face: true, values: face_color });
+    }
+    Ok(mesh)
 }
 
 #[cfg(test)]
@@ -243,6 +266,26 @@ mod tests {
         assert_eq!(m.len(), 2);
         assert_eq!(m.uvs.len(), 4);
         assert!((m.area() - 4.0).abs() < 1e-6);
+    }
+
+    /// Vertex and face colours become Mitsuba's `vertex_color` and `face_color` attributes (raw
+    /// values; a face's colour on every triangle of its fan), which a mesh point interpolates.
+    #[test]
+    fn colours_become_mesh_attributes() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+            property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n\
+            property list uchar int vertex_indices\nproperty float r\nproperty float g\nproperty float b\nend_header\n\
+            0 0 0 255 0 0\n1 0 0 0 255 0\n1 1 0 0 0 255\n0 1 0 10 20 30\n4 0 1 2 3 0.25 0.5 0.75\n";
+        let m = parse_ply(text.as_bytes()).unwrap();
+        let names: Vec<&str> = m.attributes.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["vertex_color", "face_color"]);
+        assert_eq!(m.attributes[1].values, vec![Vec3::new(0.25, 0.5, 0.75); 2]);
+        let point = |tri, b1, b2| crate::geometry::mesh::MeshPoint { mesh: &m, tri, bary: Vec2::new(b1, b2) };
+        assert_eq!(point(0, 0.0, 0.0).attribute("vertex_color"), Some(Vec3::new(255.0, 0.0, 0.0)));
+        let mid = point(0, 0.5, 0.5).attribute("vertex_color").unwrap();
+        assert!((mid - Vec3::new(0.0, 127.5, 127.5)).length() < 1e-4, "{mid}");
+        assert_eq!(point(1, 0.3, 0.3).attribute("face_color"), Some(Vec3::new(0.25, 0.5, 0.75)));
+        assert_eq!(point(1, 0.3, 0.3).attribute("vertex_weight"), None);
     }
 
     #[test]

@@ -31,7 +31,7 @@ impl Diffuse {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
-        self.reflectance.eval(ctx.uv) * (INV_PI * wi.z)
+        ctx.eval(&self.reflectance) * (INV_PI * wi.z)
     }
 
     /// `cos θᵢ / π` when both directions are on the front side, else 0.
@@ -50,7 +50,7 @@ impl Diffuse {
             return None;
         }
         let s = sample_cosine_hemisphere_malley(u);
-        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: self.reflectance.eval(ctx.uv), delta: false, eta: 1.0 })
+        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: ctx.eval(&self.reflectance), delta: false, eta: 1.0 })
     }
 }
 

@@ -30,10 +30,20 @@ pub use roughplastic::RoughPlastic;
 use crate::math::{Rgb, Vec2, Vec3};
 
 /// Where on the surface a BSDF is evaluated (what textured parameters need).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct BsdfContext {
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BsdfContext<'a> {
     /// Surface texture coordinates.
     pub uv: Vec2,
+    /// The mesh point, for `mesh_attribute` textures (None off meshes with attributes).
+    pub mesh: Option<crate::geometry::mesh::MeshPoint<'a>>,
+}
+
+impl BsdfContext<'_> {
+    /// The texture `t` here.
+    #[inline]
+    pub fn eval(&self, t: &crate::texture::Texture) -> Rgb {
+        t.eval_at(self.uv, self.mesh.as_ref())
+    }
 }
 
 /// The outcome of sampling a BSDF.
@@ -240,9 +250,9 @@ impl Bsdf {
     /// the incident direction along the normal (0 for delta BSDFs).
     pub fn diffuse_reflectance(&self, ctx: &BsdfContext, wo: Vec3) -> Rgb {
         match self {
-            Bsdf::Diffuse(b) => b.reflectance.eval(ctx.uv),
-            Bsdf::Plastic(b) => b.diffuse_reflectance.eval(ctx.uv),
-            Bsdf::RoughPlastic(b) => b.diffuse_reflectance.eval(ctx.uv),
+            Bsdf::Diffuse(b) => ctx.eval(&b.reflectance),
+            Bsdf::Plastic(b) => ctx.eval(&b.diffuse_reflectance),
+            Bsdf::RoughPlastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w
@@ -255,6 +265,33 @@ impl Bsdf {
                 }
             }
             _ => self.eval(ctx, wo, Vec3::new(0.0, 0.0, 1.0)) * std::f32::consts::PI,
+        }
+    }
+
+    /// The mesh attributes its textures read (`mesh_attribute`), which the shapes it is on
+    /// must carry.
+    pub fn mesh_attributes(&self) -> Vec<&str> {
+        match self {
+            Bsdf::Diffuse(b) => b.reflectance.mesh_attributes(),
+            Bsdf::Plastic(b) => b.diffuse_reflectance.mesh_attributes(),
+            Bsdf::RoughPlastic(b) => b.diffuse_reflectance.mesh_attributes(),
+            Bsdf::Blend { weight, bsdfs } => {
+                let mut v = weight.mesh_attributes();
+                v.extend(bsdfs[0].mesh_attributes());
+                v.extend(bsdfs[1].mesh_attributes());
+                v
+            }
+            Bsdf::Mask { opacity, bsdf } => {
+                let mut v = opacity.mesh_attributes();
+                v.extend(bsdf.mesh_attributes());
+                v
+            }
+            Bsdf::TwoSided(b) => {
+                let mut v = b[0].mesh_attributes();
+                v.extend(b[1].mesh_attributes());
+                v
+            }
+            _ => Vec::new(),
         }
     }
 
@@ -287,7 +324,7 @@ impl Bsdf {
 /// A blend weight or opacity in [0, 1] from a texture (its luminance).
 #[inline]
 fn blend_weight(t: &crate::texture::Texture, ctx: &BsdfContext) -> f32 {
-    crate::math::luminance(t.eval(ctx.uv)).clamp(0.0, 1.0)
+    crate::math::luminance(ctx.eval(t)).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

@@ -93,7 +93,7 @@ impl Plastic {
     }
 
     fn diffuse_albedo(&self, ctx: &BsdfContext) -> Rgb {
-        coated_diffuse_albedo(self.diffuse_reflectance.eval(ctx.uv), self.fdr_int, self.nonlinear)
+        coated_diffuse_albedo(ctx.eval(&self.diffuse_reflectance), self.fdr_int, self.nonlinear)
     }
 
     fn probabilities(&self, cos_o: f32) -> (f32, f32) {
@@ -153,8 +153,16 @@ impl Plastic {
 /// `nonlinear` (false).
 pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Texture, Rgb, f32, bool)> {
     let refl = SpectrumKind::Reflectance;
+    let diffuse = b.texture(o, "diffuse_reflectance", Rgb::splat(0.5))?;
+    if !diffuse.mesh_attributes().is_empty() {
+        // Mitsuba refuses it too: the lobe-selection weight needs the texture's mean.
+        return Err(o.error_at(
+            "diffuse_reflectance",
+            "a plastic's diffuse_reflectance cannot be a mesh_attribute (its sampling weight needs the texture's mean)",
+        ));
+    }
     Ok((
-        b.texture(o, "diffuse_reflectance", Rgb::splat(0.5))?,
+        diffuse,
         o.rgb("specular_reflectance", Rgb::ONE, refl)?,
         eta_from_props(o, 1.49)?,
         o.bool("nonlinear", false)?,

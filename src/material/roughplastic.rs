@@ -165,7 +165,7 @@ impl RoughPlastic {
     }
 
     fn diffuse_albedo(&self, ctx: &BsdfContext) -> Rgb {
-        coated_diffuse_albedo(self.diffuse_reflectance.eval(ctx.uv), self.internal_reflectance, self.nonlinear)
+        coated_diffuse_albedo(ctx.eval(&self.diffuse_reflectance), self.internal_reflectance, self.nonlinear)
     }
 
     /// `f cos θᵢ` (specular + diffuse).

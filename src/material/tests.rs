@@ -6,7 +6,7 @@ use super::microfacet::{Microfacet, MicrofacetType};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 
-const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO };
+const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None };
 
 fn rough_conductors() -> Vec<(String, Bsdf)> {
     let gold = Some(ConductorIor { eta: Rgb::new(0.143, 0.374, 1.442), k: Rgb::new(3.983, 2.385, 1.603) });

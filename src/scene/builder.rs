@@ -31,6 +31,11 @@ impl SceneBuilder {
         Self::default()
     }
 
+    /// The BSDF of index `i` (from [`SceneBuilder::add_bsdf`]).
+    pub fn bsdf(&self, i: u32) -> &Bsdf {
+        &self.bsdfs[i as usize]
+    }
+
     /// Adds a BSDF and returns its index.
     pub fn add_bsdf(&mut self, bsdf: Bsdf) -> u32 {
         self.bsdfs.push(bsdf);

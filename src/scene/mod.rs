@@ -229,6 +229,19 @@ impl Scene {
         self.light_sampler_kind
     }
 
+    /// What the BSDF at the hit `si` evaluates its textures with: the texture coordinates and,
+    /// on meshes that carry attributes, the point for `mesh_attribute` lookups.
+    #[inline]
+    pub fn bsdf_context(&self, si: &SurfaceInteraction) -> crate::material::BsdfContext<'_> {
+        let mesh = match &self.geometries[si.shape as usize] {
+            Geometry::Mesh(m) if !m.attributes.is_empty() => {
+                Some(crate::geometry::mesh::MeshPoint { mesh: m, tri: si.prim, bary: si.bary })
+            }
+            _ => None,
+        };
+        crate::material::BsdfContext { uv: si.uv, mesh }
+    }
+
     /// The closest surface hit along `ray` within `(0, ray.t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
@@ -331,6 +344,7 @@ impl Scene {
             ns,
             uv,
             dpdu: m.dpdu(i, &p, ng),
+            bary: crate::math::Vec2::new(h.b1, h.b2),
             shape: r.shape,
             prim: r.index,
         }
@@ -346,7 +360,8 @@ impl Scene {
             (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpdu(q)),
             _ => unreachable!("primitive kind and shape geometry always agree"),
         };
-        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, shape: r.shape, prim: 0 }
+        let bary = crate::math::Vec2::ZERO;
+        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, shape: r.shape, prim: 0, bary }
     }
 
     /// Whether anything blocks `ray` within `(0, ray.t_max)`.

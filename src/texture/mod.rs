@@ -7,6 +7,7 @@
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
 
+use crate::geometry::mesh::MeshPoint;
 use crate::image::{Image, ImageSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Mat3, Rgb, Vec2, Vec3};
@@ -55,6 +56,14 @@ pub enum Texture {
         bitmap: Bitmap,
         /// uv transform (homogeneous 2D affine).
         to_uv: Mat3,
+    },
+    /// Mitsuba's `mesh_attribute`: the named attribute of the mesh at the shading point
+    /// (per-vertex values interpolated, or the triangle's), times `scale`.
+    MeshAttribute {
+        /// The attribute's name (`vertex_color`, `face_color`, …).
+        name: String,
+        /// A factor on the value.
+        scale: f32,
     },
     /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v lie on the same
     /// side of 1/2, `color1` elsewhere.
@@ -114,10 +123,21 @@ impl Bitmap {
 }
 
 impl Texture {
-    /// The value at surface coordinates `uv`.
+    /// The value at surface coordinates `uv` (0 for a `mesh_attribute`, which needs a mesh
+    /// point: [`Texture::eval_at`]).
     #[inline]
     pub fn eval(&self, uv: Vec2) -> Rgb {
+        self.eval_at(uv, None)
+    }
+
+    /// The value at surface coordinates `uv` of the mesh point `mesh` (if on a mesh with
+    /// attributes).
+    #[inline]
+    pub fn eval_at(&self, uv: Vec2, mesh: Option<&MeshPoint>) -> Rgb {
         match self {
+            Texture::MeshAttribute { name, scale } => {
+                mesh.and_then(|m| m.attribute(name)).map_or(Rgb::ZERO, |v| v * *scale)
+            }
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
             Texture::Checkerboard { color0, color1, to_uv } => {
@@ -140,6 +160,8 @@ impl Texture {
                 bitmap.image.pixels.iter().copied().sum::<Rgb>() / bitmap.image.pixels.len().max(1) as f32
             }
             Texture::Checkerboard { color0, color1, .. } => 0.5 * (*color0 + *color1),
+            // Unknown without the mesh: an estimate for sampling weights only.
+            Texture::MeshAttribute { scale, .. } => Rgb::splat(0.5 * scale),
         }
     }
 
@@ -150,6 +172,7 @@ impl Texture {
             Texture::Constant(c) => ok(*c),
             Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
             Texture::Checkerboard { color0, color1, .. } => ok(*color0) && ok(*color1),
+            Texture::MeshAttribute { .. } => true,
         }
     }
 }
@@ -192,7 +215,12 @@ pub type TexturePlugin = fn(&Obj, &mut dyn ImageSource) -> PropResult<Texture>;
 
 /// Every texture plugin by its (Mitsuba) name.
 pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
-    &[("bitmap", bitmap_from_props), ("checkerboard", checkerboard_from_props), ("rawconstant", rawconstant_from_props)];
+    &[
+        ("bitmap", bitmap_from_props),
+        ("checkerboard", checkerboard_from_props),
+        ("rawconstant", rawconstant_from_props),
+        ("mesh_attribute", mesh_attribute_from_props),
+    ];
 
 /// The constructor of the texture plugin `name`.
 pub fn texture_plugin(name: &str) -> Option<TexturePlugin> {
@@ -236,6 +264,26 @@ fn checkerboard_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Textu
         color1: o.rgb("color1", Rgb::splat(0.2), refl)?,
         to_uv: to_uv_from_props(o)?,
     })
+}
+
+/// Mitsuba's `mesh_attribute`: `name` (required: `vertex_…` or `face_…`, e.g. `vertex_color`
+/// from a PLY file's vertex colours), `scale` (1). The shapes that use it must have the attribute.
+fn mesh_attribute_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
+    let name = o.string("name")?;
+    if !(name.starts_with("vertex_") || name.starts_with("face_")) {
+        return Err(o.error_at("name", format!("a mesh attribute's name starts with 'vertex_' or 'face_', got '{name}'")));
+    }
+    Ok(Texture::MeshAttribute { name, scale: o.float("scale", 1.0)? })
+}
+
+impl Texture {
+    /// The mesh attributes this texture reads.
+    pub fn mesh_attributes(&self) -> Vec<&str> {
+        match self {
+            Texture::MeshAttribute { name, .. } => vec![name.as_str()],
+            _ => Vec::new(),
+        }
+    }
 }
 
 /// Mitsuba's `rawconstant`: `value` (required), a `<float>` or a `<vector>` (three channels),

@@ -88,4 +88,18 @@ first = serialized_mesh([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 2)], b"triang
 second = serialized_mesh(verts, faces, b"knot")
 with open("scenes/assets/knot.serialized", "wb") as f:
     f.write(first + second + struct.pack("<QQI", 0, len(first), 2))
-print("wrote scenes/assets/sky.exr, tiles.png, knot.obj and knot.serialized")
+# The knot as an ASCII PLY with per-vertex colours (a hue around the curve) and per-face colours
+# (alternating bands), for Mitsuba's mesh_attribute textures (vertex_color, face_color).
+with open("scenes/assets/knot_colors.ply", "w") as f:
+    f.write("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\nproperty float z\n" % len(verts))
+    f.write("property float r\nproperty float g\nproperty float b\n")
+    f.write("element face %d\nproperty list uchar int vertex_indices\n" % len(faces))
+    f.write("property float r\nproperty float g\nproperty float b\nend_header\n")
+    for k, v in enumerate(verts):
+        h = 2 * math.pi * (k // ring) / seg
+        rgb = [0.5 + 0.4 * math.cos(h + o) for o in (0.0, 2.1, 4.2)]
+        f.write("%.5f %.5f %.5f %.3f %.3f %.3f\n" % (*v, *rgb))
+    for k, (a, b, c) in enumerate(faces):
+        band = (k // (2 * ring)) % 2
+        f.write("3 %d %d %d %s\n" % (a, b, c, "0.8 0.7 0.2" if band else "0.2 0.3 0.8"))
+print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized and knot_colors.ply")

@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
-use crate::geometry::{shape_plugin, MeshFile, MeshSource, SHAPE_PLUGINS};
+use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGINS};
 use crate::image::{Image, ImageSource};
 use crate::integrator::{integrator_plugin, AnyIntegrator, INTEGRATOR_PLUGINS};
 use crate::light::LightSamplerKind;
@@ -279,6 +279,20 @@ impl Builder {
                 }
             }
         };
+        // Mitsuba: a mesh_attribute texture on a shape without that attribute is an error.
+        for name in self.sb.bsdf(bsdf).mesh_attributes() {
+            let has = matches!(&geometry, Geometry::Mesh(m) if m.attributes.iter().any(|a| a.name == name));
+            if !has {
+                return Err(o.error(format!(
+                    "the shape's BSDF reads the mesh attribute '{name}', which this {} does not have \
+                     (PLY vertex or face colours give vertex_color and face_color)",
+                    o.ty
+                )));
+            }
+        }
+        if emission.as_ref().is_some_and(|t| !t.mesh_attributes().is_empty()) {
+            return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
+        }
         let index = self.sb.add_shape_textured(geometry, bsdf, emission);
         self.sb.set_shape_media(index, interior, exterior);
         Ok(())
@@ -428,9 +442,18 @@ impl MeshSource for Builder {
                 let index = o.int("shape_index", 0)?;
                 let index = usize::try_from(index)
                     .map_err(|_| o.error_at("shape_index", format!("shape_index must be ≥ 0, got {index}")))?;
-                // Vertex colours only matter to `mesh_attribute` textures, which are an error.
                 let s = crate::load::serialized::load_serialized(&path, index).map_err(located)?;
-                Ok(MeshFile { mesh: s.mesh, face_normals: s.face_normals })
+                let mut mesh = s.mesh;
+                if !s.colors.is_empty() {
+                    // Mitsuba names a serialized mesh's vertex colours `vertex_color`.
+                    let values = s.colors;
+                    mesh.attributes.push(crate::geometry::mesh::MeshAttribute {
+                        name: "vertex_color".into(),
+                        per_face: false,
+                        values,
+                    });
+                }
+                Ok(MeshFile { mesh, face_normals: s.face_normals })
             }
         }
     }

@@ -704,3 +704,35 @@ fn version_upgrade_of_old_scenes() {
     let r = f.scene.camera().generate_ray(crate::math::Vec2::new(16.0, 0.0), crate::math::Vec2::ZERO);
     assert!(r.d.is_finite());
 }
+
+/// `mesh_attribute` textures read a PLY's colours at the hit point; a shape without the
+/// attribute is a located error, as in Mitsuba.
+#[test]
+fn mesh_attribute_textures() {
+    let dir = std::env::temp_dir().join(format!("neumann-meshattr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("quad.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+         property float r\nproperty float g\nproperty float b\nelement face 1\nproperty list uchar int vertex_indices\n\
+         end_header\n-1 -1 0 0.2 0.2 0.2\n1 -1 0 0.2 0.2 0.2\n1 1 0 0.2 0.2 0.2\n-1 1 0 0.2 0.2 0.2\n4 0 1 2 3\n",
+    )
+    .unwrap();
+    let body = |name: &str| {
+        scene(&format!(
+            r#"<shape type="ply"><string name="filename" value="quad.ply"/>
+            <bsdf type="diffuse"><texture type="mesh_attribute" name="reflectance"><string name="name" value="{name}"/></texture></bsdf></shape>"#
+        ))
+    };
+    let f = load_scene_text(&dir.join("s.xml"), &body("vertex_color"), &[]).unwrap();
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.1, 0.2, 5.0), -Vec3::Z)).unwrap();
+    let ctx = f.scene.bsdf_context(&si);
+    let albedo = f.scene.bsdfs()[0].diffuse_reflectance(&ctx, Vec3::Z);
+    assert!((albedo - Rgb::splat(0.2)).abs().max_element() < 1e-6, "{albedo}");
+    let e = load_scene_text(&dir.join("s.xml"), &body("face_color"), &[]).unwrap_err().to_string();
+    assert!(e.contains("s.xml:") && e.contains("mesh attribute 'face_color'"), "{e}");
+    let e = load_scene_text(&dir.join("s.xml"), &body("color"), &[]).unwrap_err().to_string();
+    assert!(e.contains("starts with 'vertex_' or 'face_'"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
