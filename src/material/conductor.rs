@@ -9,10 +9,11 @@
 use super::conductor_presets::{conductor_names, named_conductor};
 use super::fresnel::{fresnel_conductor, reflect, reflect_about};
 use super::microfacet::Microfacet;
-use super::{Bsdf, BsdfBuilder, BsdfSample};
+use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::props::{nearest, Obj, Result as PropResult};
+use crate::texture::Texture;
 
 /// The Fresnel term of a conductor: complex IOR, or none (perfect reflector).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,48 +60,63 @@ impl Conductor {
 /// sampled through the visible normals seen from `wo`.
 #[derive(Clone, Debug)]
 pub struct RoughConductor {
-    /// Microfacet distribution.
+    /// Microfacet distribution (its roughness replaced by `textured_alpha` where given).
     pub distribution: Microfacet,
     /// Complex index of refraction (`None`: perfect reflector).
     pub ior: Option<ConductorIor>,
-    /// Reflectance scale.
-    pub specular_reflectance: Rgb,
+    /// Reflectance scale (texturable).
+    pub specular_reflectance: Texture,
+    /// Roughness textures (α_u, α_v; their luminance), if the roughness varies over the surface.
+    pub textured_alpha: Option<Box<[Texture; 2]>>,
 }
 
 impl RoughConductor {
+    /// The microfacet distribution at `ctx` (textured roughness evaluated there).
+    #[inline]
+    fn distribution_at(&self, ctx: &BsdfContext) -> Microfacet {
+        match &self.textured_alpha {
+            None => self.distribution,
+            Some(t) => {
+                let alpha = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()).max(1e-4);
+                Microfacet::new(self.distribution.kind, alpha(&t[0]), alpha(&t[1]))
+            }
+        }
+    }
+
     /// `f cos θᵢ`; 0 unless both directions are above the surface.
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
+        let distribution = self.distribution_at(ctx);
         let m = (wo + wi).normalize();
-        let d = self.distribution.d(m);
+        let d = distribution.d(m);
         if d == 0.0 {
             return Rgb::ZERO;
         }
-        let g = self.distribution.g(wi, wo, m);
+        let g = distribution.g(wi, wo, m);
         let f = ConductorIor::reflectance(&self.ior, wi.dot(m));
-        self.specular_reflectance * f * (d * g / (4.0 * wo.z))
+        ctx.eval(&self.specular_reflectance) * f * (d * g / (4.0 * wo.z))
     }
 
     /// Density of [`RoughConductor::sample`]: `pdf(m) / (4 |wo·m|)` (Jacobian of reflection).
     #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
         let m = (wo + wi).normalize();
-        self.distribution.pdf(wo, m) / (4.0 * wo.dot(m).abs())
+        self.distribution_at(ctx).pdf(wo, m) / (4.0 * wo.dot(m).abs())
     }
 
     /// A visible microfacet normal from `wo`, reflected.
     #[inline]
-    pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
-        let m = self.distribution.sample(wo, u);
+        let m = self.distribution_at(ctx).sample(wo, u);
         if m.pdf <= 0.0 {
             return None;
         }
@@ -109,7 +125,7 @@ impl RoughConductor {
             return None;
         }
         let pdf = m.pdf / (4.0 * wo.dot(m.value).abs());
-        let weight = self.eval(wo, wi) / pdf;
+        let weight = self.eval(ctx, wo, wi) / pdf;
         (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
     }
 }
@@ -145,12 +161,29 @@ impl Conductor {
 
 impl RoughConductor {
     /// Mitsuba's `roughconductor`: the conductor's parameters and the microfacet distribution's
-    /// (anisotropic `alpha_u`/`alpha_v` allowed).
-    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+    /// (anisotropic `alpha_u`/`alpha_v` allowed; the roughness and `specular_reflectance` may be
+    /// textures).
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let textured = ["alpha", "alpha_u", "alpha_v"].iter().any(|n| matches!(o.object_opt(n, "texture"), Ok(Some(_))));
+        let (distribution, textured_alpha) = if textured {
+            let (au, av) = if o.has("alpha") {
+                if o.has("alpha_u") || o.has("alpha_v") {
+                    return Err(o.error_at("alpha", "give either 'alpha' or 'alpha_u'/'alpha_v'"));
+                }
+                let a = b.texture(o, "alpha", Rgb::splat(0.1))?;
+                (a.clone(), a)
+            } else {
+                (b.texture(o, "alpha_u", Rgb::splat(0.1))?, b.texture(o, "alpha_v", Rgb::splat(0.1))?)
+            };
+            (Microfacet::kind_from_props(o)?, Some(Box::new([au, av])))
+        } else {
+            (Microfacet::from_props(o, true)?, None)
+        };
         Ok(Bsdf::RoughConductor(RoughConductor {
-            distribution: Microfacet::from_props(o, true)?,
+            distribution,
             ior: ConductorIor::from_props(o)?,
-            specular_reflectance: o.rgb("specular_reflectance", Rgb::ONE, SpectrumKind::Reflectance)?,
+            specular_reflectance: b.texture(o, "specular_reflectance", Rgb::ONE)?,
+            textured_alpha,
         }))
     }
 }

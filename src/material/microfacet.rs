@@ -227,6 +227,17 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
 }
 
 impl Microfacet {
+    /// A distribution of Mitsuba's `distribution` (`beckmann` or `ggx`) whose roughness comes
+    /// from elsewhere (textures): α = 0.1 here.
+    pub fn kind_from_props(o: &Obj) -> PropResult<Microfacet> {
+        let kind = match o.choice("distribution", &["beckmann", "ggx"])?.as_str() {
+            "beckmann" => MicrofacetType::Beckmann,
+            _ => MicrofacetType::Ggx,
+        };
+        o.bool("sample_visible", true)?;
+        Ok(Microfacet::new(kind, 0.1, 0.1))
+    }
+
     /// Mitsuba's rough-surface parameters: `distribution` (`beckmann` (default), `ggx`, `phong`
     /// with `exponent` or `alpha` → `n = 2/α² − 2`), `alpha` (0.1) or, if `anisotropic`,
     /// `alpha_u` / `alpha_v`; `sample_visible` is read (visible normals are always sampled).

@@ -133,7 +133,7 @@ impl Bsdf {
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
-            Bsdf::RoughConductor(b) => b.eval(wo, wi),
+            Bsdf::RoughConductor(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(wo, wi),
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
@@ -158,7 +158,7 @@ impl Bsdf {
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
-            Bsdf::RoughConductor(b) => b.pdf(wo, wi),
+            Bsdf::RoughConductor(b) => b.pdf(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
@@ -184,7 +184,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Conductor(b) => b.sample(wo),
-            Bsdf::RoughConductor(b) => b.sample(wo, u),
+            Bsdf::RoughConductor(b) => b.sample(ctx, wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
             Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
@@ -324,7 +324,7 @@ impl Bsdf {
 /// A blend weight or opacity in [0, 1] from a texture (its luminance).
 #[inline]
 fn blend_weight(t: &crate::texture::Texture, ctx: &BsdfContext) -> f32 {
-    crate::math::luminance(ctx.eval(t)).clamp(0.0, 1.0)
+    t.eval_scalar(ctx.uv, ctx.mesh.as_ref()).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

@@ -20,9 +20,25 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
     ] {
         v.push((
             format!("roughconductor {md:?}"),
-            Bsdf::RoughConductor(RoughConductor { distribution: md, ior: gold, specular_reflectance: Rgb::ONE }),
+            Bsdf::RoughConductor(RoughConductor {
+                distribution: md,
+                ior: gold,
+                specular_reflectance: Rgb::ONE.into(),
+                textured_alpha: None,
+            }),
         ));
     }
+    // Textured roughness (anisotropic, from two textures) and reflectance: at the tests' shading
+    // point the textures give α = (0.15, 0.45) and a coloured reflectance.
+    v.push((
+        "roughconductor textured".into(),
+        Bsdf::RoughConductor(RoughConductor {
+            distribution: Microfacet::new(MicrofacetType::Ggx, 0.1, 0.1),
+            ior: gold,
+            specular_reflectance: Rgb::new(0.9, 0.8, 0.6).into(),
+            textured_alpha: Some(Box::new([Rgb::splat(0.15).into(), Rgb::splat(0.45).into()])),
+        }),
+    ));
     v
 }
 
@@ -197,15 +213,16 @@ fn energy_is_conserved() {
         let white = RoughConductor {
             distribution: Microfacet::new(MicrofacetType::Ggx, a, a),
             ior: None,
-            specular_reflectance: Rgb::ONE,
+            specular_reflectance: Rgb::ONE.into(),
+            textured_alpha: None,
         };
         let wo = Vec3::new(0.3, 0.0, 0.954).normalize();
         let exact =
-            crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| white.eval(wo, *wi).x as f64);
+            crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| white.eval(&CTX, wo, *wi).x as f64);
         let mut rng = crate::sampling::Pcg32::new(4, k as u64);
         let n = 100_000;
         let est = crate::estimators::Estimate::from_values(
-            (0..n).map(|_| white.sample(wo, u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)),
+            (0..n).map(|_| white.sample(&CTX, wo, u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)),
         );
         assert!(
             (est.value - exact).abs() < 4.0 * est.std_error() + 1e-4,

@@ -152,6 +152,23 @@ impl Texture {
         }
     }
 
+    /// The texture as a scalar (roughness, blend weight, opacity): the luminance of its value,
+    /// as Mitsuba's `eval_1`. Measured against Mitsuba 3.9.1: its checkerboard's scalar lookup
+    /// swaps the two colours relative to its colour lookup (`color1` where the fractional parts
+    /// of u and v lie on the same side of ½), and so does this one, so that scenes render as
+    /// there.
+    #[inline]
+    pub fn eval_scalar(&self, uv: Vec2, mesh: Option<&MeshPoint>) -> f32 {
+        match self {
+            Texture::Checkerboard { color0, color1, to_uv } => {
+                let p = to_uv.transform_point2(uv);
+                let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
+                crate::math::luminance(if (fu > 0.5) == (fv > 0.5) { *color1 } else { *color0 })
+            }
+            t => crate::math::luminance(t.eval_at(uv, mesh)),
+        }
+    }
+
     /// Average value (over the image, or the two checker colours).
     pub fn mean(&self) -> Rgb {
         match self {
@@ -335,6 +352,9 @@ mod tests {
         assert_eq!(t.eval(Vec2::new(0.3, 0.3)), Rgb::ONE);
         assert_eq!(t.mean(), Rgb::splat(0.5));
         assert!(t.is_reflectance());
+        // As a scalar (Mitsuba's eval_1) the colours are swapped, as Mitsuba 3.9.1 has them.
+        assert_eq!(t.eval_scalar(Vec2::new(0.1, 0.1), None), 0.0);
+        assert_eq!(t.eval_scalar(Vec2::new(0.3, 0.1), None), 1.0);
         assert!(!Texture::Constant(Rgb::splat(1.5)).is_reflectance());
     }
 }
