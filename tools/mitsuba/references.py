@@ -45,6 +45,8 @@ SCENES = {
     "orthographic": (4096, 64, {}, 1.5),
     # Projected light: textured spot, projectors (textured and constant).
     "projector": (4096, 64, {}, 1.5),
+    # Textured roughness, specular reflectance, blend weight and mask opacity.
+    "textured_params": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 
