@@ -466,7 +466,7 @@ mod tests {
         let cases: Vec<(&str, Bsdf, i32, f64)> = vec![
             ("diffuse, direct only", Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))), 2, 0.5),
             ("diffuse", Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))), -1, 0.5),
-            ("mirror", Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }), -1, 1.0),
+            ("mirror", Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() }), -1, 1.0),
             (
                 "glass",
                 Bsdf::Dielectric(Dielectric {

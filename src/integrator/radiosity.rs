@@ -668,7 +668,7 @@ mod tests {
         };
         let e = Radiosity::solve(&scene_with(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))), &Options::default()).unwrap_err();
         assert!(e.contains("point"), "{e}");
-        let mirror = Bsdf::Conductor(crate::material::Conductor { ior: None, specular_reflectance: Rgb::ONE });
+        let mirror = Bsdf::Conductor(crate::material::Conductor { ior: None, specular_reflectance: Rgb::ONE.into() });
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(mirror);
         b.add_shape(Geometry::Mesh(TriangleMesh::rectangle()), m, Some(Rgb::ONE));

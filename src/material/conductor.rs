@@ -40,18 +40,18 @@ impl ConductorIor {
 pub struct Conductor {
     /// Complex index of refraction (`None`: perfect mirror).
     pub ior: Option<ConductorIor>,
-    /// Reflectance scale.
-    pub specular_reflectance: Rgb,
+    /// Reflectance scale (texturable).
+    pub specular_reflectance: Texture,
 }
 
 impl Conductor {
     /// Mirror reflection of `wo`, weight `F(cos θ) · specular_reflectance`. One-sided.
     #[inline]
-    pub fn sample(&self, wo: Vec3) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;
         }
-        let weight = self.specular_reflectance * ConductorIor::reflectance(&self.ior, wo.z);
+        let weight = ctx.eval(&self.specular_reflectance) * ConductorIor::reflectance(&self.ior, wo.z);
         Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight, delta: true, eta: 1.0 })
     }
 }
@@ -150,11 +150,11 @@ impl ConductorIor {
 }
 
 impl Conductor {
-    /// Mitsuba's `conductor`: `material` or `eta`/`k`, `specular_reflectance` (1).
-    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+    /// Mitsuba's `conductor`: `material` or `eta`/`k`, `specular_reflectance` (1, texturable).
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
         Ok(Bsdf::Conductor(Conductor {
             ior: ConductorIor::from_props(o)?,
-            specular_reflectance: o.rgb("specular_reflectance", Rgb::ONE, SpectrumKind::Reflectance)?,
+            specular_reflectance: b.texture(o, "specular_reflectance", Rgb::ONE)?,
         }))
     }
 }

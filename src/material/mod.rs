@@ -183,7 +183,7 @@ impl Bsdf {
     pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
-            Bsdf::Conductor(b) => b.sample(wo),
+            Bsdf::Conductor(b) => b.sample(ctx, wo),
             Bsdf::RoughConductor(b) => b.sample(ctx, wo, u),
             Bsdf::Dielectric(b) => b.sample(wo, u1),
             Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),

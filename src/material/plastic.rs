@@ -12,14 +12,13 @@
 //! `F(cos θₒ) · s / (s + d)` against `(1 - F(cos θₒ)) · d / (s + d)`, `s` and `d` being the mean
 //! specular and diffuse reflectances (Mitsuba's rule).
 //!
-//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1), `int_ior`
+//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1, texturable), `int_ior`
 //! (polypropylene, 1.49), `ext_ior` (air), `nonlinear` (false).
 
 use super::fresnel::eta_from_props;
 use super::fresnel::{fresnel_dielectric, reflect};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::texture::Texture;
-use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_cosine_hemisphere_malley;
@@ -29,8 +28,8 @@ use crate::sampling::sample_cosine_hemisphere_malley;
 pub struct Plastic {
     /// Base albedo ρ (texturable).
     pub diffuse_reflectance: Texture,
-    /// Specular scale.
-    pub specular_reflectance: Rgb,
+    /// Specular scale (texturable).
+    pub specular_reflectance: Texture,
     /// `int_ior / ext_ior` of the coating.
     pub eta: f32,
     /// Mitsuba's `nonlinear` internal-scattering model.
@@ -79,9 +78,14 @@ pub(super) fn coated_diffuse_albedo(rho: Rgb, r_int: f32, nonlinear: bool) -> Rg
 
 impl Plastic {
     /// Plastic with the given parameters.
-    pub fn new(diffuse_reflectance: impl Into<Texture>, specular_reflectance: Rgb, eta: f32, nonlinear: bool) -> Plastic {
-        let diffuse_reflectance = diffuse_reflectance.into();
-        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance);
+    pub fn new(
+        diffuse_reflectance: impl Into<Texture>,
+        specular_reflectance: impl Into<Texture>,
+        eta: f32,
+        nonlinear: bool,
+    ) -> Plastic {
+        let (diffuse_reflectance, specular_reflectance) = (diffuse_reflectance.into(), specular_reflectance.into());
+        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance.mean());
         Plastic {
             diffuse_reflectance,
             specular_reflectance,
@@ -133,7 +137,7 @@ impl Plastic {
             Some(BsdfSample {
                 wi: reflect(wo),
                 pdf: ps,
-                weight: self.specular_reflectance * (f / ps),
+                weight: ctx.eval(&self.specular_reflectance) * (f / ps),
                 delta: true,
                 eta: 1.0,
             })
@@ -149,10 +153,9 @@ impl Plastic {
 }
 
 /// The parameters both plastics read: `diffuse_reflectance` (0.5, texturable),
-/// `specular_reflectance` (1), `eta` from `int_ior` (polypropylene, 1.49) and `ext_ior`,
-/// `nonlinear` (false).
-pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Texture, Rgb, f32, bool)> {
-    let refl = SpectrumKind::Reflectance;
+/// `specular_reflectance` (1, texturable), `eta` from `int_ior` (polypropylene, 1.49) and
+/// `ext_ior`, `nonlinear` (false).
+pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Texture, Texture, f32, bool)> {
     let diffuse = b.texture(o, "diffuse_reflectance", Rgb::splat(0.5))?;
     if !diffuse.mesh_attributes().is_empty() {
         // Mitsuba refuses it too: the lobe-selection weight needs the texture's mean.
@@ -163,7 +166,7 @@ pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Tex
     }
     Ok((
         diffuse,
-        o.rgb("specular_reflectance", Rgb::ONE, refl)?,
+        b.texture(o, "specular_reflectance", Rgb::ONE)?,
         eta_from_props(o, 1.49)?,
         o.bool("nonlinear", false)?,
     ))

@@ -13,7 +13,7 @@
 //! Sampling picks the specular lobe with probability ∝ `(1 - T(cos θₒ)) s / (s + d)` against
 //! `T(cos θₒ) d / (s + d)`.
 //!
-//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1), `int_ior`
+//! Parameters (Mitsuba): `diffuse_reflectance` (0.5, texturable), `specular_reflectance` (1, texturable), `int_ior`
 //! (1.49), `ext_ior`, `distribution` (beckmann, ggx), `alpha` (0.1), `nonlinear` (false).
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
@@ -35,8 +35,8 @@ pub struct RoughPlastic {
     pub distribution: Microfacet,
     /// Base albedo ρ (texturable).
     pub diffuse_reflectance: Texture,
-    /// Specular scale.
-    pub specular_reflectance: Rgb,
+    /// Specular scale (texturable).
+    pub specular_reflectance: Texture,
     /// `int_ior / ext_ior`.
     pub eta: f32,
     /// Mitsuba's `nonlinear` model.
@@ -125,12 +125,12 @@ impl RoughPlastic {
     pub fn new(
         distribution: Microfacet,
         diffuse_reflectance: impl Into<Texture>,
-        specular_reflectance: Rgb,
+        specular_reflectance: impl Into<Texture>,
         eta: f32,
         nonlinear: bool,
     ) -> Self {
-        let diffuse_reflectance = diffuse_reflectance.into();
-        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance);
+        let (diffuse_reflectance, specular_reflectance) = (diffuse_reflectance.into(), specular_reflectance.into());
+        let specular_weight = specular_sampling_weight(diffuse_reflectance.mean(), specular_reflectance.mean());
         let tables = coating_tables(distribution, eta);
         let (external_transmittance, internal_reflectance) = (tables.0.clone(), tables.1);
         RoughPlastic {
@@ -177,7 +177,7 @@ impl RoughPlastic {
         let f = fresnel_dielectric(wo.dot(m), self.eta).0;
         let spec = f * self.distribution.d(m) * self.distribution.g(wi, wo, m) / (4.0 * wo.z);
         let diff = self.transmittance(wo.z) * self.transmittance(wi.z) * INV_PI / (self.eta * self.eta) * wi.z;
-        self.specular_reflectance * spec + self.diffuse_albedo(ctx) * diff
+        ctx.eval(&self.specular_reflectance) * spec + self.diffuse_albedo(ctx) * diff
     }
 
     /// Density of [`RoughPlastic::sample`].

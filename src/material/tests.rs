@@ -61,6 +61,23 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         ));
     }
     v.push(("plastic".into(), Bsdf::Plastic(Plastic::new(Rgb::new(0.2, 0.5, 0.8), Rgb::ONE, 1.49, false))));
+    // Textured diffuse and specular reflectances (a checkerboard: colour 0 at the tests' uv,
+    // while its mean, which sets the lobe weights, differs).
+    let checker = |a: Rgb, b: Rgb| crate::texture::Texture::Checkerboard {
+        color0: a,
+        color1: b,
+        to_uv: crate::math::Mat3::IDENTITY,
+    };
+    v.push((
+        "roughplastic textured".into(),
+        Bsdf::RoughPlastic(RoughPlastic::new(
+            Microfacet::new(MicrofacetType::Beckmann, 0.3, 0.3),
+            checker(Rgb::new(0.6, 0.3, 0.1), Rgb::splat(0.05)),
+            checker(Rgb::splat(0.7), Rgb::ONE),
+            1.5,
+            false,
+        )),
+    ));
     v.push((
         "plastic, nonlinear".into(),
         Bsdf::Plastic(Plastic::new(Rgb::new(0.9, 0.5, 0.1), Rgb::splat(0.5), 1.6, true)),
@@ -237,7 +254,7 @@ fn energy_is_conserved() {
 fn smooth_conductor_mirrors_with_fresnel() {
     let b = Bsdf::Conductor(Conductor {
         ior: Some(ConductorIor { eta: Rgb::splat(0.2), k: Rgb::splat(3.9) }),
-        specular_reflectance: Rgb::ONE,
+        specular_reflectance: Rgb::ONE.into(),
     });
     let wo = Vec3::new(0.3, 0.4, 0.866).normalize();
     let s = b.sample(&CTX, wo, 0.5, Vec2::splat(0.5)).unwrap();
@@ -247,8 +264,8 @@ fn smooth_conductor_mirrors_with_fresnel() {
     assert_eq!(b.eval(&CTX, wo, s.wi), Rgb::ZERO);
     assert!(b.sample(&CTX, -wo, 0.5, Vec2::splat(0.5)).is_none(), "one-sided");
     let mirror = Bsdf::TwoSided(Box::new([
-        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
-        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE }),
+        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() }),
+        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() }),
     ]));
     let s = mirror.sample(&CTX, flip(wo), 0.5, Vec2::splat(0.5)).unwrap();
     assert!((s.wi - Vec3::new(-wo.x, -wo.y, -wo.z)).length() < 1e-6, "twosided mirrors the back too");
