@@ -64,9 +64,10 @@ impl MeshPoint<'_> {
         if a.per_face {
             return a.values.get(self.tri as usize).copied();
         }
-        let [i0, i1, i2] = self.mesh.indices[self.tri as usize].map(|v| v as usize);
+        let [i0, i1, i2] = self.mesh.indices.get(self.tri as usize)?.map(|v| v as usize);
         let (b1, b2) = (self.bary.x, self.bary.y);
-        Some(a.values[i0] * (1.0 - b1 - b2) + a.values[i1] * b1 + a.values[i2] * b2)
+        let v = |i: usize| a.values.get(i).copied();
+        Some(v(i0)? * (1.0 - b1 - b2) + v(i1)? * b1 + v(i2)? * b2)
     }
 }
 

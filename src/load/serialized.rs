@@ -68,10 +68,16 @@ pub fn load_serialized(path: &Path, index: usize) -> Result<SerializedMesh, Load
     if start + 4 > table || u16_at(start) != FORMAT_TAG || u16_at(start + 2) != version {
         return Err(fail(format!("mesh {index} does not start with the format tag at byte {start}")));
     }
+    // A hostile stream could inflate without bound: stop at 16 GiB (a billion-triangle mesh).
+    const MAX_INFLATED: u64 = 16 << 30;
     let mut data = Vec::new();
     flate2::read::ZlibDecoder::new(&bytes[start + 4..table])
+        .take(MAX_INFLATED + 1)
         .read_to_end(&mut data)
         .map_err(|e| fail(format!("mesh {index}: corrupt compressed data: {e}")))?;
+    if data.len() as u64 > MAX_INFLATED {
+        return Err(fail(format!("mesh {index} inflates to more than 16 GiB")));
+    }
     parse(&data, version, index).map_err(fail)
 }
 
@@ -134,7 +140,9 @@ fn parse(data: &[u8], version: u16, index: usize) -> Result<SerializedMesh, Stri
     };
     let colors = if flags & HAS_COLORS != 0 { vec3s(r.floats(vertices * 3)?) } else { Vec::new() };
     let wide = vertices > u32::MAX as usize;
-    let mut indices = Vec::with_capacity(triangles);
+    // Capacity from the counts in the file only as far as the data can hold them.
+    let index_size = if wide { 24 } else { 12 };
+    let mut indices = Vec::with_capacity(triangles.min((data.len() - r.at) / index_size));
     for _ in 0..triangles {
         let mut t = [0u32; 3];
         for v in &mut t {
@@ -219,6 +227,21 @@ pub(crate) mod tests {
         bytes[10] ^= 0xff; // inside the first compressed stream
         std::fs::write(&path, &bytes).unwrap();
         assert!(load_serialized(&path, 0).is_err());
+        // A header that claims 2⁴⁰ triangles over a few bytes of data: an error, not an abort.
+        let mut raw = Vec::new();
+        raw.extend_from_slice(&SINGLE_PRECISION.to_le_bytes());
+        raw.extend_from_slice(b"x\0");
+        raw.extend_from_slice(&3u64.to_le_bytes());
+        raw.extend_from_slice(&(1u64 << 40).to_le_bytes());
+        raw.extend_from_slice(&[0u8; 9 * 4 + 3 * 4]);
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        z.write_all(&raw).unwrap();
+        let mut file = [FORMAT_TAG.to_le_bytes(), 4u16.to_le_bytes()].concat();
+        file.extend_from_slice(&z.finish().unwrap());
+        file.extend_from_slice(&0u64.to_le_bytes());
+        file.extend_from_slice(&1u32.to_le_bytes());
+        std::fs::write(&path, &file).unwrap();
+        assert!(load_serialized(&path, 0).unwrap_err().to_string().contains("ends early"));
         std::fs::write(&path, b"not a mesh").unwrap();
         assert!(load_serialized(&path, 0).unwrap_err().to_string().contains("format tag"));
         std::fs::remove_dir_all(&dir).ok();
