@@ -134,6 +134,11 @@ impl Integrator for AovIntegrator {
         names
     }
 
+    fn aov_count(&self) -> usize {
+        let nested: usize = (0..self.nested.len()).map(|k| 4 + self.inner(k).aov_count()).sum();
+        nested + self.aovs.iter().map(|(_, kind)| kind.channels().len()).sum::<usize>()
+    }
+
     fn sample_aovs(
         &self,
         scene: &Scene,
@@ -146,8 +151,7 @@ impl Integrator for AovIntegrator {
         let mut result = RadianceSample { l: Rgb::ZERO, alpha: 0.0 };
         for k in 0..self.nested.len() {
             let inner = self.inner(k);
-            let n = inner.aov_names().len();
-            let (own, tail) = rest.split_at_mut(n);
+            let (own, tail) = rest.split_at_mut(inner.aov_count());
             rest = tail;
             let terms: &mut [Rgb] = if k == 0 { terms } else { &mut [] };
             let s = inner.sample_aovs(scene, ray, sampler, terms, own);

@@ -65,6 +65,11 @@ pub trait Integrator: Sync {
         Vec::new()
     }
 
+    /// `aov_names().len()`, without building the names (what sampling needs per sample).
+    fn aov_count(&self) -> usize {
+        0
+    }
+
     /// [`Integrator::sample`] that also writes one value per [`Integrator::aov_names`] entry
     /// into `aovs` (which has that length). The render driver calls this one.
     fn sample_aovs(
@@ -88,7 +93,7 @@ pub(crate) fn sample_without_aovs(
     sampler: &mut Sampler,
     terms: &mut [Rgb],
 ) -> RadianceSample {
-    let mut aovs = vec![0.0; i.aov_names().len()];
+    let mut aovs = vec![0.0; i.aov_count()];
     i.sample_aovs(scene, ray, sampler, terms, &mut aovs)
 }
 
@@ -189,10 +194,7 @@ pub fn nested_integrators(o: &Obj) -> PropResult<Vec<(String, AnyIntegrator)>> {
             unnamed += 1;
             format!("_arg_{}", unnamed - 1)
         });
-        c.built.set(true);
-        let plugin = integrator_plugin(&c.ty)
-            .ok_or_else(|| c.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-        let integrator = plugin(&c)?;
+        let integrator = integrator_from_props(&c)?;
         if integrator.camera().is_none() {
             return Err(crate::props::SceneError::at(
                 &c.loc,
@@ -210,6 +212,15 @@ pub fn nested_integrators(o: &Obj) -> PropResult<Vec<(String, AnyIntegrator)>> {
 /// The constructor of the integrator plugin `name`.
 pub fn integrator_plugin(name: &str) -> Option<IntegratorPlugin> {
     INTEGRATOR_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// The integrator `o` describes, built by its plugin (an unknown plugin name is a located error
+/// listing the names, with the nearest).
+pub fn integrator_from_props(o: &Obj) -> PropResult<AnyIntegrator> {
+    o.built.set(true);
+    let plugin = integrator_plugin(&o.ty)
+        .ok_or_else(|| o.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
+    plugin(o)
 }
 
 /// One of neumann's integrators, chosen at run time (by the scene file or the command line).

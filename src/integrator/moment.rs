@@ -38,8 +38,7 @@ impl MomentIntegrator {
     fn first_moment_names(&self) -> Vec<String> {
         let mut names = Vec::new();
         for (name, i) in &self.nested {
-            let inner = i.camera().expect("nested integrators trace camera rays");
-            names.extend(inner.aov_names().into_iter().map(|a| format!("{name}.{a}")));
+            names.extend(inner(i).aov_names().into_iter().map(|a| format!("{name}.{a}")));
             names.extend(["X", "Y", "Z"].map(|c| format!("{name}.{c}")));
         }
         names
@@ -56,13 +55,17 @@ impl Integrator for MomentIntegrator {
     }
 
     fn has_terms(&self) -> bool {
-        self.nested[0].1.camera().is_some_and(|i| i.has_terms())
+        inner(&self.nested[0].1).has_terms()
     }
 
     fn aov_names(&self) -> Vec<String> {
         let first = self.first_moment_names();
         let second = first.iter().map(|n| format!("m2_{n}"));
         first.iter().cloned().chain(second).collect()
+    }
+
+    fn aov_count(&self) -> usize {
+        2 * self.nested.iter().map(|(_, i)| inner(i).aov_count() + 3).sum::<usize>()
     }
 
     fn sample_aovs(
@@ -77,8 +80,8 @@ impl Integrator for MomentIntegrator {
         let mut at = 0;
         let mut result = RadianceSample { l: Rgb::ZERO, alpha: 0.0 };
         for (k, (_, nested)) in self.nested.iter().enumerate() {
-            let inner = nested.camera().expect("nested integrators trace camera rays");
-            let n = inner.aov_names().len();
+            let inner = inner(nested);
+            let n = inner.aov_count();
             // Only the first (the image) keeps the Neumann-series terms.
             let terms: &mut [Rgb] = if k == 0 { terms } else { &mut [] };
             let s = inner.sample_aovs(scene, ray, sampler, terms, &mut first[at..at + n]);
@@ -94,6 +97,11 @@ impl Integrator for MomentIntegrator {
         }
         result
     }
+}
+
+/// A nested integrator as the camera-ray integrator it is (checked when it was nested).
+fn inner(i: &AnyIntegrator) -> &dyn Integrator {
+    i.camera().expect("nested integrators trace camera rays")
 }
 
 #[cfg(test)]

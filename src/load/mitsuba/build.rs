@@ -13,7 +13,7 @@ use crate::film::filter::Filter;
 use crate::film::FilmSettings;
 use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGINS};
 use crate::image::{Image, ImageSource};
-use crate::integrator::{integrator_plugin, AnyIntegrator, INTEGRATOR_PLUGINS};
+use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
 use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
 use crate::load::image::load_image;
@@ -149,31 +149,26 @@ impl Builder {
     }
 
     fn integrator(&mut self, o: &Obj) -> Result<AnyIntegrator> {
-        o.built.set(true);
         if !matches!(o.ty.as_str(), "moment" | "aov") {
             o.check_children(&[])?;
         }
-        self.read_light_sampler(o)?;
-        // Mitsuba's rendering-loop parameters that cannot change the image: the block (tile) size
-        // and the samples per pass.
-        o.int("block_size", 0)?;
-        o.int("samples_per_pass", -1)?;
-        let plugin = integrator_plugin(&o.ty)
-            .ok_or_else(|| o.unknown_plugin(&INTEGRATOR_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-        plugin(o)
+        self.read_loader_params(o)?;
+        integrator_from_props(o)
     }
 
-    /// The `light_sampler` of the integrators that sample lights (also nested in `moment`
-    /// and `aov`).
-    fn read_light_sampler(&mut self, o: &Obj) -> Result<()> {
+    /// What the loader itself reads of an integrator and of those nested in it (`moment`,
+    /// `aov`): the `light_sampler` of the integrators that sample lights, and Mitsuba's
+    /// rendering-loop parameters that cannot change the image (`block_size`,
+    /// `samples_per_pass`).
+    fn read_loader_params(&mut self, o: &Obj) -> Result<()> {
         if matches!(o.ty.as_str(), "path" | "volpath" | "direct") {
             self.light_sampler =
                 o.choice("light_sampler", &LightSamplerKind::names())?.parse().map_err(|e: String| o.error(e))?;
         }
+        o.int("block_size", 0)?;
+        o.int("samples_per_pass", -1)?;
         for c in o.nested("integrator") {
-            self.read_light_sampler(&c)?;
-            c.int("block_size", 0)?;
-            c.int("samples_per_pass", -1)?;
+            self.read_loader_params(&c)?;
         }
         Ok(())
     }

@@ -615,6 +615,7 @@ fn moment_and_aov_integrators() {
     let names: Vec<&str> = m.nested.iter().map(|n| n.0.as_str()).collect();
     assert_eq!(names, ["d", "_arg_0", "_arg_1"]);
     assert_eq!(m.aov_names().len(), 18);
+    assert_eq!(m.aov_count(), 18);
     assert_eq!(m.aov_names()[9], "m2_d.X");
     let f = load(&scene(
         r#"<integrator type="aov"><string name="aovs" value="dd.y:depth, nn:sh_normal"/><integrator type="path" name="img"/></integrator>"#,
@@ -622,6 +623,15 @@ fn moment_and_aov_integrators() {
     .unwrap();
     let AnyIntegrator::Aov(a) = &f.integrator else { panic!() };
     assert_eq!(a.aov_names(), ["img.R", "img.G", "img.B", "img.A", "dd.y.T", "nn.X", "nn.Y", "nn.Z"]);
+    assert_eq!(a.aov_count(), 8);
+    // Wrappers nest: a moment of an aov records the aov's channels and their second moments.
+    let f = load(&scene(
+        r#"<integrator type="moment"><integrator type="aov" name="a"><string name="aovs" value="d:depth"/><integrator type="path"/></integrator></integrator>"#,
+    ))
+    .unwrap();
+    let m = f.integrator.camera().unwrap();
+    assert_eq!(m.aov_count(), m.aov_names().len());
+    assert_eq!(m.aov_names()[..6], ["a._arg_0.R", "a._arg_0.G", "a._arg_0.B", "a._arg_0.A", "a.d.T", "a.X"]);
     let e = err(&scene(r#"<integrator type="moment"><integrator type="ptracer"/></integrator>"#));
     assert!(e.contains("ptracer integrator cannot be nested"), "{e}");
     let e = err(&scene(r#"<integrator type="aov"><string name="aovs" value="x:curvature"/></integrator>"#));
