@@ -149,6 +149,24 @@ pub struct EmissionPosition {
     pub uv: Vec2,
 }
 
+impl EmissionPosition {
+    /// The position of a point-like light (point, spot, projector).
+    fn point(p: Vec3) -> EmissionPosition {
+        EmissionPosition { p, p_error: Vec3::ZERO, ng: Vec3::ZERO, ns: Vec3::ZERO, inv_pdf: 1.0, uv: Vec2::ZERO }
+    }
+}
+
+/// A point of an area emitter's shape, uniform by area, with its texture coordinates where the
+/// radiance is a texture (zero for a constant radiance, which then keeps the shapes' fastest
+/// sampling, e.g. quads as parallelograms).
+#[inline]
+fn area_emission_point(shape: &Geometry, radiance: &Texture, u: Vec2) -> Option<(crate::geometry::ShapeSample, Vec2)> {
+    match radiance {
+        Texture::Constant(_) => Some((shape.sample_area(u)?, Vec2::ZERO)),
+        _ => shape.sample_area_uv(u),
+    }
+}
+
 /// A distance from `p_ref` that reaches past everything in the scene (bounding sphere `center`,
 /// `radius`): where shadow rays toward lights at infinity end.
 #[inline]
@@ -359,13 +377,8 @@ impl Light {
         };
         let s = match self {
             Light::Area { shape, radiance } => {
-                let (ps, le) = match radiance {
-                    Texture::Constant(c) => (shapes[*shape as usize].sample_area(u_pos)?, *c),
-                    t => {
-                        let (ps, uv) = shapes[*shape as usize].sample_area_uv(u_pos)?;
-                        (ps, t.eval(uv))
-                    }
-                };
+                let (ps, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
+                let le = radiance.eval(uv);
                 let local = sample_cosine_hemisphere_malley(u_dir);
                 if local.pdf <= 0.0 || ps.pdf <= 0.0 {
                     return None;
@@ -425,10 +438,7 @@ impl Light {
     pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
         match self {
             Light::Area { shape, radiance } => {
-                let (s, uv) = match radiance {
-                    Texture::Constant(_) => (shapes[*shape as usize].sample_area(u_pos)?, Vec2::ZERO),
-                    _ => shapes[*shape as usize].sample_area_uv(u_pos)?,
-                };
+                let (s, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
                 (s.pdf > 0.0).then(|| EmissionPosition {
                     p: s.p,
                     p_error: s.p_error,
@@ -438,22 +448,8 @@ impl Light {
                     uv,
                 })
             }
-            Light::Projector(p) => Some(EmissionPosition {
-                p: p.position(),
-                p_error: Vec3::ZERO,
-                ng: Vec3::ZERO,
-                ns: Vec3::ZERO,
-                inv_pdf: 1.0,
-                uv: Vec2::ZERO,
-            }),
-            Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition {
-                p: *position,
-                p_error: Vec3::ZERO,
-                ng: Vec3::ZERO,
-                ns: Vec3::ZERO,
-                inv_pdf: 1.0,
-                uv: Vec2::ZERO,
-            }),
+            Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition::point(*position)),
+            Light::Projector(p) => Some(EmissionPosition::point(p.position())),
             _ => None,
         }
     }

@@ -271,27 +271,38 @@ impl Bsdf {
     /// The mesh attributes its textures read (`mesh_attribute`), which the shapes it is on
     /// must carry.
     pub fn mesh_attributes(&self) -> Vec<&str> {
+        self.textures().into_iter().flat_map(|t| t.mesh_attributes()).collect()
+    }
+
+    /// Every texture its parameters are (those of nested BSDFs included).
+    pub fn textures(&self) -> Vec<&crate::texture::Texture> {
         match self {
-            Bsdf::Diffuse(b) => b.reflectance.mesh_attributes(),
-            Bsdf::Plastic(b) => b.diffuse_reflectance.mesh_attributes(),
-            Bsdf::RoughPlastic(b) => b.diffuse_reflectance.mesh_attributes(),
+            Bsdf::Diffuse(b) => vec![&b.reflectance],
+            Bsdf::Conductor(b) => vec![&b.specular_reflectance],
+            Bsdf::RoughConductor(b) => {
+                let mut v = vec![&b.specular_reflectance];
+                v.extend(b.textured_alpha.iter().flat_map(|a| a.iter()));
+                v
+            }
+            Bsdf::Plastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
+            Bsdf::RoughPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::Blend { weight, bsdfs } => {
-                let mut v = weight.mesh_attributes();
-                v.extend(bsdfs[0].mesh_attributes());
-                v.extend(bsdfs[1].mesh_attributes());
+                let mut v = vec![weight];
+                v.extend(bsdfs[0].textures());
+                v.extend(bsdfs[1].textures());
                 v
             }
             Bsdf::Mask { opacity, bsdf } => {
-                let mut v = opacity.mesh_attributes();
-                v.extend(bsdf.mesh_attributes());
+                let mut v = vec![opacity];
+                v.extend(bsdf.textures());
                 v
             }
             Bsdf::TwoSided(b) => {
-                let mut v = b[0].mesh_attributes();
-                v.extend(b[1].mesh_attributes());
+                let mut v = b[0].textures();
+                v.extend(b[1].textures());
                 v
             }
-            _ => Vec::new(),
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Vec::new(),
         }
     }
 

@@ -157,16 +157,19 @@ impl Plastic {
 /// `ext_ior`, `nonlinear` (false).
 pub(crate) fn plastic_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<(Texture, Texture, f32, bool)> {
     let diffuse = b.texture(o, "diffuse_reflectance", Rgb::splat(0.5))?;
-    if !diffuse.mesh_attributes().is_empty() {
-        // Mitsuba refuses it too: the lobe-selection weight needs the texture's mean.
-        return Err(o.error_at(
-            "diffuse_reflectance",
-            "a plastic's diffuse_reflectance cannot be a mesh_attribute (its sampling weight needs the texture's mean)",
-        ));
+    let specular = b.texture(o, "specular_reflectance", Rgb::ONE)?;
+    for (name, t) in [("diffuse_reflectance", &diffuse), ("specular_reflectance", &specular)] {
+        if !t.mesh_attributes().is_empty() {
+            // Mitsuba refuses it too: the lobe-selection weight needs the texture's mean.
+            return Err(o.error_at(
+                name,
+                format!("a plastic's {name} cannot be a mesh_attribute (its sampling weight needs the texture's mean)"),
+            ));
+        }
     }
     Ok((
         diffuse,
-        b.texture(o, "specular_reflectance", Rgb::ONE)?,
+        specular,
         eta_from_props(o, 1.49)?,
         o.bool("nonlinear", false)?,
     ))

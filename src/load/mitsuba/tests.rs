@@ -743,6 +743,19 @@ fn mesh_attribute_textures() {
     assert!(e.contains("s.xml:") && e.contains("mesh attribute 'face_color'"), "{e}");
     let e = load_scene_text(&dir.join("s.xml"), &body("color"), &[]).unwrap_err().to_string();
     assert!(e.contains("starts with 'vertex_' or 'face_'"), "{e}");
+    // Every textured parameter counts, nested BSDFs' too.
+    let conductor = scene(
+        r#"<shape type="ply"><string name="filename" value="quad.ply"/><bsdf type="twosided"><bsdf type="roughconductor">
+        <texture type="mesh_attribute" name="alpha"><string name="name" value="face_color"/></texture></bsdf></bsdf></shape>"#,
+    );
+    let e = load_scene_text(&dir.join("s.xml"), &conductor, &[]).unwrap_err().to_string();
+    assert!(e.contains("mesh attribute 'face_color'"), "{e}");
+    let plastic = scene(
+        r#"<shape type="ply"><string name="filename" value="quad.ply"/><bsdf type="plastic">
+        <texture type="mesh_attribute" name="specular_reflectance"><string name="name" value="vertex_color"/></texture></bsdf></shape>"#,
+    );
+    let e = load_scene_text(&dir.join("s.xml"), &plastic, &[]).unwrap_err().to_string();
+    assert!(e.contains("specular_reflectance cannot be a mesh_attribute"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
