@@ -41,7 +41,7 @@ pub struct SceneFile {
     pub window: Option<[u32; 4]>,
     /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
     pub alpha: bool,
-    /// Warnings (unused parameters), formatted with their positions.
+    /// Warnings: things that cannot change the image (`-D` parameters the scene never uses).
     pub warnings: Vec<String>,
 }
 

@@ -86,11 +86,6 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
-/// A warning at a position (unused parameters, ignored options), formatted like errors.
-pub fn warning(loc: &Loc, message: &str) -> String {
-    format!("{}: warning: {message}", loc.position())
-}
-
 pub use crate::choice::nearest;
 
 #[cfg(test)]

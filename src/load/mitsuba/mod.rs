@@ -3,7 +3,8 @@
 //! [`load_scene_file`] parses the file ([`parse`]: defaults, `$` substitution, includes, ids and
 //! references, transforms, typed properties with positions) and builds the plugins (`build.rs`).
 //! Every problem is a [`SceneError`] naming `file:line:col` with the source line, parameters that
-//! no plugin reads included (Mitsuba 3 rejects unreferenced properties too).
+//! no plugin reads included (Mitsuba 3 rejects unreferenced properties too); `-D` parameters the
+//! scene never uses come back as warnings.
 
 mod build;
 pub mod parse;
@@ -14,8 +15,8 @@ use std::path::Path;
 
 pub use super::SceneFile;
 
-/// Loads a Mitsuba 3 XML scene. `overrides` are `-D name=value` parameters; a name that no
-/// `<default>` declares is still substituted, but reported in the warnings.
+/// Loads a Mitsuba 3 XML scene. `overrides` are `-D name=value` parameters; one that no `$name`
+/// of the scene uses is reported in the warnings (as Mitsuba reports unused parameters).
 pub fn load_scene_file(path: &Path, overrides: &[(String, String)]) -> Result<SceneFile, SceneError> {
     let mut parser = parse::Parser::new(overrides);
     let root = parser.parse_file(path)?;
@@ -31,9 +32,9 @@ pub fn load_scene_text(path: &Path, text: &str, overrides: &[(String, String)]) 
 
 fn finish(parser: parse::Parser, root: std::rc::Rc<crate::props::Obj>) -> Result<SceneFile, SceneError> {
     let mut file = build::Builder::new(parser.resolver.clone()).build(&root)?;
-    let mut warnings = parser.warnings;
-    warnings.append(&mut file.warnings);
-    file.warnings = warnings;
+    for name in parser.unused_overrides() {
+        file.warnings.push(format!("warning: -D {name}: the scene has no ${name} to substitute"));
+    }
     Ok(file)
 }
 

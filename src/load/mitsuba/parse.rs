@@ -29,8 +29,8 @@ pub struct Parser {
     overridden: Vec<String>,
     /// Objects by id.
     ids: HashMap<String, Rc<Obj>>,
-    /// Warnings collected while parsing.
-    pub warnings: Vec<String>,
+    /// Parameter names that a `$name` substituted.
+    used_params: std::cell::RefCell<std::collections::HashSet<String>>,
     depth: usize,
     /// Where relative file names are looked for (Mitsuba's file resolver: `<path>` folders, the
     /// main scene's folder, the working directory).
@@ -55,7 +55,7 @@ impl Parser {
             params: overrides.iter().cloned().collect(),
             overridden: overrides.iter().map(|(k, _)| k.clone()).collect(),
             ids: HashMap::new(),
-            warnings: Vec::new(),
+            used_params: Default::default(),
             depth: 0,
             resolver: FileResolver::default(),
             early: HashMap::new(),
@@ -63,6 +63,12 @@ impl Parser {
             id_index: Vec::new(),
             legacy: Vec::new(),
         }
+    }
+
+    /// The command-line parameters (`-D`) that no `$name` of the scene used, in the order given.
+    pub fn unused_overrides(&self) -> Vec<String> {
+        let used = self.used_params.borrow();
+        self.overridden.iter().filter(|k| !used.contains(*k)).cloned().collect()
     }
 
     /// Names of all parameters (defaults and overrides).
@@ -351,7 +357,10 @@ impl Parser {
             let len = after.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(after.len());
             let key = &after[..len];
             match self.params.get(key) {
-                Some(v) if !key.is_empty() => out.push_str(v),
+                Some(v) if !key.is_empty() => {
+                    out.push_str(v);
+                    self.used_params.borrow_mut().insert(key.to_string());
+                }
                 _ => {
                     return Err(SceneError::at(
                         loc,

@@ -759,3 +759,14 @@ fn mesh_attribute_textures() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `-D` parameters the scene never substitutes come back as warnings (Mitsuba reports unused
+/// parameters too); used ones, and undeclared ones that are used, do not.
+#[test]
+fn unused_command_line_parameters_are_reported() {
+    let text = scene(r#"<default name="r" value="0.5"/><shape type="sphere"><float name="radius" value="$r"/></shape>"#);
+    let defines = [("r".to_string(), "2".to_string()), ("spp".to_string(), "8".to_string())];
+    let f = load_scene_text(Path::new("test.xml"), &text, &defines).unwrap();
+    assert_eq!(f.warnings.len(), 1, "{:?}", f.warnings);
+    assert!(f.warnings[0].contains("-D spp"), "{:?}", f.warnings);
+}
+
