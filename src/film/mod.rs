@@ -262,7 +262,7 @@ impl Film {
 
     /// The AOV channels: each name with its image (filter-weighted mean per pixel, like the
     /// radiance; 0 where no sample reached), row-major from the top-left.
-    pub fn aov_channels(&self) -> Vec<(String, Vec<f32>)> {
+    pub fn aov_channels(&self) -> Vec<output::Channel> {
         let n = self.px.aov_count;
         self.aov_names
             .iter()

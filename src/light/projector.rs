@@ -12,7 +12,7 @@
 //! image's frustum.
 
 use super::{EmissionSample, LightSample};
-use crate::math::{Frame, Rgb, Transform, Vec2, Vec3, PI};
+use crate::math::{Rgb, Transform, Vec2, Vec3, PI};
 use crate::props::fov::{fov_from_props, tan_half, FovAxis};
 use crate::props::{Obj, Result};
 use crate::texture::Texture;
@@ -137,7 +137,7 @@ impl Projector {
     /// The unit axis, and the cosine of the widest angle of the image's frustum from it.
     pub fn cone(&self) -> (Vec3, f32) {
         let corner = Vec3::new(self.tan_half.x, self.tan_half.y, 1.0);
-        (Frame::from_z(self.axis.normalize()).n, 1.0 / corner.length())
+        (self.axis.normalize(), 1.0 / corner.length())
     }
 }
 
