@@ -471,8 +471,8 @@ mod tests {
                 "glass",
                 Bsdf::Dielectric(Dielectric {
                     eta: 1.5,
-                    specular_reflectance: Rgb::ONE,
-                    specular_transmittance: Rgb::ONE,
+                    specular_reflectance: Rgb::ONE.into(),
+                    specular_transmittance: Rgb::ONE.into(),
                 }),
                 -1,
                 1.0,

@@ -1,37 +1,49 @@
 //! Mitsuba's `conductor` (smooth metal: a perfect mirror with Fresnel reflectance) and
 //! `roughconductor` (microfacet metal, Cook–Torrance with Smith shadowing).
 //!
-//! Parameters (Mitsuba): `eta`, `k` (complex index of refraction relative to the exterior, RGB;
-//! the default, no material, is a perfect mirror with reflectance 1), `specular_reflectance`
-//! (RGB scale, default 1); for `roughconductor` also `distribution` (`beckmann` | `ggx`), `alpha`
-//! or `alpha_u` / `alpha_v` (default 0.1), and `sample_visible` (always on here).
+//! Parameters (Mitsuba): `eta`, `k` (complex index of refraction relative to the exterior, RGB
+//! or textures; or a named `material`; the default, no material, is a perfect mirror with
+//! reflectance 1), `specular_reflectance` (RGB scale or texture, default 1); for
+//! `roughconductor` also `distribution` (`beckmann` | `ggx`), `alpha` or `alpha_u` / `alpha_v`
+//! (default 0.1, numbers or textures), and `sample_visible` (always on here).
 
 use super::conductor_presets::{conductor_names, named_conductor};
 use super::fresnel::{fresnel_conductor, reflect, reflect_about};
-use super::microfacet::Microfacet;
+use super::microfacet::Roughness;
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::props::{nearest, Obj, Result as PropResult};
 use crate::texture::Texture;
 
-/// The Fresnel term of a conductor: complex IOR, or none (perfect reflector).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// The Fresnel term of a conductor: its complex index of refraction relative to the exterior,
+/// per RGB channel (texturable, as in Mitsuba).
+#[derive(Clone, Debug)]
 pub struct ConductorIor {
     /// Real part per channel.
-    pub eta: Rgb,
+    pub eta: Texture,
     /// Imaginary part (absorption) per channel.
-    pub k: Rgb,
+    pub k: Texture,
 }
 
 impl ConductorIor {
-    /// Fresnel reflectance at `cos θ` (1 everywhere when `None`).
+    /// A constant index `eta + i k`.
+    pub fn constant(eta: Rgb, k: Rgb) -> ConductorIor {
+        ConductorIor { eta: eta.into(), k: k.into() }
+    }
+
+    /// Fresnel reflectance at `cos θ` at `ctx` (1 everywhere when `None`: a perfect mirror).
     #[inline]
-    pub fn reflectance(ior: &Option<ConductorIor>, cos_theta: f32) -> Rgb {
+    pub fn reflectance(ior: &Option<ConductorIor>, ctx: &BsdfContext, cos_theta: f32) -> Rgb {
         match ior {
             None => Rgb::ONE,
-            Some(c) => fresnel_conductor(cos_theta, c.eta, c.k),
+            Some(c) => fresnel_conductor(cos_theta, ctx.eval(&c.eta), ctx.eval(&c.k)),
         }
+    }
+
+    /// Its textures (none for a perfect mirror).
+    pub fn textures(ior: &Option<ConductorIor>) -> impl Iterator<Item = &Texture> {
+        ior.iter().flat_map(|c| [&c.eta, &c.k])
     }
 }
 
@@ -51,7 +63,7 @@ impl Conductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let weight = ctx.eval(&self.specular_reflectance) * ConductorIor::reflectance(&self.ior, wo.z);
+        let weight = ctx.eval(&self.specular_reflectance) * ConductorIor::reflectance(&self.ior, ctx, wo.z);
         Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight, delta: true, eta: 1.0 })
     }
 }
@@ -60,43 +72,29 @@ impl Conductor {
 /// sampled through the visible normals seen from `wo`.
 #[derive(Clone, Debug)]
 pub struct RoughConductor {
-    /// Microfacet distribution (its roughness replaced by `textured_alpha` where given).
-    pub distribution: Microfacet,
+    /// Microfacet distribution (roughness texturable).
+    pub roughness: Roughness,
     /// Complex index of refraction (`None`: perfect reflector).
     pub ior: Option<ConductorIor>,
     /// Reflectance scale (texturable).
     pub specular_reflectance: Texture,
-    /// Roughness textures (α_u, α_v; their luminance), if the roughness varies over the surface.
-    pub textured_alpha: Option<Box<[Texture; 2]>>,
 }
 
 impl RoughConductor {
-    /// The microfacet distribution at `ctx` (textured roughness evaluated there).
-    #[inline]
-    fn distribution_at(&self, ctx: &BsdfContext) -> Microfacet {
-        match &self.textured_alpha {
-            None => self.distribution,
-            Some(t) => {
-                let alpha = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()).max(1e-4);
-                Microfacet::new(self.distribution.kind, alpha(&t[0]), alpha(&t[1]))
-            }
-        }
-    }
-
     /// `f cos θᵢ`; 0 unless both directions are above the surface.
     #[inline]
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
-        let distribution = self.distribution_at(ctx);
+        let distribution = self.roughness.at(ctx);
         let m = (wo + wi).normalize();
         let d = distribution.d(m);
         if d == 0.0 {
             return Rgb::ZERO;
         }
         let g = distribution.g(wi, wo, m);
-        let f = ConductorIor::reflectance(&self.ior, wi.dot(m));
+        let f = ConductorIor::reflectance(&self.ior, ctx, wi.dot(m));
         ctx.eval(&self.specular_reflectance) * f * (d * g / (4.0 * wo.z))
     }
 
@@ -107,7 +105,7 @@ impl RoughConductor {
             return 0.0;
         }
         let m = (wo + wi).normalize();
-        self.distribution_at(ctx).pdf(wo, m) / (4.0 * wo.dot(m).abs())
+        self.roughness.at(ctx).pdf(wo, m) / (4.0 * wo.dot(m).abs())
     }
 
     /// A visible microfacet normal from `wo`, reflected.
@@ -116,7 +114,7 @@ impl RoughConductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let m = self.distribution_at(ctx).sample(wo, u);
+        let m = self.roughness.at(ctx).sample(wo, u);
         if m.pdf <= 0.0 {
             return None;
         }
@@ -129,16 +127,17 @@ impl RoughConductor {
         (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
     }
 }
+
 impl ConductorIor {
-    /// The complex index of a conductor: `eta` and `k` (defaults 0 and 1), or a named
-    /// `material` (default `none`, Mitsuba's perfect mirror: `None`), not both.
-    pub fn from_props(o: &Obj) -> PropResult<Option<ConductorIor>> {
+    /// The complex index of a conductor: `eta` and `k` (defaults 0 and 1, texturable), or a
+    /// named `material` (default `none`, Mitsuba's perfect mirror: `None`), not both.
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Option<ConductorIor>> {
         if o.has("eta") || o.has("k") {
             if o.has("material") {
                 return Err(o.error_at("material", "give either 'material' or 'eta'/'k'"));
             }
-            let eta = o.rgb("eta", Rgb::ZERO, SpectrumKind::Reflectance)?;
-            let k = o.rgb("k", Rgb::ONE, SpectrumKind::Reflectance)?;
+            let eta = b.texture_of(o, "eta", Rgb::ZERO, SpectrumKind::Unbounded)?;
+            let k = b.texture_of(o, "k", Rgb::ONE, SpectrumKind::Unbounded)?;
             return Ok(Some(ConductorIor { eta, k }));
         }
         let name = o.string_opt("material")?.unwrap_or_else(|| "none".into());
@@ -153,7 +152,7 @@ impl Conductor {
     /// Mitsuba's `conductor`: `material` or `eta`/`k`, `specular_reflectance` (1, texturable).
     pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
         Ok(Bsdf::Conductor(Conductor {
-            ior: ConductorIor::from_props(o)?,
+            ior: ConductorIor::from_props(o, b)?,
             specular_reflectance: b.texture(o, "specular_reflectance", Rgb::ONE)?,
         }))
     }
@@ -164,26 +163,10 @@ impl RoughConductor {
     /// (anisotropic `alpha_u`/`alpha_v` allowed; the roughness and `specular_reflectance` may be
     /// textures).
     pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
-        let textured = ["alpha", "alpha_u", "alpha_v"].iter().any(|n| matches!(o.object_opt(n, "texture"), Ok(Some(_))));
-        let (distribution, textured_alpha) = if textured {
-            let (au, av) = if o.has("alpha") {
-                if o.has("alpha_u") || o.has("alpha_v") {
-                    return Err(o.error_at("alpha", "give either 'alpha' or 'alpha_u'/'alpha_v'"));
-                }
-                let a = b.texture(o, "alpha", Rgb::splat(0.1))?;
-                (a.clone(), a)
-            } else {
-                (b.texture(o, "alpha_u", Rgb::splat(0.1))?, b.texture(o, "alpha_v", Rgb::splat(0.1))?)
-            };
-            (Microfacet::kind_from_props(o)?, Some(Box::new([au, av])))
-        } else {
-            (Microfacet::from_props(o, true)?, None)
-        };
         Ok(Bsdf::RoughConductor(RoughConductor {
-            distribution,
-            ior: ConductorIor::from_props(o)?,
+            roughness: Roughness::from_props(o, b)?,
+            ior: ConductorIor::from_props(o, b)?,
             specular_reflectance: b.texture(o, "specular_reflectance", Rgb::ONE)?,
-            textured_alpha,
         }))
     }
 }

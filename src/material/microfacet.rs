@@ -19,9 +19,11 @@
 //!   the visible normals.
 
 use crate::math::special::{erf, erfinv};
-use crate::math::{safe_sqrt, Vec2, Vec3, INV_PI, PI};
+use crate::math::spectrum::SpectrumKind;
+use crate::math::{safe_sqrt, Rgb, Vec2, Vec3, INV_PI, PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_power, Sample};
+use crate::texture::{Texture, TextureSource};
 
 /// Which microfacet distribution (Mitsuba's `distribution` parameter, plus Blinn–Phong).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -224,6 +226,62 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
         b -= value / derivative;
     }
     (erfinv(b), erfinv(2.0 * u.y.max(1e-6) - 1.0))
+}
+
+/// The microfacet distribution of a rough surface whose roughness may vary over it (Mitsuba's
+/// textured `alpha`, `alpha_u`, `alpha_v` of `roughconductor` and `roughdielectric`).
+#[derive(Clone, Debug)]
+pub struct Roughness {
+    /// The distribution (its roughness replaced by the textures' where they are given).
+    pub distribution: Microfacet,
+    /// Roughness textures (α_u, α_v; their luminance), if the roughness varies over the surface.
+    pub textures: Option<Box<[Texture; 2]>>,
+}
+
+impl From<Microfacet> for Roughness {
+    fn from(distribution: Microfacet) -> Roughness {
+        Roughness { distribution, textures: None }
+    }
+}
+
+impl Roughness {
+    /// The distribution at `ctx` (textured roughness evaluated there, clamped to ≥ 10⁻⁴).
+    #[inline]
+    pub fn at(&self, ctx: &super::BsdfContext) -> Microfacet {
+        match &self.textures {
+            None => self.distribution,
+            Some(t) => {
+                let alpha = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref());
+                Microfacet::new(self.distribution.kind, alpha(&t[0]), alpha(&t[1]))
+            }
+        }
+    }
+
+    /// The roughness textures (none if the roughness is constant).
+    pub fn textures(&self) -> impl Iterator<Item = &Texture> {
+        self.textures.iter().flat_map(|t| t.iter())
+    }
+
+    /// Mitsuba's anisotropic rough-surface parameters ([`Microfacet::from_props`]), where
+    /// `alpha` or `alpha_u` / `alpha_v` may be textures (then `distribution` is `beckmann` or
+    /// `ggx`).
+    pub fn from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Roughness> {
+        let textured = ["alpha", "alpha_u", "alpha_v"].iter().any(|n| matches!(o.object_opt(n, "texture"), Ok(Some(_))));
+        if !textured {
+            return Microfacet::from_props(o, true).map(Roughness::from);
+        }
+        let (au, av) = if o.has("alpha") {
+            if o.has("alpha_u") || o.has("alpha_v") {
+                return Err(o.error_at("alpha", "give either 'alpha' or 'alpha_u'/'alpha_v'"));
+            }
+            let a = b.texture_of(o, "alpha", Rgb::splat(0.1), SpectrumKind::Unbounded)?;
+            (a.clone(), a)
+        } else {
+            let a = |b: &mut dyn TextureSource, n| b.texture_of(o, n, Rgb::splat(0.1), SpectrumKind::Unbounded);
+            (a(b, "alpha_u")?, a(b, "alpha_v")?)
+        };
+        Ok(Roughness { distribution: Microfacet::kind_from_props(o)?, textures: Some(Box::new([au, av])) })
+    }
 }
 
 impl Microfacet {

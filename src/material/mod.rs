@@ -134,7 +134,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval(ctx, wo, wi),
-            Bsdf::RoughDielectric(b) => b.eval(wo, wi),
+            Bsdf::RoughDielectric(b) => b.eval(ctx, wo, wi),
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
@@ -159,7 +159,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(ctx, wo, wi),
-            Bsdf::RoughDielectric(b) => b.pdf(wo, wi),
+            Bsdf::RoughDielectric(b) => b.pdf(ctx, wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
@@ -185,11 +185,11 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Conductor(b) => b.sample(ctx, wo),
             Bsdf::RoughConductor(b) => b.sample(ctx, wo, u),
-            Bsdf::Dielectric(b) => b.sample(wo, u1),
-            Bsdf::RoughDielectric(b) => b.sample(wo, u1, u),
+            Bsdf::Dielectric(b) => b.sample(ctx, wo, u1),
+            Bsdf::RoughDielectric(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
-            Bsdf::ThinDielectric(b) => b.sample(wo, u1),
+            Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -278,10 +278,22 @@ impl Bsdf {
     pub fn textures(&self) -> Vec<&crate::texture::Texture> {
         match self {
             Bsdf::Diffuse(b) => vec![&b.reflectance],
-            Bsdf::Conductor(b) => vec![&b.specular_reflectance],
+            Bsdf::Conductor(b) => {
+                let mut v = vec![&b.specular_reflectance];
+                v.extend(ConductorIor::textures(&b.ior));
+                v
+            }
             Bsdf::RoughConductor(b) => {
                 let mut v = vec![&b.specular_reflectance];
-                v.extend(b.textured_alpha.iter().flat_map(|a| a.iter()));
+                v.extend(ConductorIor::textures(&b.ior));
+                v.extend(b.roughness.textures());
+                v
+            }
+            Bsdf::Dielectric(b) => vec![&b.specular_reflectance, &b.specular_transmittance],
+            Bsdf::ThinDielectric(b) => vec![&b.specular_reflectance, &b.specular_transmittance],
+            Bsdf::RoughDielectric(b) => {
+                let mut v = vec![&b.specular_reflectance, &b.specular_transmittance];
+                v.extend(b.roughness.textures());
                 v
             }
             Bsdf::Plastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
@@ -302,7 +314,7 @@ impl Bsdf {
                 v.extend(b[1].textures());
                 v
             }
-            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Vec::new(),
+            Bsdf::Null => Vec::new(),
         }
     }
 

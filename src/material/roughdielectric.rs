@@ -15,22 +15,23 @@
 //! `specular_reflectance`, `specular_transmittance`.
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use super::microfacet::Microfacet;
-use super::{Bsdf, BsdfBuilder, BsdfSample};
+use super::microfacet::Roughness;
+use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
+use crate::texture::Texture;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 
 /// Rough dielectric interface.
 #[derive(Clone, Debug)]
 pub struct RoughDielectric {
-    /// Microfacet distribution.
-    pub distribution: Microfacet,
+    /// Microfacet distribution (roughness texturable).
+    pub roughness: Roughness,
     /// `int_ior / ext_ior`.
     pub eta: f32,
-    /// Reflection scale.
-    pub specular_reflectance: Rgb,
-    /// Transmission scale.
-    pub specular_transmittance: Rgb,
+    /// Reflection scale (texturable).
+    pub specular_reflectance: Texture,
+    /// Transmission scale (texturable).
+    pub specular_transmittance: Texture,
 }
 
 /// Geometry of a (wo, wi) pair: microfacet normal (upper hemisphere), whether it is a
@@ -66,33 +67,34 @@ impl RoughDielectric {
     }
 
     /// `f |cos θᵢ|` for both reflection and refraction.
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         let Some(c) = self.config(wo, wi) else { return Rgb::ZERO };
         let (wom, wim) = (wo.dot(c.m), wi.dot(c.m));
         // Directions must lie on the same side of the microfacet as of the macro-surface.
         if wom * wo.z <= 0.0 || wim * wi.z <= 0.0 {
             return Rgb::ZERO;
         }
-        let d = self.distribution.d(c.m);
-        let g = self.distribution.g(wi, wo, c.m);
+        let distribution = self.roughness.at(ctx);
+        let d = distribution.d(c.m);
+        let g = distribution.g(wi, wo, c.m);
         let (f, ..) = fresnel_dielectric(wom, self.eta);
         if c.reflect {
-            self.specular_reflectance * (f * d * g / (4.0 * wo.z.abs()))
+            ctx.eval(&self.specular_reflectance) * (f * d * g / (4.0 * wo.z.abs()))
         } else {
             let denom = wom + c.e * wim;
-            self.specular_transmittance * ((1.0 - f) * d * g * (wim * wom).abs() / (wo.z.abs() * denom * denom))
+            ctx.eval(&self.specular_transmittance) * ((1.0 - f) * d * g * (wim * wom).abs() / (wo.z.abs() * denom * denom))
         }
     }
 
     /// Density of [`RoughDielectric::sample`] choosing `wi` (solid angle).
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         let Some(c) = self.config(wo, wi) else { return 0.0 };
         let (wom, wim) = (wo.dot(c.m), wi.dot(c.m));
         if wom * wo.z <= 0.0 || wim * wi.z <= 0.0 {
             return 0.0;
         }
         let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let pdf_m = self.distribution.pdf(wo_up, c.m);
+        let pdf_m = self.roughness.at(ctx).pdf(wo_up, c.m);
         let (f, ..) = fresnel_dielectric(wom, self.eta);
         if c.reflect {
             pdf_m * f / (4.0 * wom.abs())
@@ -103,12 +105,12 @@ impl RoughDielectric {
     }
 
     /// A visible normal from `wo`, then reflection (probability F) or refraction.
-    pub fn sample(&self, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
+    pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;
         }
         let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let m = self.distribution.sample(wo_up, u).value;
+        let m = self.roughness.at(ctx).sample(wo_up, u).value;
         let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.dot(m), self.eta);
         let reflected = u1 <= f;
         let (wi, eta) = if reflected {
@@ -124,21 +126,21 @@ impl RoughDielectric {
         if (wi.z * wo.z > 0.0) != reflected {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
+        let pdf = self.pdf(ctx, wo, wi);
         if pdf <= 0.0 || pdf.is_nan() {
             return None;
         }
-        let weight = self.eval(wo, wi) / pdf;
+        let weight = self.eval(ctx, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 }
 impl RoughDielectric {
     /// Mitsuba's `roughdielectric`: the dielectric's parameters and the microfacet
-    /// distribution's.
-    pub fn from_props(o: &Obj, _: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
-        let (eta, specular_reflectance, specular_transmittance) = super::dielectric::dielectric_props(o)?;
+    /// distribution's (roughness and scales texturable).
+    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let (eta, specular_reflectance, specular_transmittance) = super::dielectric::dielectric_props(o, b)?;
         Ok(Bsdf::RoughDielectric(RoughDielectric {
-            distribution: Microfacet::from_props(o, true)?,
+            roughness: Roughness::from_props(o, b)?,
             eta,
             specular_reflectance,
             specular_transmittance,

@@ -2,14 +2,14 @@
 //! sphere, so transmission is covered), the returned pdf and weight against `pdf` and `eval`,
 //! reciprocity, and energy conservation.
 
-use super::microfacet::{Microfacet, MicrofacetType};
+use super::microfacet::{Microfacet, MicrofacetType, Roughness};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 
 const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None };
 
 fn rough_conductors() -> Vec<(String, Bsdf)> {
-    let gold = Some(ConductorIor { eta: Rgb::new(0.143, 0.374, 1.442), k: Rgb::new(3.983, 2.385, 1.603) });
+    let gold = Some(ConductorIor::constant(Rgb::new(0.143, 0.374, 1.442), Rgb::new(3.983, 2.385, 1.603)));
     let mut v = Vec::new();
     for md in [
         Microfacet::new(MicrofacetType::Ggx, 0.2, 0.2),
@@ -21,10 +21,9 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
         v.push((
             format!("roughconductor {md:?}"),
             Bsdf::RoughConductor(RoughConductor {
-                distribution: md,
-                ior: gold,
+                roughness: md.into(),
+                ior: gold.clone(),
                 specular_reflectance: Rgb::ONE.into(),
-                textured_alpha: None,
             }),
         ));
     }
@@ -33,10 +32,12 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
     v.push((
         "roughconductor textured".into(),
         Bsdf::RoughConductor(RoughConductor {
-            distribution: Microfacet::new(MicrofacetType::Ggx, 0.1, 0.1),
+            roughness: Roughness {
+                distribution: Microfacet::new(MicrofacetType::Ggx, 0.1, 0.1),
+                textures: Some(Box::new([Rgb::splat(0.15).into(), Rgb::splat(0.45).into()])),
+            },
             ior: gold,
             specular_reflectance: Rgb::new(0.9, 0.8, 0.6).into(),
-            textured_alpha: Some(Box::new([Rgb::splat(0.15).into(), Rgb::splat(0.45).into()])),
         }),
     ));
     v
@@ -53,10 +54,10 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         v.push((
             format!("roughdielectric η={eta} {md:?}"),
             Bsdf::RoughDielectric(RoughDielectric {
-                distribution: md,
+                roughness: md.into(),
                 eta,
-                specular_reflectance: Rgb::ONE,
-                specular_transmittance: Rgb::ONE,
+                specular_reflectance: Rgb::ONE.into(),
+                specular_transmittance: Rgb::ONE.into(),
             }),
         ));
     }
@@ -228,10 +229,9 @@ fn energy_is_conserved() {
     // head-on, from rays reflected below the horizon and masked.)
     for (k, a) in [0.2f32, 0.5].into_iter().enumerate() {
         let white = RoughConductor {
-            distribution: Microfacet::new(MicrofacetType::Ggx, a, a),
+            roughness: Microfacet::new(MicrofacetType::Ggx, a, a).into(),
             ior: None,
             specular_reflectance: Rgb::ONE.into(),
-            textured_alpha: None,
         };
         let wo = Vec3::new(0.3, 0.0, 0.954).normalize();
         let exact =
@@ -253,7 +253,7 @@ fn energy_is_conserved() {
 #[test]
 fn smooth_conductor_mirrors_with_fresnel() {
     let b = Bsdf::Conductor(Conductor {
-        ior: Some(ConductorIor { eta: Rgb::splat(0.2), k: Rgb::splat(3.9) }),
+        ior: Some(ConductorIor::constant(Rgb::splat(0.2), Rgb::splat(3.9))),
         specular_reflectance: Rgb::ONE.into(),
     });
     let wo = Vec3::new(0.3, 0.4, 0.866).normalize();
@@ -286,4 +286,132 @@ fn mask_passes_light_through_with_probability_one_minus_opacity() {
         .count();
     let p = through as f64 / n as f64;
     assert!((p - 0.75).abs() < 4.0 * (0.75f64 * 0.25 / n as f64).sqrt(), "{p}");
+}
+
+/// A textured parameter acts where it is evaluated as the constant it evaluates to there: each
+/// BSDF with checkerboard parameters equals, at a point of each colour, the same BSDF with those
+/// colours as constants (eval, pdf and sample with the same random numbers). Roughness reads the
+/// texture as a scalar ([`crate::texture::Texture::eval_scalar`]), colours as RGB.
+#[test]
+fn textured_parameters_act_as_their_local_value() {
+    use crate::texture::Texture;
+    let checker = |a: Rgb, b: Rgb| Texture::Checkerboard { color0: a, color1: b, to_uv: glam::Mat3::IDENTITY };
+    let alpha = checker(Rgb::splat(0.05), Rgb::splat(0.4));
+    let refl = checker(Rgb::new(0.9, 0.5, 0.2), Rgb::new(0.2, 0.5, 0.9));
+    let trans = checker(Rgb::new(0.3, 0.8, 0.6), Rgb::new(1.0, 0.4, 0.1));
+    let eta = checker(Rgb::new(0.2, 0.4, 1.2), Rgb::new(1.1, 0.9, 0.3));
+    let k = checker(Rgb::new(3.0, 2.5, 2.0), Rgb::new(1.0, 4.0, 0.5));
+    let ggx = |a: f32| Microfacet::new(MicrofacetType::Ggx, a, a);
+    let textured_roughness =
+        Roughness { distribution: ggx(0.1), textures: Some(Box::new([alpha.clone(), alpha.clone()])) };
+    type Case<'a> = (&'static str, Bsdf, Box<dyn Fn(Vec2) -> Bsdf + 'a>);
+    let cases: Vec<Case> = vec![
+        (
+            "roughdielectric",
+            Bsdf::RoughDielectric(RoughDielectric {
+                roughness: textured_roughness.clone(),
+                eta: 1.5,
+                specular_reflectance: refl.clone(),
+                specular_transmittance: trans.clone(),
+            }),
+            Box::new(|uv| {
+                Bsdf::RoughDielectric(RoughDielectric {
+                    roughness: ggx(alpha.eval_scalar(uv, None)).into(),
+                    eta: 1.5,
+                    specular_reflectance: refl.eval(uv).into(),
+                    specular_transmittance: trans.eval(uv).into(),
+                })
+            }),
+        ),
+        (
+            "dielectric",
+            Bsdf::Dielectric(Dielectric {
+                eta: 1.33,
+                specular_reflectance: refl.clone(),
+                specular_transmittance: trans.clone(),
+            }),
+            Box::new(|uv| {
+                Bsdf::Dielectric(Dielectric {
+                    eta: 1.33,
+                    specular_reflectance: refl.eval(uv).into(),
+                    specular_transmittance: trans.eval(uv).into(),
+                })
+            }),
+        ),
+        (
+            "thindielectric",
+            Bsdf::ThinDielectric(ThinDielectric {
+                eta: 1.5,
+                specular_reflectance: refl.clone(),
+                specular_transmittance: trans.clone(),
+            }),
+            Box::new(|uv| {
+                Bsdf::ThinDielectric(ThinDielectric {
+                    eta: 1.5,
+                    specular_reflectance: refl.eval(uv).into(),
+                    specular_transmittance: trans.eval(uv).into(),
+                })
+            }),
+        ),
+        (
+            "conductor",
+            Bsdf::Conductor(Conductor {
+                ior: Some(ConductorIor { eta: eta.clone(), k: k.clone() }),
+                specular_reflectance: refl.clone(),
+            }),
+            Box::new(|uv| {
+                Bsdf::Conductor(Conductor {
+                    ior: Some(ConductorIor::constant(eta.eval(uv), k.eval(uv))),
+                    specular_reflectance: refl.eval(uv).into(),
+                })
+            }),
+        ),
+        (
+            "roughconductor",
+            Bsdf::RoughConductor(RoughConductor {
+                roughness: textured_roughness.clone(),
+                ior: Some(ConductorIor { eta: eta.clone(), k: k.clone() }),
+                specular_reflectance: refl.clone(),
+            }),
+            Box::new(|uv| {
+                Bsdf::RoughConductor(RoughConductor {
+                    roughness: ggx(alpha.eval_scalar(uv, None)).into(),
+                    ior: Some(ConductorIor::constant(eta.eval(uv), k.eval(uv))),
+                    specular_reflectance: refl.eval(uv).into(),
+                })
+            }),
+        ),
+    ];
+    let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() <= 1e-5 * a.abs().max_element().max(1.0);
+    for (name, textured, constant_at) in &cases {
+        // One point in each colour of the checkerboard.
+        let values: Vec<Rgb> = [Vec2::new(0.25, 0.25), Vec2::new(0.75, 0.25)]
+            .into_iter()
+            .map(|uv| {
+                let ctx = BsdfContext { uv, mesh: None };
+                let constant = constant_at(uv);
+                let mut rng = crate::sampling::Pcg32::new(17, 3);
+                let mut sum = Rgb::ZERO;
+                for wo in outgoing() {
+                    for _ in 0..200 {
+                        let (u1, u) = (rng.next_f32(), u2(&mut rng));
+                        let (s, c) = (textured.sample(&ctx, wo, u1, u), constant.sample(&CTX, wo, u1, u));
+                        assert_eq!(s.is_some(), c.is_some(), "{name} at {uv}");
+                        let (Some(s), Some(c)) = (s, c) else { continue };
+                        assert!(s.wi == c.wi && close(s.weight, c.weight), "{name} at {uv}: {s:?} vs {c:?}");
+                        assert!((s.pdf - c.pdf).abs() <= 1e-5 * c.pdf.max(1.0), "{name} at {uv}");
+                        let wi = crate::sampling::sample_uniform_sphere(u2(&mut rng)).value;
+                        let (e, ec) = (textured.eval(&ctx, wo, wi), constant.eval(&CTX, wo, wi));
+                        assert!(close(e, ec), "{name} at {uv}: eval {e} vs {ec}");
+                        let (p, pc) = (textured.pdf(&ctx, wo, wi), constant.pdf(&CTX, wo, wi));
+                        assert!((p - pc).abs() <= 1e-5 * pc.max(1.0), "{name} at {uv}: pdf {p} vs {pc}");
+                        sum += s.weight;
+                    }
+                }
+                sum
+            })
+            .collect();
+        // The two colours differ, so a texture read at the wrong point would be seen.
+        assert!(!close(values[0], values[1]), "{name}: the test points must see different values");
+    }
 }

@@ -121,8 +121,12 @@ const LAMBDA_MAX: f32 = 830.0;
 /// What a spectrum describes, which decides how it is seen.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SpectrumKind {
-    /// A reflectance or other material parameter, seen under D65 and clamped to [0, 1].
+    /// A reflectance or other material parameter, seen under D65 and clamped to [0, 1]; an RGB
+    /// value must lie in [0, 1] (Mitsuba's bounded `srgb` spectrum).
     Reflectance,
+    /// A material parameter that is no reflectance (a conductor's `eta` and `k`, a roughness):
+    /// seen under D65, not clamped (Mitsuba's unbounded spectrum).
+    Unbounded,
     /// Emitted light (the spectrum of the radiance itself).
     Illuminant,
 }
@@ -170,7 +174,7 @@ pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Rgb {
         let lambda = LAMBDA_MIN + 0.5 * i as f32;
         let [x, y, z, d65] = cie_at(lambda);
         let w =
-            if kind == SpectrumKind::Reflectance { d65 } else { 1.0 } * if i == 0 || i == steps { 0.5 } else { 1.0 };
+            if kind == SpectrumKind::Illuminant { 1.0 } else { d65 } * if i == 0 || i == steps { 0.5 } else { 1.0 };
         let s = interpolate(samples, lambda);
         xyz += Vec3::new(x, y, z) * (s * w);
         norm += (y * w) as f64;
@@ -178,7 +182,7 @@ pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Rgb {
     let rgb = xyz_to_srgb(xyz / norm as f32).max(Rgb::ZERO);
     match kind {
         SpectrumKind::Reflectance => rgb.min(Rgb::ONE),
-        SpectrumKind::Illuminant => rgb,
+        SpectrumKind::Unbounded | SpectrumKind::Illuminant => rgb,
     }
 }
 

@@ -137,11 +137,24 @@ impl Obj {
         match self.get(name) {
             None => Ok(None),
             Some(p) => match &p.value {
-                Value::Rgb(c) => Ok(Some(*c)),
+                Value::Rgb(c) => {
+                    if kind == SpectrumKind::Reflectance && !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+                        // As Mitsuba's srgb reflectance spectrum; a <float> or <spectrum> is not
+                        // range-checked.
+                        return Err(SceneError::at(
+                            &p.loc,
+                            format!(
+                                "'{name}' is a reflectance: an <rgb> value must lie in [0, 1], got {c} (as in Mitsuba; \
+                                 a <float> or <spectrum> may exceed 1)"
+                            ),
+                        ));
+                    }
+                    Ok(Some(*c))
+                }
                 Value::Float(v) => Ok(Some(Rgb::splat(*v as f32))),
                 Value::Integer(v) => Ok(Some(Rgb::splat(*v as f32))),
                 Value::Spectrum(SpectrumValue::Constant(v)) => Ok(Some(match kind {
-                    SpectrumKind::Reflectance => Rgb::splat(*v),
+                    SpectrumKind::Reflectance | SpectrumKind::Unbounded => Rgb::splat(*v),
                     // Mitsuba: a constant emission spectrum is illuminant E times the value.
                     SpectrumKind::Illuminant => spectrum_to_rgb(&[(360.0, *v), (830.0, *v)], kind),
                 })),

@@ -378,6 +378,17 @@ fn errors_name_the_place_and_the_expectation() {
             "axis must be non-zero",
         ),
         (r#"<medium type="homogeneous"><float name="albedo" value="-1"/></medium>"#, "test.xml:7:", "albedo"),
+        // Mitsuba rejects RGB reflectances outside [0, 1] (a <float> or <spectrum> passes).
+        (
+            r#"<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1.2, 0.5, 0.5"/></bsdf></shape>"#,
+            "test.xml:7:",
+            "an <rgb> value must lie in [0, 1]",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="dielectric"><rgb name="specular_transmittance" value="1.5"/></bsdf></shape>"#,
+            "test.xml:7:",
+            "an <rgb> value must lie in [0, 1]",
+        ),
     ];
     for (body, position, expectation) in cases {
         let e = err(&scene(body));
@@ -770,3 +781,30 @@ fn unused_command_line_parameters_are_reported() {
     assert!(f.warnings[0].contains("-D spp"), "{:?}", f.warnings);
 }
 
+
+/// Every parameter Mitsuba lets be a texture loads as one: the dielectrics' reflectance and
+/// transmittance, the rough dielectric's roughness, the conductors' `eta` and `k`; `eta`, `k` and
+/// roughness are unbounded (an <rgb> above 1 is accepted there, as in Mitsuba).
+#[test]
+fn dielectric_and_conductor_parameters_take_textures() {
+    let checker = |name: &str| format!(r#"<texture type="checkerboard" name="{name}"/>"#);
+    for (ty, params) in [
+        ("dielectric", vec!["specular_reflectance", "specular_transmittance"]),
+        ("thindielectric", vec!["specular_reflectance", "specular_transmittance"]),
+        ("roughdielectric", vec!["specular_reflectance", "specular_transmittance", "alpha"]),
+        ("roughdielectric", vec!["alpha_u", "alpha_v"]),
+        ("conductor", vec!["eta", "k", "specular_reflectance"]),
+        ("roughconductor", vec!["eta", "k", "alpha"]),
+    ] {
+        let inner: String = params.iter().map(|p| checker(p)).collect();
+        let f = load(&scene(&format!(r#"<shape type="sphere"><bsdf type="{ty}">{inner}</bsdf></shape>"#)))
+            .unwrap_or_else(|e| panic!("{ty} {params:?}: {e}"));
+        let textured = f.scene.bsdfs()[0].textures().iter().filter(|t| matches!(t, crate::texture::Texture::Checkerboard { .. })).count();
+        let expected = if params.contains(&"alpha") { params.len() + 1 } else { params.len() };
+        assert_eq!(textured, expected, "{ty} {params:?}");
+    }
+    let unbounded = r#"<shape type="sphere"><bsdf type="roughconductor"><rgb name="eta" value="0.2, 0.4, 1.2"/>
+        <rgb name="k" value="3, 2.5, 2"/><texture type="bitmap" name="alpha"><string name="filename" value="nope.png"/></texture></bsdf></shape>"#;
+    let e = err(&scene(unbounded));
+    assert!(e.contains("nope.png"), "eta and k above 1 pass, the missing image is the error: {e}");
+}
