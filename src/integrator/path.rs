@@ -638,11 +638,7 @@ mod tests {
         use crate::texture::Texture;
         let (rho0, rho1) = (Rgb::splat(0.8), Rgb::splat(0.2));
         let mut b = SceneBuilder::new();
-        let checker = Texture::Checkerboard {
-            color0: rho0,
-            color1: rho1,
-            to_uv: crate::math::Mat3::from_scale(crate::math::Vec2::splat(10.0)),
-        };
+        let checker = Texture::checkerboard(rho0, rho1, crate::math::Mat3::from_scale(crate::math::Vec2::splat(10.0)));
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: checker }));
         let mut floor = TriangleMesh::rectangle();
         floor.transform(&(Transform::rotate(Vec3::X, -90.0).unwrap() * Transform::scale(Vec3::splat(10.0)).unwrap()));

@@ -565,11 +565,7 @@ mod tests {
         assert!(g.prepare_sampling());
         let shapes = [g];
         let (c0, c1) = (Rgb::new(4.0, 1.0, 0.5), Rgb::new(0.5, 1.0, 4.0));
-        let texture = Texture::Checkerboard {
-            color0: c0,
-            color1: c1,
-            to_uv: crate::math::Mat3::from_scale(Vec2::new(1.0, 0.5)),
-        };
+        let texture = Texture::checkerboard(c0, c1, crate::math::Mat3::from_scale(Vec2::new(1.0, 0.5)));
         let light = Light::Area { shape: 0, radiance: texture };
         let mut rng = crate::sampling::Pcg32::new(4, 4);
         let mut seen = [false; 2];

@@ -64,11 +64,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     v.push(("plastic".into(), Bsdf::Plastic(Plastic::new(Rgb::new(0.2, 0.5, 0.8), Rgb::ONE, 1.49, false))));
     // Textured diffuse and specular reflectances (a checkerboard: colour 0 at the tests' uv,
     // while its mean, which sets the lobe weights, differs).
-    let checker = |a: Rgb, b: Rgb| crate::texture::Texture::Checkerboard {
-        color0: a,
-        color1: b,
-        to_uv: crate::math::Mat3::IDENTITY,
-    };
+    let checker = |a: Rgb, b: Rgb| crate::texture::Texture::checkerboard(a, b, crate::math::Mat3::IDENTITY);
     v.push((
         "roughplastic textured".into(),
         Bsdf::RoughPlastic(RoughPlastic::new(
@@ -295,7 +291,7 @@ fn mask_passes_light_through_with_probability_one_minus_opacity() {
 #[test]
 fn textured_parameters_act_as_their_local_value() {
     use crate::texture::Texture;
-    let checker = |a: Rgb, b: Rgb| Texture::Checkerboard { color0: a, color1: b, to_uv: glam::Mat3::IDENTITY };
+    let checker = |a: Rgb, b: Rgb| Texture::checkerboard(a, b, glam::Mat3::IDENTITY);
     let alpha = checker(Rgb::splat(0.05), Rgb::splat(0.4));
     let refl = checker(Rgb::new(0.9, 0.5, 0.2), Rgb::new(0.2, 0.5, 0.9));
     let trans = checker(Rgb::new(0.3, 0.8, 0.6), Rgb::new(1.0, 0.4, 0.1));

@@ -65,16 +65,32 @@ pub enum Texture {
         /// A factor on the value.
         scale: f32,
     },
-    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v lie on the same
-    /// side of 1/2, `color1` elsewhere.
+    /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v (after `to_uv`)
+    /// lie on the same side of 1/2, `color1` elsewhere; the colours are textures themselves,
+    /// looked up at the untransformed point.
     Checkerboard {
         /// First colour.
-        color0: Rgb,
+        color0: Box<Texture>,
         /// Second colour.
-        color1: Rgb,
+        color1: Box<Texture>,
         /// uv transform.
         to_uv: Mat3,
     },
+}
+
+impl Texture {
+    /// A checkerboard of two colours (or textures) after the uv transform `to_uv`.
+    pub fn checkerboard(color0: impl Into<Texture>, color1: impl Into<Texture>, to_uv: Mat3) -> Texture {
+        Texture::Checkerboard { color0: Box::new(color0.into()), color1: Box::new(color1.into()), to_uv }
+    }
+
+    /// Whether `uv` lies in a `color0` cell of a checkerboard with uv transform `to_uv`.
+    #[inline]
+    fn checker_cell0(to_uv: &Mat3, uv: Vec2) -> bool {
+        let p = to_uv.transform_point2(uv);
+        let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
+        (fu > 0.5) == (fv > 0.5)
+    }
 }
 
 impl From<Rgb> for Texture {
@@ -141,12 +157,10 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
             Texture::Checkerboard { color0, color1, to_uv } => {
-                let p = to_uv.transform_point2(uv);
-                let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
-                if (fu > 0.5) == (fv > 0.5) {
-                    *color0
+                if Texture::checker_cell0(to_uv, uv) {
+                    color0.eval_at(uv, mesh)
                 } else {
-                    *color1
+                    color1.eval_at(uv, mesh)
                 }
             }
         }
@@ -161,9 +175,11 @@ impl Texture {
     pub fn eval_scalar(&self, uv: Vec2, mesh: Option<&MeshPoint>) -> f32 {
         match self {
             Texture::Checkerboard { color0, color1, to_uv } => {
-                let p = to_uv.transform_point2(uv);
-                let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
-                crate::math::luminance(if (fu > 0.5) == (fv > 0.5) { *color1 } else { *color0 })
+                if Texture::checker_cell0(to_uv, uv) {
+                    color1.eval_scalar(uv, mesh)
+                } else {
+                    color0.eval_scalar(uv, mesh)
+                }
             }
             t => crate::math::luminance(t.eval_at(uv, mesh)),
         }
@@ -176,7 +192,7 @@ impl Texture {
             Texture::Bitmap { bitmap, .. } => {
                 bitmap.image.pixels.iter().copied().sum::<Rgb>() / bitmap.image.pixels.len().max(1) as f32
             }
-            Texture::Checkerboard { color0, color1, .. } => 0.5 * (*color0 + *color1),
+            Texture::Checkerboard { color0, color1, .. } => 0.5 * (color0.mean() + color1.mean()),
             // Unknown without the mesh: an estimate for sampling weights only.
             Texture::MeshAttribute { scale, .. } => Rgb::splat(0.5 * scale),
         }
@@ -188,7 +204,7 @@ impl Texture {
         match self {
             Texture::Constant(c) => ok(*c),
             Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
-            Texture::Checkerboard { color0, color1, .. } => ok(*color0) && ok(*color1),
+            Texture::Checkerboard { color0, color1, .. } => color0.is_reflectance() && color1.is_reflectance(),
             Texture::MeshAttribute { .. } => true,
         }
     }
@@ -228,7 +244,7 @@ impl Texture {
 }
 
 /// A texture plugin's constructor.
-pub type TexturePlugin = fn(&Obj, &mut dyn ImageSource) -> PropResult<Texture>;
+pub type TexturePlugin = fn(&Obj, &mut dyn TextureSource) -> PropResult<Texture>;
 
 /// Every texture plugin by its (Mitsuba) name.
 pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
@@ -236,6 +252,7 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("bitmap", bitmap_from_props),
         ("checkerboard", checkerboard_from_props),
         ("rawconstant", rawconstant_from_props),
+        ("srgb", srgb_from_props),
         ("mesh_attribute", mesh_attribute_from_props),
     ];
 
@@ -256,7 +273,7 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 
 /// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
 /// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`.
-fn bitmap_from_props(o: &Obj, images: &mut dyn ImageSource) -> PropResult<Texture> {
+fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Texture> {
     let raw = o.bool("raw", false)?;
     // Mitsuba's `accel` (hardware texture lookups on GPUs) changes no value.
     o.bool("accel", true)?;
@@ -273,19 +290,16 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn ImageSource) -> PropResult<Textur
     Ok(Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? })
 }
 
-/// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), `to_uv`.
-fn checkerboard_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
-    let refl = SpectrumKind::Reflectance;
-    Ok(Texture::Checkerboard {
-        color0: o.rgb("color0", Rgb::splat(0.4), refl)?,
-        color1: o.rgb("color1", Rgb::splat(0.2), refl)?,
-        to_uv: to_uv_from_props(o)?,
-    })
+/// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`.
+fn checkerboard_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    let color0 = b.texture(o, "color0", Rgb::splat(0.4))?;
+    let color1 = b.texture(o, "color1", Rgb::splat(0.2))?;
+    Ok(Texture::checkerboard(color0, color1, to_uv_from_props(o)?))
 }
 
 /// Mitsuba's `mesh_attribute`: `name` (required: `vertex_…` or `face_…`, e.g. `vertex_color`
 /// from a PLY file's vertex colours), `scale` (1). The shapes that use it must have the attribute.
-fn mesh_attribute_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
+fn mesh_attribute_from_props(o: &Obj, _: &mut dyn TextureSource) -> PropResult<Texture> {
     let name = o.string("name")?;
     if !(name.starts_with("vertex_") || name.starts_with("face_")) {
         return Err(o.error_at("name", format!("a mesh attribute's name starts with 'vertex_' or 'face_', got '{name}'")));
@@ -298,14 +312,31 @@ impl Texture {
     pub fn mesh_attributes(&self) -> Vec<&str> {
         match self {
             Texture::MeshAttribute { name, .. } => vec![name.as_str()],
+            Texture::Checkerboard { color0, color1, .. } => {
+                let mut v = color0.mesh_attributes();
+                v.extend(color1.mesh_attributes());
+                v
+            }
             _ => Vec::new(),
         }
     }
 }
 
+/// Mitsuba's `srgb`: `color` (required), a constant colour; in [0, 1] unless `unbounded`
+/// (false), as Mitsuba checks.
+fn srgb_from_props(o: &Obj, _: &mut dyn TextureSource) -> PropResult<Texture> {
+    let unbounded = o.bool("unbounded", false)?;
+    let c = o.rgb_opt("color", SpectrumKind::Unbounded)?.ok_or_else(|| o.error("srgb needs a 'color'"))?;
+    if !(c.is_finite() && c.min_element() >= 0.0 && (unbounded || c.max_element() <= 1.0)) {
+        let range = if unbounded { "≥ 0" } else { "in [0, 1] unless 'unbounded' is true" };
+        return Err(o.error_at("color", format!("an srgb colour must be {range}, got {c}")));
+    }
+    Ok(Texture::Constant(c))
+}
+
 /// Mitsuba's `rawconstant`: `value` (required), a `<float>` or a `<vector>` (three channels),
 /// used as given (no spectral conversion); Mitsuba refuses an `<rgb>` here, and so does neumann.
-fn rawconstant_from_props(o: &Obj, _: &mut dyn ImageSource) -> PropResult<Texture> {
+fn rawconstant_from_props(o: &Obj, _: &mut dyn TextureSource) -> PropResult<Texture> {
     use crate::props::Value;
     let p = o.get("value").ok_or_else(|| o.error("rawconstant needs a 'value' (a <float> or a <vector>)"))?;
     p.used.set(true);
@@ -346,7 +377,7 @@ mod tests {
     #[test]
     fn checkerboard_and_uv_transform() {
         let t =
-            Texture::Checkerboard { color0: Rgb::ONE, color1: Rgb::ZERO, to_uv: Mat3::from_scale(Vec2::splat(2.0)) };
+            Texture::checkerboard(Rgb::ONE, Rgb::ZERO, Mat3::from_scale(Vec2::splat(2.0)));
         assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Rgb::ONE);
         assert_eq!(t.eval(Vec2::new(0.3, 0.1)), Rgb::ZERO);
         assert_eq!(t.eval(Vec2::new(0.3, 0.3)), Rgb::ONE);
@@ -356,5 +387,21 @@ mod tests {
         assert_eq!(t.eval_scalar(Vec2::new(0.1, 0.1), None), 0.0);
         assert_eq!(t.eval_scalar(Vec2::new(0.3, 0.1), None), 1.0);
         assert!(!Texture::Constant(Rgb::splat(1.5)).is_reflectance());
+    }
+
+    /// A checkerboard's colours may be textures, looked up at the untransformed point (as
+    /// Mitsuba does; compared with Mitsuba 3.9.1 on a bitmap-and-checkerboard nest).
+    #[test]
+    fn nested_checkerboards() {
+        let inner = Texture::checkerboard(Rgb::new(1.0, 0.0, 0.0), Rgb::new(0.0, 0.0, 1.0), Mat3::from_scale(Vec2::splat(8.0)));
+        let t = Texture::checkerboard(Rgb::splat(0.5), inner.clone(), Mat3::from_scale(Vec2::splat(2.0)));
+        // Outer color1 cell (u in [0.25, 0.5), v in [0, 0.25)): the inner board at the same uv.
+        for uv in [Vec2::new(0.3, 0.01), Vec2::new(0.37, 0.01), Vec2::new(0.3, 0.07)] {
+            assert_eq!(t.eval(uv), inner.eval(uv), "{uv}");
+            assert_eq!(t.eval_scalar(uv, None), 0.5, "{uv}: scalar lookups swap the outer colours");
+        }
+        assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Rgb::splat(0.5));
+        assert_eq!(t.eval_scalar(Vec2::new(0.1, 0.1), None), inner.eval_scalar(Vec2::new(0.1, 0.1), None));
+        assert_eq!(t.mean(), 0.5 * (Rgb::splat(0.5) + inner.mean()));
     }
 }

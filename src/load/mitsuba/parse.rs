@@ -226,8 +226,7 @@ impl Parser {
                     }
                 }
                 t if PROPERTY_TAGS.contains(&t) => {
-                    // <spectrum type="…"> and <rgb> without a name are texture-like objects in
-                    // Mitsuba; only named property forms are supported.
+                    // Named properties; a <spectrum type="…"> plugin reduces to a value here.
                     let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                     let value = self.property(file, child)?;
                     push_prop(obj, name, value, loc)?;
@@ -411,6 +410,7 @@ impl Parser {
                     _ => return Err(bad("one or three numbers", &v)),
                 }
             }
+            "spectrum" if node.attribute("type").is_some() => self.spectrum_object(file, node)?,
             "spectrum" => {
                 if node.attribute("filename").is_some() {
                     let name = self.attr(file, node, "filename")?;
@@ -449,6 +449,120 @@ impl Parser {
             "transform" => Value::Transform(self.transform(file, node)?),
             _ => unreachable!("property tags are listed"),
         })
+    }
+
+    /// A spectrum plugin, `<spectrum type="…">` with its parameters nested, as Mitsuba's RGB
+    /// variants read it: `uniform` (`value`, 1) and `d65` (`scale`, 1) are a grey of that value
+    /// (D65 is the RGB white), `srgb` (`color`; in [0, 1] unless `unbounded`) its colour;
+    /// `regular` (`wavelength_min`, `wavelength_max`, `values`) and `irregular` (`wavelengths`,
+    /// `values`) sampled spectra, reduced to RGB as `<spectrum value="λ:v, …">` is (Mitsuba's RGB
+    /// variants cannot render these); `blackbody` is an error, as in Mitsuba's RGB variants.
+    fn spectrum_object(&self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Value> {
+        let loc = |n: roxmltree::Node| Loc { file: file.clone(), offset: n.range().start };
+        let ty = self.attr(file, node, "type")?;
+        let allowed: &[&str] = match ty.as_str() {
+            "uniform" => &["value"],
+            "d65" => &["scale"],
+            "srgb" => &["color", "unbounded"],
+            "regular" => &["wavelength_min", "wavelength_max", "values"],
+            "irregular" => &["wavelengths", "values"],
+            "blackbody" => {
+                return Err(SceneError::at(
+                    &loc(node),
+                    "a blackbody spectrum needs spectral rendering: neumann renders in RGB, and Mitsuba's RGB \
+                     variants refuse it too",
+                ))
+            }
+            _ => {
+                let types = ["uniform", "d65", "srgb", "regular", "irregular", "blackbody"];
+                let hint = nearest(&ty, types).map(|n| format!("; the nearest is '{n}'")).unwrap_or_default();
+                return Err(SceneError::at(
+                    &loc(node),
+                    format!("unsupported spectrum type '{ty}' (supported: {}{hint})", types.join(", ")),
+                ));
+            }
+        };
+        let mut params: HashMap<String, (Value, roxmltree::Node)> = HashMap::new();
+        for c in node.children().filter(|c| c.is_element()) {
+            let name = self.attr(file, c, "name")?;
+            if !allowed.contains(&name.as_str()) {
+                return Err(SceneError::at(
+                    &loc(c),
+                    format!("spectrum '{ty}' has no parameter '{name}' (its parameters: {})", allowed.join(", ")),
+                ));
+            }
+            if !PROPERTY_TAGS.contains(&c.tag_name().name()) {
+                return Err(SceneError::at(&loc(c), format!("parameter '{name}' of spectrum '{ty}' must be a property")));
+            }
+            params.insert(name, (self.property(file, c)?, c));
+        }
+        let float = |name: &str, default: Option<f64>| -> Result<f64> {
+            match params.get(name) {
+                Some((Value::Float(v), _)) => Ok(*v),
+                Some((Value::Integer(v), _)) => Ok(*v as f64),
+                Some((_, c)) => Err(SceneError::at(&loc(*c), format!("'{name}' of spectrum '{ty}' must be a <float>"))),
+                None => default.ok_or_else(|| SceneError::at(&loc(node), format!("spectrum '{ty}' needs '{name}'"))),
+            }
+        };
+        let list = |name: &str| -> Result<Vec<f64>> {
+            match params.get(name) {
+                Some((Value::String(v), c)) => parse_list(v).ok_or_else(|| {
+                    SceneError::at(&loc(*c), format!("'{name}' must be a list of numbers, found {v:?}"))
+                }),
+                Some((_, c)) => Err(SceneError::at(&loc(*c), format!("'{name}' of spectrum '{ty}' must be a <string>"))),
+                None => Err(SceneError::at(&loc(node), format!("spectrum '{ty}' needs '{name}'"))),
+            }
+        };
+        let sampled = |samples: Vec<(f32, f32)>| -> Result<Value> {
+            check_increasing(&samples).map_err(|m| SceneError::at(&loc(node), m))?;
+            Ok(Value::Spectrum(SpectrumValue::Samples(samples)))
+        };
+        match ty.as_str() {
+            "uniform" => Ok(Value::Float(float("value", Some(1.0))?)),
+            "d65" => Ok(Value::Float(float("scale", Some(1.0))?)),
+            "srgb" => {
+                let unbounded = match params.get("unbounded") {
+                    Some((Value::Bool(b), _)) => *b,
+                    Some((_, c)) => return Err(SceneError::at(&loc(*c), "'unbounded' must be a <boolean>")),
+                    None => false,
+                };
+                match params.get("color") {
+                    Some((Value::Rgb(c), n)) => {
+                        if !unbounded && !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+                            return Err(SceneError::at(
+                                &loc(*n),
+                                format!("an srgb spectrum's colour must lie in [0, 1] unless 'unbounded' is true, got {c}"),
+                            ));
+                        }
+                        Ok(Value::Rgb(*c))
+                    }
+                    Some((_, n)) => Err(SceneError::at(&loc(*n), "'color' of spectrum 'srgb' must be an <rgb>")),
+                    None => Err(SceneError::at(&loc(node), "spectrum 'srgb' needs 'color'")),
+                }
+            }
+            "regular" => {
+                let (lo, hi) = (float("wavelength_min", None)?, float("wavelength_max", None)?);
+                let values = list("values")?;
+                if values.len() < 2 || !(hi > lo) {
+                    return Err(SceneError::at(
+                        &loc(node),
+                        "a regular spectrum needs wavelength_min < wavelength_max and at least two values",
+                    ));
+                }
+                let step = (hi - lo) / (values.len() - 1) as f64;
+                sampled(values.iter().enumerate().map(|(i, v)| ((lo + step * i as f64) as f32, *v as f32)).collect())
+            }
+            _ => {
+                let (wavelengths, values) = (list("wavelengths")?, list("values")?);
+                if wavelengths.len() != values.len() {
+                    return Err(SceneError::at(
+                        &loc(node),
+                        format!("{} wavelengths but {} values", wavelengths.len(), values.len()),
+                    ));
+                }
+                sampled(wavelengths.iter().zip(&values).map(|(l, v)| (*l as f32, *v as f32)).collect())
+            }
+        }
     }
 
     /// The `x`, `y`, `z` attributes (each defaulting to `default`).

@@ -808,3 +808,47 @@ fn dielectric_and_conductor_parameters_take_textures() {
     let e = err(&scene(unbounded));
     assert!(e.contains("nope.png"), "eta and k above 1 pass, the missing image is the error: {e}");
 }
+
+/// `<spectrum type="…">` plugins as Mitsuba's RGB variants read them (values measured with
+/// Mitsuba 3.9.1 scalar_rgb): `uniform` and `d65` are greys (unlike `<spectrum value="v">` for an
+/// emitter, which is illuminant E), `srgb` its colour; `regular`/`irregular` reduce as the inline
+/// sampled form does; `blackbody` and unknown types are located errors.
+#[test]
+fn spectrum_plugins() {
+    let reflectance = |spectrum: &str| {
+        let f = load(&scene(&format!(r#"<shape type="sphere"><bsdf type="diffuse">{spectrum}</bsdf></shape>"#)))
+            .unwrap_or_else(|e| panic!("{spectrum}: {e}"));
+        f.scene.bsdfs()[0].diffuse_reflectance(&crate::material::BsdfContext::default(), Vec3::Z)
+    };
+    let uniform = reflectance(r#"<spectrum type="uniform" name="reflectance"><float name="value" value="0.3"/></spectrum>"#);
+    assert_eq!(uniform, Rgb::splat(0.3));
+    let d65 = reflectance(r#"<spectrum type="d65" name="reflectance"><float name="scale" value="0.5"/></spectrum>"#);
+    assert_eq!(d65, Rgb::splat(0.5));
+    let srgb = reflectance(r#"<spectrum type="srgb" name="reflectance"><rgb name="color" value="0.1, 0.5, 0.9"/></spectrum>"#);
+    assert_eq!(srgb, Rgb::new(0.1, 0.5, 0.9));
+    let regular = reflectance(
+        r#"<spectrum type="regular" name="reflectance"><float name="wavelength_min" value="400"/>
+        <float name="wavelength_max" value="700"/><string name="values" value="0.1, 0.5, 0.9"/></spectrum>"#,
+    );
+    let inline = reflectance(r#"<spectrum name="reflectance" value="400:0.1, 550:0.5, 700:0.9"/>"#);
+    assert_eq!(regular, inline);
+    let irregular = reflectance(
+        r#"<spectrum type="irregular" name="reflectance"><string name="wavelengths" value="400, 550, 700"/>
+        <string name="values" value="0.1, 0.5, 0.9"/></spectrum>"#,
+    );
+    assert_eq!(irregular, inline);
+    assert!(inline.x > inline.z + 0.3, "a reddish spectrum: {inline}");
+    let texture = reflectance(r#"<texture type="srgb" name="reflectance"><rgb name="color" value="0.2, 0.4, 0.6"/></texture>"#);
+    assert_eq!(texture, Rgb::new(0.2, 0.4, 0.6));
+    for (body, expectation) in [
+        (r#"<spectrum type="blackbody" name="reflectance"><float name="temperature" value="3000"/></spectrum>"#, "spectral rendering"),
+        (r#"<spectrum type="unifrom" name="reflectance"/>"#, "the nearest is 'uniform'"),
+        (r#"<spectrum type="uniform" name="reflectance"><float name="scale" value="2"/></spectrum>"#, "no parameter 'scale'"),
+        (r#"<spectrum type="srgb" name="reflectance"><rgb name="color" value="2, 1, 1"/></spectrum>"#, "unless 'unbounded'"),
+        (r#"<texture type="srgb" name="reflectance"><rgb name="color" value="2, 1, 1"/></texture>"#, "unless 'unbounded'"),
+        (r#"<spectrum type="irregular" name="reflectance"><string name="wavelengths" value="400, 500"/><string name="values" value="1"/></spectrum>"#, "2 wavelengths but 1 values"),
+    ] {
+        let e = err(&scene(&format!(r#"<shape type="sphere"><bsdf type="diffuse">{body}</bsdf></shape>"#)));
+        assert!(e.starts_with("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+}
