@@ -35,14 +35,8 @@ pub struct Parser {
     /// Where relative file names are looked for (Mitsuba's file resolver: `<path>` folders, the
     /// main scene's folder, the working directory).
     pub resolver: FileResolver,
-    /// Objects parsed ahead of their place because a `<ref>` before them named their id, by
-    /// (file, offset): where the document reaches them, they are used as parsed.
-    early: HashMap<(usize, usize), Rc<Obj>>,
-    /// Objects being parsed ahead, by (file, offset): a reference back to one is a cycle.
-    in_progress: Vec<(usize, usize)>,
-    /// For each document being parsed (the innermost include last), its objects' ids and nodes,
-    /// indexed once at its first forward reference, however many follow.
-    id_index: Vec<Option<HashMap<String, roxmltree::NodeId>>>,
+    /// `<alias>`es whose target id was not declared yet: (alias, id, where), bound at the end.
+    aliases: Vec<(String, String, Loc)>,
     /// For each document being parsed, whether its `version` is older than 2.0.0 (Mitsuba 0.x),
     /// which Mitsuba upgrades as it reads (see [`Parser::upgraded_name`]).
     legacy: Vec<bool>,
@@ -58,9 +52,7 @@ impl Parser {
             used_params: Default::default(),
             depth: 0,
             resolver: FileResolver::default(),
-            early: HashMap::new(),
-            in_progress: Vec::new(),
-            id_index: Vec::new(),
+            aliases: Vec::new(),
             legacy: Vec::new(),
         }
     }
@@ -125,13 +117,21 @@ impl Parser {
             children: Vec::new(),
             built: Cell::new(false),
         };
-        self.id_index.push(None);
         self.legacy.push(legacy);
         let filled = self.fill(&file, root, &mut scene, true);
         self.legacy.pop();
-        self.id_index.pop();
         filled?;
-        Ok(Rc::new(scene))
+        let scene = Rc::new(scene);
+        if self.depth > 0 {
+            return Ok(scene);
+        }
+        // The whole document is read (includes too): bind the references to ids declared after
+        // them, as Mitsuba does (it instantiates objects only once the file is parsed).
+        for (alias, id, loc) in std::mem::take(&mut self.aliases) {
+            let target = self.lookup(&loc, &id)?;
+            self.ids.insert(alias, target);
+        }
+        Resolver { ids: &self.ids, parser: self, done: HashMap::new(), stack: Vec::new() }.resolve(&scene)
     }
 
     /// Reads the children of `node` into `obj`.
@@ -184,14 +184,20 @@ impl Parser {
                 "alias" => {
                     let id = self.attr(file, child, "id")?;
                     let alias = self.attr(file, child, "as")?;
-                    let target = self.lookup(&loc, &id)?;
-                    self.ids.insert(alias, target);
+                    match self.ids.get(&id) {
+                        Some(target) => {
+                            self.ids.insert(alias, target.clone());
+                        }
+                        None => self.aliases.push((alias, id, loc)),
+                    }
                 }
                 "ref" => {
                     let id = self.attr(file, child, "id")?;
+                    // An id declared later (in this file, an included one or the file that
+                    // includes this one) is bound once the whole scene is read.
                     let target = match self.ids.get(&id) {
                         Some(t) => t.clone(),
-                        None => self.forward(file, child, &id, &loc)?,
+                        None => Rc::new(unbound_reference(id, loc.clone())),
                     };
                     match child.attribute("name") {
                         Some(_) => {
@@ -202,21 +208,13 @@ impl Parser {
                     }
                 }
                 t if OBJECT_TAGS.contains(&t) => {
-                    let key = (Arc::as_ptr(file) as usize, child.range().start);
-                    let nested = match self.early.remove(&key) {
-                        // Parsed already, for a reference before it.
-                        Some(parsed) => parsed,
-                        None => {
-                            let nested = Rc::new(self.object(file, child)?);
-                            if let Some(id) = &nested.id {
-                                if self.ids.contains_key(id) {
-                                    return Err(SceneError::at(&loc, format!("duplicate id '{id}'")));
-                                }
-                                self.ids.insert(id.clone(), nested.clone());
-                            }
-                            nested
+                    let nested = Rc::new(self.object(file, child)?);
+                    if let Some(id) = &nested.id {
+                        if self.ids.contains_key(id) {
+                            return Err(SceneError::at(&loc, format!("duplicate id '{id}'")));
                         }
-                    };
+                        self.ids.insert(id.clone(), nested.clone());
+                    }
                     match child.attribute("name") {
                         Some(_) => {
                             let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
@@ -253,37 +251,6 @@ impl Parser {
             .map(|n| format!(" (did you mean '{n}'?)"))
             .unwrap_or_default();
         SceneError::at(loc, format!("reference to unknown id '{id}'{hint}"))
-    }
-
-    /// A `<ref>` (at `loc`, in the document of `node`) to an id declared later in the same file,
-    /// as Mitsuba allows: the object is parsed now and used where the document reaches it.
-    fn forward(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node, id: &str, loc: &Loc) -> Result<Rc<Obj>> {
-        let doc = node.document();
-        let index = self.id_index.last_mut().expect("inside a document").get_or_insert_with(|| {
-            let mut index = HashMap::new();
-            for n in doc.descendants().filter(|n| n.is_element() && OBJECT_TAGS.contains(&n.tag_name().name())) {
-                if let Some(i) = n.attribute("id") {
-                    index.entry(i.to_string()).or_insert(n.id());
-                }
-            }
-            index
-        });
-        let Some(target) = index.get(id).and_then(|&n| doc.get_node(n)) else { return Err(self.unknown_id(loc, id)) };
-        let key = (Arc::as_ptr(file) as usize, target.range().start);
-        if self.in_progress.contains(&key) {
-            return Err(SceneError::at(loc, format!("circular reference to '{id}'")));
-        }
-        // Each forward reference parses its target on the stack: bound the chain.
-        if self.in_progress.len() >= 256 {
-            return Err(SceneError::at(loc, "forward references chained more than 256 deep"));
-        }
-        self.in_progress.push(key);
-        let parsed = self.object(file, target);
-        self.in_progress.pop();
-        let parsed = Rc::new(parsed?);
-        self.ids.insert(id.to_string(), parsed.clone());
-        self.early.insert(key, parsed.clone());
-        Ok(parsed)
     }
 
     fn object(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Obj> {
@@ -528,7 +495,7 @@ impl Parser {
                 };
                 match params.get("color") {
                     Some((Value::Rgb(c), n)) => {
-                        if !unbounded && !(c.min_element() >= 0.0 && c.max_element() <= 1.0) {
+                        if !(unbounded || c.min_element() >= 0.0 && c.max_element() <= 1.0) {
                             return Err(SceneError::at(
                                 &loc(*n),
                                 format!("an srgb spectrum's colour must lie in [0, 1] unless 'unbounded' is true, got {c}"),
@@ -543,7 +510,7 @@ impl Parser {
             "regular" => {
                 let (lo, hi) = (float("wavelength_min", None)?, float("wavelength_max", None)?);
                 let values = list("values")?;
-                if values.len() < 2 || !(hi > lo) {
+                if values.len() < 2 || hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
                     return Err(SceneError::at(
                         &loc(node),
                         "a regular spectrum needs wavelength_min < wavelength_max and at least two values",
@@ -758,6 +725,100 @@ fn parse_f64(s: &str) -> Option<f64> {
 }
 
 /// Numbers separated by commas and/or whitespace.
+/// The tag of a placeholder for a `<ref>` to an id not declared yet (no object element has it).
+const UNBOUND_REF: &str = "ref";
+
+/// A placeholder for a `<ref id>` met before its id was declared; bound once the scene is read.
+fn unbound_reference(id: String, loc: Loc) -> Obj {
+    Obj {
+        tag: UNBOUND_REF.into(),
+        ty: String::new(),
+        id: Some(id),
+        loc,
+        props: Vec::new(),
+        children: Vec::new(),
+        built: Cell::new(false),
+    }
+}
+
+/// Binds the placeholders of references to later ids: rebuilds the objects that contain one
+/// (directly or below), each once, so that an object referenced from several places stays one
+/// shared object; a reference cycle is an error.
+struct Resolver<'a> {
+    ids: &'a HashMap<String, Rc<Obj>>,
+    parser: &'a Parser,
+    /// Objects bound already, by address: the same (rebuilt or unchanged) object.
+    done: HashMap<*const Obj, Rc<Obj>>,
+    /// Objects being bound, by address (a reference back to one is a cycle).
+    stack: Vec<*const Obj>,
+}
+
+impl Resolver<'_> {
+    fn resolve(&mut self, obj: &Rc<Obj>) -> Result<Rc<Obj>> {
+        if obj.tag == UNBOUND_REF {
+            let id = obj.id.as_deref().unwrap_or_default();
+            let target = self.ids.get(id).ok_or_else(|| self.parser.unknown_id(&obj.loc, id))?;
+            if self.stack.contains(&Rc::as_ptr(target)) {
+                return Err(SceneError::at(&obj.loc, format!("circular reference to '{id}'")));
+            }
+            return self.resolve(&target.clone());
+        }
+        let key = Rc::as_ptr(obj);
+        if let Some(r) = self.done.get(&key) {
+            return Ok(r.clone());
+        }
+        if self.stack.contains(&key) {
+            let what = obj.id.as_ref().map_or_else(|| format!("this <{}>", obj.tag), |id| format!("'{id}'"));
+            return Err(SceneError::at(&obj.loc, format!("circular reference to {what}")));
+        }
+        // Nesting is bounded by the XML's depth, but reference chains are not.
+        if self.stack.len() >= 1024 {
+            return Err(SceneError::at(&obj.loc, "references chained more than 1024 deep"));
+        }
+        self.stack.push(key);
+        let resolved = self.rebuild(obj);
+        self.stack.pop();
+        let resolved = resolved?;
+        self.done.insert(key, resolved.clone());
+        Ok(resolved)
+    }
+
+    /// `obj` with its nested objects bound (the same `Rc` if none changed).
+    fn rebuild(&mut self, obj: &Rc<Obj>) -> Result<Rc<Obj>> {
+        let mut changed = false;
+        let mut props = Vec::with_capacity(obj.props.len());
+        for p in &obj.props {
+            let value = match &p.value {
+                Value::Object(o) => {
+                    let r = self.resolve(o)?;
+                    changed |= !Rc::ptr_eq(&r, o);
+                    Value::Object(r)
+                }
+                v => v.clone(),
+            };
+            props.push(Prop { name: p.name.clone(), value, loc: p.loc.clone(), used: Cell::new(p.used.get()) });
+        }
+        let mut children = Vec::with_capacity(obj.children.len());
+        for c in &obj.children {
+            let r = self.resolve(c)?;
+            changed |= !Rc::ptr_eq(&r, c);
+            children.push(r);
+        }
+        if !changed {
+            return Ok(obj.clone());
+        }
+        Ok(Rc::new(Obj {
+            tag: obj.tag.clone(),
+            ty: obj.ty.clone(),
+            id: obj.id.clone(),
+            loc: obj.loc.clone(),
+            props,
+            children,
+            built: Cell::new(obj.built.get()),
+        }))
+    }
+}
+
 fn parse_list(s: &str) -> Option<Vec<f64>> {
     let v: Option<Vec<f64>> = s.split([',', ' ', '\t', '\n', '\r']).filter(|t| !t.is_empty()).map(parse_f64).collect();
     v.filter(|v| !v.is_empty())

@@ -338,6 +338,42 @@ fn forward_references() {
     assert!(cycle.contains("circular reference") && cycle.contains("test.xml:7:"), "{cycle}");
     let missing = load(&scene(r#"<shape type="sphere"><ref id="nowhere"/></shape>"#)).unwrap_err().to_string();
     assert!(missing.contains("unknown id 'nowhere'"), "{missing}");
+    let itself = load(&scene(r#"<bsdf type="twosided" id="a"><ref id="a"/></bsdf>"#)).unwrap_err().to_string();
+    assert!(itself.contains("circular reference to 'a'"), "{itself}");
+    // An alias of an id declared later.
+    let f = load(&scene(
+        r#"<alias id="later" as="other"/><shape type="sphere"><ref id="other"/></shape>
+           <bsdf type="diffuse" id="later"><rgb name="reflectance" value="0.25"/></bsdf>"#,
+    ))
+    .unwrap();
+    assert_eq!(f.scene.bsdfs().len(), 1);
+}
+
+/// References across included files bind as Mitsuba binds them, once the whole scene is read:
+/// the main file may name an id that a later include declares, and an included file an id
+/// that the main file declares after the include.
+#[test]
+fn forward_references_across_includes() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-fwd-include-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("mats.xml"),
+        r#"<scene version="3.0.0">
+    <bsdf type="diffuse" id="green"><rgb name="reflectance" value="0.2, 0.8, 0.2"/></bsdf>
+    <shape type="sphere"><point name="center" x="2" y="0" z="0"/><ref id="red"/></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let main = scene(
+        r#"<shape type="sphere"><ref id="green"/></shape>
+    <include filename="mats.xml"/>
+    <bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.2, 0.2"/></bsdf>"#,
+    );
+    let f = load_scene_text(&dir.join("main.xml"), &main, &[]).unwrap();
+    let reflectances: Vec<Rgb> = f.scene.bsdfs().iter().map(|b| b.diffuse_reflectance(&Default::default(), Vec3::Z)).collect();
+    assert_eq!(reflectances.len(), 2, "{reflectances:?}");
+    assert!(reflectances.contains(&Rgb::new(0.2, 0.8, 0.2)) && reflectances.contains(&Rgb::new(0.8, 0.2, 0.2)));
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Each user mistake gives file:line:col, what was expected, and the source line.
