@@ -1,5 +1,6 @@
-//! Images in memory: linear RGB pixels, rows from the top. Textures and environment maps sample
-//! them; decoding files into them is the job of `load::image`, which sits above the
+//! Images in memory: linear RGB pixels, rows from the top, and grid volumes (values on a 3D
+//! lattice: SDF grids, grid media). Textures, environment maps and shapes sample them; decoding
+//! files into them is the job of `load::image` and `load::volume`, which sit above the
 //! renderer's layers.
 
 use crate::math::Rgb;
@@ -26,6 +27,19 @@ impl Image {
         self.pixels[y * self.width as usize + x]
     }
 }
+/// A grid of values on a 3D lattice (Mitsuba's `.vol` grid volumes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridVolume {
+    /// Resolution along x, y and z (each ≥ 1).
+    pub res: [usize; 3],
+    /// Values per grid point.
+    pub channels: usize,
+    /// The bounding box the file states (min, max); Mitsuba's shapes ignore it.
+    pub bbox: [[f32; 3]; 2],
+    /// `res[0]·res[1]·res[2]·channels` values: index `((z·res[1] + y)·res[0] + x)·channels + c`.
+    pub data: Vec<f32>,
+}
+
 /// Where plugins get their images: the loader resolves the file that the string parameter
 /// `name` of `o` names (relative to the scene file), decodes it (linear RGB; sRGB-decoded unless
 /// `raw`) and shares it between the plugins that name the same file.

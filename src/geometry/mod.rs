@@ -1,4 +1,4 @@
-//! Geometry: shapes (triangle meshes, spheres, disks; rectangles and cubes as meshes), their
+//! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids; rectangles and cubes as meshes), their
 //! ray intersection with floating-point error bounds, and area / solid-angle sampling.
 //!
 //! All geometry is stored in world space (transforms are applied when a shape is built), so
@@ -9,6 +9,7 @@ pub mod disk;
 pub mod interaction;
 pub mod mesh;
 mod registry;
+pub mod sdfgrid;
 pub mod shape;
 pub mod sphere;
 pub mod triangle;
@@ -19,5 +20,6 @@ pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
+pub use sdfgrid::SdfGrid;
 pub use shape::{Geometry, ShapeSample};
 pub use sphere::Sphere;

@@ -4,7 +4,8 @@
 //! ([`MeshSource`]). What a shape is made of (BSDF, emitter, media) and instancing are the
 //! loader's business.
 
-use super::{Cylinder, Disk, Geometry, Sphere, TriangleMesh};
+use super::{Cylinder, Disk, Geometry, SdfGrid, Sphere, TriangleMesh};
+use crate::image::GridVolume;
 use crate::math::{Transform, Vec3};
 use crate::props::{Obj, Result};
 
@@ -18,12 +19,15 @@ pub struct MeshFile {
     pub face_normals: bool,
 }
 
-/// Where mesh plugins get their files: the loader resolves the file that the string parameter
-/// `name` of `o` names and reads it in the format of `o`'s plugin (`obj`, `ply`, or
-/// `serialized` with its `shape_index`).
+/// Where shape plugins get their files: the loader resolves the file that the string parameter
+/// `name` of `o` names and reads it: a mesh in the format of `o`'s plugin (`obj`, `ply`, or
+/// `serialized` with its `shape_index`), or a grid volume (`.vol`).
 pub trait MeshSource {
     /// The mesh named by parameter `name` of `o`; errors are located at the parameter.
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile>;
+
+    /// The grid volume named by parameter `name` of `o`; errors are located at the parameter.
+    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<GridVolume>;
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
@@ -39,6 +43,7 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("disk", disk),
     ("sphere", sphere),
     ("cylinder", cylinder),
+    ("sdfgrid", sdfgrid),
 ];
 
 /// The constructor of the shape plugin `name`.
@@ -117,6 +122,20 @@ fn cylinder(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -
             "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
         )
     })?))
+}
+
+/// Mitsuba's `sdfgrid`: `filename` (a one-channel `.vol` grid volume over the unit cube of
+/// object space, required: Mitsuba's XML cannot give the `grid` tensor), `normals` (`smooth`,
+/// the default, or `analytic`), `to_world` (any affine map; Mitsuba warns on rotations, which
+/// its bounding boxes mishandle, while these are exact). No `flip_normals`, as in Mitsuba.
+fn sdfgrid(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
+    if flip {
+        return Err(o.error_at("flip_normals", "an sdfgrid has no flip_normals (as in Mitsuba): negate the samples"));
+    }
+    let smooth = o.choice("normals", &["smooth", "analytic"])? == "smooth";
+    let grid = files.grid_volume(o, "filename")?;
+    let sdf = SdfGrid::new(&grid, *to_world, smooth).map_err(|e| o.error_at("filename", e))?;
+    Ok(Geometry::SdfGrid(Box::new(sdf)))
 }
 
 /// Centre and radius of the unit sphere under `t`, if `t` is a similarity (uniform scale).

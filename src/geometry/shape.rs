@@ -1,6 +1,6 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
-use super::{Cylinder, Disk, Sphere, TriangleMesh};
+use super::{Cylinder, Disk, SdfGrid, Sphere, TriangleMesh};
 use crate::math::{Bounds3, DirectionCone, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
@@ -15,6 +15,8 @@ pub enum Geometry {
     Disk(Disk),
     /// Analytic open cylinder.
     Cylinder(Cylinder),
+    /// Signed distance field on a grid (no area: it cannot emit).
+    SdfGrid(Box<SdfGrid>),
 }
 
 /// A point sampled on a shape as seen from a reference point.
@@ -40,6 +42,8 @@ impl Geometry {
             Geometry::Sphere(s) => s.area(),
             Geometry::Disk(d) => d.area(),
             Geometry::Cylinder(c) => c.area(),
+            // As in Mitsuba: not sampled, so no area.
+            Geometry::SdfGrid(_) => 0.0,
         }
     }
 
@@ -47,6 +51,7 @@ impl Geometry {
     pub fn primitive_count(&self) -> usize {
         match self {
             Geometry::Mesh(m) => m.len(),
+            Geometry::SdfGrid(g) => g.len(),
             _ => 1,
         }
     }
@@ -70,6 +75,7 @@ impl Geometry {
                 b
             }
             Geometry::Cylinder(c) => c.bounds(),
+            Geometry::SdfGrid(g) => g.voxel_bounds(i),
         }
     }
 
@@ -86,7 +92,7 @@ impl Geometry {
         match self {
             Geometry::Mesh(m) => m.normal_cone(),
             Geometry::Disk(d) => DirectionCone::from_direction(d.normal()),
-            Geometry::Sphere(_) | Geometry::Cylinder(_) => DirectionCone::ENTIRE_SPHERE,
+            Geometry::Sphere(_) | Geometry::Cylinder(_) | Geometry::SdfGrid(_) => DirectionCone::ENTIRE_SPHERE,
         }
     }
 
@@ -116,6 +122,7 @@ impl Geometry {
                 let (sp, pdf) = c.sample_area(u);
                 (sp, sp.n, pdf)
             }
+            Geometry::SdfGrid(_) => return None,
         };
         Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
     }
@@ -139,6 +146,7 @@ impl Geometry {
                 let (sp, uv) = c.surface(Vec3::new(cos, sin, u.y));
                 (sp, sp.n, 1.0 / c.area(), uv)
             }
+            Geometry::SdfGrid(_) => return None,
         };
         Some((ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf }, uv))
     }

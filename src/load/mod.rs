@@ -10,6 +10,7 @@ pub mod obj;
 pub mod ply;
 mod resolver;
 pub mod serialized;
+pub mod volume;
 
 pub use error::LoadError;
 pub use resolver::FileResolver;

@@ -150,6 +150,7 @@ impl SceneBuilder {
                 Geometry::Sphere(s) => Primitive::Sphere(*s),
                 Geometry::Disk(_) => Primitive::Disk,
                 Geometry::Cylinder(_) => Primitive::Cylinder,
+                Geometry::SdfGrid(_) => Primitive::SdfVoxel,
             }
         };
         bvh.remap_leaves(|first, count| {

@@ -76,6 +76,8 @@ enum Primitive {
     Sphere(Sphere),
     Disk,
     Cylinder,
+    /// A voxel of an SDF grid.
+    SdfVoxel,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -95,6 +97,7 @@ enum HitKind {
     Sphere(u32),
     Disk(Vec2, u32),
     Cylinder(Vec3, u32),
+    SdfVoxel(u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -258,7 +261,9 @@ impl Scene {
         let (prim, barycentrics) = match kind {
             HitKind::Block(h, b, lane) => (self.blocks[b as usize].id[lane], Vec2::new(h.b1, h.b2)),
             HitKind::Triangle(h, k) => (self.prims[k as usize].r, Vec2::new(h.b1, h.b2)),
-            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) => (r, Vec2::ZERO),
+            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) | HitKind::SdfVoxel(r) => {
+                (r, Vec2::ZERO)
+            }
         };
         Some(RayHit { t, prim, barycentrics })
     }
@@ -314,6 +319,13 @@ impl Scene {
                 Geometry::Cylinder(c) => c.intersect(ray, t_max).map(|(t, q)| (t, HitKind::Cylinder(q, lp.r))),
                 _ => None,
             },
+            Primitive::SdfVoxel => match geometry() {
+                Geometry::SdfGrid(g) => {
+                    let voxel = self.refs[lp.r as usize].index as usize;
+                    g.intersect(voxel, ray, t_max).map(|t| (t, HitKind::SdfVoxel(lp.r)))
+                }
+                _ => None,
+            },
         }
     }
 
@@ -327,7 +339,7 @@ impl Scene {
                 LeafPrim { prim: Primitive::Triangle(p), r } => (h, p, r),
                 _ => unreachable!("HitKind::Triangle names a triangle"),
             },
-            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) => {
+            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) | HitKind::SdfVoxel(r) => {
                 return self.analytic_interaction(ray, t, kind, self.refs[r as usize]);
             }
         };
@@ -351,6 +363,12 @@ impl Scene {
     }
 
     fn analytic_interaction(&self, ray: &Ray, t: f32, kind: HitKind, r: PrimRef) -> SurfaceInteraction {
+        if let (HitKind::SdfVoxel(_), Geometry::SdfGrid(g)) = (kind, &self.geometries[r.shape as usize]) {
+            // No parameterization: uv = 0 and a shading frame around the normal alone.
+            let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
+            let (uv, dpdu, bary) = (Vec2::ZERO, Vec3::ZERO, Vec2::ZERO);
+            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, shape: r.shape, prim: r.index, bary };
+        }
         let ((sp, uv), dpdu) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
                 let surface = s.surface(ray, t);

@@ -8,6 +8,7 @@
 - knot.obj and knot.serialized: a low-polygon torus knot without normals (Mitsuba computes smooth
   vertex normals for such meshes; faceted shading would show), the serialized file (zlib,
   version 4) holding a small triangle first so that shape_index 1 picks the knot.
+- blob.vol: a signed distance field (a sphere and a torus) on a 24^3 grid, for sdfgrid.
 Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
 import math
 import struct
@@ -102,4 +103,18 @@ with open("scenes/assets/knot_colors.ply", "w") as f:
     for k, (a, b, c) in enumerate(faces):
         band = (k // (2 * ring)) % 2
         f.write("3 %d %d %d %s\n" % (a, b, c, "0.8 0.7 0.2" if band else "0.2 0.3 0.8"))
-print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized and knot_colors.ply")
+
+# An SDF for Mitsuba's sdfgrid: a sphere joined to a torus lying around it, in the unit cube,
+# on a 24^3 grid, as a Mitsuba grid volume (.vol: 'VOL' 3, float32 encoding, resolution, 1
+# channel, bbox, data with x fastest). Cubic, because Mitsuba 3.9.1 renders nothing of a grid
+# whose resolutions differ (a bug of its voxel indexing, fixed later); neumann's unit tests
+# cover such grids.
+nx, ny, nz = 24, 24, 24
+zs, ys, xs = np.meshgrid(np.linspace(0, 1, nz), np.linspace(0, 1, ny), np.linspace(0, 1, nx), indexing="ij")
+sphere = np.sqrt((xs - 0.3) ** 2 + (ys - 0.5) ** 2 + (zs - 0.45) ** 2) - 0.26
+ring = np.sqrt((np.sqrt((xs - 0.62) ** 2 + (ys - 0.5) ** 2) - 0.26) ** 2 + (zs - 0.35) ** 2) - 0.1
+sdf = np.minimum(sphere, ring).astype("<f4")
+with open("scenes/assets/blob.vol", "wb") as f:
+    f.write(b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, nx, ny, nz, 1) + struct.pack("<6f", 0, 0, 0, 1, 1, 1))
+    f.write(sdf.tobytes())
+print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply and blob.vol")

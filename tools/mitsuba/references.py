@@ -51,6 +51,8 @@ SCENES = {
     # eta, k). A texture replaced by a constant raises relMSE by 1.1-1.4x here (or shifts the
     # mean): the bound is tighter than the default.
     "textured_glass": (8192, 64, {}, 1.25),
+    # Signed distance fields on a grid (sdfgrid), smooth and analytic shading normals.
+    "sdfgrid": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 

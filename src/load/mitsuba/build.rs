@@ -245,6 +245,9 @@ impl Builder {
         }
         let emission = match emitters.first() {
             None => None,
+            Some(e) if e.ty == "area" && matches!(geometry, Geometry::SdfGrid(_)) => {
+                return Err(e.error("an sdfgrid cannot be an area emitter (as in Mitsuba: it has no area to sample)"));
+            }
             Some(e) if e.ty == "area" => {
                 e.built.set(true);
                 e.check_children(&[])?;
@@ -427,6 +430,11 @@ impl ImageSource for Builder {
 }
 
 impl MeshSource for Builder {
+    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<crate::image::GridVolume> {
+        let path = self.resolver.resolve(&o.string(name)?);
+        crate::load::volume::load_grid_volume(&path).map_err(|e| o.error_at(name, e.to_string()))
+    }
+
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile> {
         let path = self.resolver.resolve(&o.string(name)?);
         let located = |e: crate::load::LoadError| o.error_at(name, e.to_string());

@@ -888,3 +888,51 @@ fn spectrum_plugins() {
         assert!(e.starts_with("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
     }
 }
+
+/// Mitsuba's `sdfgrid` from a `.vol` file: loads and is hit; its errors are located (a missing
+/// or malformed file, a grid without surface, an area emitter on it, `flip_normals`, an unknown
+/// `normals` mode).
+#[test]
+fn sdfgrid_shapes() {
+    use crate::image::GridVolume;
+    let dir = std::env::temp_dir().join(format!("neumann-sdfgrid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let n = 8;
+    let mut data = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = Vec3::new(x as f32, y as f32, z as f32) / (n - 1) as f32;
+                data.push((p - Vec3::splat(0.5)).length() - 0.3);
+            }
+        }
+    }
+    let grid = GridVolume { res: [n; 3], channels: 1, bbox: [[0.0; 3], [1.0; 3]], data };
+    std::fs::write(dir.join("ball.vol"), crate::load::volume::grid_volume_bytes(&grid)).unwrap();
+    let empty = GridVolume { data: vec![1.0; n * n * n], ..grid.clone() };
+    std::fs::write(dir.join("empty.vol"), crate::load::volume::grid_volume_bytes(&empty)).unwrap();
+    std::fs::write(dir.join("bad.vol"), b"VOL\x03 not a grid").unwrap();
+    let shape = |file: &str, extra: &str| {
+        scene(&format!(
+            r#"<shape type="sdfgrid"><string name="filename" value="{file}"/>{extra}
+            <transform name="to_world"><translate x="-0.5" y="-0.5" z="-0.5"/></transform></shape>"#
+        ))
+    };
+    let f = load_scene_text(&dir.join("s.xml"), &shape("ball.vol", ""), &[]).unwrap();
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).expect("the ball is hit");
+    assert!((si.p.z - 0.3).abs() < 0.03 && si.ns.z > 0.99, "{} {}", si.p, si.ns);
+    let f = load_scene_text(&dir.join("s.xml"), &shape("ball.vol", r#"<string name="normals" value="analytic"/>"#), &[]);
+    assert!(f.is_ok());
+    for (file, extra, expectation) in [
+        ("nowhere.vol", "", "nowhere.vol"),
+        ("bad.vol", "", "header"),
+        ("empty.vol", "", "holds no surface"),
+        ("ball.vol", r#"<emitter type="area"/>"#, "cannot be an area emitter"),
+        ("ball.vol", r#"<boolean name="flip_normals" value="true"/>"#, "no flip_normals"),
+        ("ball.vol", r#"<string name="normals" value="falcao"/>"#, "normals"),
+    ] {
+        let e = load_scene_text(&dir.join("s.xml"), &shape(file, extra), &[]).unwrap_err().to_string();
+        assert!(e.contains("s.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
