@@ -264,3 +264,27 @@ fn moment_layers_go_to_the_exr() {
     assert!(r.status.success());
     assert!(String::from_utf8_lossy(&r.stdout).contains("are not written: only .exr holds them"));
 }
+
+/// Mitsuba's integrator `timeout` stops the render there (in whole passes) when the sample
+/// count would take longer; `--time` overrides it.
+#[test]
+fn the_scene_timeout_limits_the_render() {
+    let scene = temp("timeout.xml");
+    std::fs::write(
+        &scene,
+        r#"<scene version="3.0.0">
+    <integrator type="path"><float name="timeout" value="0.3"/></integrator>
+    <sensor type="perspective"><sampler type="independent"><integer name="sample_count" value="1000000"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film></sensor>
+    <emitter type="constant"/><shape type="sphere"/>
+</scene>"#,
+    )
+    .unwrap();
+    let out = temp("timeout.exr");
+    let start = std::time::Instant::now();
+    let r = neumann().args(["render", "--quiet", "-o"]).arg(&out).arg(&scene).output().unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(start.elapsed() < Duration::from_secs(20), "the timeout stops the render");
+    assert!(stdout.contains("wrote") && !stdout.contains("(1000000 spp"), "{stdout}");
+}

@@ -5,7 +5,7 @@
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
 use super::{EnvMap, Light, Projector};
-use crate::texture::TextureSource;
+use crate::texture::{Texture, TextureSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::props::{Obj, Result};
@@ -30,7 +30,7 @@ pub fn area_radiance_from_props(o: &Obj, textures: &mut dyn TextureSource) -> Re
 }
 
 /// Mitsuba's `point`: `position` or `to_world` (not both), `intensity` (W sr⁻¹, 1).
-fn point(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
+fn point(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     let position = match o.point_opt("position")? {
         Some(p) => {
             if o.has("to_world") {
@@ -40,7 +40,7 @@ fn point(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
         }
         None => o.transform("to_world")?.apply_point(Vec3::ZERO),
     };
-    Ok(Light::Point { position, intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)? })
+    Ok(Light::Point { position, intensity: uniform_emission(o, "intensity", textures)? })
 }
 
 /// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
@@ -56,7 +56,7 @@ fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     Ok(Light::Spot {
         position: to_world.apply_point(Vec3::ZERO),
         frame,
-        intensity: o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)?,
+        intensity: uniform_emission(o, "intensity", textures)?,
         cutoff: cutoff.to_radians(),
         beam: beam.to_radians(),
         texture: without_mesh_attributes(o, "texture", textures.texture_opt(o, "texture", SpectrumKind::Reflectance)?)?
@@ -84,7 +84,7 @@ fn projector(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 }
 
 /// Mitsuba's `directional`: `direction` or `to_world` (local +z), `irradiance` (W m⁻², 1).
-fn directional(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
+fn directional(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     let d = match o.point_opt("direction")? {
         Some(d) => d,
         None => o.transform("to_world")?.apply_vector(Vec3::Z),
@@ -94,16 +94,28 @@ fn directional(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
     }
     Ok(Light::Directional {
         direction: d.normalize(),
-        irradiance: o.rgb("irradiance", Rgb::ONE, SpectrumKind::Illuminant)?,
+        irradiance: uniform_emission(o, "irradiance", textures)?,
         center: Vec3::ZERO,
         radius: 0.0,
     })
 }
 
+/// An emitter parameter that Mitsuba reads as a texture but requires to be the same
+/// everywhere: a colour, or a texture that does not vary (`srgb`, `rawconstant`).
+fn uniform_emission(o: &Obj, name: &str, textures: &mut dyn TextureSource) -> Result<Rgb> {
+    match textures.texture_of(o, name, Rgb::ONE, SpectrumKind::Illuminant)? {
+        Texture::Constant(c) => Ok(c),
+        _ => Err(o.error_at(
+            name,
+            format!("the {} emitter's '{name}' must be the same everywhere (as Mitsuba requires), not a varying texture", o.ty),
+        )),
+    }
+}
+
 /// Mitsuba's `constant`: `radiance` (1) from every direction.
-fn constant(o: &Obj, _: &mut dyn TextureSource) -> Result<Light> {
+fn constant(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     Ok(Light::Constant {
-        radiance: o.rgb("radiance", Rgb::ONE, SpectrumKind::Illuminant)?,
+        radiance: uniform_emission(o, "radiance", textures)?,
         center: Vec3::ZERO,
         radius: 0.0,
     })

@@ -42,6 +42,9 @@ pub struct SceneFile {
     pub window: Option<[u32; 4]>,
     /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
     pub alpha: bool,
+    /// The longest the render may take (Mitsuba's integrator `timeout`): it stops there or at
+    /// `spp`, whichever comes first, with whole passes.
+    pub time_limit: Option<std::time::Duration>,
     /// Warnings: things that cannot change the image (`-D` parameters the scene never uses).
     pub warnings: Vec<String>,
 }

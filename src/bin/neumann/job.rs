@@ -75,6 +75,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         filter: Filter::Box,
         window: None,
         alpha: false,
+        time_limit: None,
         warnings: Vec::new(),
     };
     Ok(Job { name: name.to_string(), file })

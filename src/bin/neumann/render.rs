@@ -186,7 +186,8 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         }
     }
     let time_budget = match a.time {
-        None => None,
+        // The scene's own limit (Mitsuba's integrator timeout) keeps its sample count.
+        None => job.file.time_limit,
         Some(t) => match Duration::try_from_secs_f64(t) {
             Ok(d) if t > 0.0 => Some(d),
             _ => return Err(usage(format!("--time must be a positive number of seconds, got {t:?}"))),
@@ -215,7 +216,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         std::fs::create_dir_all(dir).map_err(|e| Failure(1, format!("cannot create '{}': {e}", dir.display())))?;
     }
     let settings = RenderSettings {
-        spp: if time_budget.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
+        spp: if a.time.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
         time_budget,
         seed: job.file.seed,
         threads: a.threads,

@@ -55,6 +55,8 @@ pub struct Builder {
     medium_index: HashMap<*const Obj, u32>,
     /// The integrator's `light_sampler` (neumann's own parameter; default the light BVH).
     light_sampler: LightSamplerKind,
+    /// The integrator's `timeout` (Mitsuba: seconds, ≤ 0 for none).
+    time_limit: Option<std::time::Duration>,
     /// Where plugins' relative file names are looked for.
     resolver: FileResolver,
 }
@@ -69,6 +71,7 @@ impl Builder {
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
             light_sampler: LightSamplerKind::default(),
+            time_limit: None,
             resolver,
         }
     }
@@ -144,6 +147,7 @@ impl Builder {
             filter,
             window,
             alpha,
+            time_limit: self.time_limit,
             warnings,
         })
     }
@@ -152,15 +156,21 @@ impl Builder {
         if !matches!(o.ty.as_str(), "moment" | "aov") {
             o.check_children(&[])?;
         }
-        self.read_loader_params(o)?;
+        self.read_loader_params(o, true)?;
         integrator_from_props(o)
     }
 
     /// What the loader itself reads of an integrator and of those nested in it (`moment`,
-    /// `aov`): the `light_sampler` of the integrators that sample lights, and Mitsuba's
-    /// rendering-loop parameters that cannot change the image (`block_size`,
+    /// `aov`): the `light_sampler` of the integrators that sample lights, the `timeout` of the
+    /// `top` one (seconds; the render stops at it or at the sample count, whichever comes
+    /// first, as Mitsuba's does; nested integrators' are read and unused, as in Mitsuba), and
+    /// Mitsuba's rendering-loop parameters that cannot change the image (`block_size`,
     /// `samples_per_pass`).
-    fn read_loader_params(&mut self, o: &Obj) -> Result<()> {
+    fn read_loader_params(&mut self, o: &Obj, top: bool) -> Result<()> {
+        let timeout = o.float_checked("timeout", -1.0, f32::is_finite, "a number of seconds (≤ 0: none)")?;
+        if top && timeout > 0.0 {
+            self.time_limit = Some(std::time::Duration::from_secs_f32(timeout));
+        }
         if matches!(o.ty.as_str(), "path" | "volpath" | "direct") {
             self.light_sampler =
                 o.choice("light_sampler", &LightSamplerKind::names())?.parse().map_err(|e: String| o.error(e))?;
@@ -168,7 +178,7 @@ impl Builder {
         o.int("block_size", 0)?;
         o.int("samples_per_pass", -1)?;
         for c in o.nested("integrator") {
-            self.read_loader_params(&c)?;
+            self.read_loader_params(&c, false)?;
         }
         Ok(())
     }

@@ -414,6 +414,11 @@ fn errors_name_the_place_and_the_expectation() {
             "axis must be non-zero",
         ),
         (r#"<medium type="homogeneous"><float name="albedo" value="-1"/></medium>"#, "test.xml:7:", "albedo"),
+        (
+            r#"<emitter type="constant"><texture type="checkerboard" name="radiance"/></emitter>"#,
+            "test.xml:7:",
+            "must be the same everywhere",
+        ),
         // Mitsuba rejects RGB reflectances outside [0, 1] (a <float> or <spectrum> passes).
         (
             r#"<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1.2, 0.5, 0.5"/></bsdf></shape>"#,
