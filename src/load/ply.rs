@@ -1,9 +1,12 @@
 //! Stanford PLY meshes, ASCII and binary (little- and big-endian): `vertex` elements with
 //! `x y z`, optional `nx ny nz` and `u v` / `s t` / `texture_u texture_v`, and `face` elements
-//! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Colours `r g b` (or
-//! `red green blue`) of vertices and faces become the mesh attributes `vertex_color` and
-//! `face_color` (raw values, as Mitsuba reads them), which `mesh_attribute` textures look up. Other elements and
-//! properties are read and skipped.
+//! with a `vertex_indices` (or `vertex_index`) list, triangulated as fans. Other properties of
+//! vertices and faces become mesh attributes as Mitsuba 3 names them, which `mesh_attribute`
+//! textures look up (raw values, integers not rescaled, as Mitsuba reads them): colours `r g b`
+//! (or `red green blue`) become `vertex_color` / `face_color`, and each run of properties
+//! `NAME_p` whose one-character suffixes follow `x y z`, `r g b`, `0 1 2` or `1 2 3` (one or
+//! three of them) becomes `vertex_NAME` / `face_NAME` (`…_color` for `r g b`). Other properties
+//! and elements are read and skipped.
 
 use super::LoadError;
 use crate::geometry::mesh::MeshAttribute;
@@ -183,19 +186,28 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
     let enc = enc.ok_or("header has no 'format' line")?;
     let mut body = Body { data, pos, enc };
     let (mut positions, mut normals, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    // Mitsuba's colour attributes: r, g, b (or red, green, blue) of vertices and faces, raw
-    // values (not rescaled from integers), one per triangle of a face's fan.
-    let (mut vertex_color, mut face_color) = (Vec::new(), Vec::new());
+    // Mitsuba's mesh attributes of vertices and of faces (one value per triangle of a face's
+    // fan): (name, the properties holding its 1 or 3 channels, values).
+    let mut attributes: Vec<(MeshAttribute, Vec<usize>)> = Vec::new();
     for el in &elements {
         let find = |names: &[&str]| el.props.iter().position(|p| names.contains(&p.name.as_str()));
         let (ix, iy, iz) = (find(&["x"]), find(&["y"]), find(&["z"]));
         let (inx, iny, inz) = (find(&["nx"]), find(&["ny"]), find(&["nz"]));
         let (iu, iv) = (find(&["u", "s", "texture_u", "texture_s"]), find(&["v", "t", "texture_v", "texture_t"]));
         let iface = find(&["vertex_indices", "vertex_index"]);
-        let color = match (find(&["r", "red"]), find(&["g", "green"]), find(&["b", "blue"])) {
-            (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+        let first_attribute = attributes.len();
+        let kind = match el.name.as_str() {
+            "vertex" => Some(false),
+            "face" if iface.is_some() => Some(true),
             _ => None,
         };
+        if let Some(per_face) = kind {
+            let uv_names: &[&str] = if iu.is_some() && iv.is_some() { &["u", "v", "s", "t", "texture_u", "texture_v", "texture_s", "texture_t"] } else { &[] };
+            for (name, channels) in attribute_groups(&el.props, uv_names) {
+                let name = format!("{}_{name}", if per_face { "face" } else { "vertex" });
+                attributes.push((MeshAttribute { name, per_face, values: Vec::new() }, channels));
+            }
+        }
         let mut vals = vec![0.0f64; el.props.len()];
         let mut list: Vec<u32> = Vec::new();
         for item in 0..el.count {
@@ -228,8 +240,8 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
                 if let (Some(a), Some(b)) = (iu, iv) {
                     uvs.push(Vec2::new(vals[a] as f32, vals[b] as f32));
                 }
-                if let Some(c) = color {
-                    vertex_color.push(Vec3::from_array(c.map(|k| vals[k] as f32)));
+                for (a, channels) in &mut attributes[first_attribute..] {
+                    a.values.push(attribute_value(&vals, channels));
                 }
             } else if el.name == "face" && iface.is_some() {
                 if list.len() < 3 {
@@ -237,21 +249,86 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
                 }
                 for k in 1..list.len() - 1 {
                     indices.push([list[0], list[k], list[k + 1]]);
-                    if let Some(c) = color {
-                        face_color.push(Vec3::from_array(c.map(|k| vals[k] as f32)));
+                    for (a, channels) in &mut attributes[first_attribute..] {
+                        a.values.push(attribute_value(&vals, channels));
                     }
                 }
             }
         }
     }
     let mut mesh = TriangleMesh::new(positions, normals, uvs, indices)?;
-    if !vertex_color.is_empty() {
-        mesh.attributes.push(MeshAttribute { name: "vertex_color".into(), per_face: false, values: vertex_color });
-    }
-    if !face_color.is_empty() {
-        mesh.attributes.push(MeshAttribute { name: "face_color".into(), per_face: true, values: face_color });
-    }
+    mesh.attributes = attributes.into_iter().map(|(a, _)| a).collect();
     Ok(mesh)
+}
+
+/// A mesh attribute's value from the item's property values: three channels, or one (grey).
+fn attribute_value(vals: &[f64], channels: &[usize]) -> Vec3 {
+    match channels {
+        [r, g, b] => Vec3::new(vals[*r] as f32, vals[*g] as f32, vals[*b] as f32),
+        [v] => Vec3::splat(vals[*v] as f32),
+        _ => unreachable!("attributes have one or three channels"),
+    }
+}
+
+/// The mesh attributes among an element's properties, as Mitsuba 3's PLY loader finds them
+/// (names without the `vertex_` / `face_` prefix): `color` from `r g b` or `red green blue`;
+/// then each run of consecutive properties `NAME_p` (the same NAME) whose one-character
+/// suffixes follow one of the sequences `x y z w`, `r g b a`, `0 1 2 3`, `1 2 3 4` from its
+/// start, and has one or three members (`NAME`, or `NAME_color` for `r g b`). Positions,
+/// normals, the texture coordinates `uv_names` (when the element has them), lists and
+/// properties that fit no run are not attributes (Mitsuba warns and skips those).
+fn attribute_groups(props: &[Property], uv_names: &[&str]) -> Vec<(String, Vec<usize>)> {
+    let index = |n: &str| props.iter().position(|p| p.name == n && p.list_count.is_none());
+    let mut groups = Vec::new();
+    let mut reserved: Vec<&str> = vec!["x", "y", "z", "nx", "ny", "nz", "r", "g", "b", "a"];
+    reserved.extend(uv_names);
+    let rgb = match (index("r"), index("g"), index("b")) {
+        (Some(r), Some(g), Some(b)) => Some([r, g, b]),
+        _ => match (index("red"), index("green"), index("blue")) {
+            (Some(r), Some(g), Some(b)) => {
+                reserved.extend(["red", "green", "blue", "alpha"]);
+                Some([r, g, b])
+            }
+            _ => None,
+        },
+    };
+    if let Some(c) = rgb {
+        groups.push(("color".to_string(), c.to_vec()));
+    }
+    const SEQUENCES: [&[u8; 4]; 4] = [b"xyzw", b"rgba", b"0123", b"1234"];
+    let mut seen: Vec<&str> = Vec::new();
+    let mut k = 0;
+    while k < props.len() {
+        let p = &props[k];
+        let split = p.name.rsplit_once('_').filter(|(_, s)| s.len() == 1);
+        let Some((prefix, suffix)) = split.filter(|_| p.list_count.is_none() && !reserved.contains(&p.name.as_str()))
+        else {
+            k += 1;
+            continue;
+        };
+        // The run of consecutive properties with this prefix.
+        let mut run = vec![(k, suffix.as_bytes()[0])];
+        let mut j = k + 1;
+        while let Some((pre, suf)) = props.get(j).filter(|q| q.list_count.is_none()).and_then(|q| q.name.rsplit_once('_')) {
+            if pre != prefix || suf.len() != 1 {
+                break;
+            }
+            run.push((j, suf.as_bytes()[0]));
+            j += 1;
+        }
+        k = j;
+        if seen.contains(&prefix) {
+            continue;
+        }
+        seen.push(prefix);
+        let Some(seq) = SEQUENCES.iter().position(|s| s[0] == run[0].1) else { continue };
+        let follows = run.len() <= 4 && run.iter().enumerate().all(|(level, &(_, c))| SEQUENCES[seq][level] == c);
+        if follows && (run.len() == 1 || run.len() == 3) {
+            let name = if seq == 1 { format!("{prefix}_color") } else { prefix.to_string() };
+            groups.push((name, run.iter().map(|&(i, _)| i).collect()));
+        }
+    }
+    groups
 }
 
 #[cfg(test)]
@@ -286,6 +363,32 @@ mod tests {
         assert!((mid - Vec3::new(0.0, 127.5, 127.5)).length() < 1e-4, "{mid}");
         assert_eq!(point(1, 0.3, 0.3).attribute("face_color"), Some(Vec3::new(0.25, 0.5, 0.75)));
         assert_eq!(point(1, 0.3, 0.3).attribute("vertex_weight"), None);
+    }
+
+    /// Other properties group into attributes as Mitsuba 3.9.1 groups them (its attribute list
+    /// for this very file: face_area 1, vertex_color 3, face_k 3, vertex_tint_color 3,
+    /// vertex_weight 1, vertex_dir 3; `lone`, without a suffix, is skipped).
+    #[test]
+    fn named_properties_become_mesh_attributes() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+            property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float weight_x\n\
+            property float dir_x\nproperty float dir_y\nproperty float dir_z\nproperty float tint_r\n\
+            property float tint_g\nproperty float tint_b\nproperty float lone\nproperty float bad_x\nproperty float bad_z\n\
+            element face 1\nproperty list uchar int vertex_indices\nproperty float area_0\nproperty float k_1\n\
+            property float k_2\nproperty float k_3\nend_header\n\
+            0 0 0 255 0 128 0.5 1 2 3 0.1 0.2 0.3 7 0 0\n1 0 0 0 255 0 0.25 4 5 6 0.4 0.5 0.6 8 0 0\n\
+            0 1 0 0 0 255 0.125 7 8 9 0.7 0.8 0.9 9 0 0\n3 0 1 2 42 1 2 3\n";
+        let m = parse_ply(text.as_bytes()).unwrap();
+        let mut names: Vec<&str> = m.attributes.iter().map(|a| a.name.as_str()).collect();
+        names.sort();
+        assert_eq!(names, ["face_area", "face_k", "vertex_color", "vertex_dir", "vertex_tint_color", "vertex_weight"]);
+        let get = |n: &str| &m.attributes.iter().find(|a| a.name == n).unwrap().values;
+        assert_eq!(get("vertex_color")[0], Vec3::new(255.0, 0.0, 128.0));
+        assert_eq!(get("vertex_weight")[1], Vec3::splat(0.25));
+        assert_eq!(get("vertex_dir")[2], Vec3::new(7.0, 8.0, 9.0));
+        assert_eq!(get("vertex_tint_color")[1], Vec3::new(0.4, 0.5, 0.6));
+        assert_eq!(get("face_area")[0], Vec3::splat(42.0));
+        assert_eq!(get("face_k")[0], Vec3::new(1.0, 2.0, 3.0));
     }
 
     #[test]

@@ -293,7 +293,7 @@ impl Builder {
             if !has {
                 return Err(o.error(format!(
                     "the shape's BSDF reads the mesh attribute '{name}', which this {} does not have \
-                     (PLY vertex or face colours give vertex_color and face_color)",
+                     (a PLY file's vertex and face properties give them: r g b → vertex_color / face_color, NAME_x NAME_y NAME_z → vertex_NAME, …)",
                     o.ty
                 )));
             }
