@@ -261,9 +261,10 @@ impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
     /// `fov` + `fov_axis` (`x` default, `y`, `diagonal`, `smaller`, `larger`) or `focal_length`
     /// (default `50mm`: the diagonal field of view of a 36 × 24 mm frame), `near_clip` (0.01),
-    /// `far_clip` (10⁴); thin lens: `aperture_radius`, `focus_distance` (both required).
+    /// `far_clip` (10⁴), `focus_distance` (default `far_clip`: every projective camera of
+    /// Mitsuba reads it; only the thin lens focuses); thin lens: `aperture_radius` (required).
     /// `orthographic`: `to_world` (its scale sets the extent: camera-space x ∈ [-1, 1] spans the
-    /// film's width), `near_clip`, `far_clip`.
+    /// film's width), `near_clip`, `far_clip`, `focus_distance`.
     pub fn from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
         if !CAMERA_PLUGINS.contains(&o.ty.as_str()) {
             return Err(o.unknown_plugin(CAMERA_PLUGINS));
@@ -274,21 +275,19 @@ impl Camera {
         if !(open.is_finite() && close.is_finite() && close >= open) {
             return Err(o.error_at("shutter_close", format!("need shutter_open ≤ shutter_close, got {open} and {close}")));
         }
+        let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
+        let focus = o.float_checked("focus_distance", far, |d| d > 0.0 && d.is_finite(), "positive")?;
         if o.ty == "orthographic" {
             let camera = Camera::orthographic(to_world, width, height).map_err(|e| o.error(e.to_string()))?;
-            let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
             return camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()));
         }
         let (fov, axis) = crate::props::fov::fov_from_props(o)?;
         let mut camera =
             Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e.to_string()))?;
-        let near = o.float("near_clip", 0.01)?;
-        let far = o.float("far_clip", 10000.0)?;
         camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()))?;
         if o.ty == "thinlens" {
             let r = o.float_opt("aperture_radius")?.ok_or_else(|| o.error("'aperture_radius' is required"))?;
-            let d = o.float_opt("focus_distance")?.ok_or_else(|| o.error("'focus_distance' is required"))?;
-            camera = camera.with_thin_lens(r, d).map_err(|e| o.error_at("aperture_radius", e.to_string()))?;
+            camera = camera.with_thin_lens(r, focus).map_err(|e| o.error_at("aperture_radius", e.to_string()))?;
         }
         Ok(camera)
     }

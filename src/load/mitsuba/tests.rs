@@ -941,3 +941,27 @@ fn sdfgrid_shapes() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Every projective camera reads `focus_distance` as Mitsuba's do (default `far_clip`): the
+/// perspective and orthographic cameras accept it (it cannot change their image), the thin lens
+/// needs only `aperture_radius`; a non-positive distance is a located error.
+#[test]
+fn cameras_read_focus_distance() {
+    let sensor = |ty: &str, params: &str| {
+        format!(
+            r#"<scene version="3.0.0"><sensor type="{ty}">{params}
+            <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor></scene>"#
+        )
+    };
+    for (ty, params) in [
+        ("perspective", r#"<float name="focus_distance" value="6"/>"#),
+        ("orthographic", r#"<float name="focus_distance" value="6"/>"#),
+        ("thinlens", r#"<float name="aperture_radius" value="0.1"/>"#),
+    ] {
+        load(&sensor(ty, params)).unwrap_or_else(|e| panic!("{ty}: {e}"));
+    }
+    let e = load(&sensor("perspective", r#"<float name="focus_distance" value="0"/>"#)).unwrap_err().to_string();
+    assert!(e.contains("test.xml:1:") && e.contains("focus_distance"), "{e}");
+    let e = load(&sensor("thinlens", "")).unwrap_err().to_string();
+    assert!(e.contains("'aperture_radius' is required"), "{e}");
+}
