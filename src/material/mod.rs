@@ -13,6 +13,7 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
+mod normalmap;
 mod plastic;
 mod registry;
 mod roughdielectric;
@@ -22,6 +23,7 @@ pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
+pub use normalmap::NormalMap;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
@@ -103,6 +105,8 @@ pub enum Bsdf {
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided(Box<[Bsdf; 2]>),
+    /// Mitsuba's `normalmap`: a nested BSDF under a tangent-space normal map.
+    NormalMap(NormalMap),
 }
 
 impl Bsdf {
@@ -116,6 +120,7 @@ impl Bsdf {
             | Bsdf::Mask { .. }
             | Bsdf::Null => true,
             Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
+            Bsdf::NormalMap(n) => n.bsdf.transmits(),
             _ => false,
         }
     }
@@ -143,6 +148,7 @@ impl Bsdf {
                 bsdfs[0].eval(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval(ctx, wo, wi) * w
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.eval(ctx, wo, wi) * blend_weight(opacity, ctx),
+            Bsdf::NormalMap(n) => n.eval(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].eval(ctx, wo, wi)
@@ -168,6 +174,7 @@ impl Bsdf {
                 bsdfs[0].pdf(ctx, wo, wi) * (1.0 - w) + bsdfs[1].pdf(ctx, wo, wi) * w
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.pdf(ctx, wo, wi) * blend_weight(opacity, ctx),
+            Bsdf::NormalMap(n) => n.pdf(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].pdf(ctx, wo, wi)
@@ -213,6 +220,7 @@ impl Bsdf {
                     Some(BsdfSample { wi: -wo, pdf: 1.0 - a, weight: Rgb::ONE, delta: true, eta: 1.0 })
                 }
             }
+            Bsdf::NormalMap(n) => n.sample(ctx, wo, u1, u),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].sample(ctx, wo, u1, u)
@@ -235,6 +243,9 @@ impl Bsdf {
             Bsdf::Dielectric(b) => b.eta,
             Bsdf::RoughDielectric(b) => b.eta,
             Bsdf::Blend { bsdfs, .. } => return bsdfs[0].eta_crossed(wo, wi) * bsdfs[1].eta_crossed(wo, wi),
+            // The sides of the perturbed frame decide; without the context, those of the
+            // original one (they agree for every direction the normal map lets through).
+            Bsdf::NormalMap(n) => return n.bsdf.eta_crossed(wo, wi),
             _ => return 1.0,
         };
         if wo.z > 0.0 {
@@ -264,6 +275,7 @@ impl Bsdf {
                     b[1].diffuse_reflectance(ctx, flip(wo))
                 }
             }
+            Bsdf::NormalMap(n) => n.bsdf.diffuse_reflectance(ctx, wo),
             _ => self.eval(ctx, wo, Vec3::new(0.0, 0.0, 1.0)) * std::f32::consts::PI,
         }
     }
@@ -314,6 +326,11 @@ impl Bsdf {
                 v.extend(b[1].textures());
                 v
             }
+            Bsdf::NormalMap(n) => {
+                let mut v = vec![&n.map];
+                v.extend(n.bsdf.textures());
+                v
+            }
             Bsdf::Null => Vec::new(),
         }
     }
@@ -339,6 +356,7 @@ impl Bsdf {
         match self {
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
+            Bsdf::NormalMap(n) => n.bsdf.is_delta(),
             leaf => leaf.is_delta(),
         }
     }

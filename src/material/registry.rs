@@ -35,6 +35,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("blendbsdf", blend),
     ("mask", mask),
     ("null", null),
+    ("normalmap", super::NormalMap::from_props),
 ];
 
 /// The constructor of the BSDF plugin `name`.

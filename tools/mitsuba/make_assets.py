@@ -8,6 +8,7 @@
 - knot.obj and knot.serialized: a low-polygon torus knot without normals (Mitsuba computes smooth
   vertex normals for such meshes; faceted shading would show), the serialized file (zlib,
   version 4) holding a small triangle first so that shape_index 1 picks the knot.
+- bumps_normal.png: a tangent-space normal map of round bumps (raw 8-bit), for normalmap.
 - blob.vol: a signed distance field (a sphere and a torus) on a 24^3 grid, for sdfgrid.
 Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
 import math
@@ -117,4 +118,26 @@ sdf = np.minimum(sphere, ring).astype("<f4")
 with open("scenes/assets/blob.vol", "wb") as f:
     f.write(b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, nx, ny, nz, 1) + struct.pack("<6f", 0, 0, 0, 1, 1, 1))
     f.write(sdf.tobytes())
-print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply and blob.vol")
+
+# A tangent-space normal map (64x64, 8-bit, stored raw: c = (n + 1) / 2): a 4x4 grid of round
+# bumps whose normals tilt up to about 50 degrees, and a flat groove between them, so that a
+# map read with the wrong axis order, sign or sRGB decoding shows.
+n = 64
+nm = np.zeros((n, n, 3), dtype=np.float32)
+for y in range(n):
+    for x in range(n):
+        # Texel centres in [0, 1); rows from the top are v = 1 - y/n (Mitsuba's bitmap).
+        u, v = (x + 0.5) / n, 1.0 - (y + 0.5) / n
+        cu, cv = (u * 4) % 1 - 0.5, (v * 4) % 1 - 0.5
+        r = math.hypot(cu, cv)
+        if r < 0.4:
+            # A spherical cap: the height falls off from the centre, so the normal leans out.
+            k = 1.2 * r / 0.4
+            nrm = np.array([cu / max(r, 1e-6) * k, cv / max(r, 1e-6) * k, 1.0])
+        else:
+            nrm = np.array([0.0, 0.0, 1.0])
+        nrm /= np.linalg.norm(nrm)
+        nm[y, x] = (nrm + 1) / 2
+img = mi.Bitmap(nm).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=False)
+img.write("scenes/assets/bumps_normal.png")
+print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply, blob.vol and bumps_normal.png")

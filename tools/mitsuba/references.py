@@ -53,6 +53,8 @@ SCENES = {
     "textured_glass": (8192, 64, {}, 1.25),
     # Signed distance fields on a grid (sdfgrid), smooth and analytic shading normals.
     "sdfgrid": (8192, 64, {}, 1.5),
+    # Tangent-space normal maps (normalmap) over rough plastic, diffuse and anisotropic metal.
+    "normalmap": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 
