@@ -118,10 +118,12 @@ impl Cylinder {
         (SurfacePoint { p, n, p_error }, Vec2::new(phi / (2.0 * PI), q.z))
     }
 
-    /// `∂p/∂u` at the local point `local` (u = φ / 2π: around the axis, Mitsuba's).
+    /// `(∂p/∂u, ∂p/∂v)` at the local point `local` for `uv = (φ / 2π, z)`, as Mitsuba gives
+    /// them: `2π (−y, x, 0)` around the axis and the axis itself, turned to world space.
     #[inline]
-    pub fn dpdu(&self, local: Vec3) -> Vec3 {
-        self.to_world.apply_vector(Vec3::new(-local.y, local.x, 0.0))
+    pub fn dpduv(&self, local: Vec3) -> (Vec3, Vec3) {
+        let dpdu = self.to_world.apply_vector(Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI));
+        (dpdu, self.to_world.apply_vector(Vec3::Z))
     }
 
     /// Uniform point on the surface; pdf `1 / area` per unit area.

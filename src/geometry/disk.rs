@@ -75,13 +75,15 @@ impl Disk {
         (SurfacePoint { p, n: self.n, p_error }, Vec2::new(q.length(), phi / (2.0 * PI)))
     }
 
-    /// `∂p/∂u` at the local point `q` (u = r: the radial direction, Mitsuba's; local +x at the
-    /// centre).
+    /// `(∂p/∂u, ∂p/∂v)` at the local point `q` for `uv = (r, φ / 2π)`, as Mitsuba gives them:
+    /// the radial direction (local +x at the centre) and `2π (−y, x, 0)`, turned to world space.
     #[inline]
-    pub fn dpdu(&self, q: Vec2) -> Vec3 {
+    pub fn dpduv(&self, q: Vec2) -> (Vec3, Vec3) {
         let r = q.length();
         let radial = if r > 0.0 { q / r } else { Vec2::X };
-        self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0))
+        let dpdu = self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0));
+        let dpdv = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI));
+        (dpdu, dpdv)
     }
 
     /// Uniform point on the disk (concentric map); pdf `1 / area` per unit area.

@@ -24,6 +24,9 @@ pub struct SurfaceInteraction {
     /// the shading frame's first tangent is this made perpendicular to `ns`, as in Mitsuba, which
     /// orients anisotropic BSDFs.
     pub dpdu: Vec3,
+    /// `∂p/∂v` (world space, not normalized; zero where the parameterization is degenerate):
+    /// with `dpdu`, what bump maps perturb.
+    pub dpdv: Vec3,
     /// Index of the shape in the scene.
     pub shape: u32,
     /// Index of the primitive (triangle) within the shape.

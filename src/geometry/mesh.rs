@@ -331,27 +331,30 @@ impl TriangleMesh {
         }
     }
 
-    /// `∂p/∂u` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba 3.9
-    /// computes it: from the vertices' texture coordinates where they span the triangle (else
-    /// the first tangent of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
+    /// `(∂p/∂u, ∂p/∂v)` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba
+    /// 3.9 computes them: from the vertices' texture coordinates where they span the triangle
+    /// (else the tangents of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
     /// without texture coordinates the barycentric parameterization uv = (b1, b2) gives
-    /// `p1 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes change frame from
-    /// triangle to triangle there, and so they do here).
+    /// `p1 − p0` and `p2 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes
+    /// change frame from triangle to triangle there, and so they do here).
     #[inline]
-    pub fn dpdu(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> Vec3 {
+    pub fn dpduv(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> (Vec3, Vec3) {
+        let (dp0, dp1) = (p[1] - p[0], p[2] - p[0]);
         if self.uvs.is_empty() {
-            return p[1] - p[0];
+            return (dp0, dp1);
         }
         let [a, b, c] = self.indices[i].map(|v| v as usize);
         let (duv0, duv1) = (self.uvs[b] - self.uvs[a], self.uvs[c] - self.uvs[a]);
         let det = duv0.x * duv1.y - duv0.y * duv1.x;
         if det != 0.0 {
-            let d = ((p[1] - p[0]) * duv1.y - (p[2] - p[0]) * duv0.y) / det;
-            if d.is_finite() {
-                return d;
+            let dpdu = (dp0 * duv1.y - dp1 * duv0.y) / det;
+            let dpdv = (dp1 * duv0.x - dp0 * duv1.x) / det;
+            if dpdu.is_finite() && dpdv.is_finite() {
+                return (dpdu, dpdv);
             }
         }
-        crate::math::Frame::from_z(ng).s
+        let f = crate::math::Frame::from_z(ng);
+        (f.s, f.t)
     }
 
     /// Shading normal and uv at barycentrics `(b0, b1, b2)` of triangle `i`, given its face

@@ -93,12 +93,17 @@ impl Sphere {
         Vec2::new(crate::math::spherical_phi(local) / (2.0 * PI), crate::math::spherical_theta(local) / PI)
     }
 
-    /// `∂p/∂u` at the surface point `p` (direction only): Mitsuba's `(-y, x, 0)` of the object
-    /// frame, turned to world space; zero at the poles.
+    /// `(∂p/∂u, ∂p/∂v)` at the surface point `p` for `uv = (φ / 2π, θ / π)`, as Mitsuba gives
+    /// them: `2π (−y, x, 0)` and `π (z cos φ, z sin φ, −√(x² + y²))` in the object frame, turned
+    /// to world space (∂p/∂u vanishes at the poles).
     #[inline]
-    pub fn dpdu(&self, p: Vec3) -> Vec3 {
+    pub fn dpduv(&self, p: Vec3) -> (Vec3, Vec3) {
         let local = self.rotation.transpose() * (p - self.center);
-        self.rotation * Vec3::new(-local.y, local.x, 0.0)
+        let rd = local.x.hypot(local.y);
+        let (cos_phi, sin_phi) = if rd > 0.0 { (local.x / rd, local.y / rd) } else { (1.0, 0.0) };
+        let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);
+        let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rd) * PI;
+        (self.rotation * dpdu, self.rotation * dpdv)
     }
 
     /// The point in unit direction `v` from the centre, its normal and error bound.

@@ -13,7 +13,7 @@ mod dielectric;
 mod diffuse;
 pub mod fresnel;
 pub mod microfacet;
-mod normalmap;
+mod perturbed;
 mod plastic;
 mod registry;
 mod roughdielectric;
@@ -23,7 +23,7 @@ pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
-pub use normalmap::NormalMap;
+pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
@@ -38,6 +38,8 @@ pub struct BsdfContext<'a> {
     pub uv: Vec2,
     /// The mesh point, for `mesh_attribute` textures (None off meshes with attributes).
     pub mesh: Option<crate::geometry::mesh::MeshPoint<'a>>,
+    /// The surface interaction, for BSDFs that perturb the shading frame (bump maps).
+    pub si: Option<&'a crate::geometry::SurfaceInteraction>,
 }
 
 impl BsdfContext<'_> {
@@ -105,8 +107,8 @@ pub enum Bsdf {
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided(Box<[Bsdf; 2]>),
-    /// Mitsuba's `normalmap`: a nested BSDF under a tangent-space normal map.
-    NormalMap(NormalMap),
+    /// Mitsuba's `normalmap` and `bumpmap`: a nested BSDF under a perturbed shading normal.
+    Perturbed(Perturbed),
 }
 
 impl Bsdf {
@@ -120,7 +122,7 @@ impl Bsdf {
             | Bsdf::Mask { .. }
             | Bsdf::Null => true,
             Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
-            Bsdf::NormalMap(n) => n.bsdf.transmits(),
+            Bsdf::Perturbed(n) => n.bsdf.transmits(),
             _ => false,
         }
     }
@@ -148,7 +150,7 @@ impl Bsdf {
                 bsdfs[0].eval(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval(ctx, wo, wi) * w
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.eval(ctx, wo, wi) * blend_weight(opacity, ctx),
-            Bsdf::NormalMap(n) => n.eval(ctx, wo, wi),
+            Bsdf::Perturbed(n) => n.eval(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].eval(ctx, wo, wi)
@@ -174,7 +176,7 @@ impl Bsdf {
                 bsdfs[0].pdf(ctx, wo, wi) * (1.0 - w) + bsdfs[1].pdf(ctx, wo, wi) * w
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.pdf(ctx, wo, wi) * blend_weight(opacity, ctx),
-            Bsdf::NormalMap(n) => n.pdf(ctx, wo, wi),
+            Bsdf::Perturbed(n) => n.pdf(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].pdf(ctx, wo, wi)
@@ -220,7 +222,7 @@ impl Bsdf {
                     Some(BsdfSample { wi: -wo, pdf: 1.0 - a, weight: Rgb::ONE, delta: true, eta: 1.0 })
                 }
             }
-            Bsdf::NormalMap(n) => n.sample(ctx, wo, u1, u),
+            Bsdf::Perturbed(n) => n.sample(ctx, wo, u1, u),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].sample(ctx, wo, u1, u)
@@ -245,7 +247,7 @@ impl Bsdf {
             Bsdf::Blend { bsdfs, .. } => return bsdfs[0].eta_crossed(wo, wi) * bsdfs[1].eta_crossed(wo, wi),
             // The sides of the perturbed frame decide; without the context, those of the
             // original one (they agree for every direction the normal map lets through).
-            Bsdf::NormalMap(n) => return n.bsdf.eta_crossed(wo, wi),
+            Bsdf::Perturbed(n) => return n.bsdf.eta_crossed(wo, wi),
             _ => return 1.0,
         };
         if wo.z > 0.0 {
@@ -275,7 +277,7 @@ impl Bsdf {
                     b[1].diffuse_reflectance(ctx, flip(wo))
                 }
             }
-            Bsdf::NormalMap(n) => n.bsdf.diffuse_reflectance(ctx, wo),
+            Bsdf::Perturbed(n) => n.bsdf.diffuse_reflectance(ctx, wo),
             _ => self.eval(ctx, wo, Vec3::new(0.0, 0.0, 1.0)) * std::f32::consts::PI,
         }
     }
@@ -326,8 +328,10 @@ impl Bsdf {
                 v.extend(b[1].textures());
                 v
             }
-            Bsdf::NormalMap(n) => {
-                let mut v = vec![&n.map];
+            Bsdf::Perturbed(n) => {
+                let mut v = vec![match &n.perturbation {
+                    Perturbation::NormalMap(t) | Perturbation::BumpMap { height: t, .. } => t,
+                }];
                 v.extend(n.bsdf.textures());
                 v
             }
@@ -356,7 +360,7 @@ impl Bsdf {
         match self {
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
-            Bsdf::NormalMap(n) => n.bsdf.is_delta(),
+            Bsdf::Perturbed(n) => n.bsdf.is_delta(),
             leaf => leaf.is_delta(),
         }
     }

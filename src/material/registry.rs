@@ -16,6 +16,9 @@ use std::ops::RangeInclusive;
 pub trait BsdfBuilder: TextureSource {
     /// The BSDFs nested in `o`; an error unless their number is in `count`.
     fn nested_bsdfs(&mut self, o: &Obj, count: RangeInclusive<usize>) -> Result<Vec<Bsdf>>;
+
+    /// The textures nested in `o` without a name (a `bumpmap`'s height field).
+    fn nested_textures(&mut self, o: &Obj) -> Result<Vec<crate::texture::Texture>>;
 }
 
 /// A BSDF plugin's constructor.
@@ -35,7 +38,8 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("blendbsdf", blend),
     ("mask", mask),
     ("null", null),
-    ("normalmap", super::NormalMap::from_props),
+    ("normalmap", super::Perturbed::normalmap_from_props),
+    ("bumpmap", super::Perturbed::bumpmap_from_props),
 ];
 
 /// The constructor of the BSDF plugin `name`.

@@ -6,7 +6,7 @@ use super::microfacet::{Microfacet, MicrofacetType, Roughness};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 
-const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None };
+const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None };
 
 fn rough_conductors() -> Vec<(String, Bsdf)> {
     let gold = Some(ConductorIor::constant(Rgb::new(0.143, 0.374, 1.442), Rgb::new(3.983, 2.385, 1.603)));
@@ -132,8 +132,8 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     let tilted = |n: Vec3| crate::texture::Texture::Constant((n.normalize() + Vec3::ONE) * 0.5);
     v.push((
         "normalmap(diffuse)".into(),
-        Bsdf::NormalMap(NormalMap {
-            map: tilted(Vec3::new(0.4, -0.2, 1.0)),
+        Bsdf::Perturbed(Perturbed {
+            perturbation: Perturbation::NormalMap(tilted(Vec3::new(0.4, -0.2, 1.0))),
             bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))),
             flip_invalid_normals: true,
             shadowing: true,
@@ -141,8 +141,8 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     ));
     v.push((
         "normalmap(roughconductor)".into(),
-        Bsdf::NormalMap(NormalMap {
-            map: tilted(Vec3::new(-0.3, 0.35, 1.0)),
+        Bsdf::Perturbed(Perturbed {
+            perturbation: Perturbation::NormalMap(tilted(Vec3::new(-0.3, 0.35, 1.0))),
             bsdf: Box::new(rough_conductors().remove(1).1),
             flip_invalid_normals: true,
             shadowing: true,
@@ -405,7 +405,7 @@ fn textured_parameters_act_as_their_local_value() {
         let values: Vec<Rgb> = [Vec2::new(0.25, 0.25), Vec2::new(0.75, 0.25)]
             .into_iter()
             .map(|uv| {
-                let ctx = BsdfContext { uv, mesh: None };
+                let ctx = BsdfContext { uv, mesh: None, si: None };
                 let constant = constant_at(uv);
                 let mut rng = crate::sampling::Pcg32::new(17, 3);
                 let mut sum = Rgb::ZERO;

@@ -235,14 +235,14 @@ impl Scene {
     /// What the BSDF at the hit `si` evaluates its textures with: the texture coordinates and,
     /// on meshes that carry attributes, the point for `mesh_attribute` lookups.
     #[inline]
-    pub fn bsdf_context(&self, si: &SurfaceInteraction) -> crate::material::BsdfContext<'_> {
+    pub fn bsdf_context<'a>(&'a self, si: &'a SurfaceInteraction) -> crate::material::BsdfContext<'a> {
         let mesh = match &self.geometries[si.shape as usize] {
             Geometry::Mesh(m) if !m.attributes.is_empty() => {
                 Some(crate::geometry::mesh::MeshPoint { mesh: m, tri: si.prim, bary: si.bary })
             }
             _ => None,
         };
-        crate::material::BsdfContext { uv: si.uv, mesh }
+        crate::material::BsdfContext { uv: si.uv, mesh, si: Some(si) }
     }
 
     /// The closest surface hit along `ray` within `(0, ray.t_max)`.
@@ -348,6 +348,7 @@ impl Scene {
         let i = r.index as usize;
         let ng = m.face_normal(i);
         let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
+        let (dpdu, dpdv) = m.dpduv(i, &p, ng);
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
             p_error: triangle_point_error(&p, &h),
@@ -355,7 +356,8 @@ impl Scene {
             ng,
             ns,
             uv,
-            dpdu: m.dpdu(i, &p, ng),
+            dpdu,
+            dpdv,
             bary: crate::math::Vec2::new(h.b1, h.b2),
             shape: r.shape,
             prim: r.index,
@@ -366,20 +368,20 @@ impl Scene {
         if let (HitKind::SdfVoxel(_), Geometry::SdfGrid(g)) = (kind, &self.geometries[r.shape as usize]) {
             // No parameterization: uv = 0 and a shading frame around the normal alone.
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
-            let (uv, dpdu, bary) = (Vec2::ZERO, Vec3::ZERO, Vec2::ZERO);
-            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, shape: r.shape, prim: r.index, bary };
+            let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
+            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
         }
-        let ((sp, uv), dpdu) = match (kind, &self.geometries[r.shape as usize]) {
+        let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
                 let surface = s.surface(ray, t);
-                (surface, s.dpdu(surface.0.p))
+                (surface, s.dpduv(surface.0.p))
             }
-            (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpdu(q)),
-            (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpdu(q)),
+            (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpduv(q)),
+            (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpduv(q)),
             _ => unreachable!("primitive kind and shape geometry always agree"),
         };
         let bary = crate::math::Vec2::ZERO;
-        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, shape: r.shape, prim: 0, bary }
+        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, dpdv, shape: r.shape, prim: 0, bary }
     }
 
     /// Whether anything blocks `ray` within `(0, ray.t_max)`.
@@ -426,6 +428,61 @@ mod tests {
     /// the texture's u axis on a turned rectangle, around the axis on a sphere, and along the
     /// first edge `p1 − p0` on a mesh without texture coordinates (whose uv are then the
     /// barycentrics `(b1, b2)`).
+    /// `∂p/∂u` and `∂p/∂v` of every shape are Mitsuba's, magnitudes included (what bump maps
+    /// scale their slopes by): values Mitsuba 3.9.1 gives for the same rays.
+    #[test]
+    fn parameterization_derivatives_match_mitsuba() {
+        use crate::geometry::{Cylinder, Disk, Sphere};
+        let cases: Vec<(Geometry, Vec3, Vec3, [f32; 6])> = vec![
+            (
+                Geometry::Sphere(Sphere::new(Vec3::ZERO, 2.0, false)),
+                Vec3::new(0.3, -5.0, 0.7),
+                Vec3::Y,
+                [11.6196, 1.88496, 0.0, 0.35214, -2.17074, -5.88577],
+            ),
+            (
+                Geometry::Sphere(Sphere::new(Vec3::ZERO, 2.0, false)),
+                Vec3::new(0.5, 0.2, 5.0),
+                -Vec3::Z,
+                [-1.25664, 3.14159, 0.0, 5.61834, 2.24733, -1.6918],
+            ),
+            (
+                {
+                    let mut m = TriangleMesh::rectangle();
+                    m.transform(&Transform::scale(Vec3::new(3.0, 2.0, 1.0)).unwrap());
+                    Geometry::Mesh(m)
+                },
+                Vec3::new(0.5, 0.2, 5.0),
+                -Vec3::Z,
+                [6.0, 0.0, 0.0, 0.0, 4.0, 0.0],
+            ),
+            (
+                Geometry::Disk(Disk::new(Transform::scale(Vec3::splat(2.0)).unwrap(), false).unwrap()),
+                Vec3::new(0.5, 0.2, 5.0),
+                -Vec3::Z,
+                [1.85695, 0.742781, 0.0, -1.25664, 3.14159, 0.0],
+            ),
+            (
+                Geometry::Cylinder(Cylinder::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 3.0), 0.5, Transform::IDENTITY, false).unwrap()),
+                Vec3::new(0.3, -5.0, 0.7),
+                Vec3::Y,
+                [2.51327, 1.88496, 0.0, 0.0, 0.0, 3.0],
+            ),
+        ];
+        for (k, (g, o, d, expected)) in cases.into_iter().enumerate() {
+            let mut b = SceneBuilder::new();
+            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+            b.add_shape(g, m, None);
+            b.set_camera(crate::camera::Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
+            let scene = b.build().unwrap();
+            let si = scene.intersect(&Ray::new(o, d)).unwrap_or_else(|| panic!("case {k} misses"));
+            let got = [si.dpdu.x, si.dpdu.y, si.dpdu.z, si.dpdv.x, si.dpdv.y, si.dpdv.z];
+            for (g, e) in got.iter().zip(expected) {
+                assert!((g - e).abs() < 1e-3 * e.abs().max(1.0), "case {k}: {got:?} vs {expected:?}");
+            }
+        }
+    }
+
     #[test]
     fn shading_frames_follow_the_parameterization() {
         let mut b = SceneBuilder::new();

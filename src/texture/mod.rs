@@ -185,6 +185,30 @@ impl Texture {
         }
     }
 
+    /// The gradient `(∂f/∂u, ∂f/∂v)` of the texture as a scalar (its luminance) at `uv`, as
+    /// Mitsuba's `eval_1_grad` computes it for a bitmap: the slopes of the bilinear interpolant
+    /// in texels, taken through the transpose of the uv transform's linear part and scaled by
+    /// the resolution (zero for nearest filtering). Other textures have no gradient (zero; the
+    /// bump map, its only user, accepts bitmaps only).
+    pub fn eval_scalar_grad(&self, uv: Vec2) -> Vec2 {
+        let Texture::Bitmap { bitmap, to_uv } = self else { return Vec2::ZERO };
+        if bitmap.filter == Filter::Nearest {
+            return Vec2::ZERO;
+        }
+        let t = to_uv.transform_point2(uv);
+        let (w, h) = (bitmap.image.width as f32, bitmap.image.height as f32);
+        let (x, y) = (t.x * w - 0.5, t.y * h - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let f = |dx: i64, dy: i64| crate::math::luminance(bitmap.texel(x0 + dx, y0 + dy));
+        let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
+        let dfx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
+        let dfy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10);
+        let m = to_uv;
+        Vec2::new(m.x_axis.x * dfx + m.x_axis.y * dfy, m.y_axis.x * dfx + m.y_axis.y * dfy) * Vec2::new(w, h)
+    }
+
     /// Average value (over the image, or the two checker colours).
     pub fn mean(&self) -> Rgb {
         match self {
@@ -358,6 +382,20 @@ mod tests {
     fn image() -> Arc<Image> {
         // 2 × 2: top row red, green; bottom row blue, white.
         Arc::new(Image { width: 2, height: 2, pixels: vec![Rgb::X, Rgb::Y, Rgb::Z, Rgb::ONE] })
+    }
+
+    /// A grey ramp's gradient, as Mitsuba's eval_1_grad gives it: texel slopes through the
+    /// transposed uv transform, times the resolution; zero for nearest filtering.
+    #[test]
+    fn bitmap_gradients() {
+        let ramp = Arc::new(Image { width: 4, height: 1, pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec() });
+        let to_uv = Mat3::from_scale(Vec2::new(2.0, 3.0));
+        let bilinear = Texture::Bitmap { bitmap: Bitmap { image: ramp.clone(), filter: Filter::Bilinear, wrap: Wrap::Clamp }, to_uv };
+        let g = bilinear.eval_scalar_grad(Vec2::new(0.25, 0.1));
+        assert!((g - Vec2::new(2.0, 0.0)).length() < 1e-5, "{g}");
+        let nearest = Texture::Bitmap { bitmap: Bitmap { image: ramp, filter: Filter::Nearest, wrap: Wrap::Clamp }, to_uv };
+        assert_eq!(nearest.eval_scalar_grad(Vec2::new(0.25, 0.1)), Vec2::ZERO);
+        assert_eq!(Texture::Constant(Rgb::ONE).eval_scalar_grad(Vec2::ZERO), Vec2::ZERO);
     }
 
     #[test]

@@ -55,6 +55,8 @@ SCENES = {
     "sdfgrid": (8192, 64, {}, 1.5),
     # Tangent-space normal maps (normalmap) over rough plastic, diffuse and anisotropic metal.
     "normalmap": (8192, 64, {}, 1.5),
+    # Bump maps (bumpmap) from a bitmap's luminance on a floor and a sphere.
+    "bumpmap": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 

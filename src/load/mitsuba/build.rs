@@ -424,6 +424,10 @@ impl BsdfBuilder for Builder {
     fn nested_bsdfs(&mut self, o: &Obj, count: std::ops::RangeInclusive<usize>) -> Result<Vec<Bsdf>> {
         Builder::nested_bsdfs(self, o, count)
     }
+
+    fn nested_textures(&mut self, o: &Obj) -> Result<Vec<Texture>> {
+        o.nested("texture").iter().map(|t| self.texture_obj(t)).collect()
+    }
 }
 
 impl ImageSource for Builder {

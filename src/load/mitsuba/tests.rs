@@ -965,3 +965,24 @@ fn cameras_read_focus_distance() {
     let e = load(&sensor("thinlens", "")).unwrap_err().to_string();
     assert!(e.contains("'aperture_radius' is required"), "{e}");
 }
+
+/// `bumpmap` takes one nested bitmap (Mitsuba differentiates bitmaps only) and one BSDF;
+/// `normalmap` needs its `normalmap` texture.
+#[test]
+fn bump_and_normal_map_parameters() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let shape = |bsdf: &str| scene(&format!(r#"<shape type="rectangle">{bsdf}</shape>"#));
+    let bump = r#"<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="assets/tiles.png"/></texture>
+        <float name="scale" value="0.2"/><boolean name="use_shadowing_function" value="false"/><bsdf type="diffuse"/></bsdf>"#;
+    let f = load_scene_text(&dir.join("test.xml"), &shape(bump), &[]).unwrap();
+    assert!(matches!(&f.scene.bsdfs()[0], Bsdf::Perturbed(p) if !p.shadowing && p.flip_invalid_normals));
+    for (bsdf, expectation) in [
+        (r#"<bsdf type="bumpmap"><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf>"#, "must be a bitmap"),
+        (r#"<bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf>"#, "exactly one nested <texture>"),
+        (r#"<bsdf type="normalmap"><bsdf type="diffuse"/></bsdf>"#, "needs its 'normalmap' texture"),
+        (r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/></bsdf>"#, "expects 1 nested <bsdf>"),
+    ] {
+        let e = load_scene_text(&dir.join("test.xml"), &shape(bsdf), &[]).unwrap_err().to_string();
+        assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+}

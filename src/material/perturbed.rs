@@ -1,8 +1,14 @@
-//! Mitsuba's `normalmap`: a nested BSDF seen through a shading normal read from a texture
-//! (tangent space: the texture's RGB `c` gives the normal `2c − 1` in the local shading frame,
-//! whose x follows `∂p/∂u`; read the image with `raw` so that it is not sRGB-decoded).
+//! Mitsuba's `normalmap` and `bumpmap`: a nested BSDF seen through a perturbed shading normal.
 //!
-//! As Mitsuba 3.9 does (its `PerturbedBSDF`, measured against Mitsuba 3.9.1):
+//! - `normalmap`: the normal is read from a texture, in tangent space: its RGB `c` gives
+//!   `2c − 1` in the local shading frame, whose x follows `∂p/∂u` (read the image with `raw`
+//!   so that it is not sRGB-decoded).
+//! - `bumpmap`: the normal of the surface displaced along the shading normal by a height field
+//!   `h` (a bitmap's luminance, times `scale`): with the slopes `(∂h/∂u, ∂h/∂v)` of the bilinear
+//!   interpolant, `∂p/∂u' = ∂p/∂u + n (∂h/∂u − n·∂p/∂u)` (and alike for v), and the normal
+//!   `∂p/∂u' × ∂p/∂v'`, turned to the side of the geometric normal.
+//!
+//! Both as Mitsuba 3.9 applies them (its `PerturbedBSDF`, measured against Mitsuba 3.9.1):
 //! - `flip_invalid_normals` (default true): a perturbed normal whose side differs from the
 //!   viewer's has its tangential part negated, so that the viewer sees its front (Schüssler et
 //!   al. 2017), which leaves no black pixels;
@@ -18,12 +24,26 @@ use crate::math::{Frame, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use crate::texture::Texture;
 
-/// A BSDF under a normal map.
+/// Where the perturbed normal comes from.
 #[derive(Clone, Debug)]
-pub struct NormalMap {
+pub enum Perturbation {
     /// Tangent-space normals, encoded as `(n + 1) / 2`.
-    pub map: Texture,
-    /// The BSDF seen through them.
+    NormalMap(Texture),
+    /// A height field (a bitmap's luminance) times `scale`.
+    BumpMap {
+        /// The height field.
+        height: Texture,
+        /// Its scale (world units per unit of the texture's value).
+        scale: f32,
+    },
+}
+
+/// A BSDF under a normal or bump map.
+#[derive(Clone, Debug)]
+pub struct Perturbed {
+    /// The perturbation.
+    pub perturbation: Perturbation,
+    /// The BSDF seen through it.
     pub bsdf: Box<Bsdf>,
     /// Turn normals that face away from the viewer toward it.
     pub flip_invalid_normals: bool,
@@ -67,11 +87,33 @@ pub fn perturbed_frame(mut n: Vec3, wo: Vec3, flip_invalid_normals: bool) -> Fra
     Frame { s, t: n.cross(s), n }
 }
 
-impl NormalMap {
+impl Perturbation {
+    /// The perturbed normal at `ctx` in the local shading frame's coordinates (not normalized;
+    /// +z without a surface interaction to perturb).
+    fn normal(&self, ctx: &BsdfContext) -> Vec3 {
+        match self {
+            Perturbation::NormalMap(map) => ctx.eval(map) * 2.0 - Vec3::ONE,
+            Perturbation::BumpMap { height, scale } => {
+                let Some(si) = ctx.si else { return Vec3::Z };
+                let g = height.eval_scalar_grad(ctx.uv) * *scale;
+                let n = si.ns;
+                let dpdu = si.dpdu + n * (g.x - n.dot(si.dpdu));
+                let dpdv = si.dpdv + n * (g.y - n.dot(si.dpdv));
+                let mut cr = dpdu.cross(dpdv);
+                if si.ng.dot(cr) < 0.0 {
+                    cr = -cr;
+                }
+                si.frame().to_local(cr)
+            }
+        }
+    }
+}
+
+impl Perturbed {
     /// The perturbed shading frame at `ctx` for the viewer at `wo` (local coordinates).
     #[inline]
     pub fn frame(&self, ctx: &BsdfContext, wo: Vec3) -> Frame {
-        perturbed_frame(ctx.eval(&self.map) * 2.0 - Vec3::ONE, wo, self.flip_invalid_normals)
+        perturbed_frame(self.perturbation.normal(ctx), wo, self.flip_invalid_normals)
     }
 
     #[inline]
@@ -93,7 +135,7 @@ impl NormalMap {
         self.bsdf.eval(ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
     }
 
-    /// Density of [`NormalMap::sample`] choosing `wi` (the nested BSDF's).
+    /// Density of [`Perturbed::sample`] choosing `wi` (the nested BSDF's).
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         let f = self.frame(ctx, wo);
         let wi_p = f.to_local(wi);
@@ -112,18 +154,38 @@ impl NormalMap {
         (wi.z * s.wi.z > 0.0).then(|| BsdfSample { wi, weight: s.weight * self.shadow(&f, wi), ..s })
     }
 
-    /// Mitsuba's `normalmap`: `normalmap` (a texture, required), `flip_invalid_normals` (true),
+    /// The parameters both plugins share: `flip_invalid_normals` (true),
     /// `use_shadowing_function` (true) and one nested BSDF.
-    pub fn from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
-        if !o.has("normalmap") {
-            return Err(o.error("a normalmap needs its 'normalmap' texture (a bitmap read with raw = true)"));
-        }
-        let map = b.texture_of(o, "normalmap", Rgb::new(0.5, 0.5, 1.0), crate::math::spectrum::SpectrumKind::Unbounded)?;
+    fn from_props(perturbation: Perturbation, o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
         let flip_invalid_normals = o.bool("flip_invalid_normals", true)?;
         let shadowing = o.bool("use_shadowing_function", true)?;
         let mut nested = b.nested_bsdfs(o, 1..=1)?;
         let bsdf = Box::new(nested.pop().expect("one"));
-        Ok(Bsdf::NormalMap(NormalMap { map, bsdf, flip_invalid_normals, shadowing }))
+        Ok(Bsdf::Perturbed(Perturbed { perturbation, bsdf, flip_invalid_normals, shadowing }))
+    }
+
+    /// Mitsuba's `normalmap`: `normalmap` (a texture, required) and the shared parameters.
+    pub fn normalmap_from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        if !o.has("normalmap") {
+            return Err(o.error("a normalmap needs its 'normalmap' texture (a bitmap read with raw = true)"));
+        }
+        let map = b.texture_of(o, "normalmap", Rgb::new(0.5, 0.5, 1.0), crate::math::spectrum::SpectrumKind::Unbounded)?;
+        Perturbed::from_props(Perturbation::NormalMap(map), o, b)
+    }
+
+    /// Mitsuba's `bumpmap`: one nested (unnamed) bitmap texture, the height field; `scale` (1);
+    /// and the shared parameters. Mitsuba differentiates only bitmaps, and so does neumann.
+    pub fn bumpmap_from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        let mut textures = b.nested_textures(o)?;
+        if textures.len() != 1 {
+            return Err(o.error(format!("a bumpmap takes exactly one nested <texture> (its height field), found {}", textures.len())));
+        }
+        let height = textures.pop().expect("one");
+        if !matches!(height, Texture::Bitmap { .. }) {
+            return Err(o.error("a bumpmap's height field must be a bitmap texture (Mitsuba differentiates bitmaps only)"));
+        }
+        let scale = o.float("scale", 1.0)?;
+        Perturbed::from_props(Perturbation::BumpMap { height, scale }, o, b)
     }
 }
 
@@ -136,8 +198,58 @@ mod tests {
         BsdfContext::default()
     }
 
-    fn map(n: Vec3, bsdf: Bsdf, shadowing: bool) -> NormalMap {
-        NormalMap { map: ((n.normalize() + Vec3::ONE) * 0.5).into(), bsdf: Box::new(bsdf), flip_invalid_normals: true, shadowing }
+    fn map(n: Vec3, bsdf: Bsdf, shadowing: bool) -> Perturbed {
+        Perturbed {
+            perturbation: Perturbation::NormalMap(((n.normalize() + Vec3::ONE) * 0.5).into()),
+            bsdf: Box::new(bsdf),
+            flip_invalid_normals: true,
+            shadowing,
+        }
+    }
+
+    /// A bump map's normal on a flat surface with `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 2, 0)`: a
+    /// height slope `g` along u (scale included) tilts it to `(−g/2, 0, 1)`, normalized; flipping
+    /// the geometric normal's side flips the result back onto it.
+    #[test]
+    fn bump_maps_tilt_by_the_height_slope() {
+        use crate::geometry::SurfaceInteraction;
+        use crate::texture::{Bitmap, Filter, Wrap};
+        let ramp = std::sync::Arc::new(crate::image::Image {
+            width: 4,
+            height: 1,
+            pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec(),
+        });
+        let height = Texture::Bitmap {
+            bitmap: Bitmap { image: ramp, filter: Filter::Bilinear, wrap: Wrap::Clamp },
+            to_uv: glam::Mat3::IDENTITY,
+        };
+        // Slope of the height field along u: 0.25 per texel × 4 texels = 1, times scale 0.3.
+        let bump = Perturbed {
+            perturbation: Perturbation::BumpMap { height, scale: 0.3 },
+            bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
+            flip_invalid_normals: false,
+            shadowing: false,
+        };
+        let si = SurfaceInteraction {
+            p: Vec3::ZERO,
+            p_error: Vec3::ZERO,
+            t: 1.0,
+            ng: Vec3::Z,
+            ns: Vec3::Z,
+            uv: Vec2::new(0.5, 0.5),
+            dpdu: Vec3::new(2.0, 0.0, 0.0),
+            dpdv: Vec3::new(0.0, 2.0, 0.0),
+            shape: 0,
+            prim: 0,
+            bary: Vec2::ZERO,
+        };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
+        let n = bump.frame(&ctx, Vec3::Z).n;
+        let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();
+        assert!((n - expected).length() < 1e-5, "{n} vs {expected}");
+        let below = SurfaceInteraction { ng: -Vec3::Z, ..si };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&below) };
+        assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
 
     /// An unperturbing map ((0.5, 0.5, 1): the normal +z) leaves the BSDF as it is; a tilted
