@@ -444,7 +444,7 @@ mod tests {
                 Geometry::Sphere(Sphere::new(Vec3::ZERO, 2.0, false)),
                 Vec3::new(0.5, 0.2, 5.0),
                 -Vec3::Z,
-                [-1.25664, 3.14159, 0.0, 5.61834, 2.24733, -1.6918],
+                [-1.25664, std::f32::consts::PI, 0.0, 5.61834, 2.24733, -1.6918],
             ),
             (
                 {
@@ -460,7 +460,7 @@ mod tests {
                 Geometry::Disk(Disk::new(Transform::scale(Vec3::splat(2.0)).unwrap(), false).unwrap()),
                 Vec3::new(0.5, 0.2, 5.0),
                 -Vec3::Z,
-                [1.85695, 0.742781, 0.0, -1.25664, 3.14159, 0.0],
+                [1.85695, 0.742781, 0.0, -1.25664, std::f32::consts::PI, 0.0],
             ),
             (
                 Geometry::Cylinder(Cylinder::new(Vec3::ZERO, Vec3::new(0.0, 0.0, 3.0), 0.5, Transform::IDENTITY, false).unwrap()),
