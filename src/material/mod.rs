@@ -15,6 +15,7 @@ pub mod fresnel;
 pub mod microfacet;
 mod perturbed;
 mod plastic;
+mod principled;
 mod registry;
 mod roughdielectric;
 mod roughplastic;
@@ -24,6 +25,7 @@ pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use perturbed::{Perturbation, Perturbed};
+pub use principled::Principled;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
@@ -83,6 +85,8 @@ pub enum Bsdf {
     Plastic(Plastic),
     /// Rough plastic: microfacet coating over a diffuse base.
     RoughPlastic(RoughPlastic),
+    /// Mitsuba's `principled`: the Disney BSDF.
+    Principled(Box<Principled>),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `blendbsdf`: `(1 - w) f₀ + w f₁` with blend weight `w ∈ [0, 1]` (constant or
@@ -121,6 +125,7 @@ impl Bsdf {
             | Bsdf::ThinDielectric(_)
             | Bsdf::Mask { .. }
             | Bsdf::Null => true,
+            Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
             Bsdf::Perturbed(n) => n.bsdf.transmits(),
             _ => false,
@@ -144,6 +149,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.eval(ctx, wo, wi),
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
+            Bsdf::Principled(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -170,6 +176,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.pdf(ctx, wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
+            Bsdf::Principled(b) => b.pdf(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -198,6 +205,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::Principled(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
@@ -244,6 +252,7 @@ impl Bsdf {
         let eta = match self {
             Bsdf::Dielectric(b) => b.eta,
             Bsdf::RoughDielectric(b) => b.eta,
+            Bsdf::Principled(b) => b.eta,
             Bsdf::Blend { bsdfs, .. } => return bsdfs[0].eta_crossed(wo, wi) * bsdfs[1].eta_crossed(wo, wi),
             // The sides of the perturbed frame decide; without the context, those of the
             // original one (they agree for every direction the normal map lets through).
@@ -266,6 +275,7 @@ impl Bsdf {
             Bsdf::Diffuse(b) => ctx.eval(&b.reflectance),
             Bsdf::Plastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::RoughPlastic(b) => ctx.eval(&b.diffuse_reflectance),
+            Bsdf::Principled(b) => ctx.eval(&b.base_color),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w
@@ -312,6 +322,7 @@ impl Bsdf {
             }
             Bsdf::Plastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::RoughPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
+            Bsdf::Principled(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
                 let mut v = vec![weight];
                 v.extend(bsdfs[0].textures());
@@ -347,7 +358,8 @@ impl Bsdf {
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::Plastic(_)
-            | Bsdf::RoughPlastic(_) => false,
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::Principled(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.
             _ => self.is_delta_nested(),

@@ -127,6 +127,40 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "twosided(roughconductor)".into(),
         Bsdf::TwoSided(Box::new([rough_conductors().remove(0).1, Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))])),
     ));
+    // The principled BSDF: every lobe with anisotropy; transmission (seen from both sides);
+    // flatness.
+    let k = |v: f32| Some(crate::texture::Texture::from(Rgb::splat(v)));
+    let principled = Principled {
+        base_color: Rgb::new(0.8, 0.3, 0.2).into(),
+        roughness: Rgb::splat(0.3).into(),
+        anisotropic: k(0.5),
+        spec_trans: None,
+        sheen: k(0.5),
+        sheen_tint: k(0.4),
+        flatness: None,
+        spec_tint: k(0.3),
+        metallic: k(0.4),
+        clearcoat: k(0.7),
+        clearcoat_gloss: Rgb::splat(0.5).into(),
+        eta: 1.5,
+        rates: [1.0; 3],
+    };
+    v.push(("principled".into(), Bsdf::Principled(Box::new(principled.clone()))));
+    v.push((
+        "principled, transmission".into(),
+        Bsdf::Principled(Box::new(Principled {
+            base_color: Rgb::new(0.9, 0.9, 0.7).into(),
+            roughness: Rgb::splat(0.35).into(),
+            spec_trans: k(0.6),
+            metallic: None,
+            eta: 1.4,
+            ..principled.clone()
+        })),
+    ));
+    v.push((
+        "principled, flatness".into(),
+        Bsdf::Principled(Box::new(Principled { roughness: Rgb::splat(0.7).into(), flatness: k(0.6), ..principled })),
+    ));
     // Normal maps tilting the normal by about 25°, over a diffuse and a rough conductor (not
     // reciprocal: the cosine is about the perturbed normal, as in Mitsuba).
     let tilted = |n: Vec3| crate::texture::Texture::Constant((n.normalize() + Vec3::ONE) * 0.5);

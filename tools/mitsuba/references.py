@@ -57,6 +57,9 @@ SCENES = {
     "normalmap": (8192, 64, {}, 1.5),
     # Bump maps (bumpmap) from a bitmap's luminance on a floor and a sphere.
     "bumpmap": (8192, 64, {}, 1.5),
+    # The principled BSDF: metallic with clearcoat and anisotropy, transmission, sheen and
+    # flatness with textured base colour and roughness, spec_tint.
+    "principled": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 
