@@ -16,6 +16,7 @@ pub mod microfacet;
 mod perturbed;
 mod plastic;
 mod principled;
+mod principledthin;
 mod registry;
 mod roughdielectric;
 mod roughplastic;
@@ -26,6 +27,7 @@ pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use perturbed::{Perturbation, Perturbed};
 pub use principled::Principled;
+pub use principledthin::PrincipledThin;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
@@ -87,6 +89,8 @@ pub enum Bsdf {
     RoughPlastic(RoughPlastic),
     /// Mitsuba's `principled`: the Disney BSDF.
     Principled(Box<Principled>),
+    /// Mitsuba's `principledthin`: the Disney BSDF of a thin sheet.
+    PrincipledThin(Box<PrincipledThin>),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
     /// Mitsuba's `blendbsdf`: `(1 - w) f₀ + w f₁` with blend weight `w ∈ [0, 1]` (constant or
@@ -126,6 +130,7 @@ impl Bsdf {
             | Bsdf::Mask { .. }
             | Bsdf::Null => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
+            Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
             Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
             Bsdf::Perturbed(n) => n.bsdf.transmits(),
             _ => false,
@@ -150,6 +155,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::Principled(b) => b.eval(ctx, wo, wi),
+            Bsdf::PrincipledThin(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -177,6 +183,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             Bsdf::Principled(b) => b.pdf(ctx, wo, wi),
+            Bsdf::PrincipledThin(b) => b.pdf(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -206,6 +213,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Principled(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::PrincipledThin(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
@@ -276,6 +284,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::RoughPlastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::Principled(b) => ctx.eval(&b.base_color),
+            Bsdf::PrincipledThin(b) => ctx.eval(&b.base_color),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w
@@ -323,6 +332,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::RoughPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::Principled(b) => b.textures(),
+            Bsdf::PrincipledThin(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
                 let mut v = vec![weight];
                 v.extend(bsdfs[0].textures());
@@ -359,7 +369,8 @@ impl Bsdf {
             | Bsdf::RoughDielectric(_)
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
-            | Bsdf::Principled(_) => false,
+            | Bsdf::Principled(_)
+            | Bsdf::PrincipledThin(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.
             _ => self.is_delta_nested(),

@@ -35,6 +35,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("plastic", super::Plastic::from_props),
     ("roughplastic", super::RoughPlastic::from_props),
     ("principled", super::Principled::from_props),
+    ("principledthin", super::PrincipledThin::from_props),
     ("twosided", two_sided),
     ("blendbsdf", blend),
     ("mask", mask),

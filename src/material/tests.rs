@@ -161,6 +161,33 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "principled, flatness".into(),
         Bsdf::Principled(Box::new(Principled { roughness: Rgb::splat(0.7).into(), flatness: k(0.6), ..principled })),
     ));
+    // The thin principled BSDF: specular and diffuse transmission with anisotropy and tint;
+    // sheen and flatness.
+    let thin = PrincipledThin {
+        base_color: Rgb::new(0.7, 0.3, 0.2).into(),
+        roughness: Rgb::splat(0.35).into(),
+        anisotropic: k(0.5),
+        spec_trans: k(0.6),
+        diff_trans: k(0.8),
+        sheen: None,
+        sheen_tint: None,
+        flatness: None,
+        spec_tint: k(0.4),
+        eta: Rgb::splat(1.33).into(),
+        rates: [1.0; 4],
+    };
+    v.push(("principledthin".into(), Bsdf::PrincipledThin(Box::new(thin.clone()))));
+    v.push((
+        "principledthin, sheen".into(),
+        Bsdf::PrincipledThin(Box::new(PrincipledThin {
+            spec_trans: None,
+            sheen: k(0.7),
+            sheen_tint: k(0.5),
+            flatness: k(0.4),
+            diff_trans: k(1.2),
+            ..thin
+        })),
+    ));
     // Normal maps tilting the normal by about 25°, over a diffuse and a rough conductor (not
     // reciprocal: the cosine is about the perturbed normal, as in Mitsuba).
     let tilted = |n: Vec3| crate::texture::Texture::Constant((n.normalize() + Vec3::ONE) * 0.5);

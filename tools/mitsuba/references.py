@@ -58,7 +58,7 @@ SCENES = {
     # Bump maps (bumpmap) from a bitmap's luminance on a floor and a sphere.
     "bumpmap": (8192, 64, {}, 1.5),
     # The principled BSDF: metallic with clearcoat and anisotropy, transmission, sheen and
-    # flatness with textured base colour and roughness, spec_tint.
+    # flatness with textured base colour and roughness, spec_tint; a principledthin leaf.
     "principled": (8192, 64, {}, 1.5),
 }
 SEEDS = 4

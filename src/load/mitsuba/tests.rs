@@ -986,3 +986,31 @@ fn bump_and_normal_map_parameters() {
         assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
     }
 }
+
+/// `principled` and `principledthin` take every parameter as a texture; a lobe left out (or
+/// given as the float 0) is off, as Mitsuba's get_flag decides; `eta` and `specular` exclude
+/// each other.
+#[test]
+fn principled_parameters() {
+    let shape = |bsdf: &str| scene(&format!(r#"<shape type="sphere">{bsdf}</shape>"#));
+    let f = load(&shape(
+        r#"<bsdf type="principled"><texture type="checkerboard" name="roughness"/><float name="metallic" value="0"/>
+        <float name="clearcoat" value="0.5"/><rgb name="base_color" value="0.2, 0.4, 0.6"/><float name="eta" value="1.33"/></bsdf>"#,
+    ))
+    .unwrap();
+    let Bsdf::Principled(p) = &f.scene.bsdfs()[0] else { panic!("not principled") };
+    assert!(p.metallic.is_none() && p.clearcoat.is_some() && (p.eta - 1.33).abs() < 1e-6);
+    assert!(matches!(p.roughness, crate::texture::Texture::Checkerboard { .. }));
+    let f = load(&shape(r#"<bsdf type="principled"><float name="specular" value="0.5"/></bsdf>"#)).unwrap();
+    let Bsdf::Principled(p) = &f.scene.bsdfs()[0] else { panic!("not principled") };
+    assert!((p.eta - (2.0 / (1.0 - 0.04f32.sqrt()) - 1.0)).abs() < 1e-5, "{}", p.eta);
+    let e = err(&shape(r#"<bsdf type="principled"><float name="eta" value="1.5"/><float name="specular" value="0.5"/></bsdf>"#));
+    assert!(e.contains("either 'eta' or 'specular'"), "{e}");
+    let f = load(&shape(
+        r#"<bsdf type="principledthin"><float name="diff_trans" value="1.2"/><texture type="checkerboard" name="eta"/></bsdf>"#,
+    ))
+    .unwrap();
+    assert!(matches!(&f.scene.bsdfs()[0], Bsdf::PrincipledThin(t) if t.diff_trans.is_some() && t.spec_trans.is_none()));
+    let e = err(&shape(r#"<bsdf type="principledthin"><float name="clearcoat" value="0.5"/></bsdf>"#));
+    assert!(e.contains("clearcoat"), "{e}");
+}
