@@ -167,6 +167,45 @@ pub(super) fn ggx_alpha(roughness: f32, anisotropic: Option<f32>) -> (f32, f32) 
     }
 }
 
+/// A scalar parameter that may be off (0 then).
+#[inline]
+pub(super) fn scalar(t: &Option<Texture>, ctx: &BsdfContext) -> f32 {
+    t.as_ref().map_or(0.0, |t| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()))
+}
+
+/// Disney's diffuse lobe without the `base/π` factor: `(1 − F_i/2)(1 − F_o/2)` plus the
+/// retro-reflection `R_r (F_o + F_i + F_o F_i (R_r − 1))`, `R_r = 2 roughness cos²θ_d`, blended
+/// toward Hanrahan–Krueger's fake subsurface `1.25 (F_ss (1/(cos θ_i + cos θ_o) − ½) + ½)` by
+/// `flatness` (if on). Cosines are absolute.
+pub(super) fn disney_diffuse(roughness: f32, cos_i: f32, cos_o: f32, cos_d: f32, flatness: Option<f32>) -> f32 {
+    let (f_in, f_out) = (schlick_weight(cos_i), schlick_weight(cos_o));
+    let f_diff = (1.0 - 0.5 * f_out) * (1.0 - 0.5 * f_in);
+    let rr = 2.0 * roughness * cos_d * cos_d;
+    let f_retro = rr * (f_in + f_out + f_in * f_out * (rr - 1.0));
+    match flatness {
+        None => f_diff + f_retro,
+        Some(flatness) => {
+            let fss90 = rr / 2.0;
+            let fss = lerp(1.0, fss90, f_in) * lerp(1.0, fss90, f_out);
+            let f_ss = 1.25 * (fss * (1.0 / (cos_i + cos_o) - 0.5) + 0.5);
+            lerp(f_diff + f_retro, f_ss, flatness)
+        }
+    }
+}
+
+/// The sheen's colour: white tinted toward the base colour's hue (`base / luminance`) by
+/// `tint` (if on).
+pub(super) fn sheen_color(base: Rgb, tint: Option<f32>) -> Rgb {
+    match tint {
+        None => Rgb::ONE,
+        Some(t) => {
+            let lum = luminance(base);
+            let c = if lum > 0.0 { base / lum } else { Rgb::ONE };
+            Rgb::ONE + (c - Rgb::ONE) * t
+        }
+    }
+}
+
 /// A lobe switch of Mitsuba's principled BSDFs (its `get_flag`): the parameter `name` as a
 /// texture, or `None` if it is left out or given as the float 0.
 pub(super) fn optional_parameter(o: &Obj, b: &mut dyn BsdfBuilder, name: &str) -> PropResult<Option<Texture>> {
@@ -181,7 +220,7 @@ pub(super) fn optional_parameter(o: &Obj, b: &mut dyn BsdfBuilder, name: &str) -
 
 impl Principled {
     fn params(&self, ctx: &BsdfContext) -> Params {
-        let s = |t: &Option<Texture>| t.as_ref().map_or(0.0, |t| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()));
+        let s = |t: &Option<Texture>| scalar(t, ctx);
         let roughness = self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref());
         let alpha = ggx_alpha(roughness, self.anisotropic.as_ref().map(|_| s(&self.anisotropic)));
         Params {
@@ -192,10 +231,6 @@ impl Principled {
             clearcoat: s(&self.clearcoat),
             alpha,
         }
-    }
-
-    fn scalar(&self, t: &Option<Texture>, ctx: &BsdfContext) -> f32 {
-        t.as_ref().map_or(0.0, |t| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()))
     }
 
     fn clearcoat_distribution(&self, ctx: &BsdfContext) -> Gtr1 {
@@ -254,7 +289,7 @@ impl Principled {
         let g = dist.g(wo, wi, wh);
         let mut value = Rgb::ZERO;
         if reflect && refl_ok && f_diel > 0.0 {
-            let spec_tint = self.scalar(&self.spec_tint, ctx);
+            let spec_tint = scalar(&self.spec_tint, ctx);
             let lum = if self.spec_tint.is_some() { luminance(p.base) } else { 1.0 };
             let f = if front {
                 let cos = wo.dot(wh);
@@ -289,30 +324,14 @@ impl Principled {
             value += Rgb::splat(p.clearcoat * 0.25 * f_cc * d_cc * g_cc * cos_i.abs());
         }
         if brdf > 0.0 && reflect && front {
-            let (f_in, f_out) = (schlick_weight(cos_i.abs()), schlick_weight(cos_o.abs()));
-            let f_diff = (1.0 - 0.5 * f_out) * (1.0 - 0.5 * f_in);
             let cos_d = wh.dot(wi);
-            let rr = 2.0 * p.roughness * cos_d * cos_d;
-            let f_retro = rr * (f_in + f_out + f_in * f_out * (rr - 1.0));
-            let mut lobe = f_diff + f_retro;
-            if self.flatness.is_some() {
-                let fss90 = rr / 2.0;
-                let fss = lerp(1.0, fss90, f_in) * lerp(1.0, fss90, f_out);
-                let f_ss = 1.25 * (fss * (1.0 / (cos_i.abs() + cos_o.abs()) - 0.5) + 0.5);
-                lobe = lerp(lobe, f_ss, self.scalar(&self.flatness, ctx));
-            }
+            let flatness = self.flatness.as_ref().map(|_| scalar(&self.flatness, ctx));
+            let lobe = disney_diffuse(p.roughness, cos_i.abs(), cos_o.abs(), cos_d, flatness);
             value += p.base * (brdf * cos_i.abs() * INV_PI * lobe);
-            let sheen = self.scalar(&self.sheen, ctx);
+            let sheen = scalar(&self.sheen, ctx);
             if self.sheen.is_some() && sheen > 0.0 && 1.0 - p.metallic > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let tint = if self.sheen_tint.is_some() {
-                    let lum = luminance(p.base);
-                    let c = if lum > 0.0 { p.base / lum } else { Rgb::ONE };
-                    Rgb::ONE + (c - Rgb::ONE) * self.scalar(&self.sheen_tint, ctx)
-                } else {
-                    Rgb::ONE
-                };
-                value += tint * (sheen * (1.0 - p.metallic) * fd * cos_i.abs());
+                let tint = sheen_color(p.base, self.sheen_tint.as_ref().map(|_| scalar(&self.sheen_tint, ctx)));
+                value += tint * (sheen * (1.0 - p.metallic) * schlick_weight(cos_d.abs()) * cos_i.abs());
             }
         }
         if value.is_finite() {

@@ -17,7 +17,9 @@
 
 use super::fresnel::{fresnel_dielectric, reflect_about};
 use super::microfacet::{Microfacet, MicrofacetType};
-use super::principled::{compatible, ggx_alpha, lerp, optional_parameter, schlick, schlick_weight};
+use super::principled::{
+    compatible, disney_diffuse, ggx_alpha, optional_parameter, scalar, schlick, schlick_weight, sheen_color,
+};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{luminance, Rgb, Vec2, Vec3, INV_PI};
 use crate::props::{Obj, Result as PropResult};
@@ -63,16 +65,12 @@ struct Params {
 }
 
 impl PrincipledThin {
-    fn scalar(&self, t: &Option<Texture>, ctx: &BsdfContext) -> f32 {
-        t.as_ref().map_or(0.0, |t| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()))
-    }
-
     fn params(&self, ctx: &BsdfContext) -> Params {
         Params {
             roughness: self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref()),
-            anisotropic: self.anisotropic.as_ref().map(|_| self.scalar(&self.anisotropic, ctx)),
-            spec_trans: self.scalar(&self.spec_trans, ctx),
-            diff_trans: self.scalar(&self.diff_trans, ctx) / 2.0,
+            anisotropic: self.anisotropic.as_ref().map(|_| scalar(&self.anisotropic, ctx)),
+            spec_trans: scalar(&self.spec_trans, ctx),
+            diff_trans: scalar(&self.diff_trans, ctx) / 2.0,
             eta: self.eta.eval_scalar(ctx.uv, ctx.mesh.as_ref()),
         }
     }
@@ -123,7 +121,7 @@ impl PrincipledThin {
             let (f_diel, ..) = fresnel_dielectric(wo.dot(wh), p.eta);
             let (spec, trans) = PrincipledThin::distributions(&p);
             if reflect && compatible(wh, wo, wi, cos_o, true) {
-                let spec_tint = self.scalar(&self.spec_tint, ctx);
+                let spec_tint = scalar(&self.spec_tint, ctx);
                 let f_schlick = if self.spec_tint.is_some() {
                     let lum = luminance(base);
                     let tint = if lum > 0.0 { base / lum } else { Rgb::ONE };
@@ -141,31 +139,15 @@ impl PrincipledThin {
             }
         }
         if reflect && p.spec_trans < 1.0 && p.diff_trans < 1.0 {
-            let (f_in, f_out) = (schlick_weight(cos_i.abs()), schlick_weight(cos_o));
-            let f_diff = (1.0 - 0.5 * f_out) * (1.0 - 0.5 * f_in);
             let cos_d = wh.dot(wi);
-            let rr = 2.0 * p.roughness * cos_d * cos_d;
-            let f_retro = rr * (f_in + f_out + f_in * f_out * (rr - 1.0));
-            let mut lobe = f_diff + f_retro;
-            if self.flatness.is_some() {
-                let fss90 = rr / 2.0;
-                let fss = lerp(1.0, fss90, f_in) * lerp(1.0, fss90, f_out);
-                let f_ss = 1.25 * (fss * (1.0 / (cos_i.abs() + cos_o.abs()) - 0.5) + 0.5);
-                lobe = lerp(lobe, f_ss, self.scalar(&self.flatness, ctx));
-            }
+            let flatness = self.flatness.as_ref().map(|_| scalar(&self.flatness, ctx));
+            let lobe = disney_diffuse(p.roughness, cos_i.abs(), cos_o.abs(), cos_d, flatness);
             let weight = (1.0 - p.spec_trans) * (1.0 - p.diff_trans);
             value += base * (weight * cos_i * INV_PI * lobe);
-            let sheen = self.scalar(&self.sheen, ctx);
+            let sheen = scalar(&self.sheen, ctx);
             if self.sheen.is_some() && sheen > 0.0 {
-                let fd = schlick_weight(cos_d.abs());
-                let tint = if self.sheen_tint.is_some() {
-                    let lum = luminance(base);
-                    let c = if lum > 0.0 { base / lum } else { Rgb::ONE };
-                    Rgb::ONE + (c - Rgb::ONE) * self.scalar(&self.sheen_tint, ctx)
-                } else {
-                    Rgb::ONE
-                };
-                value += tint * (sheen * weight * fd * cos_i.abs());
+                let tint = sheen_color(base, self.sheen_tint.as_ref().map(|_| scalar(&self.sheen_tint, ctx)));
+                value += tint * (sheen * weight * schlick_weight(cos_d.abs()) * cos_i.abs());
             }
         }
         if self.diff_trans.is_some() && refract && p.spec_trans < 1.0 && p.diff_trans > 0.0 {
