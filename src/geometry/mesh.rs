@@ -84,27 +84,61 @@ struct Parallelogram {
     mismatch: f32,
 }
 
+/// Why arrays do not make a triangle mesh.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    /// Normals given, but not one per vertex.
+    #[error("{normals} normals for {vertices} vertices")]
+    NormalCount {
+        /// Normals given.
+        normals: usize,
+        /// Vertices.
+        vertices: usize,
+    },
+    /// Texture coordinates given, but not one pair per vertex.
+    #[error("{uvs} texture coordinates for {vertices} vertices")]
+    UvCount {
+        /// Texture coordinates given.
+        uvs: usize,
+        /// Vertices.
+        vertices: usize,
+    },
+    /// A triangle names a vertex that does not exist.
+    #[error("triangle {triangle} refers to vertex {indices:?} but there are only {vertices} vertices")]
+    IndexOutOfRange {
+        /// The triangle.
+        triangle: usize,
+        /// Its vertex indices.
+        indices: [u32; 3],
+        /// Vertices.
+        vertices: usize,
+    },
+    /// A vertex position is NaN or infinite.
+    #[error("vertex {0} has a non-finite position")]
+    NonFinite(usize),
+}
+
 impl TriangleMesh {
-    /// A mesh from its arrays. `normals` and `uvs` are either empty or one per vertex.
-    /// Returns a description of the first problem found, if any.
+    /// A mesh from its arrays. `normals` and `uvs` are either empty or one per vertex; the
+    /// first problem found is the error.
     pub fn new(
         positions: Vec<Vec3>,
         normals: Vec<Vec3>,
         uvs: Vec<Vec2>,
         indices: Vec<[u32; 3]>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, MeshError> {
         let n = positions.len();
         if !normals.is_empty() && normals.len() != n {
-            return Err(format!("{} normals for {} vertices", normals.len(), n));
+            return Err(MeshError::NormalCount { normals: normals.len(), vertices: n });
         }
         if !uvs.is_empty() && uvs.len() != n {
-            return Err(format!("{} texture coordinates for {} vertices", uvs.len(), n));
+            return Err(MeshError::UvCount { uvs: uvs.len(), vertices: n });
         }
         if let Some((i, t)) = indices.iter().enumerate().find(|(_, t)| t.iter().any(|&v| v as usize >= n)) {
-            return Err(format!("triangle {i} refers to vertex {:?} but there are only {n} vertices", t));
+            return Err(MeshError::IndexOutOfRange { triangle: i, indices: *t, vertices: n });
         }
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-            return Err(format!("vertex {i} has a non-finite position"));
+            return Err(MeshError::NonFinite(i));
         }
         let normals = normals.into_iter().map(|v| v.normalize_or(Vec3::Z)).collect();
         Ok(TriangleMesh {

@@ -20,6 +20,7 @@ pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
-pub use sdfgrid::SdfGrid;
+pub use mesh::MeshError;
+pub use sdfgrid::{SdfGrid, SdfGridError};
 pub use shape::{Geometry, ShapeSample};
 pub use sphere::Sphere;

@@ -134,7 +134,7 @@ fn sdfgrid(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource
     }
     let smooth = o.choice("normals", &["smooth", "analytic"])? == "smooth";
     let grid = files.grid_volume(o, "filename")?;
-    let sdf = SdfGrid::new(&grid, *to_world, smooth).map_err(|e| o.error_at("filename", e))?;
+    let sdf = SdfGrid::new(&grid, *to_world, smooth).map_err(|e| o.error_at("filename", e.to_string()))?;
     Ok(Geometry::SdfGrid(Box::new(sdf)))
 }
 

@@ -22,6 +22,31 @@ const SOLVE_EPSILON: f32 = 1e-5;
 /// Iterations of the root finder at most.
 const SOLVE_MAX_ITERATIONS: u32 = 50;
 
+/// Why a grid volume does not make an SDF grid.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SdfGridError {
+    /// Not one value per grid point.
+    #[error("an SDF grid has one channel, this one has {0}")]
+    Channels(usize),
+    /// Fewer than two samples along an axis.
+    #[error("an SDF grid has at least 2 samples per axis, this one {0:?}")]
+    TooSmall([usize; 3]),
+    /// More samples than 32-bit indices reach.
+    #[error("the SDF grid has more than 2³² samples")]
+    TooLarge,
+    /// A sample is NaN or infinite.
+    #[error("SDF sample {index} is {value} (the samples must be finite)")]
+    NonFinite {
+        /// Its index.
+        index: usize,
+        /// Its value.
+        value: f32,
+    },
+    /// No voxel's samples change sign.
+    #[error("the SDF grid holds no surface: no voxel's samples change sign")]
+    NoSurface,
+}
+
 /// A signed distance field on a grid (world space through `to_world`).
 #[derive(Clone, Debug)]
 pub struct SdfGrid {
@@ -111,18 +136,18 @@ fn corner(i: usize) -> Vec3 {
 impl SdfGrid {
     /// The SDF of a one-channel grid volume placed by `to_world`; an error if the grid is not
     /// one channel of at least 2×2×2 finite values, or no voxel holds surface.
-    pub fn new(grid: &GridVolume, to_world: Transform, smooth: bool) -> Result<SdfGrid, String> {
+    pub fn new(grid: &GridVolume, to_world: Transform, smooth: bool) -> Result<SdfGrid, SdfGridError> {
         if grid.channels != 1 {
-            return Err(format!("an SDF grid has one channel, this one has {}", grid.channels));
+            return Err(SdfGridError::Channels(grid.channels));
         }
         if grid.res.iter().any(|&n| n < 2) {
-            return Err(format!("an SDF grid has at least 2 samples per axis, this one {:?}", grid.res));
+            return Err(SdfGridError::TooSmall(grid.res));
         }
         if grid.data.len() > u32::MAX as usize {
-            return Err("the SDF grid has more than 2³² samples".into());
+            return Err(SdfGridError::TooLarge);
         }
         if let Some(i) = grid.data.iter().position(|v| !v.is_finite()) {
-            return Err(format!("SDF sample {i} is {} (the samples must be finite)", grid.data[i]));
+            return Err(SdfGridError::NonFinite { index: i, value: grid.data[i] });
         }
         let mut sdf = SdfGrid {
             res: grid.res,
@@ -153,7 +178,7 @@ impl SdfGrid {
             }
         }
         if sdf.voxels.is_empty() {
-            return Err("the SDF grid holds no surface: no voxel's samples change sign".into());
+            return Err(SdfGridError::NoSurface);
         }
         Ok(sdf)
     }
@@ -580,14 +605,14 @@ mod tests {
     fn bad_grids_are_refused() {
         let mut g = sphere_grid(4, 0.3);
         g.channels = 3;
-        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().contains("one channel"));
+        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().to_string().contains("one channel"));
         let g = GridVolume { res: [1, 4, 4], channels: 1, bbox: [[0.0; 3]; 2], data: vec![0.0; 16] };
-        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().contains("at least 2"));
+        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().to_string().contains("at least 2"));
         let g = GridVolume { res: [2, 2, 2], channels: 1, bbox: [[0.0; 3]; 2], data: vec![1.0; 8] };
-        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().contains("no surface"));
+        assert_eq!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err(), SdfGridError::NoSurface);
         let mut g = sphere_grid(4, 0.3);
         g.data[5] = f32::NAN;
-        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().contains("finite"));
+        assert!(SdfGrid::new(&g, Transform::IDENTITY, true).unwrap_err().to_string().contains("finite"));
     }
 
     use crate::math::Vec2;

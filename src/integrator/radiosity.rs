@@ -159,28 +159,65 @@ fn shape_emission(scene: &Scene, shape: usize) -> Rgb {
     }
 }
 
+/// What the radiosity method cannot handle in a scene.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RadiosityError {
+    /// The patch size is not a positive number.
+    #[error("patch size must be positive, got {0}")]
+    PatchSize(f32),
+    /// An area emitter's radiance varies over its surface.
+    #[error("radiosity needs constant emission: an area emitter's radiance is a texture")]
+    TexturedEmission,
+    /// A light other than an area emitter.
+    #[error("radiosity handles area emitters only; the scene has a {0} light")]
+    Light(&'static str),
+    /// A shape's reflectance varies over its surface.
+    #[error("shape {0}: radiosity needs constant reflectances (this one is textured)")]
+    TexturedReflectance(usize),
+    /// A shape whose BSDF is not diffuse.
+    #[error("shape {shape}: radiosity handles diffuse surfaces only, not {bsdf}")]
+    NotDiffuse {
+        /// The shape.
+        shape: usize,
+        /// Its BSDF's kind.
+        bsdf: String,
+    },
+    /// A shape that is no triangle mesh.
+    #[error("shape {0}: radiosity patches triangle meshes (rectangles, cubes, OBJ/PLY); spheres, disks, cylinders and SDF grids are not meshed")]
+    NotAMesh(usize),
+    /// Patching a mesh failed.
+    #[error("shape {0}: {1}")]
+    Mesh(usize, crate::geometry::MeshError),
+    /// The patched scene could not be built.
+    #[error("{0}")]
+    Build(#[from] crate::scene::BuildError),
+    /// Nothing to patch.
+    #[error("the scene has no surfaces to patch")]
+    NoSurfaces,
+    /// More patches than the dense solve handles.
+    #[error("{0} patches is too many (at most 200 000): use a larger patch size")]
+    TooManyPatches(usize),
+}
+
 impl Radiosity {
     /// Meshes `scene` into patches, computes form factors and solves. Errors name what the
     /// method cannot handle.
-    pub fn solve(scene: &Scene, opts: &Options) -> Result<Radiosity, String> {
+    pub fn solve(scene: &Scene, opts: &Options) -> Result<Radiosity, RadiosityError> {
         if !(opts.patch_size > 0.0 && opts.patch_size.is_finite()) {
-            return Err(format!("patch size must be positive, got {}", opts.patch_size));
+            return Err(RadiosityError::PatchSize(opts.patch_size));
         }
         if scene.lights().iter().any(|l| matches!(l, Light::Area { radiance, .. } if !matches!(radiance, crate::texture::Texture::Constant(_)))) {
-            return Err("radiosity needs constant emission: an area emitter's radiance is a texture".into());
+            return Err(RadiosityError::TexturedEmission);
         }
         if let Some(l) = scene.lights().iter().find(|l| !matches!(l, Light::Area { .. })) {
-            return Err(format!(
-                "radiosity handles area emitters only; the scene has a {} light",
-                match l {
-                    Light::Point { .. } => "point",
-                    Light::Spot { .. } => "spot",
-                    Light::Directional { .. } => "directional",
-                    Light::Projector(_) => "projector",
-                    Light::Constant { .. } => "constant environment",
-                    _ => "environment map",
-                }
-            ));
+            return Err(RadiosityError::Light(match l {
+                Light::Point { .. } => "point",
+                Light::Spot { .. } => "spot",
+                Light::Directional { .. } => "directional",
+                Light::Projector(_) => "projector",
+                Light::Constant { .. } => "constant environment",
+                _ => "environment map",
+            }));
         }
         let mut b = SceneBuilder::new();
         let mut first_patch = Vec::new();
@@ -190,22 +227,14 @@ impl Radiosity {
             let reflectance = match &scene.bsdfs()[scene.shapes()[s].bsdf as usize] {
                 Bsdf::Diffuse(d) => match &d.reflectance {
                     Texture::Constant(c) => *c,
-                    _ => {
-                        return Err(format!("shape {s}: radiosity needs constant reflectances (this one is textured)"))
-                    }
+                    _ => return Err(RadiosityError::TexturedReflectance(s)),
                 },
                 other => {
-                    return Err(format!(
-                        "shape {s}: radiosity handles diffuse surfaces only, not {}",
-                        format!("{other:?}").split(['(', ' ', '{']).next().unwrap_or("this BSDF")
-                    ))
+                    let bsdf = format!("{other:?}").split(['(', ' ', '{']).next().unwrap_or("this BSDF").to_string();
+                    return Err(RadiosityError::NotDiffuse { shape: s, bsdf });
                 }
             };
-            let Geometry::Mesh(mesh) = geometry else {
-                return Err(format!(
-                    "shape {s}: radiosity patches triangle meshes (rectangles, cubes, OBJ/PLY); spheres, disks and cylinders are not meshed"
-                ));
-            };
+            let Geometry::Mesh(mesh) = geometry else { return Err(RadiosityError::NotAMesh(s)) };
             let le = shape_emission(scene, s);
             let mut tris = Vec::new();
             for i in 0..mesh.len() {
@@ -214,7 +243,8 @@ impl Radiosity {
             first_patch.push(area.len() as u32);
             let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
             let indices: Vec<[u32; 3]> = (0..tris.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
-            let mut patches = TriangleMesh::new(positions, vec![], vec![], indices)?;
+            let mut patches =
+                TriangleMesh::new(positions, vec![], vec![], indices).map_err(|e| RadiosityError::Mesh(s, e))?;
             patches.flip_normals = mesh.flip_normals;
             for t in &tris {
                 area.push(0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length());
@@ -226,13 +256,13 @@ impl Radiosity {
         }
         let camera: Camera = scene.camera().clone();
         b.set_camera(camera);
-        let patched = b.build().map_err(|e| e.to_string())?;
+        let patched = b.build()?;
         let n = area.len();
         if n == 0 {
-            return Err("the scene has no surfaces to patch".into());
+            return Err(RadiosityError::NoSurfaces);
         }
         if n > 200_000 {
-            return Err(format!("{n} patches is too many (at most 200 000): use a larger patch size"));
+            return Err(RadiosityError::TooManyPatches(n));
         }
 
         // Form factors, one row per patch, deterministic per row.
@@ -667,13 +697,13 @@ mod tests {
             b.build().unwrap()
         };
         let e = Radiosity::solve(&scene_with(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))), &Options::default()).unwrap_err();
-        assert!(e.contains("point"), "{e}");
+        assert_eq!(e, RadiosityError::Light("point"));
         let mirror = Bsdf::Conductor(crate::material::Conductor { ior: None, specular_reflectance: Rgb::ONE.into() });
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(mirror);
         b.add_shape(Geometry::Mesh(TriangleMesh::rectangle()), m, Some(Rgb::ONE));
         b.set_camera(Camera::perspective(Transform::IDENTITY, 60.0, FovAxis::X, 4, 4).unwrap());
         let e = Radiosity::solve(&b.build().unwrap(), &Options::default()).unwrap_err();
-        assert!(e.contains("diffuse"), "{e}");
+        assert!(matches!(&e, RadiosityError::NotDiffuse { shape: 0, bsdf } if bsdf == "Conductor"), "{e}");
     }
 }

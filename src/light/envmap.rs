@@ -32,22 +32,42 @@ pub struct EnvMap {
     to_local: Transform,
 }
 
+/// Why an image and scale do not make an environment map.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EnvMapError {
+    /// The image has no pixels.
+    #[error("environment map image is empty")]
+    Empty,
+    /// The scale is negative or not finite.
+    #[error("environment map scale must be a non-negative number, got {0}")]
+    Scale(f32),
+    /// A pixel is negative or not finite.
+    #[error("environment map pixel {0} is negative or not finite")]
+    Pixel(usize),
+    /// One row cannot span the sphere's latitudes.
+    #[error("environment map must be at least 2 pixels high")]
+    TooLow,
+    /// Every pixel is black: nothing to sample.
+    #[error("environment map is black: nothing to sample (use no emitter instead)")]
+    Black,
+}
+
 impl EnvMap {
     /// An environment from `image` (owned or shared), radiance multiplied by `scale`, rotated by
     /// `to_world`.
-    pub fn new(image: impl Into<Arc<Image>>, scale: f32, to_world: Transform) -> Result<EnvMap, String> {
+    pub fn new(image: impl Into<Arc<Image>>, scale: f32, to_world: Transform) -> Result<EnvMap, EnvMapError> {
         let image: Arc<Image> = image.into();
         if image.width == 0 || image.height == 0 {
-            return Err("environment map image is empty".into());
+            return Err(EnvMapError::Empty);
         }
         if !(scale.is_finite() && scale >= 0.0) {
-            return Err(format!("environment map scale must be a non-negative number, got {scale}"));
+            return Err(EnvMapError::Scale(scale));
         }
         if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
-            return Err(format!("environment map pixel {i} is negative or not finite"));
+            return Err(EnvMapError::Pixel(i));
         }
         if image.height < 2 {
-            return Err("environment map must be at least 2 pixels high".into());
+            return Err(EnvMapError::TooLow);
         }
         let (w, h) = (image.width as usize, image.height as usize);
         let lum = |x: usize, y: usize| luminance(image.pixels[y * w + x % w]);
@@ -65,7 +85,7 @@ impl EnvMap {
             }
         }
         let distribution = PiecewiseConstant2D::new(&func, w, h - 1)
-            .ok_or("environment map is black: nothing to sample (use no emitter instead)")?;
+            .ok_or(EnvMapError::Black)?;
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
         Ok(EnvMap {

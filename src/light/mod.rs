@@ -12,7 +12,7 @@ mod registry;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh};
-pub use envmap::EnvMap;
+pub use envmap::{EnvMap, EnvMapError};
 pub use projector::Projector;
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};

@@ -128,6 +128,6 @@ fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
     let scale = o.float("scale", 1.0)?;
     // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).
     o.bool("mis_compensation", false)?;
-    let map = EnvMap::new(image, scale, o.transform("to_world")?).map_err(|e| o.error(e))?;
+    let map = EnvMap::new(image, scale, o.transform("to_world")?).map_err(|e| o.error(e.to_string()))?;
     Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
 }

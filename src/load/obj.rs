@@ -107,7 +107,7 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
     if !any_n || normals.contains(&Vec3::ZERO) {
         normals.clear();
     }
-    TriangleMesh::new(positions, normals, uvs, indices).map_err(|e| (0, e))
+    TriangleMesh::new(positions, normals, uvs, indices).map_err(|e| (0, e.to_string()))
 }
 
 #[cfg(test)]

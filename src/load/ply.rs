@@ -256,7 +256,7 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
             }
         }
     }
-    let mut mesh = TriangleMesh::new(positions, normals, uvs, indices)?;
+    let mut mesh = TriangleMesh::new(positions, normals, uvs, indices).map_err(|e| e.to_string())?;
     mesh.attributes = attributes.into_iter().map(|(a, _)| a).collect();
     Ok(mesh)
 }

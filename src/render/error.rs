@@ -44,7 +44,7 @@ pub enum RenderError {
     NoEmitters,
     /// The radiosity solve failed (the scene has no patches, say).
     #[error("radiosity: {0}")]
-    Radiosity(String),
+    Radiosity(crate::integrator::radiosity::RadiosityError),
     /// An output the integrator writes could not be written.
     #[error("cannot write '{}': {source}", path.display())]
     Write {
