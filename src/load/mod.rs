@@ -3,6 +3,7 @@
 //! PLY and Mitsuba serialized meshes, and images. Errors name the file, the line (for text formats) and what
 //! was expected.
 
+pub mod build;
 mod error;
 pub mod image;
 pub mod mitsuba;

@@ -1,12 +1,12 @@
 //! Mitsuba 3 XML scene files: `neumann render scene.xml`.
 //!
 //! [`load_scene_file`] parses the file ([`parse`]: defaults, `$` substitution, includes, ids and
-//! references, transforms, typed properties with positions) and builds the plugins (`build.rs`).
+//! references, transforms, typed properties with positions) into located objects, which the
+//! format-neutral [`crate::load::build`] turns into the scene.
 //! Every problem is a [`SceneError`] naming `file:line:col` with the source line, parameters that
 //! no plugin reads included (Mitsuba 3 rejects unreferenced properties too); `-D` parameters the
 //! scene never uses come back as warnings.
 
-mod build;
 pub mod parse;
 
 pub use crate::props::SceneError;
@@ -31,7 +31,7 @@ pub fn load_scene_text(path: &Path, text: &str, overrides: &[(String, String)]) 
 }
 
 fn finish(parser: parse::Parser, root: std::rc::Rc<crate::props::Obj>) -> Result<SceneFile, SceneError> {
-    let mut file = build::Builder::new(parser.resolver.clone()).build(&root)?;
+    let mut file = crate::load::build::Builder::new(parser.resolver.clone()).build(&root)?;
     for name in parser.unused_overrides() {
         file.warnings.push(format!("warning: -D {name}: the scene has no ${name} to substitute"));
     }

@@ -1,3 +1,7 @@
+//! Scene assembly from properties, shared by every scene format: a format's loader maps its
+//! syntax to a tree of located objects ([`crate::props::Obj`], Mitsuba's plugin names and
+//! parameters), and this builds the scene from it.
+//!
 //! The scene's structure, from the parsed objects: which objects are built and where they go
 //! (shapes with their BSDF, area emitter and media; ids shared by reference; shapegroups and
 //! instances; the default BSDFs), and the loader's services to plugins (textures, nested BSDFs,
