@@ -1,7 +1,8 @@
 //! neumann against Mitsuba 3 on every scene with a committed reference (`neumann validate`, see
 //! src/bin/neumann/validate.rs and tools/mitsuba/references.py): at equal spp, relMSE ≤ the scene's
 //! bound × Mitsuba's (1.5; tighter where an issue asked for it, e.g. 1.2 on the small-light scenes)
-//! and the image mean within 0.5 % of the reference.
+//! and the image mean within 0.5 % of the reference, for every scene listed in
+//! references/references.csv.
 
 use std::process::Command;
 
@@ -13,5 +14,9 @@ fn every_scene_agrees_with_mitsuba() {
     println!("{stdout}");
     assert!(out.status.success(), "validation failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     let rows = stdout.lines().filter(|l| l.trim_end().ends_with(" ok")).count();
-    assert!(rows >= 11, "expected the 3 shared and 8 own scenes, found {rows} rows:\n{stdout}");
+    // Every scene with a committed reference is validated (references.csv lists them).
+    let csv = std::fs::read_to_string(std::path::Path::new(root).join("references/references.csv")).unwrap();
+    let expected = csv.lines().skip(1).filter(|l| !l.trim().is_empty()).count();
+    assert!(expected >= 21, "references.csv lists {expected} scenes");
+    assert_eq!(rows, expected, "every referenced scene must pass:\n{stdout}");
 }
