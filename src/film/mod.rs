@@ -446,8 +446,9 @@ impl Default for FilmSettings {
 impl FilmSettings {
     /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
     /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
-    /// nested `<rfilter>`; `component_format`, `file_format` and `sample_border` are read (the
-    /// output format follows the output file's extension).
+    /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
+    /// `sample_border` and `banner` are read (they cannot change the image: the output format
+    /// follows the output file's extension).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
         f.built.set(true);
         f.check_children(&["rfilter"])?;
@@ -469,8 +470,9 @@ impl FilmSettings {
         }
         let alpha = f.choice("pixel_format", &["rgb", "rgba"])? == "rgba";
         f.choice("component_format", &["float16", "float32", "uint32"])?;
-        f.choice("file_format", &["openexr", "pfm", "png"])?;
+        f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
         f.bool("sample_border", false)?;
+        f.bool("banner", true)?;
         let mut window = None;
         if f.has("crop_width") || f.has("crop_height") || f.has("crop_offset_x") || f.has("crop_offset_y") {
             let ox = f.int("crop_offset_x", 0)?;
