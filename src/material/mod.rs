@@ -15,6 +15,7 @@ pub mod fresnel;
 pub mod microfacet;
 mod perturbed;
 mod plastic;
+mod pplastic;
 mod principled;
 mod principledthin;
 mod registry;
@@ -26,6 +27,7 @@ pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use perturbed::{Perturbation, Perturbed};
+pub use pplastic::PPlastic;
 pub use principled::Principled;
 pub use principledthin::PrincipledThin;
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
@@ -87,6 +89,8 @@ pub enum Bsdf {
     Plastic(Plastic),
     /// Rough plastic: microfacet coating over a diffuse base.
     RoughPlastic(RoughPlastic),
+    /// Mitsuba's `pplastic` (polarized plastic), unpolarized.
+    PPlastic(Box<PPlastic>),
     /// Mitsuba's `principled`: the Disney BSDF.
     Principled(Box<Principled>),
     /// Mitsuba's `principledthin`: the Disney BSDF of a thin sheet.
@@ -155,6 +159,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::Principled(b) => b.eval(ctx, wo, wi),
+            Bsdf::PPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
@@ -183,6 +188,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.pdf(wo, wi),
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             Bsdf::Principled(b) => b.pdf(ctx, wo, wi),
+            Bsdf::PPlastic(b) => b.pdf(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.pdf(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
@@ -213,6 +219,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Principled(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::PPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::PrincipledThin(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
@@ -332,6 +339,7 @@ impl Bsdf {
             Bsdf::Plastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::RoughPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::Principled(b) => b.textures(),
+            Bsdf::PPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::PrincipledThin(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
                 let mut v = vec![weight];
@@ -370,7 +378,8 @@ impl Bsdf {
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::Principled(_)
-            | Bsdf::PrincipledThin(_) => false,
+            | Bsdf::PrincipledThin(_)
+            | Bsdf::PPlastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.
             _ => self.is_delta_nested(),

@@ -34,6 +34,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("roughdielectric", super::RoughDielectric::from_props),
     ("plastic", super::Plastic::from_props),
     ("roughplastic", super::RoughPlastic::from_props),
+    ("pplastic", super::PPlastic::from_props),
     ("principled", super::Principled::from_props),
     ("principledthin", super::PrincipledThin::from_props),
     ("twosided", two_sided),

@@ -161,6 +161,16 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "principled, flatness".into(),
         Bsdf::Principled(Box::new(Principled { roughness: Rgb::splat(0.7).into(), flatness: k(0.6), ..principled })),
     ));
+    // Mitsuba's polarized plastic, unpolarized.
+    v.push((
+        "pplastic".into(),
+        Bsdf::PPlastic(Box::new(PPlastic::new(
+            Rgb::new(0.6, 0.4, 0.2).into(),
+            Rgb::new(0.9, 0.8, 0.7).into(),
+            Microfacet::new(MicrofacetType::Ggx, 0.1, 0.3),
+            1.6,
+        ))),
+    ));
     // The thin principled BSDF: specular and diffuse transmission with anisotropy and tint;
     // sheen and flatness.
     let thin = PrincipledThin {

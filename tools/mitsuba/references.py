@@ -60,6 +60,8 @@ SCENES = {
     # The principled BSDF: metallic with clearcoat and anisotropy, transmission, sheen and
     # flatness with textured base colour and roughness, spec_tint; a principledthin leaf.
     "principled": (8192, 64, {}, 1.5),
+    # Polarized plastic, unpolarized (Mitsuba's RGB variants): plain and textured, anisotropic.
+    "pplastic": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 
