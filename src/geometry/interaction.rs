@@ -24,8 +24,9 @@ pub struct SurfaceInteraction {
     /// the shading frame's first tangent is this made perpendicular to `ns`, as in Mitsuba, which
     /// orients anisotropic BSDFs.
     pub dpdu: Vec3,
-    /// `∂p/∂v` (world space, not normalized; zero where the parameterization is degenerate):
-    /// with `dpdu`, what bump maps perturb.
+    /// `∂p/∂v` (world space, not normalized): with `dpdu`, what bump maps perturb. Computed only
+    /// in scenes that have a bump map (zero elsewhere, and where the parameterization is
+    /// degenerate), as no other part of the renderer reads it.
     pub dpdv: Vec3,
     /// Index of the shape in the scene.
     pub shape: u32,

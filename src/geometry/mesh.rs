@@ -365,22 +365,49 @@ impl TriangleMesh {
         }
     }
 
-    /// `(∂p/∂u, ∂p/∂v)` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba
-    /// 3.9 computes them: from the vertices' texture coordinates where they span the triangle
-    /// (else the tangents of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
+    /// The texture-coordinate differences `(uv1 − uv0, uv2 − uv0)` of triangle `i` and their
+    /// determinant, where the uvs span the triangle.
+    #[inline]
+    fn uv_deltas(&self, i: usize) -> Option<(Vec2, Vec2, f32)> {
+        if self.uvs.is_empty() {
+            return None;
+        }
+        let [a, b, c] = self.indices[i].map(|v| v as usize);
+        let (duv0, duv1) = (self.uvs[b] - self.uvs[a], self.uvs[c] - self.uvs[a]);
+        let det = duv0.x * duv1.y - duv0.y * duv1.x;
+        (det != 0.0).then_some((duv0, duv1, det))
+    }
+
+    /// `∂p/∂u` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba 3.9
+    /// computes it: from the vertices' texture coordinates where they span the triangle (else
+    /// the first tangent of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
     /// without texture coordinates the barycentric parameterization uv = (b1, b2) gives
-    /// `p1 − p0` and `p2 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes
-    /// change frame from triangle to triangle there, and so they do here).
+    /// `p1 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes change frame from
+    /// triangle to triangle there, and so they do here).
+    #[inline]
+    pub fn dpdu(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> Vec3 {
+        if self.uvs.is_empty() {
+            return p[1] - p[0];
+        }
+        if let Some((duv0, duv1, det)) = self.uv_deltas(i) {
+            let d = ((p[1] - p[0]) * duv1.y - (p[2] - p[0]) * duv0.y) / det;
+            if d.is_finite() {
+                return d;
+            }
+        }
+        crate::math::Frame::from_z(ng).s
+    }
+
+    /// `(∂p/∂u, ∂p/∂v)` of triangle `i`, as [`TriangleMesh::dpdu`] (without texture
+    /// coordinates `p1 − p0` and `p2 − p0`; the tangents of Duff et al.'s basis where the uvs
+    /// are degenerate).
     #[inline]
     pub fn dpduv(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> (Vec3, Vec3) {
         let (dp0, dp1) = (p[1] - p[0], p[2] - p[0]);
         if self.uvs.is_empty() {
             return (dp0, dp1);
         }
-        let [a, b, c] = self.indices[i].map(|v| v as usize);
-        let (duv0, duv1) = (self.uvs[b] - self.uvs[a], self.uvs[c] - self.uvs[a]);
-        let det = duv0.x * duv1.y - duv0.y * duv1.x;
-        if det != 0.0 {
+        if let Some((duv0, duv1, det)) = self.uv_deltas(i) {
             let dpdu = (dp0 * duv1.y - dp1 * duv0.y) / det;
             let dpdv = (dp1 * duv0.x - dp0 * duv1.x) / det;
             if dpdu.is_finite() && dpdv.is_finite() {

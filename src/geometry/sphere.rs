@@ -95,10 +95,13 @@ impl Sphere {
 
     /// `(∂p/∂u, ∂p/∂v)` at the surface point `p` for `uv = (φ / 2π, θ / π)`, as Mitsuba gives
     /// them: `2π (−y, x, 0)` and `π (z cos φ, z sin φ, −√(x² + y²))` in the object frame, turned
-    /// to world space (∂p/∂u vanishes at the poles).
+    /// to world space (∂p/∂u vanishes at the poles); `∂p/∂v` only `with_v` (else zero).
     #[inline]
-    pub fn dpduv(&self, p: Vec3) -> (Vec3, Vec3) {
+    pub fn dpduv(&self, p: Vec3, with_v: bool) -> (Vec3, Vec3) {
         let local = self.rotation.transpose() * (p - self.center);
+        if !with_v {
+            return (self.rotation * (Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI)), Vec3::ZERO);
+        }
         let rd = local.x.hypot(local.y);
         let (cos_phi, sin_phi) = if rd > 0.0 { (local.x / rd, local.y / rd) } else { (1.0, 0.0) };
         let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);

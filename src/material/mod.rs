@@ -368,6 +368,18 @@ impl Bsdf {
         }
     }
 
+    /// Whether the BSDF (or one nested in it) is a bump map, which reads `∂p/∂v` at hits.
+    pub fn perturbs_with_height(&self) -> bool {
+        match self {
+            Bsdf::Perturbed(p) => {
+                matches!(p.perturbation, Perturbation::BumpMap { .. }) || p.bsdf.perturbs_with_height()
+            }
+            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].perturbs_with_height() || b[1].perturbs_with_height(),
+            Bsdf::Mask { bsdf, .. } => bsdf.perturbs_with_height(),
+            _ => false,
+        }
+    }
+
     /// Whether the BSDF has only delta lobes (light sampling is useless on it).
     #[inline]
     pub fn is_delta(&self) -> bool {

@@ -187,7 +187,10 @@ impl SceneBuilder {
         let light_sampler = LightSampler::new(LightSamplerKind::default(), &self.lights, &self.geometries)?;
         let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
         let emission_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
+        // ∂p/∂v is computed at hits only where a bump map reads it.
+        let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);
         Ok(Scene {
+            needs_dpdv,
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,

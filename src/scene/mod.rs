@@ -135,6 +135,8 @@ pub struct Scene {
     /// Every primitive's shape and index, in BVH order.
     refs: Vec<PrimRef>,
     camera: Camera,
+    /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
+    needs_dpdv: bool,
 }
 
 impl Scene {
@@ -348,7 +350,7 @@ impl Scene {
         let i = r.index as usize;
         let ng = m.face_normal(i);
         let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
-        let (dpdu, dpdv) = m.dpduv(i, &p, ng);
+        let (dpdu, dpdv) = if self.needs_dpdv { m.dpduv(i, &p, ng) } else { (m.dpdu(i, &p, ng), Vec3::ZERO) };
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
             p_error: triangle_point_error(&p, &h),
@@ -374,7 +376,7 @@ impl Scene {
         let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
                 let surface = s.surface(ray, t);
-                (surface, s.dpduv(surface.0.p))
+                (surface, s.dpduv(surface.0.p, self.needs_dpdv))
             }
             (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpduv(q)),
             (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpduv(q)),
@@ -471,7 +473,21 @@ mod tests {
         ];
         for (k, (g, o, d, expected)) in cases.into_iter().enumerate() {
             let mut b = SceneBuilder::new();
-            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+            // A bump map, so that hits compute ∂p/∂v (scenes without one skip it).
+            let height = crate::texture::Texture::Bitmap {
+                bitmap: crate::texture::Bitmap {
+                    image: std::sync::Arc::new(crate::image::Image { width: 1, height: 1, pixels: vec![Rgb::ONE] }),
+                    filter: crate::texture::Filter::Bilinear,
+                    wrap: crate::texture::Wrap::Repeat,
+                },
+                to_uv: crate::math::Mat3::IDENTITY,
+            };
+            let m = b.add_bsdf(Bsdf::Perturbed(crate::material::Perturbed {
+                perturbation: crate::material::Perturbation::BumpMap { height, scale: 1.0 },
+                bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))),
+                flip_invalid_normals: true,
+                shadowing: true,
+            }));
             b.add_shape(g, m, None);
             b.set_camera(crate::camera::Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
             let scene = b.build().unwrap();
