@@ -22,7 +22,7 @@
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
-use crate::math::{luminance, Rgb, Vec2, Vec3, INV_PI, PI};
+use crate::math::{lerp, luminance, Rgb, Vec2, Vec3, INV_PI, PI};
 use crate::props::{Obj, Result as PropResult, Value};
 use crate::texture::Texture;
 
@@ -63,10 +63,13 @@ struct Params {
     base: Rgb,
     roughness: f32,
     metallic: f32,
-    spec_trans: f32,
     clearcoat: f32,
     /// GGX roughness (α_u, α_v).
     alpha: (f32, f32),
+    /// Weight of the reflection-only lobes, `(1 − metallic)(1 − spec_trans)`.
+    brdf: f32,
+    /// Weight of the transmissive lobe, `(1 − metallic) spec_trans` (0 without transmission).
+    bsdf: f32,
 }
 
 /// Schlick's weight `(1 − cos)⁵`, cos clamped to [0, 1].
@@ -75,12 +78,6 @@ pub(super) fn schlick_weight(cos: f32) -> f32 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     let m2 = m * m;
     m2 * m2 * m
-}
-
-/// `a (1 − t) + b t`.
-#[inline]
-pub(super) fn lerp(a: f32, b: f32, t: f32) -> f32 {
-    a * (1.0 - t) + b * t
 }
 
 /// Schlick's Fresnel with normal reflectance `r0` at `cos_i` (about the microfacet), using the
@@ -223,13 +220,15 @@ impl Principled {
         let s = |t: &Option<Texture>| scalar(t, ctx);
         let roughness = self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref());
         let alpha = ggx_alpha(roughness, self.anisotropic.as_ref().map(|_| s(&self.anisotropic)));
+        let (metallic, spec_trans) = (s(&self.metallic), s(&self.spec_trans));
         Params {
             base: ctx.eval(&self.base_color),
             roughness,
-            metallic: s(&self.metallic),
-            spec_trans: s(&self.spec_trans),
+            metallic,
             clearcoat: s(&self.clearcoat),
             alpha,
+            brdf: (1.0 - metallic) * (1.0 - spec_trans),
+            bsdf: (1.0 - metallic) * spec_trans,
         }
     }
 
@@ -241,14 +240,13 @@ impl Principled {
     /// for the dielectric Fresnel term `f`, normalized, as Mitsuba chooses lobes.
     fn lobe_probabilities(&self, p: &Params, f: f32, front: bool) -> [f32; 4] {
         let [spec_rate, cc_rate, diff_rate] = self.rates;
-        let brdf = (1.0 - p.metallic) * (1.0 - p.spec_trans);
-        let bsdf = if self.spec_trans.is_some() { (1.0 - p.metallic) * p.spec_trans } else { 0.0 };
+        // Lobes that are off have weight 0 (their parameters read 0).
         let (diffuse, clearcoat, trans, reflect) = if front {
             (
-                brdf * diff_rate,
-                if self.clearcoat.is_some() { 0.25 * p.clearcoat * cc_rate } else { 0.0 },
-                if self.spec_trans.is_some() { spec_rate * bsdf * (1.0 - f) } else { 0.0 },
-                spec_rate * (1.0 - bsdf * (1.0 - f)),
+                p.brdf * diff_rate,
+                0.25 * p.clearcoat * cc_rate,
+                spec_rate * p.bsdf * (1.0 - f),
+                spec_rate * (1.0 - p.bsdf * (1.0 - f)),
             )
         } else {
             (0.0, 0.0, if self.spec_trans.is_some() { 1.0 - f } else { 0.0 }, f)
@@ -267,13 +265,16 @@ impl Principled {
 
     /// `f(wo, wi) |cos θᵢ|`.
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_with(ctx, &self.params(ctx), wo, wi)
+    }
+
+    /// [`Principled::eval`] with the parameters evaluated at `ctx` already.
+    fn eval_with(&self, ctx: &BsdfContext, p: &Params, wo: Vec3, wi: Vec3) -> Rgb {
         let cos_o = wo.z;
         if cos_o == 0.0 {
             return Rgb::ZERO;
         }
-        let p = self.params(ctx);
-        let brdf = (1.0 - p.metallic) * (1.0 - p.spec_trans);
-        let bsdf = (1.0 - p.metallic) * p.spec_trans;
+        let (brdf, bsdf) = (p.brdf, p.bsdf);
         let cos_i = wi.z;
         let (reflect, refract) = (cos_o * cos_i > 0.0, cos_o * cos_i < 0.0);
         let front = cos_o > 0.0;
@@ -309,7 +310,7 @@ impl Principled {
             };
             value += f * (d * g / (4.0 * cos_o.abs()));
         }
-        if self.spec_trans.is_some() && bsdf > 0.0 && refract && refr_ok && f_diel < 1.0 {
+        if bsdf > 0.0 && refract && refr_ok && f_diel < 1.0 {
             // Radiance transport: the solid angle compresses by 1/η² across the interface.
             let scale = 1.0 / (eta_path * eta_path);
             let (ow, iw) = (wo.dot(wh), wi.dot(wh));
@@ -317,7 +318,7 @@ impl Principled {
             let t = (scale * (1.0 - f_diel) * d * g * eta_path * eta_path * ow * iw / (cos_o * denom * denom)).abs();
             value += Rgb::new(p.base.x.max(0.0).sqrt(), p.base.y.max(0.0).sqrt(), p.base.z.max(0.0).sqrt()) * (bsdf * t);
         }
-        if self.clearcoat.is_some() && p.clearcoat > 0.0 && reflect && refl_ok && front {
+        if p.clearcoat > 0.0 && reflect && refl_ok && front {
             let f_cc = schlick(Rgb::splat(0.04), wo.dot(wh), self.eta).x;
             let d_cc = self.clearcoat_distribution(ctx).d(wh);
             let g_cc = smith_ggx1(wo, wh, 0.25) * smith_ggx1(wi, wh, 0.25);
@@ -329,7 +330,7 @@ impl Principled {
             let lobe = disney_diffuse(p.roughness, cos_i.abs(), cos_o.abs(), cos_d, flatness);
             value += p.base * (brdf * cos_i.abs() * INV_PI * lobe);
             let sheen = scalar(&self.sheen, ctx);
-            if self.sheen.is_some() && sheen > 0.0 && 1.0 - p.metallic > 0.0 {
+            if sheen > 0.0 && 1.0 - p.metallic > 0.0 {
                 let tint = sheen_color(p.base, self.sheen_tint.as_ref().map(|_| scalar(&self.sheen_tint, ctx)));
                 value += tint * (sheen * (1.0 - p.metallic) * schlick_weight(cos_d.abs()) * cos_i.abs());
             }
@@ -343,15 +344,19 @@ impl Principled {
 
     /// Density of [`Principled::sample`] choosing `wi`.
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_with(ctx, &self.params(ctx), wo, wi)
+    }
+
+    /// [`Principled::pdf`] with the parameters evaluated at `ctx` already.
+    fn pdf_with(&self, ctx: &BsdfContext, p: &Params, wo: Vec3, wi: Vec3) -> f32 {
         let cos_o = wo.z;
         if cos_o == 0.0 {
             return 0.0;
         }
-        let p = self.params(ctx);
         let front = cos_o > 0.0;
         // Seen from inside without transmission nothing is sampled (Mitsuba's pdf is not zero
         // there, but its value is: the density differs only where the BSDF vanishes).
-        if !front && (self.spec_trans.is_none() || (1.0 - p.metallic) * p.spec_trans <= 0.0) {
+        if !front && p.bsdf <= 0.0 {
             return 0.0;
         }
         let (reflect, refract) = (cos_o * wi.z > 0.0, cos_o * wi.z < 0.0);
@@ -361,7 +366,7 @@ impl Principled {
         }
         let dist = Microfacet::new(MicrofacetType::Ggx, p.alpha.0, p.alpha.1);
         let (f_diel, ..) = fresnel_dielectric(wo.dot(wh), self.eta);
-        let [p_diffuse, p_clearcoat, p_trans, p_reflect] = self.lobe_probabilities(&p, f_diel, front);
+        let [p_diffuse, p_clearcoat, p_trans, p_reflect] = self.lobe_probabilities(p, f_diel, front);
         let (ow, iw) = (wo.dot(wh), wi.dot(wh));
         let jacobian = if self.spec_trans.is_some() && !reflect {
             (eta_path * eta_path * iw / (ow + eta_path * iw).powi(2)).abs()
@@ -398,8 +403,7 @@ impl Principled {
         }
         let p = self.params(ctx);
         let front = cos_o > 0.0;
-        let bsdf = if self.spec_trans.is_some() { (1.0 - p.metallic) * p.spec_trans } else { 0.0 };
-        if !(front || bsdf > 0.0) {
+        if !(front || p.bsdf > 0.0) {
             return None;
         }
         let dist = Microfacet::new(MicrofacetType::Ggx, p.alpha.0, p.alpha.1);
@@ -416,9 +420,6 @@ impl Principled {
             let wi = reflect_about(wo, m_cc);
             (compatible(m_cc, wo, wi, cos_o, true) && cos_o * wi.z > 0.0).then_some(wi)?
         } else if u1 < p_diffuse + p_clearcoat + p_trans {
-            if cos_t == 0.0 && f_diel >= 1.0 {
-                return None;
-            }
             let wi = refract_about(wo, m, cos_t, eta_ti);
             eta = eta_it;
             (compatible(m, wo, wi, cos_o, false) && cos_o * wi.z < 0.0).then_some(wi)?
@@ -426,11 +427,11 @@ impl Principled {
             let wi = reflect_about(wo, m);
             (compatible(m, wo, wi, cos_o, true) && cos_o * wi.z > 0.0).then_some(wi)?
         };
-        let pdf = self.pdf(ctx, wo, wi);
+        let pdf = self.pdf_with(ctx, &p, wo, wi);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval(ctx, wo, wi) / pdf;
+        let weight = self.eval_with(ctx, &p, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 
@@ -511,6 +512,7 @@ impl Principled {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::tests::{assert_matches_mitsuba, MitsubaRow};
 
     fn constant(v: f32) -> Option<Texture> {
         Some(Rgb::splat(v).into())
@@ -568,8 +570,7 @@ mod tests {
     /// `si.wi` is our `wo`): all lobes, anisotropy, transmission from both sides, flatness.
     #[test]
     fn matches_mitsuba() {
-        type Row = (char, [f32; 3], [f32; 3], [f32; 3], f32);
-        let rows: &[Row] = &[
+        let rows: &[MitsubaRow] = &[
         ('A', [0.3007679, 0.200512, 0.9323806], [-0.4000088, 0.3000066, 0.8660191], [0.1491884, 0.05899792, 0.04095982], 0.1307671),
         ('A', [0.3007679, 0.200512, 0.9323806], [0.7419985, 0.6359987, 0.2119996], [0.03278917, 0.012387, 0.008306559], 0.02554113),
         ('A', [0.3007679, 0.200512, 0.9323806], [-0.3007679, -0.200512, -0.9323806], [0.0, 0.0, 0.0], 0.0),
@@ -595,18 +596,14 @@ mod tests {
         ('C', [0.2009163, -0.1004581, -0.9744439], [-0.3007679, -0.200512, -0.9323806], [0.0, 0.0, 0.0], 0.2879162),
         ('C', [0.2009163, -0.1004581, -0.9744439], [0.1003721, 0.05018603, 0.9936835], [0.0, 0.0, 0.0], 0.0),
         ];
-        let ctx = BsdfContext::default();
-        for &(k, wo, wi, value, pdf) in rows {
-            let b = config(k);
-            let (wo, wi) = (Vec3::from_array(wo), Vec3::from_array(wi));
-            let e = b.eval(&ctx, wo, wi);
-            let close = |a: f32, b: f32| (a - b).abs() <= 2e-4 * b.abs().max(1e-2);
-            assert!(close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]), "{k} {wo} {wi}: {e} vs {value:?}");
-            let p = b.pdf(&ctx, wo, wi);
+        assert_matches_mitsuba(rows, |k| Bsdf::Principled(Box::new(config(k))), |k, wo, pdf| {
             // Mitsuba's pdf from inside a material that does not transmit is not zero, where
             // the BSDF is (see `pdf`).
-            let expected = if wo.z < 0.0 && b.spec_trans.is_none() { 0.0 } else { pdf };
-            assert!(close(p, expected), "{k} {wo} {wi}: pdf {p} vs {expected}");
-        }
+            if wo.z < 0.0 && config(k).spec_trans.is_none() {
+                0.0
+            } else {
+                pdf
+            }
+        });
     }
 }

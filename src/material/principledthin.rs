@@ -54,8 +54,9 @@ pub struct PrincipledThin {
     pub rates: [f32; 4],
 }
 
-/// The parameters at one shading point.
+/// The parameters at one shading point (off ones read 0).
 struct Params {
+    base: Rgb,
     roughness: f32,
     anisotropic: Option<f32>,
     spec_trans: f32,
@@ -67,6 +68,7 @@ struct Params {
 impl PrincipledThin {
     fn params(&self, ctx: &BsdfContext) -> Params {
         Params {
+            base: ctx.eval(&self.base_color),
             roughness: self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref()),
             anisotropic: self.anisotropic.as_ref().map(|_| scalar(&self.anisotropic, ctx)),
             spec_trans: scalar(&self.spec_trans, ctx),
@@ -86,12 +88,11 @@ impl PrincipledThin {
     /// diffuse transmission (normalized).
     fn lobe_probabilities(&self, p: &Params) -> [f32; 4] {
         let [r_sr, r_st, r_dr, r_dt] = self.rates;
-        let spec = self.spec_trans.is_some();
         let probs = [
-            if spec { p.spec_trans * r_sr / 2.0 } else { 0.0 },
-            if spec { p.spec_trans * r_st / 2.0 } else { 0.0 },
+            p.spec_trans * r_sr / 2.0,
+            p.spec_trans * r_st / 2.0,
             r_dr * (1.0 - p.spec_trans) * (1.0 - p.diff_trans),
-            if self.diff_trans.is_some() { r_dt * (1.0 - p.spec_trans) * p.diff_trans } else { 0.0 },
+            r_dt * (1.0 - p.spec_trans) * p.diff_trans,
         ];
         let total: f32 = probs.iter().sum();
         probs.map(|x| x / total)
@@ -108,18 +109,22 @@ impl PrincipledThin {
 
     /// `f(wo, wi) |cos θᵢ|`.
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_with(ctx, &self.params(ctx), wo, wi)
+    }
+
+    /// [`PrincipledThin::eval`] with the parameters evaluated at `ctx` already.
+    fn eval_with(&self, ctx: &BsdfContext, p: &Params, wo: Vec3, wi: Vec3) -> Rgb {
         if wo.z == 0.0 {
             return Rgb::ZERO;
         }
-        let p = self.params(ctx);
-        let base = ctx.eval(&self.base_color);
+        let base = p.base;
         let (wo, wi, wh) = PrincipledThin::frontal(wo, wi);
         let (cos_o, cos_i) = (wo.z, wi.z);
         let (reflect, refract) = (cos_i > 0.0, cos_i < 0.0);
         let mut value = Rgb::ZERO;
-        if self.spec_trans.is_some() && p.spec_trans > 0.0 && wh != Vec3::ZERO {
+        if p.spec_trans > 0.0 && wh != Vec3::ZERO {
             let (f_diel, ..) = fresnel_dielectric(wo.dot(wh), p.eta);
-            let (spec, trans) = PrincipledThin::distributions(&p);
+            let (spec, trans) = PrincipledThin::distributions(p);
             if reflect && compatible(wh, wo, wi, cos_o, true) {
                 let spec_tint = scalar(&self.spec_tint, ctx);
                 let f_schlick = if self.spec_tint.is_some() {
@@ -145,12 +150,12 @@ impl PrincipledThin {
             let weight = (1.0 - p.spec_trans) * (1.0 - p.diff_trans);
             value += base * (weight * cos_i * INV_PI * lobe);
             let sheen = scalar(&self.sheen, ctx);
-            if self.sheen.is_some() && sheen > 0.0 {
+            if sheen > 0.0 {
                 let tint = sheen_color(base, self.sheen_tint.as_ref().map(|_| scalar(&self.sheen_tint, ctx)));
                 value += tint * (sheen * weight * schlick_weight(cos_d.abs()) * cos_i.abs());
             }
         }
-        if self.diff_trans.is_some() && refract && p.spec_trans < 1.0 && p.diff_trans > 0.0 {
+        if refract && p.spec_trans < 1.0 && p.diff_trans > 0.0 {
             value += base * ((1.0 - p.spec_trans) * p.diff_trans * INV_PI * cos_i.abs());
         }
         if value.is_finite() {
@@ -162,18 +167,22 @@ impl PrincipledThin {
 
     /// Density of [`PrincipledThin::sample`] choosing `wi`.
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
+        self.pdf_with(&self.params(ctx), wo, wi)
+    }
+
+    /// [`PrincipledThin::pdf`] with the parameters evaluated already.
+    fn pdf_with(&self, p: &Params, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z == 0.0 {
             return 0.0;
         }
-        let p = self.params(ctx);
-        let [p_sr, p_st, p_dr, p_dt] = self.lobe_probabilities(&p);
+        let [p_sr, p_st, p_dr, p_dt] = self.lobe_probabilities(p);
         let (wo, wi, wh) = PrincipledThin::frontal(wo, wi);
         let (reflect, refract) = (wi.z > 0.0, wi.z < 0.0);
         let mut pdf = 0.0;
         if self.spec_trans.is_some() && wh != Vec3::ZERO {
             let wi_r = Vec3::new(wi.x, wi.y, wi.z.abs());
             let jacobian = (1.0 / (4.0 * wi_r.dot(wh))).abs();
-            let (spec, trans) = PrincipledThin::distributions(&p);
+            let (spec, trans) = PrincipledThin::distributions(p);
             if reflect && compatible(wh, wo, wi, wo.z, true) {
                 pdf += p_sr * spec.pdf(wo, wh) * jacobian;
             }
@@ -220,11 +229,11 @@ impl PrincipledThin {
             return None;
         };
         let wi = wi_f * side;
-        let pdf = self.pdf(ctx, wo, wi);
+        let pdf = self.pdf_with(&p, wo, wi);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval(ctx, wo, wi) / pdf;
+        let weight = self.eval_with(ctx, &p, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
     }
 
@@ -273,6 +282,7 @@ impl PrincipledThin {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::tests::{assert_matches_mitsuba, MitsubaRow};
 
     fn constant(v: f32) -> Option<Texture> {
         Some(Rgb::splat(v).into())
@@ -320,8 +330,7 @@ mod tests {
     /// `si.wi` is our `wo`), from both sides of the sheet.
     #[test]
     fn matches_mitsuba() {
-        type Row = (char, [f32; 3], [f32; 3], [f32; 3], f32);
-        let rows: &[Row] = &[
+        let rows: &[MitsubaRow] = &[
             ('A', [0.3007679, 0.200512, 0.9323806], [-0.4000088, 0.3000066, 0.8660191], [0.04688761, 0.02024289, 0.01358171], 0.07682913),
             ('A', [0.3007679, 0.200512, 0.9323806], [0.7419985, 0.6359987, 0.2119996], [0.01124391, 0.00482647, 0.003222109], 0.01675749),
             ('A', [0.3007679, 0.200512, 0.9323806], [-0.3007679, -0.200512, -0.9323806], [61.90474, 26.5306, 17.68707], 45.15805),
@@ -353,15 +362,6 @@ mod tests {
             ('C', [0.2009163, -0.1004581, -0.9744439], [0.1003721, 0.05018603, 0.9936835], [0.0, 0.0, 0.0], 0.0),
             ('C', [0.2009163, -0.1004581, -0.9744439], [0.404061, -0.1010153, -0.9091373], [0.1446939, 0.1446939, 0.2315103], 0.2893874),
         ];
-        let ctx = BsdfContext::default();
-        for &(k, wo, wi, value, pdf) in rows {
-            let b = config(k);
-            let (wo, wi) = (Vec3::from_array(wo), Vec3::from_array(wi));
-            let e = b.eval(&ctx, wo, wi);
-            let close = |a: f32, b: f32| (a - b).abs() <= 2e-4 * b.abs().max(1e-2);
-            assert!(close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]), "{k} {wo} {wi}: {e} vs {value:?}");
-            let p = b.pdf(&ctx, wo, wi);
-            assert!(close(p, pdf), "{k} {wo} {wi}: pdf {p} vs {pdf}");
-        }
+        assert_matches_mitsuba(rows, |k| Bsdf::PrincipledThin(Box::new(config(k))), |_, _, pdf| pdf);
     }
 }
