@@ -14,7 +14,7 @@
 //! default). Like Mitsuba's, the shape has no texture coordinates and no area (it cannot emit).
 
 use crate::image::GridVolume;
-use crate::math::{Bounds3, Ray, Transform, Vec3};
+use crate::math::{lerp, Bounds3, Ray, Transform, Vec3};
 
 /// Ray-parameter tolerance of the root finder (Mitsuba's `NumSolveEpsilon`), also bounded by a
 /// fraction of the segment in the voxel so that tiny grids stay accurate.
@@ -97,12 +97,6 @@ impl Cubic {
         let (r0, r1) = if q == 0.0 { (0.0, 0.0) } else { (q / a as f64, c as f64 / q) };
         Some((r0.min(r1) as f32, r0.max(r1) as f32))
     }
-}
-
-/// Linear interpolation that is exact at both ends.
-#[inline]
-fn lerp(a: f32, b: f32, t: f32) -> f32 {
-    (1.0 - t) * a + t * b
 }
 
 /// Bilinear interpolant of `f` (indexed u + 2v) at (u, v).
@@ -234,6 +228,15 @@ impl SdfGrid {
         Some(b)
     }
 
+    /// Voxel primitive `i`: the sample index of its lower corner and that corner's grid
+    /// coordinates.
+    #[inline]
+    fn voxel(&self, i: usize) -> (usize, Vec3) {
+        let base = self.voxels[i] as usize;
+        let [nx, ny, _] = self.res;
+        (base, Vec3::new((base % nx) as f32, ((base / nx) % ny) as f32, (base / (nx * ny)) as f32))
+    }
+
     /// Number of voxels holding surface (the BVH's primitives).
     pub fn len(&self) -> usize {
         self.voxels.len()
@@ -251,9 +254,7 @@ impl SdfGrid {
 
     /// The first crossing of the surface by `ray` inside voxel primitive `i`, in `(0, t_max)`.
     pub fn intersect(&self, i: usize, ray: &Ray, t_max: f32) -> Option<f32> {
-        let base = self.voxels[i] as usize;
-        let [nx, ny, _] = self.res;
-        let voxel = Vec3::new((base % nx) as f32, ((base / nx) % ny) as f32, (base / (nx * ny)) as f32);
+        let (base, voxel) = self.voxel(i);
         let res = self.resolution();
         // Object space (the direction keeps its length change, so t is the world t), then the
         // voxel's unit cube.
@@ -289,9 +290,7 @@ impl SdfGrid {
     /// The hit at parameter `t` of `ray` in voxel primitive `i`: the point, its error bound, the
     /// geometric normal (the interpolant's gradient) and the shading normal.
     pub fn surface(&self, i: usize, ray: &Ray, t: f32) -> (Vec3, Vec3, Vec3, Vec3) {
-        let base = self.voxels[i] as usize;
-        let [nx, ny, _] = self.res;
-        let voxel = Vec3::new((base % nx) as f32, ((base / nx) % ny) as f32, (base / (nx * ny)) as f32);
+        let (base, voxel) = self.voxel(i);
         let res = self.resolution();
         let p = ray.o + ray.d * t;
         let local = self.to_object.apply_point(p);

@@ -116,6 +116,7 @@ impl PPlastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::tests::{assert_matches_mitsuba, MitsubaRow};
     use crate::material::microfacet::MicrofacetType;
 
     fn config(k: char) -> PPlastic {
@@ -139,8 +140,7 @@ mod tests {
     /// directions (its `si.wi` is our `wo`).
     #[test]
     fn matches_mitsuba() {
-        type Row = (char, [f32; 3], [f32; 3], [f32; 3], f32);
-        let rows: &[Row] = &[
+        let rows: &[MitsubaRow] = &[
             ('A', [0.3007679, 0.200512, 0.9323806], [-0.4000088, 0.3000066, 0.8660191], [0.01271337, 0.007628023, 0.02542674], 0.01560353),
             ('A', [0.3007679, 0.200512, 0.9323806], [0.7419985, 0.6359987, 0.2119996], [0.002214344, 0.001328607, 0.004428689], 0.003819708),
             ('A', [0.3007679, 0.200512, 0.9323806], [-0.3007679, -0.200512, 0.9323806], [0.9384812, 0.9329996, 0.9521855], 22.38281),
@@ -158,15 +158,6 @@ mod tests {
             ('B', [-0.8846517, 0.147442, 0.4423259], [-0.3007679, -0.200512, 0.9323806], [0.1471595, 0.09814055, 0.04912158], 0.1010455),
             ('B', [-0.8846517, 0.147442, 0.4423259], [0.1003721, 0.05018603, 0.9936835], [0.1572749, 0.1049702, 0.05266551], 0.1125455),
         ];
-        let ctx = BsdfContext::default();
-        for &(k, wo, wi, value, pdf) in rows {
-            let b = config(k);
-            let (wo, wi) = (Vec3::from_array(wo), Vec3::from_array(wi));
-            let e = b.eval(&ctx, wo, wi);
-            let close = |a: f32, b: f32| (a - b).abs() <= 2e-4 * b.abs().max(1e-2);
-            assert!(close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]), "{k} {wo} {wi}: {e} vs {value:?}");
-            let p = b.pdf(&ctx, wo, wi);
-            assert!(close(p, pdf), "{k} {wo} {wi}: pdf {p} vs {pdf}");
-        }
+        assert_matches_mitsuba(rows, |k| Bsdf::PPlastic(Box::new(config(k))), |_, _, pdf| pdf);
     }
 }

@@ -8,6 +8,29 @@ use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 
 const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None };
 
+/// A value Mitsuba 3.9.1 (scalar_rgb) gave through its Python BSDF API for a configuration
+/// (named by a letter): its `si.wi` (our `wo`), its `wo` (our `wi`), `eval` and `pdf`.
+pub(super) type MitsubaRow = (char, [f32; 3], [f32; 3], [f32; 3], f32);
+
+/// Asserts that the BSDF of each row's configuration (`bsdf_of`) gives Mitsuba's `eval` and
+/// `pdf` to 2·10⁻⁴ (relative, absolute below 10⁻²); `expected_pdf` states where neumann's
+/// density deliberately differs (given the configuration, `wo` and Mitsuba's value).
+pub(super) fn assert_matches_mitsuba(
+    rows: &[MitsubaRow],
+    bsdf_of: impl Fn(char) -> Bsdf,
+    expected_pdf: impl Fn(char, Vec3, f32) -> f32,
+) {
+    let close = |a: f32, b: f32| (a - b).abs() <= 2e-4 * b.abs().max(1e-2);
+    for &(k, wo, wi, value, pdf) in rows {
+        let b = bsdf_of(k);
+        let (wo, wi) = (Vec3::from_array(wo), Vec3::from_array(wi));
+        let e = b.eval(&CTX, wo, wi);
+        assert!(close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]), "{k} {wo} {wi}: {e} vs {value:?}");
+        let (p, expected) = (b.pdf(&CTX, wo, wi), expected_pdf(k, wo, pdf));
+        assert!(close(p, expected), "{k} {wo} {wi}: pdf {p} vs {expected}");
+    }
+}
+
 fn rough_conductors() -> Vec<(String, Bsdf)> {
     let gold = Some(ConductorIor::constant(Rgb::new(0.143, 0.374, 1.442), Rgb::new(3.983, 2.385, 1.603)));
     let mut v = Vec::new();

@@ -39,6 +39,12 @@ pub const INV_4PI: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
 /// The largest `f32` strictly below one: uniform random numbers live in `[0, ONE_MINUS_EPSILON]`.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// Linear interpolation `a (1 − t) + b t`, exact at both ends.
+#[inline]
+pub fn lerp(a: f32, b: f32, t: f32) -> f32 {
+    (1.0 - t) * a + t * b
+}
+
 /// `sqrt(max(x, 0))`: square root that tolerates tiny negative round-off.
 #[inline]
 pub fn safe_sqrt(x: f32) -> f32 {

@@ -118,17 +118,24 @@ impl Bitmap {
         self.image.get(wrap(x, w), wrap(y, h))
     }
 
+    /// The bilinear cell holding `uv`: the texel whose centre is its lower corner, and `uv`'s
+    /// position in the cell.
+    #[inline]
+    fn bilinear_cell(&self, uv: Vec2) -> (i64, i64, f32, f32) {
+        let (x, y) = (uv.x * self.image.width as f32 - 0.5, uv.y * self.image.height as f32 - 0.5);
+        let (x0, y0) = (x.floor(), y.floor());
+        (x0 as i64, y0 as i64, x - x0, y - y0)
+    }
+
     /// The filtered value at `uv` (v down the rows).
     pub fn eval(&self, uv: Vec2) -> Rgb {
-        let (w, h) = (self.image.width as f32, self.image.height as f32);
-        let (x, y) = (uv.x * w, uv.y * h);
         match self.filter {
-            Filter::Nearest => self.texel(x.floor() as i64, y.floor() as i64),
+            Filter::Nearest => {
+                let (w, h) = (self.image.width as f32, self.image.height as f32);
+                self.texel((uv.x * w).floor() as i64, (uv.y * h).floor() as i64)
+            }
             Filter::Bilinear => {
-                let (x, y) = (x - 0.5, y - 0.5);
-                let (x0, y0) = (x.floor(), y.floor());
-                let (fx, fy) = (x - x0, y - y0);
-                let (x0, y0) = (x0 as i64, y0 as i64);
+                let (x0, y0, fx, fy) = self.bilinear_cell(uv);
                 self.texel(x0, y0) * ((1.0 - fx) * (1.0 - fy))
                     + self.texel(x0 + 1, y0) * (fx * (1.0 - fy))
                     + self.texel(x0, y0 + 1) * ((1.0 - fx) * fy)
@@ -195,12 +202,8 @@ impl Texture {
         if bitmap.filter == Filter::Nearest {
             return Vec2::ZERO;
         }
-        let t = to_uv.transform_point2(uv);
+        let (x0, y0, fx, fy) = bitmap.bilinear_cell(to_uv.transform_point2(uv));
         let (w, h) = (bitmap.image.width as f32, bitmap.image.height as f32);
-        let (x, y) = (t.x * w - 0.5, t.y * h - 0.5);
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (x0, y0) = (x0 as i64, y0 as i64);
         let f = |dx: i64, dy: i64| crate::math::luminance(bitmap.texel(x0 + dx, y0 + dy));
         let (f00, f10, f01, f11) = (f(0, 0), f(1, 0), f(0, 1), f(1, 1));
         let dfx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
