@@ -40,6 +40,14 @@ pub struct GridVolume {
     pub data: Vec<f32>,
 }
 
+/// Where plugins get their grid volumes: the loader resolves the file that the string parameter
+/// `name` of `o` names (relative to the scene file), reads it (Mitsuba's `.vol` format) and shares
+/// it between the plugins that name the same file.
+pub trait VolumeSource {
+    /// The grid volume named by parameter `name` of `o`; errors are located at the parameter.
+    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<Arc<GridVolume>>;
+}
+
 /// Where plugins get their images: the loader resolves the file that the string parameter
 /// `name` of `o` names (relative to the scene file), decodes it (linear RGB; sRGB-decoded unless
 /// `raw`) and shares it between the plugins that name the same file.

@@ -44,8 +44,22 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     if bounds.is_empty() {
         return Bvh::default();
     }
-    let mut items: Vec<Item> =
-        bounds.iter().enumerate().map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 }).collect();
+    // A primitive whose bounds are not finite (NaN or infinite coordinates) stands in as a point
+    // at the origin: every node box stays finite, which the traversal's slab test relies on
+    // (its own intersection test then finds no hit).
+    let sane = |b: &Bounds3| {
+        if b.min.is_finite() && b.max.is_finite() {
+            *b
+        } else {
+            Bounds3::from_point(Vec3::ZERO)
+        }
+    };
+    let mut items: Vec<Item> = bounds
+        .iter()
+        .map(sane)
+        .enumerate()
+        .map(|(i, b)| Item { bounds: b, centroid: b.centroid(), index: i as u32 })
+        .collect();
     let (root, count) = build_rec(&mut items, 0, 0, opts);
     let mut nodes = Vec::with_capacity(count / 2 + 1);
     collapse(&root, &mut nodes);

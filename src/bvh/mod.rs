@@ -155,7 +155,7 @@ impl Bvh {
     /// closer hit before their turn, and prefetching them measured slower.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !traceable(ray, t_max) {
             return;
         }
         let r = SlabRay::new(ray);
@@ -168,8 +168,9 @@ impl Bvh {
             if count > 0 {
                 leaf(child, count, &mut t_max);
             } else {
-                // SAFETY: interior children index `nodes` (built together).
-                let node = unsafe { self.nodes.get_unchecked(child as usize) };
+                // Interior children index `nodes` (built together), and unused slots (index
+                // u32::MAX) are never entered by a traceable ray; indexing checks it anyway.
+                let node = &self.nodes[child as usize];
                 let (mut mask, t_near) = r.test4(node, t_max);
                 if mask != 0 {
                     let a = mask.trailing_zeros() as usize;
@@ -244,7 +245,7 @@ impl Bvh {
         mut leaf: impl FnMut(u32, u32, f32) -> bool,
         prefetch_leaf: impl Fn(u32, u32),
     ) -> bool {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || !traceable(ray, t_max) {
             return false;
         }
         let r = SlabRay::new(ray);
@@ -261,8 +262,8 @@ impl Bvh {
                 }
                 continue;
             }
-            // SAFETY: interior children index `nodes` (built together).
-            let node = unsafe { self.nodes.get_unchecked(child as usize) };
+            // As in `closest_hit`: checked, never out of range for a traceable ray.
+            let node = &self.nodes[child as usize];
             let (mut mask, _) = r.test4(node, t_max);
             while mask != 0 {
                 let slot = mask.trailing_zeros() as usize;
@@ -284,6 +285,14 @@ impl Bvh {
             prefetch_leaf(node.child[slot], node.count[slot]);
         }
     }
+}
+
+/// Whether traversal can answer for `ray`: a finite origin and direction and a `t_max` that
+/// is not NaN. Other rays hit nothing (the slab test's reasoning about empty slots and the
+/// ordering of distances needs finite operands).
+#[inline(always)]
+fn traceable(ray: &Ray, t_max: f32) -> bool {
+    ray.o.is_finite() && ray.d.is_finite() && !t_max.is_nan()
 }
 
 /// Asks the cache for the `bytes` bytes at `p` ahead of their use (a hint: it never faults,
@@ -361,6 +370,42 @@ mod tests {
                 [v(), v(), v()]
             })
             .collect()
+    }
+
+    /// Hostile input never reads outside the nodes (it once did: a NaN ray selected unused
+    /// slots): NaN and infinite primitive bounds among good ones, and rays with NaN or infinite
+    /// origins, directions and limits. Finite rays still find the good primitives.
+    #[test]
+    fn non_finite_bounds_and_rays_are_safe() {
+        let mut bounds: Vec<Bounds3> = (0..200)
+            .map(|i| {
+                let c = Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32);
+                Bounds3::new(c, c + Vec3::splat(0.5))
+            })
+            .collect();
+        let nan = Vec3::splat(f32::NAN);
+        bounds[3] = Bounds3::new(nan, nan);
+        bounds[50] = Bounds3::new(Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY));
+        bounds[77] = Bounds3::new(Vec3::new(1.0, f32::NAN, 2.0), Vec3::splat(3.0));
+        let bvh = Bvh::build(&bounds, &BuildOptions::default());
+        let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 3.4e38, -3.4e38, 0.0];
+        let mut visited = 0;
+        for &a in &bad {
+            for &b in &bad {
+                for t_max in [f32::NAN, f32::INFINITY, 1e30, 5.0] {
+                    let rays =
+                        [Ray::new(Vec3::new(a, 0.2, b), Vec3::new(1.0, 0.0, 0.0)), Ray::new(Vec3::splat(-1.0), Vec3::new(a, b, 1.0))];
+                    for ray in rays {
+                        bvh.closest_hit(&ray, t_max, |first, count, _| {
+                            assert!((first + count) as usize <= bounds.len());
+                            visited += 1;
+                        });
+                        bvh.any_hit(&ray, t_max, |first, count, _| (first + count) as usize > bounds.len(), |_, _| {});
+                    }
+                }
+            }
+        }
+        assert!(visited > 0, "finite rays still reach leaves");
     }
 
     #[test]

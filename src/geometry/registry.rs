@@ -5,7 +5,7 @@
 //! loader's business.
 
 use super::{Cylinder, Disk, Geometry, SdfGrid, Sphere, TriangleMesh};
-use crate::image::GridVolume;
+use crate::image::VolumeSource;
 use crate::math::{Transform, Vec3};
 use crate::props::{Obj, Result};
 
@@ -21,13 +21,10 @@ pub struct MeshFile {
 
 /// Where shape plugins get their files: the loader resolves the file that the string parameter
 /// `name` of `o` names and reads it: a mesh in the format of `o`'s plugin (`obj`, `ply`, or
-/// `serialized` with its `shape_index`), or a grid volume (`.vol`).
-pub trait MeshSource {
+/// `serialized` with its `shape_index`), or a grid volume (`.vol`, [`VolumeSource`]).
+pub trait MeshSource: VolumeSource {
     /// The mesh named by parameter `name` of `o`; errors are located at the parameter.
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile>;
-
-    /// The grid volume named by parameter `name` of `o`; errors are located at the parameter.
-    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<GridVolume>;
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.

@@ -58,6 +58,10 @@ impl Triangle4 {
         let t = Vec4::select(l.valid, l.t, Vec4::INFINITY);
         let t_min = t.min_element();
         let lane = t.cmpeq(Vec4::splat(t_min)).bitmask().trailing_zeros() as usize;
+        if lane >= 4 {
+            // t_min is NaN (overflowing coordinates): no hit.
+            return None;
+        }
         let inv_det = l.inv_det[lane];
         Some((
             lane,

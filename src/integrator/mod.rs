@@ -12,6 +12,7 @@ pub mod ptracer;
 pub mod radiosity;
 pub mod trace;
 pub mod volpath;
+pub mod volpathmis;
 
 pub use aov::AovIntegrator;
 pub use direct::DirectIntegrator;
@@ -20,6 +21,7 @@ pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
 pub use ptracer::LightTracer;
 pub use trace::{Mis, PathSettings};
 pub use volpath::VolPathIntegrator;
+pub use volpathmis::VolPathMisIntegrator;
 
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
@@ -130,6 +132,8 @@ pub enum IntegratorKind {
     Radiosity,
     /// Volumetric path tracing.
     Volpath,
+    /// Volumetric path tracing with spectral and null-scattering MIS.
+    VolpathMis,
     /// Mean and second moment of nested integrators' samples.
     Moment,
     /// Arbitrary output variables (geometry, albedo) beside nested integrators' images.
@@ -142,6 +146,7 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::Ptracer => "ptracer", "light tracing (forward, from the emitters; Mitsuba's `ptracer`)";
     IntegratorKind::Radiosity => "radiosity", "radiosity: finite elements for diffuse scenes, solved then displayed";
     IntegratorKind::Volpath => "volpath", "volumetric path tracing: participating media (Mitsuba's `volpath`)";
+    IntegratorKind::VolpathMis => "volpathmis", "volumetric path tracing with spectral and null-scattering MIS (Mitsuba's `volpathmis`)";
     IntegratorKind::Moment => "moment", "path tracing that also records each pixel's second moment as EXR layers (Mitsuba's `moment`)";
     IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices) as EXR layers (Mitsuba's `aov`)";
 });
@@ -155,6 +160,7 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
         Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
     }),
     ("volpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
+    ("volpathmis", |o| Ok(AnyIntegrator::VolPathMis(VolPathMisIntegrator { settings: PathSettings::from_props(o)? }))),
     ("ptracer", |o| Ok(AnyIntegrator::Ptracer(LightTracer { settings: PathSettings::from_props(o)? }))),
     ("direct", |o| Ok(AnyIntegrator::Direct(DirectIntegrator::from_props(o)?))),
     ("radiosity", |o| Ok(AnyIntegrator::Radiosity(radiosity::Options::from_props(o)?))),
@@ -165,7 +171,6 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("prb_basic", |o| {
         Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
     }),
-    ("volpathmis", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
     ("prbvolpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
     ("moment", |o| Ok(AnyIntegrator::Moment(MomentIntegrator::from_props(o)?))),
     ("aov", |o| Ok(AnyIntegrator::Aov(AovIntegrator::from_props(o)?))),
@@ -237,6 +242,8 @@ pub enum AnyIntegrator {
     Radiosity(radiosity::Options),
     /// Mitsuba's `volpath` (path tracing with participating media).
     VolPath(VolPathIntegrator),
+    /// Mitsuba's `volpathmis` (volumetric path tracing with spectral MIS).
+    VolPathMis(VolPathMisIntegrator),
     /// Mitsuba's `moment` (nested integrators' mean and second moment).
     Moment(MomentIntegrator),
     /// Mitsuba's `aov` (arbitrary output variables).
@@ -258,6 +265,7 @@ impl AnyIntegrator {
             AnyIntegrator::Ptracer(_) => IntegratorKind::Ptracer,
             AnyIntegrator::Radiosity(_) => IntegratorKind::Radiosity,
             AnyIntegrator::VolPath(_) => IntegratorKind::Volpath,
+            AnyIntegrator::VolPathMis(_) => IntegratorKind::VolpathMis,
             AnyIntegrator::Moment(_) => IntegratorKind::Moment,
             AnyIntegrator::Aov(_) => IntegratorKind::Aov,
         }
@@ -270,6 +278,7 @@ impl AnyIntegrator {
             AnyIntegrator::Path(i) => Some(i),
             AnyIntegrator::Direct(i) => Some(i),
             AnyIntegrator::VolPath(i) => Some(i),
+            AnyIntegrator::VolPathMis(i) => Some(i),
             AnyIntegrator::Moment(i) => Some(i),
             AnyIntegrator::Aov(i) => Some(i),
             AnyIntegrator::Ptracer(_) | AnyIntegrator::Radiosity(_) => None,
@@ -293,6 +302,7 @@ impl AnyIntegrator {
             IntegratorKind::Ptracer => AnyIntegrator::Ptracer(LightTracer { settings }),
             IntegratorKind::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
             IntegratorKind::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
+            IntegratorKind::VolpathMis => AnyIntegrator::VolPathMis(VolPathMisIntegrator { settings }),
             IntegratorKind::Moment => {
                 let path = AnyIntegrator::with_kind(IntegratorKind::Path, settings);
                 AnyIntegrator::Moment(MomentIntegrator { nested: vec![("_arg_0".into(), path)] })
@@ -312,6 +322,7 @@ impl AnyIntegrator {
             AnyIntegrator::Path(p) => Some(&p.settings),
             AnyIntegrator::Ptracer(t) => Some(&t.settings),
             AnyIntegrator::VolPath(v) => Some(&v.settings),
+            AnyIntegrator::VolPathMis(v) => Some(&v.settings),
             AnyIntegrator::Moment(m) => m.nested[0].1.path_settings(),
             AnyIntegrator::Aov(a) => a.nested.first()?.1.path_settings(),
             AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
@@ -324,6 +335,7 @@ impl AnyIntegrator {
             AnyIntegrator::Path(p) => Some(&mut p.settings),
             AnyIntegrator::Ptracer(t) => Some(&mut t.settings),
             AnyIntegrator::VolPath(v) => Some(&mut v.settings),
+            AnyIntegrator::VolPathMis(v) => Some(&mut v.settings),
             AnyIntegrator::Moment(m) => m.nested[0].1.path_settings_mut(),
             AnyIntegrator::Aov(a) => a.nested.first_mut()?.1.path_settings_mut(),
             AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
@@ -339,6 +351,9 @@ impl AnyIntegrator {
             }
             AnyIntegrator::Ptracer(t) => format!("light tracer, max_depth {}", t.settings.depth_text()),
             AnyIntegrator::VolPath(v) => format!("volumetric path tracer, max_depth {}", v.settings.depth_text()),
+            AnyIntegrator::VolPathMis(v) => {
+                format!("volumetric path tracer with spectral MIS, max_depth {}", v.settings.depth_text())
+            }
             AnyIntegrator::Radiosity(o) => format!(
                 "radiosity, patch size {}, {} form-factor rays per patch, {:?}{}",
                 o.patch_size,

@@ -16,7 +16,7 @@ use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
 use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGINS};
-use crate::image::{Image, ImageSource};
+use crate::image::{GridVolume, Image, ImageSource, VolumeSource};
 use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
 use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
@@ -54,6 +54,7 @@ pub struct Builder {
     sb: SceneBuilder,
     bsdf_index: HashMap<*const Obj, u32>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
+    volumes: HashMap<PathBuf, Arc<GridVolume>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
     default_bsdf: [Option<u32>; 2],
     medium_index: HashMap<*const Obj, u32>,
@@ -72,6 +73,7 @@ impl Builder {
             sb: SceneBuilder::new(),
             bsdf_index: HashMap::new(),
             images: HashMap::new(),
+            volumes: HashMap::new(),
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
             light_sampler: LightSamplerKind::default(),
@@ -253,6 +255,7 @@ impl Builder {
             o.unknown_plugin(&names)
         })?;
         let geometry = plugin(o, &to_world, flip, self)?;
+        check_finite_geometry(o, &geometry)?;
         let emitters = o.nested("emitter");
         if emitters.len() > 1 {
             return Err(SceneError::at(&emitters[1].loc, "a shape takes one <emitter>"));
@@ -266,7 +269,16 @@ impl Builder {
                 e.built.set(true);
                 e.check_children(&[])?;
                 read_sampling_weight(e)?;
-                Some(area_radiance_from_props(e, self)?)
+                let radiance = area_radiance_from_props(e, self)?;
+                let power = std::f32::consts::PI * geometry.area() * radiance.mean().max_element();
+                if !power.is_finite() {
+                    return Err(e.error(format!(
+                        "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
+                        geometry.area(),
+                        radiance.mean()
+                    )));
+                }
+                Some(radiance)
             }
             Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
         };
@@ -326,7 +338,7 @@ impl Builder {
             .find(|(n, _)| *n == o.ty)
             .map(|(_, f)| *f)
             .ok_or_else(|| o.unknown_plugin(&MEDIUM_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-        let medium = plugin(o)?;
+        let medium = plugin(o, self)?;
         let i = self.sb.add_medium(medium);
         self.medium_index.insert(key, i);
         Ok(i)
@@ -447,12 +459,19 @@ impl ImageSource for Builder {
     }
 }
 
-impl MeshSource for Builder {
-    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<crate::image::GridVolume> {
+impl VolumeSource for Builder {
+    fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<Arc<GridVolume>> {
         let path = self.resolver.resolve(&o.string(name)?);
-        crate::load::volume::load_grid_volume(&path).map_err(|e| o.error_at(name, e.to_string()))
+        if let Some(v) = self.volumes.get(&path) {
+            return Ok(v.clone());
+        }
+        let v = Arc::new(crate::load::volume::load_grid_volume(&path).map_err(|e| o.error_at(name, e.to_string()))?);
+        self.volumes.insert(path, v.clone());
+        Ok(v)
     }
+}
 
+impl MeshSource for Builder {
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile> {
         let path = self.resolver.resolve(&o.string(name)?);
         let located = |e: crate::load::LoadError| o.error_at(name, e.to_string());
@@ -478,4 +497,21 @@ impl MeshSource for Builder {
             }
         }
     }
+}
+
+/// Rejects geometry whose coordinates are not finite, or so large that their differences
+/// overflow (a NaN or overflowing `to_world`, huge mesh coordinates): such shapes would be
+/// invisible or poison the image.
+fn check_finite_geometry(o: &Obj, geometry: &Geometry) -> Result<()> {
+    for i in 0..geometry.primitive_count() {
+        let b = geometry.primitive_bounds(i);
+        if !(b.min.is_finite() && b.max.is_finite() && (b.max - b.min).is_finite()) {
+            return Err(o.error(format!(
+                "the shape's coordinates are not finite after its to_world (primitive {i} spans {} to {}): \
+                 check the transform and the file's coordinates",
+                b.min, b.max
+            )));
+        }
+    }
+    Ok(())
 }

@@ -37,7 +37,9 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
                 .take(n)
                 .map(|s| {
                     s.parse::<f32>()
-                        .map_err(|_| (line_no, format!("expected a number in '{what}' record, found '{s}'")))
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| (line_no, format!("expected a finite number in '{what}' record, found '{s}'")))
                 })
                 .collect::<Result<_, _>>()?;
             if vals.len() < n {

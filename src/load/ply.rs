@@ -208,6 +208,10 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
                 attributes.push((MeshAttribute { name, per_face, values: Vec::new() }, channels));
             }
         }
+        if el.props.is_empty() {
+            // No data per item, whatever the count.
+            continue;
+        }
         let mut vals = vec![0.0f64; el.props.len()];
         let mut list: Vec<u32> = Vec::new();
         for item in 0..el.count {
@@ -223,6 +227,9 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
                         for _ in 0..n {
                             let x = body.read(p.kind).map_err(|e| format!("{} {item}: {e}", el.name))?;
                             if keep {
+                                if !(x >= 0.0 && x <= u32::MAX as f64 && x.fract() == 0.0) {
+                                    return Err(format!("{} {item}: vertex index {x} is not a non-negative integer", el.name));
+                                }
                                 list.push(x as u32);
                             }
                         }

@@ -1,163 +1,210 @@
-//! Participating media: Mitsuba's `homogeneous` medium with a phase function ([`phase`]).
+//! Participating media: Mitsuba's `homogeneous` ([`homogeneous`]) and `heterogeneous`
+//! ([`heterogeneous`], on the volume textures of [`volume`]) media, with a phase function
+//! ([`phase`]).
 //!
 //! A medium has extinction `σₜ` (m⁻¹, per colour channel), single-scattering albedo
-//! `α = σₛ / σₜ` and a phase function. Along a ray, the transmittance over a distance t is
-//! `Tr(t) = e^(-σₜ t)` and the free-flight distance to the next interaction has the exponential
-//! density `σₜ e^(-σₜ t)`, sampled by inversion `t = -ln(1 - ξ) / σₜ`
-//! ([`crate::sampling::sample_exponential`]).
+//! `α = σₛ / σₜ` and a phase function. Media sit inside shapes (`interior`, `exterior` on the
+//! shape) and around the camera (the sensor's medium). A shape with a `null` BSDF is an
+//! index-matched boundary: rays cross it and change medium.
 //!
-//! Colour: the three channels have different `σₜ`; a channel is chosen uniformly for each
-//! distance, and the density used is the average over channels (one-sample MIS over the
-//! channels, as Mitsuba's RGB modes), so every channel's estimate stays unbiased.
-//!
-//! Media sit inside shapes (`interior`, `exterior` on the shape) and around the camera (the
-//! sensor's medium). A shape with a `null` BSDF is an index-matched boundary: rays cross it and
-//! change medium.
+//! An integrator asks a medium two things along a ray segment: where the next real interaction
+//! is ([`Medium::sample_free_flight`], with the throughput weight that keeps the estimate
+//! unbiased), and how much light gets through ([`Medium::transmittance`], exact for homogeneous
+//! media, an unbiased estimate for heterogeneous ones).
 
+pub mod heterogeneous;
+pub mod homogeneous;
 pub mod phase;
+pub mod volume;
 
+pub use heterogeneous::Heterogeneous;
+pub use homogeneous::Homogeneous;
 pub use phase::PhaseFunction;
 
+use crate::image::VolumeSource;
 use crate::math::spectrum::SpectrumKind;
-use crate::math::Rgb;
+use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult, SceneError};
-use crate::sampling::sample_exponential;
-
-/// A homogeneous participating medium.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Medium {
-    /// Extinction coefficient σₜ (m⁻¹ per channel).
-    pub sigma_t: Rgb,
-    /// Single-scattering albedo σₛ/σₜ per channel, in [0, 1].
-    pub albedo: Rgb,
-    /// Phase function.
-    pub phase: PhaseFunction,
-}
+use crate::sampling::{sample_exponential, Pcg32};
 
 /// What a free-flight sample found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum FreeFlight {
-    /// A scattering event at distance `t`; `weight = σₛ Tr(t) / p(t)` multiplies the path
-    /// throughput (absorption included: the path continues with the scattered fraction).
+    /// A scattering event at distance `t`; `weight` (for homogeneous media `σₛ Tr(t) / p(t)`)
+    /// multiplies the path throughput (absorption included: the path continues with the
+    /// scattered fraction).
     Scatter {
         /// Distance along the (unit-direction) ray.
         t: f32,
         /// Throughput factor.
         weight: Rgb,
     },
-    /// No interaction before `t_max` (the next surface); `weight = Tr(t_max) / P(pass)`.
+    /// No interaction before `t_max` (the next surface); `weight` (homogeneous:
+    /// `Tr(t_max) / P(pass)`) multiplies the throughput.
     Pass {
         /// Throughput factor.
         weight: Rgb,
     },
 }
 
+/// A tentative collision along a ray (Mitsuba's `sample_interaction`), for integrators that
+/// weigh the tracking decisions themselves (`volpathmis`): collisions are drawn at the rate of
+/// `majorant` in one channel over `[t0, t1)`, the part of the segment where the medium is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tentative {
+    /// Where the medium starts along the ray.
+    pub t0: f32,
+    /// Where it ends (the segment's end, or the medium's box).
+    pub t1: f32,
+    /// The majorant per channel (homogeneous media: σₜ, so every collision is real;
+    /// heterogeneous ones: the scalar bound σ̄).
+    pub majorant: Rgb,
+    /// The collision, if one was drawn before `t1`.
+    pub collision: Option<Collision>,
+}
+
+/// The coefficients at a tentative collision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Collision {
+    /// Distance along the ray.
+    pub t: f32,
+    /// Extinction σₜ (m⁻¹).
+    pub sigma_t: Rgb,
+    /// Scattering σₛ = α σₜ.
+    pub sigma_s: Rgb,
+    /// Null extinction σₙ = majorant − σₜ.
+    pub sigma_n: Rgb,
+}
+
+/// The coefficients of a medium (closed set).
+#[derive(Clone, Debug)]
+pub enum Coefficients {
+    /// Constant everywhere.
+    Homogeneous(Homogeneous),
+    /// From volume textures.
+    Heterogeneous(Box<Heterogeneous>),
+}
+
+/// A participating medium.
+#[derive(Clone, Debug)]
+pub struct Medium {
+    /// Extinction and albedo.
+    pub coefficients: Coefficients,
+    /// Phase function.
+    pub phase: PhaseFunction,
+    /// Whether paths scattering in the medium sample emitters (next-event estimation; Mitsuba's
+    /// `sample_emitters`, true). Off, light is found by phase sampling alone (same expectation;
+    /// faster where shadow rays cannot get out, e.g. inside a dielectric).
+    pub sample_emitters: bool,
+}
+
 impl Medium {
-    /// A homogeneous medium; `None` unless σₜ ≥ 0 and the albedo lies in [0, 1].
-    pub fn new(sigma_t: Rgb, albedo: Rgb, phase: PhaseFunction) -> Option<Medium> {
+    /// A homogeneous medium; `None` unless σₜ ≥ 0 (finite) and the albedo lies in [0, 1].
+    pub fn homogeneous(sigma_t: Rgb, albedo: Rgb, phase: PhaseFunction) -> Option<Medium> {
         let ok = (0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite() && (0.0..=1.0).contains(&albedo[c]));
-        ok.then_some(Medium { sigma_t, albedo, phase })
+        ok.then_some(Medium {
+            coefficients: Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }),
+            phase,
+            sample_emitters: true,
+        })
     }
 
-    /// Transmittance `e^(-σₜ t)` over distance `t` (per channel).
+    /// Whether the coefficients vary (tracking needs a random-number generator).
     #[inline]
-    pub fn transmittance(&self, t: f32) -> Rgb {
-        if t.is_infinite() {
-            return Rgb::new(
-                f32::from(self.sigma_t.x == 0.0),
-                f32::from(self.sigma_t.y == 0.0),
-                f32::from(self.sigma_t.z == 0.0),
-            );
+    pub fn is_heterogeneous(&self) -> bool {
+        matches!(self.coefficients, Coefficients::Heterogeneous(_))
+    }
+
+    /// Samples the distance to the next interaction along `ray` (unit direction) up to `t_max`
+    /// (possibly infinite). `beta` is the path throughput so far, `u_channel` and `u` the
+    /// sampler's numbers for this flight, `rng` the rest (heterogeneous media only).
+    #[inline]
+    pub fn sample_free_flight(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        beta: Rgb,
+        u_channel: f32,
+        u: f32,
+        rng: &mut Pcg32,
+    ) -> FreeFlight {
+        match &self.coefficients {
+            Coefficients::Homogeneous(h) => h.sample_free_flight(t_max, u_channel, u),
+            Coefficients::Heterogeneous(h) => h.sample_free_flight(ray, t_max, beta, u, rng),
         }
-        Rgb::new((-self.sigma_t.x * t).exp(), (-self.sigma_t.y * t).exp(), (-self.sigma_t.z * t).exp())
     }
 
-    /// Samples the distance to the next interaction along a ray with unit direction, up to
-    /// `t_max` (possibly infinite). `u_channel` picks the channel, `u` the distance.
+    /// Draws a tentative collision along `ray` (unit direction) before `t_max` at the majorant
+    /// rate of `channel`, from `u`.
     #[inline]
-    pub fn sample_free_flight(&self, t_max: f32, u_channel: f32, u: f32) -> FreeFlight {
-        let c = ((u_channel * 3.0) as usize).min(2);
-        let sigma = self.sigma_t[c];
-        let t = if sigma > 0.0 { sample_exponential(u, sigma).value } else { f32::INFINITY };
-        if t < t_max {
-            let tr = self.transmittance(t);
-            // p(t) = mean over channels of σ_c e^(-σ_c t).
-            let pdf = (self.sigma_t * tr).element_sum() / 3.0;
-            let weight = if pdf > 0.0 { self.sigma_t * self.albedo * tr / pdf } else { Rgb::ZERO };
-            FreeFlight::Scatter { t, weight }
-        } else {
-            let tr = self.transmittance(t_max);
-            // P(pass) = mean over channels of e^(-σ_c t_max).
-            let p = tr.element_sum() / 3.0;
-            FreeFlight::Pass { weight: if p > 0.0 { tr / p } else { Rgb::ZERO } }
+    pub fn sample_tentative(&self, ray: &Ray, t_max: f32, channel: usize, u: f32) -> Tentative {
+        match &self.coefficients {
+            Coefficients::Homogeneous(h) => {
+                let sigma = h.sigma_t[channel];
+                let t = if sigma > 0.0 { sample_exponential(u, sigma).value } else { f32::INFINITY };
+                let collision = (t < t_max).then_some(Collision {
+                    t,
+                    sigma_t: h.sigma_t,
+                    sigma_s: h.sigma_t * h.albedo,
+                    sigma_n: Rgb::ZERO,
+                });
+                Tentative { t0: 0.0, t1: t_max, majorant: h.sigma_t, collision }
+            }
+            Coefficients::Heterogeneous(h) => h.sample_tentative(ray, t_max, u),
+        }
+    }
+
+    /// Transmittance along `ray` (unit direction) over `[0, t_max)`: exact for homogeneous
+    /// media, an unbiased estimate (ratio tracking, numbers from `rng`) for heterogeneous ones.
+    #[inline]
+    pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Rgb {
+        match &self.coefficients {
+            Coefficients::Homogeneous(h) => h.transmittance(t_max),
+            Coefficients::Heterogeneous(h) => h.transmittance(ray, t_max, rng),
         }
     }
 }
 
-/// A medium plugin's constructor.
-pub type MediumPlugin = fn(&Obj) -> PropResult<Medium>;
+/// A medium plugin's constructor (`files` reads grid volumes).
+pub type MediumPlugin = fn(&Obj, &mut dyn VolumeSource) -> PropResult<Medium>;
 
 /// Every medium plugin by its (Mitsuba) name.
-pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] = &[("homogeneous", Medium::from_props)];
+pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] =
+    &[("homogeneous", homogeneous_from_props), ("heterogeneous", heterogeneous_from_props)];
 
-impl Medium {
-    /// Mitsuba's `homogeneous`: `sigma_t` (1 m⁻¹) × `scale` (1), `albedo` (0.75), and one nested
-    /// `<phase>` (isotropic if none; see [`PhaseFunction::from_props`]).
-    pub fn from_props(o: &Obj) -> PropResult<Medium> {
-        o.check_children(&["phase"])?;
-        let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
-        let sigma_t = o.rgb("sigma_t", Rgb::ONE, SpectrumKind::Illuminant)? * scale;
-        if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
-            return Err(o.error_at("sigma_t", format!("sigma_t must be non-negative, got {sigma_t}")));
-        }
-        let albedo = o.rgb("albedo", Rgb::splat(0.75), SpectrumKind::Reflectance)?;
-        if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
-            return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
-        }
-        let phases = o.nested("phase");
-        if phases.len() > 1 {
-            return Err(SceneError::at(&phases[1].loc, "a medium takes one <phase>"));
-        }
-        let phase = match phases.first() {
-            None => PhaseFunction::Isotropic,
-            Some(p) => PhaseFunction::from_props(p)?,
-        };
-        Medium::new(sigma_t, albedo, phase).ok_or_else(|| o.error("invalid medium parameters"))
+/// What every medium plugin reads: one nested `<phase>` (isotropic if none; see
+/// [`PhaseFunction::from_props`]) and `sample_emitters` (true).
+fn common(o: &Obj, coefficients: Coefficients) -> PropResult<Medium> {
+    o.check_children(&["phase"])?;
+    let phases = o.nested("phase");
+    if phases.len() > 1 {
+        return Err(SceneError::at(&phases[1].loc, "a medium takes one <phase>"));
     }
+    let phase = match phases.first() {
+        None => PhaseFunction::Isotropic,
+        Some(p) => PhaseFunction::from_props(p)?,
+    };
+    let sample_emitters = o.bool("sample_emitters", true)?;
+    Ok(Medium { coefficients, phase, sample_emitters })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::sampling::Pcg32;
-
-    /// The free-flight estimator is unbiased per channel for a medium whose channels differ:
-    /// `E[weight · 1(pass)] = Tr(t_max)` and `E[weight · 1(scatter)] = ∫₀^t_max σₛ Tr(t) dt =
-    /// α (1 - Tr(t_max))`.
-    #[test]
-    fn free_flight_is_unbiased_per_channel() {
-        let m = Medium::new(Rgb::new(0.5, 2.0, 4.0), Rgb::new(0.9, 0.5, 0.2), PhaseFunction::Isotropic).unwrap();
-        let t_max = 0.7f32;
-        let mut rng = Pcg32::new(1, 2);
-        let n = 400_000;
-        let (mut pass, mut scatter) = ([0.0f64; 3], [0.0f64; 3]);
-        for _ in 0..n {
-            match m.sample_free_flight(t_max, rng.next_f32(), rng.next_f32()) {
-                FreeFlight::Pass { weight } => (0..3).for_each(|c| pass[c] += weight[c] as f64),
-                FreeFlight::Scatter { t, weight } => {
-                    assert!(t >= 0.0 && t < t_max);
-                    (0..3).for_each(|c| scatter[c] += weight[c] as f64)
-                }
-            }
-        }
-        for c in 0..3 {
-            let tr = (-(m.sigma_t[c] as f64) * t_max as f64).exp();
-            let (p, s) = (pass[c] / n as f64, scatter[c] / n as f64);
-            assert!((p - tr).abs() < 0.01 * tr, "channel {c}: pass {p} vs {tr}");
-            let expect = m.albedo[c] as f64 * (1.0 - tr);
-            assert!((s - expect).abs() < 0.01 * expect, "channel {c}: scatter {s} vs {expect}");
-        }
-        assert!(Medium::new(Rgb::ONE, Rgb::splat(1.5), PhaseFunction::Isotropic).is_none());
-        assert!(Medium::new(Rgb::splat(-1.0), Rgb::ONE, PhaseFunction::Isotropic).is_none());
+/// Mitsuba's `homogeneous`: `sigma_t` (1 m⁻¹) × `scale` (1), `albedo` (0.75), a `<phase>`,
+/// `sample_emitters`. An `<rgb>` value must lie in [0, 1] (Mitsuba reads it as a reflectance).
+fn homogeneous_from_props(o: &Obj, _files: &mut dyn VolumeSource) -> PropResult<Medium> {
+    let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
+    let sigma_t = volume::constant_param(o, "sigma_t", 1.0, SpectrumKind::Illuminant)? * scale;
+    if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
+        return Err(o.error_at("sigma_t", format!("sigma_t must be non-negative, got {sigma_t}")));
     }
+    let albedo = o.rgb("albedo", Rgb::splat(0.75), SpectrumKind::Reflectance)?;
+    if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
+        return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
+    }
+    common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }))
+}
+
+/// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`.
+fn heterogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
+    let h = Heterogeneous::from_props(o, files)?;
+    common(o, Coefficients::Heterogeneous(Box::new(h)))
 }

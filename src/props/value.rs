@@ -58,6 +58,7 @@ impl Value {
                 "bsdf" => "bsdf",
                 "emitter" => "emitter",
                 "shape" => "shape",
+                "volume" => "volume",
                 _ => "object",
             },
         }
@@ -97,5 +98,17 @@ pub struct Obj {
 }
 
 /// The element names that are plugin objects.
-pub const OBJECT_TAGS: &[&str] =
-    &["bsdf", "shape", "emitter", "sensor", "film", "sampler", "rfilter", "integrator", "texture", "medium", "phase"];
+pub const OBJECT_TAGS: &[&str] = &[
+    "bsdf",
+    "shape",
+    "emitter",
+    "sensor",
+    "film",
+    "sampler",
+    "rfilter",
+    "integrator",
+    "texture",
+    "medium",
+    "phase",
+    "volume",
+];

@@ -130,6 +130,7 @@ pub fn render_integrator(
         AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Ptracer(t) => render_light_paths(scene, t, settings, cancel),
         AnyIntegrator::VolPath(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::VolPathMis(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Moment(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Aov(i) => render(scene, i, settings, cancel),
         AnyIntegrator::Radiosity(opts) => {

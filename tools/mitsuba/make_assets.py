@@ -140,4 +140,27 @@ for y in range(n):
         nm[y, x] = (nrm + 1) / 2
 img = mi.Bitmap(nm).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=False)
 img.write("scenes/assets/bumps_normal.png")
-print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply, blob.vol and bumps_normal.png")
+
+# Heterogeneous media: a smoke density (a cluster of Gaussian puffs, zero near the faces, so
+# most of the box is thin) on a 24^3 grid, one channel, and a coloured albedo on a 6^3 grid,
+# three channels (red to blue along x, greener with height).
+def write_vol(path, data):
+    nz_, ny_, nx_, ch = data.shape
+    with open(path, "wb") as f:
+        f.write(b"VOL" + bytes([3]) + struct.pack("<iiiii", 1, nx_, ny_, nz_, ch) + struct.pack("<6f", 0, 0, 0, 1, 1, 1))
+        f.write(data.astype("<f4").tobytes())
+
+
+n = 24
+zs, ys, xs = np.meshgrid(*(np.linspace(0.5 / n, 1 - 0.5 / n, n),) * 3, indexing="ij")
+density = np.zeros_like(xs)
+for cx, cy, cz, r, a in [(0.5, 0.35, 0.5, 0.22, 1.0), (0.35, 0.6, 0.45, 0.16, 0.8), (0.65, 0.62, 0.58, 0.14, 1.3),
+                         (0.5, 0.8, 0.5, 0.1, 0.6), (0.3, 0.3, 0.7, 0.1, 0.9)]:
+    density += a * np.exp(-((xs - cx) ** 2 + (ys - cy) ** 2 + (zs - cz) ** 2) / (r * r))
+write_vol("scenes/assets/smoke.vol", density[..., None])
+m = 6
+zs, ys, xs = np.meshgrid(*(np.linspace(0, 1, m),) * 3, indexing="ij")
+albedo = np.stack([0.95 - 0.5 * xs, 0.4 + 0.5 * ys, 0.45 + 0.5 * xs], axis=-1)
+write_vol("scenes/assets/albedo.vol", albedo)
+print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply, blob.vol, bumps_normal.png, "
+      "smoke.vol and albedo.vol")

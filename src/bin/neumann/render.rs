@@ -51,7 +51,7 @@ pub struct RenderArgs {
     /// MIS heuristic of the mis strategy (default: power).
     #[arg(long, value_parser = choice::<MisHeuristic>())]
     mis: Option<MisHeuristic>,
-    /// How next-event estimation chooses a light (path, volpath, direct). Default: the scene
+    /// How next-event estimation chooses a light (path, volpath, volpathmis, direct). Default: the scene
     /// integrator's `light_sampler`, else bvh.
     #[arg(long, value_parser = choice::<LightSamplerKind>())]
     light_sampler: Option<LightSamplerKind>,
@@ -119,7 +119,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         job.file.spp = s;
     }
     select_integrator(&mut job.file.integrator, &a)?;
-    if job.file.scene.has_media() && !matches!(job.file.integrator, AnyIntegrator::VolPath(_)) {
+    if job.file.scene.has_media() && !matches!(job.file.integrator, AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_)) {
         eprintln!(
             "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
             job.file.integrator.name()
@@ -134,7 +134,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             Some(settings) => settings.max_depth = d,
             None => {
                 return Err(usage(format!(
-                    "--max-depth applies to the path, volpath and ptracer integrators, not '{name}'"
+                    "--max-depth applies to the path, volpath, volpathmis and ptracer integrators, not '{name}'"
                 )))
             }
         }
@@ -147,12 +147,12 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     }
     if let Some(kind) = a.light_sampler {
         match &job.file.integrator {
-            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::Direct(_) => {
+            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_) | AnyIntegrator::Direct(_) => {
                 job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
             }
             other => {
                 return Err(usage(format!(
-                    "--light-sampler applies to the path, volpath and direct integrators, not '{}'",
+                    "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
                     other.name()
                 )))
             }

@@ -644,6 +644,9 @@ impl Parser {
                 }
             };
             t = step * t;
+            if !(t.matrix().is_finite() && t.inverse_matrix().is_finite()) {
+                return Err(invalid("the transform is not finite after this operation (it overflows or is degenerate)"));
+            }
         }
         Ok(t)
     }
