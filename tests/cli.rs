@@ -67,24 +67,51 @@ fn defines_override_scene_defaults() {
     assert!(String::from_utf8_lossy(&r.stdout).contains("6x4, 3 spp"));
 }
 
+/// SIGINT and SIGTERM both finish the samples in flight, write the image (replacing an earlier
+/// file only once the new one is complete, through a temporary file that does not stay) and exit
+/// with 128 + the signal (130, 143), so scripts know the image is partial.
 #[test]
 fn interrupt_writes_what_was_rendered() {
-    let out = temp("interrupted.exr");
-    let child = neumann()
-        .args(["render", "--res", "64", "--time", "60", "--quiet", "-o"])
-        .arg(&out)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
-    let killed = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
-    assert!(killed.success());
-    let r = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&r.stdout);
-    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
-    assert!(stdout.contains("interrupted"), "{stdout}");
-    assert!(std::fs::metadata(&out).unwrap().len() > 0);
+    for (signal, code) in [("-INT", 130), ("-TERM", 143)] {
+        let out = temp(&format!("interrupted{code}.exr"));
+        std::fs::write(&out, b"an earlier image").unwrap();
+        let child = neumann()
+            .args(["render", "--res", "64", "--spp", "1000000", "--quiet", "-o"])
+            .arg(&out)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(1500));
+        let killed = Command::new("kill").args([signal, &child.id().to_string()]).status().unwrap();
+        assert!(killed.success());
+        let r = child.wait_with_output().unwrap();
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(code), "{stdout} {stderr}");
+        assert!(stdout.contains("interrupted") && stderr.contains("stopped by signal"), "{stdout} {stderr}");
+        let img = neumann::load::image::load_image(&out, false).unwrap();
+        assert_eq!((img.width, img.height), (64, 64));
+        let leftovers: Vec<_> = std::fs::read_dir(out.parent().unwrap())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+            .collect();
+        assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+    }
+}
+
+/// The destination is checked before rendering: a missing folder is an error at once (exit 1),
+/// not after the render; more than 1024 threads is a usage error.
+#[test]
+fn the_destination_is_checked_first() {
+    let start = std::time::Instant::now();
+    let r = neumann().args(["render", "--spp", "100000", "-o", "/nonexistent-folder/x.png"]).output().unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("does not exist") && start.elapsed() < Duration::from_secs(5), "{stderr}");
+    let r = neumann().args(["render", "--threads", "100000", "-o"]).arg(temp("t.png")).output().unwrap();
+    assert_eq!(r.status.code(), Some(2));
 }
 
 /// A Mitsuba XML scene renders with -D overrides; a broken one fails with exit code 1 and a

@@ -358,6 +358,12 @@ impl Film {
         (min, max)
     }
 
+    /// Samples per pixel, row-major from the top-left (they differ only in an interrupted
+    /// render).
+    pub fn sample_counts(&self) -> Vec<f32> {
+        self.px.count.iter().map(|&c| c as f32).collect()
+    }
+
     /// Total samples accumulated.
     pub fn total_samples(&self) -> u64 {
         self.px.count.iter().map(|&c| c as u64).sum()

@@ -116,15 +116,55 @@ pub fn write_image_layers(
             message: format!("only OpenEXR holds the {} AOV channels: write .exr", channels.len()),
         });
     }
-    match format {
-        Format::Exr => write_exr(path, width, height, pixels, alpha, channels, info).map_err(fail),
-        Format::Png => write_png(path, width, height, pixels, alpha, info).map_err(fail),
-        Format::Pfm if alpha.is_some() => Err(WriteError::Unsupported {
+    if format == Format::Pfm && alpha.is_some() {
+        return Err(WriteError::Unsupported {
             path: path.to_path_buf(),
             message: "PFM has no alpha channel: write .exr or .png for pixel_format rgba".into(),
-        }),
-        Format::Pfm => write_pfm(path, width, height, pixels).map_err(fail),
+        });
     }
+    write_atomically(path, |tmp| match format {
+        Format::Exr => write_exr(tmp, width, height, pixels, alpha, channels, info),
+        Format::Png => write_png(tmp, width, height, pixels, alpha, info),
+        Format::Pfm => write_pfm(tmp, width, height, pixels),
+    })
+    .map_err(fail)
+}
+
+/// Writes `path` through `write` to a temporary file beside it, flushed to disk, then renamed
+/// over `path`: an interrupted or failed write leaves any earlier file at `path` whole (and
+/// the temporary file is removed on failure).
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), String> {
+    let name = path.file_name().ok_or("the output path names no file")?.to_string_lossy().into_owned();
+    let tmp = path.with_file_name(format!(".{name}.tmp-{}", std::process::id()));
+    let result = write(&tmp).and_then(|()| {
+        std::fs::File::open(&tmp).and_then(|f| f.sync_all()).map_err(|e| format!("cannot flush: {e}"))?;
+        std::fs::rename(&tmp, path).map_err(|e| format!("cannot move the finished file into place: {e}"))
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Checks before rendering that `path` can be written: a known extension, an existing folder,
+/// and permission to create files in it (tested by creating and removing an empty one).
+pub fn check_destination(path: &Path) -> Result<(), WriteError> {
+    Format::from_path(path)?;
+    let fail = |message: String| WriteError::Write { path: path.to_path_buf(), message };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(fail(format!("the folder '{}' does not exist", dir.display())));
+    }
+    if path.is_dir() {
+        return Err(fail("is a folder".into()));
+    }
+    let probe = dir.join(format!(".neumann-probe-{}", std::process::id()));
+    std::fs::File::create(&probe).map_err(|e| fail(format!("cannot create files in '{}': {e}", dir.display())))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
 }
 
 fn clean(c: Rgb) -> Rgb {

@@ -151,6 +151,22 @@ fn subdivide(p: [Vec3; 3], max_edge: f32, depth: u32, out: &mut Vec<[Vec3; 3]>) 
     }
 }
 
+/// The most patches a solve takes.
+const MAX_PATCHES: usize = 200_000;
+
+/// How many patches [`subdivide`] makes of `p`: midpoint subdivision halves every edge, so
+/// `4^L` with `L` the levels until the longest edge fits (at most 12).
+fn patch_count(p: [Vec3; 3], max_edge: f32) -> u64 {
+    let longest = (p[1] - p[0]).length().max((p[2] - p[1]).length()).max((p[0] - p[2]).length());
+    let mut levels = 0u32;
+    let mut edge = longest;
+    while edge > max_edge && levels < 12 {
+        edge *= 0.5;
+        levels += 1;
+    }
+    4u64.pow(levels)
+}
+
 /// Radiance of an area light attached to a shape, if any.
 fn shape_emission(scene: &Scene, shape: usize) -> Rgb {
     match scene.shapes()[shape].light.map(|i| &scene.lights()[i as usize]) {
@@ -219,6 +235,17 @@ impl Radiosity {
                 _ => "environment map",
             }));
         }
+        // Count the patches before making them: a tiny patch size must be an error, not an
+        // allocation of gigabytes.
+        let planned: u64 = scene
+            .geometries()
+            .iter()
+            .filter_map(|g| if let Geometry::Mesh(m) = g { Some(m) } else { None })
+            .flat_map(|m| (0..m.len()).map(move |i| patch_count(m.triangle(i), opts.patch_size)))
+            .sum();
+        if planned > MAX_PATCHES as u64 {
+            return Err(RadiosityError::TooManyPatches(planned.min(usize::MAX as u64) as usize));
+        }
         let mut b = SceneBuilder::new();
         let mut first_patch = Vec::new();
         let (mut area, mut rho, mut emission) = (Vec::new(), Vec::new(), Vec::new());
@@ -261,7 +288,7 @@ impl Radiosity {
         if n == 0 {
             return Err(RadiosityError::NoSurfaces);
         }
-        if n > 200_000 {
+        if n > MAX_PATCHES {
             return Err(RadiosityError::TooManyPatches(n));
         }
 
@@ -705,5 +732,11 @@ mod tests {
         b.set_camera(Camera::perspective(Transform::IDENTITY, 60.0, FovAxis::X, 4, 4).unwrap());
         let e = Radiosity::solve(&b.build().unwrap(), &Options::default()).unwrap_err();
         assert!(matches!(&e, RadiosityError::NotDiffuse { shape: 0, bsdf } if bsdf == "Conductor"), "{e}");
+        // A tiny patch size is refused before the patches are made (it once took gigabytes).
+        let cornell = crate::scene::cornell::cornell_box(4, 4).unwrap();
+        let start = std::time::Instant::now();
+        let e = Radiosity::solve(&cornell, &Options { patch_size: 1e-4, ..Default::default() }).unwrap_err();
+        assert!(matches!(e, RadiosityError::TooManyPatches(n) if n > 1_000_000), "{e}");
+        assert!(start.elapsed().as_secs_f32() < 1.0);
     }
 }

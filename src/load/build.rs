@@ -53,6 +53,9 @@ struct SensorSettings {
 pub struct Builder {
     sb: SceneBuilder,
     bsdf_index: HashMap<*const Obj, u32>,
+    shared_bsdfs: HashMap<*const Obj, Arc<Bsdf>>,
+    /// How many BSDF evaluations one evaluation of each built BSDF may make (itself included).
+    bsdf_sizes: HashMap<*const Obj, u64>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     volumes: HashMap<PathBuf, Arc<GridVolume>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
@@ -72,6 +75,8 @@ impl Builder {
         Builder {
             sb: SceneBuilder::new(),
             bsdf_index: HashMap::new(),
+            shared_bsdfs: HashMap::new(),
+            bsdf_sizes: HashMap::new(),
             images: HashMap::new(),
             volumes: HashMap::new(),
             default_bsdf: [None; 2],
@@ -357,7 +362,7 @@ impl Builder {
         Ok(i)
     }
 
-    fn nested_bsdfs(&mut self, o: &Obj, range: std::ops::RangeInclusive<usize>) -> Result<Vec<Bsdf>> {
+    fn nested_bsdfs(&mut self, o: &Obj, range: std::ops::RangeInclusive<usize>) -> Result<Vec<Arc<Bsdf>>> {
         let nested = o.nested("bsdf");
         if !range.contains(&nested.len()) {
             return Err(o.error(format!(
@@ -370,7 +375,19 @@ impl Builder {
                 nested.len()
             )));
         }
-        nested.iter().map(|b| self.bsdf(b)).collect()
+        nested.iter().map(|b| self.shared_bsdf(b)).collect()
+    }
+
+    /// The BSDF of `o`, built once and shared however often it is referenced (a chain of
+    /// blends that each name the previous one twice stays linear, not exponential).
+    fn shared_bsdf(&mut self, o: &Rc<Obj>) -> Result<Arc<Bsdf>> {
+        let key = Rc::as_ptr(o);
+        if let Some(b) = self.shared_bsdfs.get(&key) {
+            return Ok(b.clone());
+        }
+        let b = Arc::new(self.bsdf(o)?);
+        self.shared_bsdfs.insert(key, b.clone());
+        Ok(b)
     }
 
     fn bsdf(&mut self, o: &Rc<Obj>) -> Result<Bsdf> {
@@ -378,7 +395,18 @@ impl Builder {
         o.check_children(&["bsdf", "texture"])?;
         let plugin = bsdf_plugin(&o.ty)
             .ok_or_else(|| o.unknown_plugin(&BSDF_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-        plugin(o, self)
+        let bsdf = plugin(o, self)?;
+        // The BSDFs an evaluation may visit: each nested one as often as it is named (a blend of
+        // two references to one BSDF evaluates it twice). Bounded, so that a chain of blends
+        // naming the previous one twice cannot make every shading point cost 2⁴⁰ evaluations.
+        let size = 1 + o.nested("bsdf").iter().map(|c| self.bsdf_sizes.get(&Rc::as_ptr(c)).copied().unwrap_or(1)).sum::<u64>();
+        if size > MAX_BSDF_EVALUATIONS {
+            return Err(o.error(format!(
+                "this BSDF nests {size} BSDF evaluations (shared BSDFs count once per use), more than {MAX_BSDF_EVALUATIONS}"
+            )));
+        }
+        self.bsdf_sizes.insert(Rc::as_ptr(o), size);
+        Ok(bsdf)
     }
 
     // ---------------------------------------------------------------- textures
@@ -437,7 +465,7 @@ impl TextureSource for Builder {
 }
 
 impl BsdfBuilder for Builder {
-    fn nested_bsdfs(&mut self, o: &Obj, count: std::ops::RangeInclusive<usize>) -> Result<Vec<Bsdf>> {
+    fn nested_bsdfs(&mut self, o: &Obj, count: std::ops::RangeInclusive<usize>) -> Result<Vec<Arc<Bsdf>>> {
         Builder::nested_bsdfs(self, o, count)
     }
 
@@ -498,6 +526,9 @@ impl MeshSource for Builder {
         }
     }
 }
+
+/// The most BSDF evaluations one BSDF's evaluation may make (nested blends, twosided, masks).
+const MAX_BSDF_EVALUATIONS: u64 = 4096;
 
 /// Rejects geometry whose coordinates are not finite, or so large that their differences
 /// overflow (a NaN or overflowing `to_world`, huge mesh coordinates): such shapes would be

@@ -2,7 +2,7 @@
 //! as Mitsuba reads them), OpenEXR, Radiance HDR and PFM (float, linear). Used by bitmap textures
 //! and environment maps.
 
-use super::LoadError;
+use super::{limits, LoadError};
 use crate::math::color::srgb_decode;
 use crate::math::Rgb;
 use std::path::Path;
@@ -33,9 +33,52 @@ pub fn load_image(path: &Path, raw: bool) -> Result<Image, LoadError> {
     }
 }
 
+/// Checks a PNG's chunk structure before the decoder sees it: the signature, chunk lengths
+/// within the file, a palette of whole RGB triples (at most 256; the `png` crate panics on
+/// others) and the size the header claims against [`limits::MAX_IMAGE_PIXELS`].
+fn check_png(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    const SIGNATURE: &[u8] = b"\x89PNG\r\n\x1a\n";
+    let bad = |m: &str| m.to_string();
+    if !bytes.starts_with(SIGNATURE) {
+        return Err(bad("not a PNG file (no PNG signature)"));
+    }
+    let mut pos = SIGNATURE.len();
+    while pos + 8 <= bytes.len() {
+        let len = u32::from_be_bytes(bytes[pos..pos + 4].try_into().expect("4 bytes")) as usize;
+        let kind = &bytes[pos + 4..pos + 8];
+        let data = pos + 8;
+        let Some(end) = data.checked_add(len).filter(|&e| e + 4 <= bytes.len()) else {
+            return Err(bad("a PNG chunk runs past the end of the file"));
+        };
+        match kind {
+            b"IHDR" if len >= 8 => {
+                let w = u32::from_be_bytes(bytes[data..data + 4].try_into().expect("4 bytes"));
+                let h = u32::from_be_bytes(bytes[data + 4..data + 8].try_into().expect("4 bytes"));
+                limits::check_image_size(path, w.into(), h.into()).map_err(message)?;
+            }
+            b"PLTE" if !len.is_multiple_of(3) || len > 768 => {
+                return Err(bad(&format!("the PNG palette has {len} bytes (whole RGB entries, at most 256, are needed)")));
+            }
+            b"IEND" => break,
+            _ => {}
+        }
+        pos = end + 4;
+    }
+    Ok(())
+}
+
+/// A load error's message without its file (the caller names the file).
+fn message(e: LoadError) -> String {
+    match e {
+        LoadError::Format { message, .. } | LoadError::Unsupported { message, .. } => message,
+        LoadError::Io { source, .. } => source.to_string(),
+    }
+}
+
 fn load_png(path: &Path, raw: bool) -> Result<Image, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("cannot open: {e}"))?;
-    let mut decoder = png::Decoder::new(std::io::BufReader::new(file));
+    let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(message)?;
+    check_png(path, &bytes)?;
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(&bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
     let mut buf = vec![0u8; reader.output_buffer_size().ok_or("PNG too large")?];
@@ -81,6 +124,12 @@ fn load_decoded(path: &Path, raw: bool) -> Result<Image, String> {
 
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
     use exr::prelude::*;
+    // The sizes the header claims, checked before any pixel memory is allocated.
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
+    for header in &meta.headers {
+        let size = header.layer_size;
+        limits::check_image_size(path, size.width() as u64, size.height() as u64).map_err(message)?;
+    }
     let image = read_first_rgba_layer_from_file(
         path,
         |resolution, _| crate::load::image::Image {
@@ -121,6 +170,57 @@ mod tests {
         assert!(matches!(missing, LoadError::Io { .. }) && missing.to_string().contains("missing.png"), "{missing}");
         let gif = load_image(&dir.join("a.gif"), false).unwrap_err();
         assert!(matches!(gif, LoadError::Unsupported { .. }) && gif.to_string().contains("a.gif"), "{gif}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Hostile images are errors before any large allocation or a decoder panic: a PNG whose
+    /// palette is not whole RGB triples (the `png` crate panicked), PNG and EXR headers that
+    /// claim 100000² pixels, a truncated chunk, a device instead of a file.
+    #[test]
+    fn hostile_images_are_refused() {
+        let dir = std::env::temp_dir().join(format!("neumann-img-hostile-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let chunk = |kind: &[u8], data: &[u8]| {
+            let mut c = (data.len() as u32).to_be_bytes().to_vec();
+            c.extend(kind);
+            c.extend(data);
+            c.extend([0u8; 4]); // CRC (never reached)
+            c
+        };
+        let png = |w: u32, h: u32, colour: u8, extra: Vec<u8>| {
+            let mut ihdr = w.to_be_bytes().to_vec();
+            ihdr.extend(h.to_be_bytes());
+            ihdr.extend([8, colour, 0, 0, 0]);
+            let mut f = b"\x89PNG\r\n\x1a\n".to_vec();
+            f.extend(chunk(b"IHDR", &ihdr));
+            f.extend(extra);
+            f.extend(chunk(b"IDAT", &[0; 8]));
+            f.extend(chunk(b"IEND", &[]));
+            f
+        };
+        std::fs::write(dir.join("palette.png"), png(4, 4, 3, chunk(b"PLTE", &[1, 2, 3, 4]))).unwrap();
+        std::fs::write(dir.join("huge.png"), png(100_000, 100_000, 2, Vec::new())).unwrap();
+        let mut cut = png(4, 4, 2, Vec::new());
+        cut.truncate(30);
+        std::fs::write(dir.join("cut.png"), cut).unwrap();
+        // A 1×1 EXR whose data and display windows are patched to claim 100000².
+        write_image(&dir.join("one.exr"), 1, 1, &[Rgb::ONE], &ImageInfo::default()).unwrap();
+        let mut exr = std::fs::read(dir.join("one.exr")).unwrap();
+        for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+            let at = exr.windows(name.len()).position(|w| w == name).unwrap() + name.len() + 4;
+            exr[at + 8..at + 12].copy_from_slice(&99_999i32.to_le_bytes());
+            exr[at + 12..at + 16].copy_from_slice(&99_999i32.to_le_bytes());
+        }
+        std::fs::write(dir.join("huge.exr"), exr).unwrap();
+        for (file, expectation) in [
+            ("palette.png", "palette has 4 bytes"),
+            ("huge.png", "more than the limit"),
+            ("cut.png", "runs past the end"),
+            ("huge.exr", "more than the limit"),
+        ] {
+            let e = load_image(&dir.join(file), false).unwrap_err().to_string();
+            assert!(e.contains(file) && e.contains(expectation), "expected '{expectation}' in: {e}");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 

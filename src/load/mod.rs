@@ -6,6 +6,7 @@
 pub mod build;
 mod error;
 pub mod image;
+pub mod limits;
 pub mod mitsuba;
 pub mod obj;
 pub mod ply;

@@ -10,7 +10,7 @@ use std::path::Path;
 
 /// Loads an OBJ file.
 pub fn load_obj(path: &Path) -> Result<TriangleMesh, LoadError> {
-    let text = std::fs::read_to_string(path).map_err(|e| LoadError::io(path, e))?;
+    let text = super::limits::read_text(path)?;
     parse_obj(&text).map_err(|(line, message)| LoadError::Format {
         path: path.to_path_buf(),
         line: Some(line),

@@ -74,7 +74,7 @@ enum Encoding {
 
 /// Loads a PLY file.
 pub fn load_ply(path: &Path) -> Result<TriangleMesh, LoadError> {
-    let data = std::fs::read(path).map_err(|e| LoadError::io(path, e))?;
+    let data = super::limits::read_bounded(path, super::limits::MAX_FILE_BYTES)?;
     parse_ply(&data).map_err(|e| LoadError::format(path, e))
 }
 

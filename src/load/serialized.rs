@@ -37,7 +37,7 @@ pub struct SerializedMesh {
 
 /// Reads mesh `index` (0-based) of the serialized file at `path`.
 pub fn load_serialized(path: &Path, index: usize) -> Result<SerializedMesh, LoadError> {
-    let bytes = std::fs::read(path).map_err(|source| LoadError::Io { path: path.to_path_buf(), source })?;
+    let bytes = super::limits::read_bounded(path, super::limits::MAX_FILE_BYTES)?;
     let fail = |m: String| LoadError::format(path, m);
     if bytes.len() < 8 {
         return Err(fail("too short for a serialized mesh file".into()));

@@ -12,7 +12,7 @@ const HEADER_BYTES: usize = 48;
 
 /// Reads the grid volume at `path`.
 pub fn load_grid_volume(path: &Path) -> Result<GridVolume, LoadError> {
-    let bytes = std::fs::read(path).map_err(|e| LoadError::io(path, e))?;
+    let bytes = super::limits::read_bounded(path, super::limits::MAX_FILE_BYTES)?;
     parse_grid_volume(&bytes).map_err(|m| LoadError::format(path, m))
 }
 

@@ -35,6 +35,7 @@ pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::RoughPlastic;
 
+use std::sync::Arc;
 use crate::math::{Rgb, Vec2, Vec3};
 
 /// Where on the surface a BSDF is evaluated (what textured parameters need).
@@ -103,7 +104,7 @@ pub enum Bsdf {
         /// Blend weight toward the second BSDF.
         weight: crate::texture::Texture,
         /// The two BSDFs.
-        bsdfs: Box<[Bsdf; 2]>,
+        bsdfs: [Arc<Bsdf>; 2],
     },
     /// Mitsuba's `mask`: opacity α (constant or textured); with probability 1 - α light passes
     /// straight through (a delta "null" lobe, `wi = -wo`, weight 1).
@@ -111,14 +112,14 @@ pub enum Bsdf {
         /// Opacity.
         opacity: crate::texture::Texture,
         /// The BSDF of the opaque part.
-        bsdf: Box<Bsdf>,
+        bsdf: Arc<Bsdf>,
     },
     /// Mitsuba's `null`: no surface at all, light passes straight through (a delta lobe
     /// `wi = -wo` of weight 1). Marks index-matched boundaries of participating media.
     Null,
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
-    TwoSided(Box<[Bsdf; 2]>),
+    TwoSided([Arc<Bsdf>; 2]),
     /// Mitsuba's `normalmap` and `bumpmap`: a nested BSDF under a perturbed shading normal.
     Perturbed(Perturbed),
 }
@@ -135,7 +136,7 @@ impl Bsdf {
             | Bsdf::Null => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
-            Bsdf::Blend { bsdfs, .. } => bsdfs[0].transmits() || bsdfs[1].transmits(),
+            Bsdf::Blend { bsdfs, .. } => distinct(bsdfs).iter().any(|c| c.transmits()),
             Bsdf::Perturbed(n) => n.bsdf.transmits(),
             _ => false,
         }
@@ -343,8 +344,7 @@ impl Bsdf {
             Bsdf::PrincipledThin(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
                 let mut v = vec![weight];
-                v.extend(bsdfs[0].textures());
-                v.extend(bsdfs[1].textures());
+                v.extend(distinct(bsdfs).iter().flat_map(|b| b.textures()));
                 v
             }
             Bsdf::Mask { opacity, bsdf } => {
@@ -352,11 +352,7 @@ impl Bsdf {
                 v.extend(bsdf.textures());
                 v
             }
-            Bsdf::TwoSided(b) => {
-                let mut v = b[0].textures();
-                v.extend(b[1].textures());
-                v
-            }
+            Bsdf::TwoSided(b) => distinct(b).iter().flat_map(|b| b.textures()).collect(),
             Bsdf::Perturbed(n) => {
                 let mut v = vec![match &n.perturbation {
                     Perturbation::NormalMap(t) | Perturbation::BumpMap { height: t, .. } => t,
@@ -374,7 +370,7 @@ impl Bsdf {
             Bsdf::Perturbed(p) => {
                 matches!(p.perturbation, Perturbation::BumpMap { .. }) || p.bsdf.perturbs_with_height()
             }
-            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].perturbs_with_height() || b[1].perturbs_with_height(),
+            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.perturbs_with_height()),
             Bsdf::Mask { bsdf, .. } => bsdf.perturbs_with_height(),
             _ => false,
         }
@@ -402,7 +398,7 @@ impl Bsdf {
     #[inline(never)]
     fn is_delta_nested(&self) -> bool {
         match self {
-            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => b[0].is_delta() && b[1].is_delta(),
+            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().all(|c| c.is_delta()),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
             Bsdf::Perturbed(n) => n.bsdf.is_delta(),
             leaf => leaf.is_delta(),
@@ -418,3 +414,14 @@ fn blend_weight(t: &crate::texture::Texture, ctx: &BsdfContext) -> f32 {
 
 #[cfg(test)]
 mod tests;
+
+/// The two nested BSDFs of a `twosided` or `blendbsdf`, or one when both are the same (a
+/// `twosided` with one BSDF, or two references to one): queries over the nesting then visit a
+/// shared BSDF once, not once per path to it.
+fn distinct(b: &[Arc<Bsdf>; 2]) -> &[Arc<Bsdf>] {
+    if Arc::ptr_eq(&b[0], &b[1]) {
+        &b[..1]
+    } else {
+        &b[..]
+    }
+}

@@ -19,6 +19,7 @@
 //!   of Estevez et al. 2019 (the bump-terminator fix), `2 / (1 + √(1 + α² tan²θᵢ))` with
 //!   `α² = min(tan²θₙ / 8, 1)`, θᵢ and θₙ measured from the original normal.
 
+use std::sync::Arc;
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{Frame, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
@@ -44,7 +45,7 @@ pub struct Perturbed {
     /// The perturbation.
     pub perturbation: Perturbation,
     /// The BSDF seen through it.
-    pub bsdf: Box<Bsdf>,
+    pub bsdf: Arc<Bsdf>,
     /// Turn normals that face away from the viewer toward it.
     pub flip_invalid_normals: bool,
     /// Attenuate by the bump-terminator shadowing function.
@@ -160,7 +161,7 @@ impl Perturbed {
         let flip_invalid_normals = o.bool("flip_invalid_normals", true)?;
         let shadowing = o.bool("use_shadowing_function", true)?;
         let mut nested = b.nested_bsdfs(o, 1..=1)?;
-        let bsdf = Box::new(nested.pop().expect("one"));
+        let bsdf = nested.pop().expect("one");
         Ok(Bsdf::Perturbed(Perturbed { perturbation, bsdf, flip_invalid_normals, shadowing }))
     }
 
@@ -201,7 +202,7 @@ mod tests {
     fn map(n: Vec3, bsdf: Bsdf, shadowing: bool) -> Perturbed {
         Perturbed {
             perturbation: Perturbation::NormalMap(((n.normalize() + Vec3::ONE) * 0.5).into()),
-            bsdf: Box::new(bsdf),
+            bsdf: Arc::new(bsdf),
             flip_invalid_normals: true,
             shadowing,
         }
@@ -226,7 +227,7 @@ mod tests {
         // Slope of the height field along u: 0.25 per texel × 4 texels = 1, times scale 0.3.
         let bump = Perturbed {
             perturbation: Perturbation::BumpMap { height, scale: 0.3 },
-            bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
+            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
             flip_invalid_normals: false,
             shadowing: false,
         };

@@ -5,6 +5,7 @@
 //! The wrappers, which only combine other BSDFs (Mitsuba's `twosided`, `blendbsdf`, `mask`, and
 //! `null`), are built here.
 
+use std::sync::Arc;
 use super::Bsdf;
 use crate::math::Rgb;
 use crate::props::{Obj, Result};
@@ -14,8 +15,9 @@ use std::ops::RangeInclusive;
 /// What a BSDF plugin needs from the loader that holds the scene's objects: its texture
 /// parameters ([`TextureSource`]) and the BSDFs nested in it, built (and shared) by the loader.
 pub trait BsdfBuilder: TextureSource {
-    /// The BSDFs nested in `o`; an error unless their number is in `count`.
-    fn nested_bsdfs(&mut self, o: &Obj, count: RangeInclusive<usize>) -> Result<Vec<Bsdf>>;
+    /// The BSDFs nested in `o`; an error unless their number is in `count`. A BSDF named twice
+    /// (by references) is built once and shared.
+    fn nested_bsdfs(&mut self, o: &Obj, count: RangeInclusive<usize>) -> Result<Vec<Arc<Bsdf>>>;
 
     /// The textures nested in `o` without a name (a `bumpmap`'s height field).
     fn nested_textures(&mut self, o: &Obj) -> Result<Vec<crate::texture::Texture>>;
@@ -54,22 +56,22 @@ pub fn bsdf_plugin(name: &str) -> Option<BsdfPlugin> {
 fn two_sided(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
     let mut nested = b.nested_bsdfs(o, 1..=2)?;
     let back = if nested.len() == 2 { nested.pop().expect("two") } else { nested[0].clone() };
-    Ok(Bsdf::TwoSided(Box::new([nested.pop().expect("one"), back])))
+    Ok(Bsdf::TwoSided([nested.pop().expect("one"), back]))
 }
 
 /// Mitsuba's `blendbsdf`: `weight` (texturable, 0.5) toward the second of two nested BSDFs.
 fn blend(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
     let weight = b.texture(o, "weight", Rgb::splat(0.5))?;
     let nested = b.nested_bsdfs(o, 2..=2)?;
-    let [first, second]: [Bsdf; 2] = nested.try_into().expect("two");
-    Ok(Bsdf::Blend { weight, bsdfs: Box::new([first, second]) })
+    let bsdfs: [Arc<Bsdf>; 2] = nested.try_into().expect("two");
+    Ok(Bsdf::Blend { weight, bsdfs })
 }
 
 /// Mitsuba's `mask`: `opacity` (texturable, 0.5) of one nested BSDF; the rest passes through.
 fn mask(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
     let opacity = b.texture(o, "opacity", Rgb::splat(0.5))?;
     let mut nested = b.nested_bsdfs(o, 1..=1)?;
-    Ok(Bsdf::Mask { opacity, bsdf: Box::new(nested.pop().expect("one")) })
+    Ok(Bsdf::Mask { opacity, bsdf: nested.pop().expect("one") })
 }
 
 /// Mitsuba's `null`: an index-matched boundary (a medium's surface).

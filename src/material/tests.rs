@@ -2,6 +2,7 @@
 //! sphere, so transmission is covered), the returned pdf and weight against `pdf` and `eval`,
 //! reciprocity, and energy conservation.
 
+use std::sync::Arc;
 use super::microfacet::{Microfacet, MicrofacetType, Roughness};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
@@ -126,29 +127,32 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "blendbsdf(diffuse, roughconductor)".into(),
         Bsdf::Blend {
             weight: crate::texture::Texture::Constant(Rgb::splat(0.3)),
-            bsdfs: Box::new([Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7))), rough_conductors().remove(1).1]),
+            bsdfs: [Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))), Arc::new(rough_conductors().remove(1).1)],
         },
     ));
     v.push((
         "blendbsdf(plastic, diffuse)".into(),
         Bsdf::Blend {
             weight: crate::texture::Texture::Constant(Rgb::splat(0.6)),
-            bsdfs: Box::new([
-                Bsdf::Plastic(Plastic::new(Rgb::splat(0.4), Rgb::ONE, 1.5, false)),
-                Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7))),
-            ]),
+            bsdfs: [
+                Arc::new(Bsdf::Plastic(Plastic::new(Rgb::splat(0.4), Rgb::ONE, 1.5, false))),
+                Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))),
+            ],
         },
     ));
     v.push((
         "mask(diffuse)".into(),
         Bsdf::Mask {
             opacity: crate::texture::Texture::Constant(Rgb::splat(0.4)),
-            bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.8)))),
+            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.8)))),
         },
     ));
     v.push((
         "twosided(roughconductor)".into(),
-        Bsdf::TwoSided(Box::new([rough_conductors().remove(0).1, Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))])),
+        Bsdf::TwoSided([
+            Arc::new(rough_conductors().remove(0).1),
+            Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))),
+        ]),
     ));
     // The principled BSDF: every lobe with anisotropy; transmission (seen from both sides);
     // flatness.
@@ -228,7 +232,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "normalmap(diffuse)".into(),
         Bsdf::Perturbed(Perturbed {
             perturbation: Perturbation::NormalMap(tilted(Vec3::new(0.4, -0.2, 1.0))),
-            bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))),
+            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))),
             flip_invalid_normals: true,
             shadowing: true,
         }),
@@ -237,7 +241,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
         "normalmap(roughconductor)".into(),
         Bsdf::Perturbed(Perturbed {
             perturbation: Perturbation::NormalMap(tilted(Vec3::new(-0.3, 0.35, 1.0))),
-            bsdf: Box::new(rough_conductors().remove(1).1),
+            bsdf: Arc::new(rough_conductors().remove(1).1),
             flip_invalid_normals: true,
             shadowing: true,
         }),
@@ -374,10 +378,10 @@ fn smooth_conductor_mirrors_with_fresnel() {
     assert!((s.weight.x - fresnel::fresnel_conductor(wo.z, Rgb::splat(0.2), Rgb::splat(3.9)).x).abs() < 1e-6);
     assert_eq!(b.eval(&CTX, wo, s.wi), Rgb::ZERO);
     assert!(b.sample(&CTX, -wo, 0.5, Vec2::splat(0.5)).is_none(), "one-sided");
-    let mirror = Bsdf::TwoSided(Box::new([
-        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() }),
-        Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() }),
-    ]));
+    let mirror = Bsdf::TwoSided([
+        Arc::new(Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() })),
+        Arc::new(Bsdf::Conductor(Conductor { ior: None, specular_reflectance: Rgb::ONE.into() })),
+    ]);
     let s = mirror.sample(&CTX, flip(wo), 0.5, Vec2::splat(0.5)).unwrap();
     assert!((s.wi - Vec3::new(-wo.x, -wo.y, -wo.z)).length() < 1e-6, "twosided mirrors the back too");
     assert_eq!(s.weight, Rgb::ONE);
@@ -387,7 +391,7 @@ fn smooth_conductor_mirrors_with_fresnel() {
 fn mask_passes_light_through_with_probability_one_minus_opacity() {
     let b = Bsdf::Mask {
         opacity: crate::texture::Texture::Constant(Rgb::splat(0.25)),
-        bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
+        bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
     };
     let wo = Vec3::new(0.3, 0.2, 0.93).normalize();
     let mut rng = crate::sampling::Pcg32::new(8, 8);

@@ -14,6 +14,9 @@ pub struct SourceFile {
     pub text: String,
 }
 
+/// The most characters of a source line an error shows.
+const SNIPPET_CHARS: usize = 100;
+
 /// A byte offset in a scene file.
 #[derive(Clone, Debug)]
 pub struct Loc {
@@ -43,14 +46,29 @@ impl Loc {
         format!("{}:{line}:{col}", self.file.path.display())
     }
 
-    /// The source line of the offset with a caret under its column.
+    /// The source line of the offset with a caret under its column; of a long line, the
+    /// [`SNIPPET_CHARS`] characters around the column, elided with `…`.
     fn snippet(&self) -> String {
         let (line, col) = self.line_col();
         let text = self.file.text.lines().nth(line - 1).unwrap_or("");
         let gutter = line.to_string();
         let pad = " ".repeat(gutter.len());
-        let caret_pad: String = text.chars().take(col - 1).map(|c| if c == '\t' { '\t' } else { ' ' }).collect();
-        format!("{pad} |\n{gutter} | {text}\n{pad} | {caret_pad}^")
+        let chars: Vec<char> = text.chars().collect();
+        let (start, end) = if chars.len() <= SNIPPET_CHARS {
+            (0, chars.len())
+        } else {
+            let start = (col - 1).saturating_sub(SNIPPET_CHARS / 2).min(chars.len() - SNIPPET_CHARS);
+            (start, start + SNIPPET_CHARS)
+        };
+        let before = if start > 0 { "…" } else { "" };
+        let after = if end < chars.len() { "…" } else { "" };
+        let shown: String = chars[start..end].iter().collect();
+        let caret_pad: String = before
+            .chars()
+            .chain(chars[start..(col - 1).clamp(start, end)].iter().copied())
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
+        format!("{pad} |\n{gutter} | {before}{shown}{after}\n{pad} | {caret_pad}^")
     }
 }
 
@@ -101,6 +119,14 @@ mod tests {
         let e = SceneError::at(&loc, "unknown BSDF").to_string();
         assert!(e.starts_with("scene.xml:2:3: unknown BSDF\n"), "{e}");
         assert!(e.contains("2 |   <bsdf type=\"difuse\"/>\n  |   ^"), "{e}");
+        // A long line shows the part around the column.
+        let long = format!("<scene>{}<bsdf type=\"x\"/>{}</scene>", " ".repeat(500), " ".repeat(500));
+        let loc = Loc { file: Arc::new(SourceFile { path: "s.xml".into(), text: long }), offset: 507 };
+        let e = SceneError::at(&loc, "here").to_string();
+        let lines: Vec<&str> = e.lines().collect();
+        assert!(lines[2].chars().count() < 120 && lines[2].contains("<bsdf type=\"x\"/>"), "{e}");
+        let caret = lines[3].chars().position(|c| c == '^').unwrap();
+        assert_eq!(lines[2].chars().nth(caret), Some('<'), "{e}");
         assert_eq!(nearest("difuse", ["diffuse", "dielectric", "conductor"]), Some("diffuse"));
         assert_eq!(nearest("roughplastik", ["plastic", "roughplastic"]), Some("roughplastic"));
         assert_eq!(nearest("xyzzy", ["diffuse", "plastic"]), None);

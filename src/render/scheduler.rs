@@ -4,8 +4,8 @@
 //! path chunks; both hand the scheduler a function that renders one work item of a pass and a
 //! function that merges a pass's results, in item order, into the film.
 //!
-//! Pass sizes: without a time budget, `clamp(spp / 8, 1, max_pass)` samples per pixel (the last
-//! pass takes what remains); with one, one sample first, then as many whole samples as fit in
+//! Pass sizes: without a time budget, 1, 2, 4, … samples per pixel (each pass doubling the
+//! samples done) up to `clamp(spp / 8, 1, max_pass)` (the last pass takes what remains); with one, one sample first, then as many whole samples as fit in
 //! the remaining time at the rate measured so far (at most `max_pass`), stopping when not even
 //! one fits. Determinism does not depend on the thread count: results are merged in item order.
 
@@ -111,7 +111,9 @@ impl<'a> Scheduler<'a> {
     fn pass_size(&self, spp: u32, done: u32, max_pass: u32, elapsed: Duration) -> Option<u32> {
         let remaining_spp = spp - done;
         match self.settings.time_budget {
-            None => Some((spp / 8).clamp(1, max_pass).min(remaining_spp)),
+            // Progressive: 1, 2, 4, … samples per pixel up to the steady size, so that an early
+            // interruption still has the whole frame.
+            None => Some((spp / 8).clamp(1, max_pass).min(done.max(1).next_power_of_two()).min(remaining_spp)),
             Some(budget) => {
                 if elapsed >= budget {
                     return None;
@@ -174,7 +176,8 @@ mod tests {
         );
         assert_eq!(out.done, 100);
         assert!(!out.interrupted);
-        assert_eq!(passes, [12, 12, 12, 12, 12, 12, 12, 12, 4]);
+        // Progressive (1, 1, 2, 4, 8 samples), then the steady size, then the rest.
+        assert_eq!(passes, [1, 1, 2, 4, 8, 12, 12, 12, 12, 12, 12, 12]);
         let light = s.run(5, 1, 3, |_, _, _| ((), 1), |_, count| assert_eq!(count, 1));
         assert_eq!(light.done, 5);
         let cancelled = AtomicBool::new(true);

@@ -484,7 +484,7 @@ mod tests {
             };
             let m = b.add_bsdf(Bsdf::Perturbed(crate::material::Perturbed {
                 perturbation: crate::material::Perturbation::BumpMap { height, scale: 1.0 },
-                bsdf: Box::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))),
+                bsdf: std::sync::Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5)))),
                 flip_invalid_normals: true,
                 shadowing: true,
             }));

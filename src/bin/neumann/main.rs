@@ -81,6 +81,29 @@ enum Command {
 
 pub static CANCEL: AtomicBool = AtomicBool::new(false);
 
+/// The signal (SIGINT 2, SIGTERM 15) that asked the render to stop, 0 if none.
+pub static STOPPED_BY: std::sync::atomic::AtomicI32 = std::sync::atomic::AtomicI32::new(0);
+
+/// Listens for SIGINT and SIGTERM on a thread of its own: the first sets [`CANCEL`] (the render
+/// finishes the samples in flight and its work is written) and records the signal; a second
+/// exits at once with 128 + the signal's number.
+pub fn handle_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else { return };
+    std::thread::spawn(move || {
+        for sig in signals.forever() {
+            if CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                std::process::exit(128 + sig);
+            }
+            STOPPED_BY.store(sig, std::sync::atomic::Ordering::SeqCst);
+            eprintln!(
+                "\n{}: finishing the samples in flight and writing what has been rendered (again to abort)",
+                if sig == SIGINT { "interrupted" } else { "terminated" }
+            );
+        }
+    });
+}
+
 /// An error and the exit code it maps to (1: could not do it, 2: bad arguments).
 pub struct Failure(pub u8, pub String);
 

@@ -32,9 +32,9 @@ pub struct RenderArgs {
     /// Seed of all random numbers (default: the scene's sampler seed, 0).
     #[arg(long)]
     seed: Option<u64>,
-    /// Worker threads (default: one per core).
-    #[arg(long, default_value_t = 0)]
-    threads: usize,
+    /// Worker threads (default: one per core; at most 1024).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=1024))]
+    threads: u64,
     /// Render for this many seconds (whole passes), instead of a sample count.
     #[arg(long)]
     time: Option<f64>,
@@ -197,6 +197,9 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
     let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
+    // Before rendering: a render must not be lost to a missing or read-only folder.
+    Format::from_path(&output).map_err(|e| usage(e.to_string()))?;
+    neumann::film::output::check_destination(&output).map_err(|e| Failure(1, e.to_string()))?;
     if Format::from_path(&output).map_err(|e| usage(e.to_string()))? == Format::Pfm && job.file.alpha {
         return Err(usage(format!(
             "the scene asks for an alpha channel (pixel_format rgba), which PFM cannot hold: write {}.exr or .png",
@@ -219,7 +222,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         spp: if a.time.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
         time_budget,
         seed: job.file.seed,
-        threads: a.threads,
+        threads: a.threads as usize,
         sampler: job.file.sampler,
         progress: !a.quiet,
         filter: job.file.filter.clone(),
@@ -228,14 +231,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         terms: term_count,
         ..Default::default()
     };
-    let _ = ctrlc::set_handler(|| {
-        if CANCEL.swap(true, Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!(
-            "\ninterrupted: finishing the tiles in flight and writing what has been rendered (Ctrl-C again to abort)"
-        );
-    });
+    crate::handle_signals();
     let cam = job.file.scene.camera();
     let [_, _, width, height] = job.file.window.unwrap_or([0, 0, cam.width(), cam.height()]);
     say!(
@@ -246,7 +242,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             None => format!("{} spp", job.file.spp),
         },
         job.file.integrator.describe(),
-        if a.threads == 0 { rayon::current_num_threads() } else { a.threads }
+        if a.threads == 0 { rayon::current_num_threads() } else { a.threads as usize }
     );
     let out = render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL)
         .map_err(|e| Failure(1, e.to_string()))?;
@@ -257,6 +253,10 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
     let mut channels = out.film.aov_channels();
+    if lo != hi && Format::from_path(&output).ok() == Some(Format::Exr) {
+        // An interrupted render: the pixels hold different sample counts; say which.
+        channels.push(("spp".to_string(), out.film.sample_counts()));
+    }
     if !channels.is_empty() && Format::from_path(&output).ok() != Some(Format::Exr) {
         say!(
             "warning: the {} AOV channels of the {} integrator are not written: only .exr holds them",
@@ -284,8 +284,13 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     if out.interrupted {
         say!("render interrupted: the image holds {spp_text}");
     }
+    let stopped_by = crate::STOPPED_BY.load(Ordering::SeqCst);
     if out.film.dropped() > 0 {
         say!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    if stopped_by != 0 {
+        // Interrupted by a signal: the image is written; the exit status says it is partial.
+        return Err(Failure((128 + stopped_by) as u8, format!("stopped by signal {stopped_by}; wrote {}", output.display())));
     }
     Ok(())
 }

@@ -6,6 +6,7 @@
 //! `point`, `vector` and `transform` (with `translate`, `rotate`, `scale`, `matrix`, `lookat`
 //! applied in document order, each left-multiplying the ones before, as Mitsuba does).
 
+use crate::load::limits;
 use crate::load::FileResolver;
 use crate::math::{Mat4, Rgb, Transform, Vec3, Vec4};
 use crate::props::{nearest, Loc, Obj, Prop, SceneError, SourceFile, SpectrumValue, Value, OBJECT_TAGS};
@@ -32,6 +33,12 @@ pub struct Parser {
     /// Parameter names that a `$name` substituted.
     used_params: std::cell::RefCell<std::collections::HashSet<String>>,
     depth: usize,
+    /// Scene files included so far, and the bytes of scene text read (bounded by
+    /// [`limits::MAX_INCLUDES`] and [`limits::MAX_SCENE_BYTES`]).
+    includes: usize,
+    scene_bytes: usize,
+    /// Objects open around the one being read (bounded by [`limits::MAX_NESTING`]).
+    nesting: usize,
     /// Where relative file names are looked for (Mitsuba's file resolver: `<path>` folders, the
     /// main scene's folder, the working directory).
     pub resolver: FileResolver,
@@ -51,6 +58,9 @@ impl Parser {
             ids: HashMap::new(),
             used_params: Default::default(),
             depth: 0,
+            includes: 0,
+            scene_bytes: 0,
+            nesting: 0,
             resolver: FileResolver::default(),
             aliases: Vec::new(),
             legacy: Vec::new(),
@@ -72,8 +82,7 @@ impl Parser {
 
     /// Reads and parses the scene file at `path` into its root `scene` object.
     pub fn parse_file(&mut self, path: &Path) -> Result<Rc<Obj>> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| SceneError::new(format!("cannot read scene file {}: {e}", path.display())))?;
+        let text = limits::read_text(path).map_err(|e| SceneError::new(format!("cannot read scene file: {e}")))?;
         self.parse_text(path.to_path_buf(), text)
     }
 
@@ -81,6 +90,18 @@ impl Parser {
     pub fn parse_text(&mut self, path: PathBuf, text: String) -> Result<Rc<Obj>> {
         if self.depth == 0 {
             self.resolver = FileResolver::for_scene(&path);
+        }
+        self.scene_bytes += text.len();
+        if self.scene_bytes > limits::MAX_SCENE_BYTES {
+            return Err(SceneError::new(format!(
+                "{}: the scene's files hold more than {} bytes of text together",
+                path.display(),
+                limits::MAX_SCENE_BYTES
+            )));
+        }
+        if !text.trim_start_matches('\u{feff}').trim_start().starts_with('<') {
+            // Said without quoting the file: an include may name any file.
+            return Err(SceneError::new(format!("{}: not an XML scene file (it does not start with '<')", path.display())));
         }
         let file = Arc::new(SourceFile { path, text });
         let doc = roxmltree::Document::parse(&file.text).map_err(|e| {
@@ -151,11 +172,17 @@ impl Parser {
                     if self.depth >= 16 {
                         return Err(SceneError::at(&loc, "includes nested more than 16 deep (a cycle?)"));
                     }
+                    self.includes += 1;
+                    if self.includes > limits::MAX_INCLUDES {
+                        return Err(SceneError::at(
+                            &loc,
+                            format!("more than {} included files in one scene", limits::MAX_INCLUDES),
+                        ));
+                    }
                     let name = self.attr(file, child, "filename")?;
                     let path = self.resolver.resolve(&name);
-                    let included = std::fs::read_to_string(&path).map_err(|e| {
-                        SceneError::at(&loc, format!("cannot read included file {}: {e}", path.display()))
-                    })?;
+                    let included = limits::read_text(&path)
+                        .map_err(|e| SceneError::at(&loc, format!("cannot read included file: {e}")))?;
                     self.depth += 1;
                     let inner = self.parse_text(path, included);
                     self.depth -= 1;
@@ -264,8 +291,14 @@ impl Parser {
             Some(_) => Some(self.attr(file, node, "id")?),
             None => None,
         };
+        if self.nesting >= limits::MAX_NESTING {
+            return Err(SceneError::at(&loc, format!("objects nested more than {} deep", limits::MAX_NESTING)));
+        }
         let mut obj = Obj { tag, ty, id, loc, props: Vec::new(), children: Vec::new(), built: Cell::new(false) };
-        self.fill(file, node, &mut obj, false)?;
+        self.nesting += 1;
+        let filled = self.fill(file, node, &mut obj, false);
+        self.nesting -= 1;
+        filled?;
         if self.is_legacy() {
             upgrade_uv_transform(&mut obj);
         }
@@ -382,11 +415,8 @@ impl Parser {
                 if node.attribute("filename").is_some() {
                     let name = self.attr(file, node, "filename")?;
                     let path = self.resolver.resolve(&name);
-                    let text = std::fs::read_to_string(&path).map_err(|e| {
-                        SceneError::at(
-                            &value_loc("filename"),
-                            format!("cannot read spectrum file {}: {e}", path.display()),
-                        )
+                    let text = crate::load::limits::read_text(&path).map_err(|e| {
+                        SceneError::at(&value_loc("filename"), format!("cannot read spectrum file: {e}"))
                     })?;
                     Value::Spectrum(parse_spd(&text).map_err(|(line, msg)| {
                         SceneError::at(&value_loc("filename"), format!("{}:{line}: {msg}", path.display()))

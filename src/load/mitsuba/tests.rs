@@ -1180,3 +1180,58 @@ fn hostile_numbers_are_located_errors() {
     assert!(start.elapsed().as_secs_f32() < 5.0, "an element without properties is skipped, whatever its count");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Tiny files that once took gigabytes, hung or crashed (issue 24's probe) load quickly or are
+/// located errors: 30 nested single-child `twosided`, a 40-level chain of `blendbsdf`s naming
+/// the previous one twice (shared, not copied), an include fan-out (16 files of 10 includes
+/// each), `/dev/zero` as an include and as a spectrum file, 100 000 nested elements, an include
+/// of a file that is not XML (not quoted back), and a binary scene file (its position given).
+#[test]
+fn resource_bombs_are_bounded() {
+    let dir = std::env::temp_dir().join(format!("neumann-bombs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let timed = |what: &str, text: &str| {
+        let start = std::time::Instant::now();
+        let r = load_scene_text(&dir.join("s.xml"), text, &[]).map(|_| ()).map_err(|e| e.to_string());
+        assert!(start.elapsed().as_secs_f32() < 10.0, "{what} took {:?}", start.elapsed());
+        r
+    };
+    let nested = format!(
+        "{}<bsdf type=\"diffuse\"/>{}",
+        "<bsdf type=\"twosided\">".repeat(30),
+        "</bsdf>".repeat(30)
+    );
+    timed("nested twosided", &scene(&format!("<shape type=\"sphere\">{nested}</shape>"))).unwrap();
+    let mut chain = String::from(r#"<bsdf type="diffuse" id="b0"/>"#);
+    for k in 1..=40 {
+        chain += &format!(r#"<bsdf type="blendbsdf" id="b{k}"><ref id="b{}"/><ref id="b{}"/></bsdf>"#, k - 1, k - 1);
+    }
+    chain += r#"<shape type="sphere"><ref id="b40"/></shape>"#;
+    let e = timed("blend chain", &scene(&chain)).unwrap_err();
+    assert!(e.contains("BSDF evaluations") && e.lines().all(|l| l.chars().count() < 200), "{e}");
+    for k in 0..16 {
+        let includes: String = (0..10).map(|_| format!(r#"<include filename="f{}.xml"/>"#, (k + 1) % 16)).collect();
+        std::fs::write(dir.join(format!("f{k}.xml")), format!(r#"<scene version="3.0.0">{includes}</scene>"#)).unwrap();
+    }
+    let e = timed("include fan-out", &scene(r#"<include filename="f0.xml"/>"#)).unwrap_err();
+    assert!(e.contains("included files") || e.contains("nested more than"), "{e}");
+    let e = timed("/dev/zero include", &scene(r#"<include filename="/dev/zero"/>"#)).unwrap_err();
+    assert!(e.contains("test.xml:") || e.contains("s.xml:"), "{e}");
+    assert!(e.contains("not a regular file"), "{e}");
+    let e = timed(
+        "/dev/zero spectrum",
+        &scene(r#"<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" filename="/dev/zero"/></bsdf></shape>"#),
+    )
+    .unwrap_err();
+    assert!(e.contains("not a regular file"), "{e}");
+    let deep = format!("{}{}", "<bsdf type=\"twosided\">".repeat(100_000), "</bsdf>".repeat(100_000));
+    let e = timed("deep nesting", &scene(&format!("<shape type=\"sphere\">{deep}</shape>"))).unwrap_err();
+    assert!(e.contains("nested more than") || e.contains("malformed XML"), "{e}");
+    std::fs::write(dir.join("secret.txt"), "password=hunter2\n").unwrap();
+    let e = timed("text include", &scene(r#"<include filename="secret.txt"/>"#)).unwrap_err();
+    assert!(e.contains("not an XML scene file") && !e.contains("hunter2"), "{e}");
+    std::fs::write(dir.join("binary.xml"), b"<scene version=\"3.0.0\">\n\x00\xff\xfe</scene>").unwrap();
+    let e = crate::load::mitsuba::load_scene_file(&dir.join("binary.xml"), &[]).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("binary.xml:2: column 2: not UTF-8"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
