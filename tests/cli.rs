@@ -315,3 +315,22 @@ fn the_scene_timeout_limits_the_render() {
     assert!(start.elapsed() < Duration::from_secs(20), "the timeout stops the render");
     assert!(stdout.contains("wrote") && !stdout.contains("(1000000 spp"), "{stdout}");
 }
+
+/// On a scene file, flags are parameters of its objects: a bad one is a usage error (exit 2)
+/// located at the flag, in the plugin's words.
+#[test]
+fn flags_on_scene_files_are_validated_by_the_plugins() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cbox.xml");
+    let r = neumann()
+        .args(["render", scene, "--integrator", "radiosity", "--max-depth", "3", "-o"])
+        .arg(temp("r.png"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("command line:1:1:") && err.contains("--max-depth 3") && err.contains("max_depth"), "{err}");
+    let r = neumann().args(["render", scene, "--res", "16x8", "--spp", "2", "--quiet", "-o"]).arg(temp("f.pfm")).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (w, h, _) = neumann::film::output::read_pfm(&temp("f.pfm")).unwrap();
+    assert_eq!((w, h), (16, 8));
+}

@@ -9,6 +9,7 @@ pub mod image;
 pub mod limits;
 pub mod mitsuba;
 pub mod obj;
+pub mod overrides;
 pub mod ply;
 mod resolver;
 pub mod serialized;

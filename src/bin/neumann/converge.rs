@@ -65,7 +65,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     let mut job = if scene_arg == "cbox" {
         builtin_job(&scene_arg, &defines)?
     } else {
-        file_job(std::path::Path::new(&scene_arg), &defines)?
+        file_job(std::path::Path::new(&scene_arg), &defines, &Default::default())?
     };
     let (w, h) = parse_res(&a.res).map_err(usage)?;
     let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;

@@ -4,7 +4,8 @@
 use crate::{usage, Failure};
 use neumann::film::filter::Filter;
 use neumann::integrator::{AnyIntegrator, PathIntegrator};
-use neumann::load::mitsuba::load_scene_file;
+use neumann::load::mitsuba::load_scene_file_with;
+use neumann::load::overrides::Overrides;
 use neumann::load::SceneFile;
 use neumann::sampling::sampler::SamplerKind;
 use neumann::scene::cornell;
@@ -81,9 +82,17 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
     Ok(Job { name: name.to_string(), file })
 }
 
-/// A Mitsuba XML scene file.
-pub fn file_job(path: &std::path::Path, defines: &[(String, String)]) -> Result<Job, Failure> {
-    let file = load_scene_file(path, defines).map_err(|e| Failure(1, e.to_string()))?;
+/// A Mitsuba XML scene file, with command-line flags as `overrides` of its objects. A problem
+/// with a flag is a usage error (exit 2), one in the file exit 1.
+pub fn file_job(
+    path: &std::path::Path,
+    defines: &[(String, String)],
+    overrides: &Overrides,
+) -> Result<Job, Failure> {
+    let file = load_scene_file_with(path, defines, overrides).map_err(|e| {
+        let from_flag = e.loc.as_ref().is_some_and(|l| l.file.path.as_os_str() == "command line");
+        Failure(if from_flag { 2 } else { 1 }, e.to_string())
+    })?;
     for w in &file.warnings {
         eprintln!("{w}");
     }

@@ -6,6 +6,7 @@ use crate::{choice, usage, Failure, CANCEL};
 use neumann::film::output::{write_image_alpha, write_image_layers, Channel, Format, ImageInfo, WriteError};
 use neumann::integrator::radiosity::Method;
 use neumann::integrator::{AnyIntegrator, DirectStrategy, IntegratorKind, MisHeuristic, PathSettings};
+use neumann::load::overrides::Overrides;
 use neumann::light::LightSamplerKind;
 use neumann::render::{render_integrator, RenderSettings};
 use neumann::sampling::sampler::SamplerKind;
@@ -95,52 +96,33 @@ pub struct RenderArgs {
 pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let scene_arg = a.scene.clone().unwrap_or_else(|| "cbox".to_string());
     let defines = parse_defines(&a.define)?;
-    let mut job = if scene_arg == "cbox" {
-        builtin_job(&scene_arg, &defines)?
+    let builtin = scene_arg == "cbox";
+    if let Some(0) = a.spp {
+        return Err(usage("--spp must be at least 1".into()));
+    }
+    let mut job = if builtin {
+        let mut job = builtin_job(&scene_arg, &defines)?;
+        apply_builtin_flags(&mut job, &a)?;
+        job
     } else if scene_arg.to_ascii_lowercase().ends_with(".xml") || std::path::Path::new(&scene_arg).exists() {
-        file_job(std::path::Path::new(&scene_arg), &defines)?
+        // A scene file: the flags become parameters of its objects, validated by the plugins.
+        let mut job = file_job(std::path::Path::new(&scene_arg), &defines, &flag_overrides(&a)?)?;
+        select_integrator(&mut job.file.integrator, &a)?;
+        if a.res.is_some() {
+            job.file.window = None;
+        }
+        job
     } else {
         return Err(Failure(
             1,
             format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml scene file or a built-in scene name (cbox)"),
         ));
     };
-    // Command-line flags override the scene's settings.
-    if let Some(r) = &a.res {
-        let (w, h) = parse_res(r).map_err(usage)?;
-        let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;
-        job.file.scene.set_camera(camera);
-        job.file.window = None;
-    }
-    if let Some(s) = a.spp {
-        if s == 0 {
-            return Err(usage("--spp must be at least 1".into()));
-        }
-        job.file.spp = s;
-    }
-    select_integrator(&mut job.file.integrator, &a)?;
     if job.file.scene.has_media() && !matches!(job.file.integrator, AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_)) {
         eprintln!(
             "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
             job.file.integrator.name()
         );
-    }
-    if let Some(d) = a.max_depth {
-        if d < -1 {
-            return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
-        }
-        let name = job.file.integrator.name();
-        match job.file.integrator.path_settings_mut() {
-            Some(settings) => settings.max_depth = d,
-            None => {
-                return Err(usage(format!(
-                    "--max-depth applies to the path, volpath, volpathmis and ptracer integrators, not '{name}'"
-                )))
-            }
-        }
-    }
-    if let Some(s) = a.seed {
-        job.file.seed = s;
     }
     if let Some(s) = a.sampler {
         job.file.sampler = s;
@@ -293,6 +275,94 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         return Err(Failure((128 + stopped_by) as u8, format!("stopped by signal {stopped_by}; wrote {}", output.display())));
     }
     Ok(())
+}
+
+/// The flags that set scene parameters (`--res`, `--spp`, `--integrator`, `--max-depth`,
+/// `--seed`, `--light-sampler`), for the built-in scene, which has no scene file whose objects
+/// they could override.
+fn apply_builtin_flags(job: &mut crate::job::Job, a: &RenderArgs) -> Result<(), Failure> {
+    if let Some(r) = &a.res {
+        let (w, h) = parse_res(r).map_err(usage)?;
+        let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;
+        job.file.scene.set_camera(camera);
+        job.file.window = None;
+    }
+    if let Some(s) = a.spp {
+        job.file.spp = s;
+    }
+    select_integrator(&mut job.file.integrator, a)?;
+    if let Some(d) = a.max_depth {
+        if d < -1 {
+            return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {d}")));
+        }
+        let name = job.file.integrator.name();
+        match job.file.integrator.path_settings_mut() {
+            Some(settings) => settings.max_depth = d,
+            None => {
+                return Err(usage(format!(
+                    "--max-depth applies to the path, volpath, volpathmis and ptracer integrators, not '{name}'"
+                )))
+            }
+        }
+    }
+    if let Some(s) = a.seed {
+        job.file.seed = s;
+    }
+    if let Some(kind) = a.light_sampler {
+        match &job.file.integrator {
+            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_) | AnyIntegrator::Direct(_) => {
+                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
+            }
+            other => {
+                return Err(usage(format!(
+                    "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
+                    other.name()
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The flags that set scene parameters, as overrides of a scene file's objects: `--spp` and
+/// `--seed` (the sampler's `sample_count`, `seed`), `--res` (the film's `width`, `height`, and a
+/// crop window of the whole frame), `--max-depth` and `--light-sampler` (the integrator's
+/// `max_depth`, `light_sampler`), `--integrator` (the integrator's type).
+fn flag_overrides(a: &RenderArgs) -> Result<Overrides, Failure> {
+    use neumann::load::overrides::{Override, Target};
+    use neumann::props::Value;
+    let mut o = Overrides::default();
+    if let Some(k) = a.integrator {
+        o.integrator = Some((k, format!("--integrator {}", neumann::choice::Choice::name(k))));
+    }
+    if let Some(s) = a.spp {
+        o.settings.push(Override::new(Target::Sampler, "sample_count", Value::Integer(s.into()), format!("--spp {s}")));
+    }
+    if let Some(s) = a.seed {
+        let v = i64::try_from(s).map_err(|_| usage(format!("--seed must be at most {}, got {s}", i64::MAX)))?;
+        o.settings.push(Override::new(Target::Sampler, "seed", Value::Integer(v), format!("--seed {s}")));
+    }
+    if let Some(r) = &a.res {
+        let (w, h) = parse_res(r).map_err(usage)?;
+        let source = format!("--res {r}");
+        for (name, v) in [("width", w), ("height", h), ("crop_width", w), ("crop_height", h), ("crop_offset_x", 0), ("crop_offset_y", 0)]
+        {
+            o.settings.push(Override::new(Target::Film, name, Value::Integer(v.into()), source.clone()));
+        }
+    }
+    if let Some(d) = a.max_depth {
+        o.settings.push(Override::new(Target::Integrator, "max_depth", Value::Integer(d.into()), format!("--max-depth {d}")));
+    }
+    if let Some(k) = a.light_sampler {
+        let name = neumann::choice::Choice::name(k);
+        o.settings.push(Override::new(
+            Target::Integrator,
+            "light_sampler",
+            Value::String(name.to_string()),
+            format!("--light-sampler {name}"),
+        ));
+    }
+    Ok(o)
 }
 
 /// Applies `--integrator` and the radiosity flags to the scene's integrator. Settings the old

@@ -11,6 +11,7 @@ pub mod parse;
 
 pub use crate::props::SceneError;
 
+use crate::load::overrides::Overrides;
 use std::path::Path;
 
 pub use super::SceneFile;
@@ -18,9 +19,19 @@ pub use super::SceneFile;
 /// Loads a Mitsuba 3 XML scene. `overrides` are `-D name=value` parameters; one that no `$name`
 /// of the scene uses is reported in the warnings (as Mitsuba reports unused parameters).
 pub fn load_scene_file(path: &Path, overrides: &[(String, String)]) -> Result<SceneFile, SceneError> {
-    let mut parser = parse::Parser::new(overrides);
+    load_scene_file_with(path, overrides, &Overrides::default())
+}
+
+/// [`load_scene_file`] with settings from outside the file (`settings`: command-line flags),
+/// applied to the scene's objects before the plugins build ([`crate::load::overrides`]).
+pub fn load_scene_file_with(
+    path: &Path,
+    defines: &[(String, String)],
+    settings: &Overrides,
+) -> Result<SceneFile, SceneError> {
+    let mut parser = parse::Parser::new(defines);
     let root = parser.parse_file(path)?;
-    finish(parser, root)
+    finish(parser, crate::load::overrides::apply(&root, settings))
 }
 
 /// Loads a scene from XML text (`path` names it in messages and anchors relative paths).

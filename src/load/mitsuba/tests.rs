@@ -1235,3 +1235,64 @@ fn resource_bombs_are_bounded() {
     assert!(e.contains("binary.xml:2: column 2: not UTF-8"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Command-line flags as overrides of the scene's objects: the sampler's `sample_count` and
+/// `seed`, the film's size, the integrator's `max_depth` (a `moment`'s nested path tracer's), an
+/// integrator switch that keeps the path settings, objects created where the file has none, and
+/// errors located at the flag ("command line", quoting it) in the plugins' own words.
+#[test]
+fn flags_override_the_scene_objects() {
+    use crate::load::overrides::{Override, Overrides, Target};
+    let dir = std::env::temp_dir().join(format!("neumann-overrides-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("s.xml");
+    let int = crate::props::Value::Integer;
+    let flags = |settings: Vec<Override>, integrator: Option<crate::integrator::IntegratorKind>| Overrides {
+        integrator: integrator.map(|k| (k, format!("--integrator {}", crate::choice::Choice::name(k)))),
+        settings,
+    };
+    let load_with = |text: &str, o: &Overrides| {
+        std::fs::write(&path, text).unwrap();
+        crate::load::mitsuba::load_scene_file_with(&path, &[], o)
+    };
+    let base = scene(r#"<integrator type="moment"><integrator type="path"><integer name="max_depth" value="9"/></integrator></integrator>"#);
+    let o = flags(
+        vec![
+            Override::new(Target::Sampler, "sample_count", int(7), "--spp 7"),
+            Override::new(Target::Sampler, "seed", int(11), "--seed 11"),
+            Override::new(Target::Film, "width", int(10), "--res 10x6"),
+            Override::new(Target::Film, "height", int(6), "--res 10x6"),
+            Override::new(Target::Integrator, "max_depth", int(3), "--max-depth 3"),
+        ],
+        None,
+    );
+    let f = load_with(&base, &o).unwrap();
+    assert_eq!((f.spp, f.seed), (7, 11));
+    assert_eq!((f.scene.camera().width(), f.scene.camera().height()), (10, 6));
+    assert_eq!(f.integrator.name(), "moment");
+    assert_eq!(f.integrator.path_settings().unwrap().max_depth, 3, "the moment's nested path tracer");
+    // Switching keeps max_depth; a scene without an integrator gets one.
+    let f = load_with(&base, &flags(vec![], Some(crate::integrator::IntegratorKind::Volpath))).unwrap();
+    assert_eq!((f.integrator.name(), f.integrator.path_settings().unwrap().max_depth), ("volpath", 9));
+    let bare = scene("");
+    let f = load_with(&bare, &flags(vec![Override::new(Target::Integrator, "max_depth", int(2), "--max-depth 2")], None))
+        .unwrap();
+    assert_eq!((f.integrator.name(), f.integrator.path_settings().unwrap().max_depth), ("path", 2));
+    for (o, expectation) in [
+        (flags(vec![Override::new(Target::Integrator, "max_depth", int(-5), "--max-depth -5")], None), "max_depth must be"),
+        (
+            flags(
+                vec![Override::new(Target::Integrator, "max_depth", int(3), "--max-depth 3")],
+                Some(crate::integrator::IntegratorKind::Radiosity),
+            ),
+            "does not take the parameter integer 'max_depth'",
+        ),
+        (flags(vec![Override::new(Target::Film, "width", int(0), "--res 0")], None), "width"),
+    ] {
+        let e = load_with(&bare, &o).map(|_| ()).unwrap_err();
+        let text = e.to_string();
+        assert!(text.starts_with("command line:1:1:") && text.contains(expectation), "{text}");
+        assert!(text.contains(&o.settings[0].source), "the flag is quoted: {text}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
