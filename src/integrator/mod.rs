@@ -151,6 +151,19 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices) as EXR layers (Mitsuba's `aov`)";
 });
 
+impl IntegratorKind {
+    /// Whether the integrator samples lights by next-event estimation (and so takes neumann's
+    /// `light_sampler`).
+    pub fn samples_lights(self) -> bool {
+        matches!(self, IntegratorKind::Path | IntegratorKind::Volpath | IntegratorKind::VolpathMis | IntegratorKind::Direct)
+    }
+
+    /// Whether the integrator renders participating media (others ignore them, as Mitsuba's).
+    pub fn renders_media(self) -> bool {
+        matches!(self, IntegratorKind::Volpath | IntegratorKind::VolpathMis)
+    }
+}
+
 /// An integrator plugin's constructor.
 pub type IntegratorPlugin = fn(&Obj) -> PropResult<AnyIntegrator>;
 

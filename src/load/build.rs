@@ -182,7 +182,7 @@ impl Builder {
         if top && timeout > 0.0 {
             self.time_limit = Some(std::time::Duration::from_secs_f32(timeout));
         }
-        if matches!(o.ty.as_str(), "path" | "volpath" | "volpathmis" | "direct") {
+        if o.ty.parse::<crate::integrator::IntegratorKind>().is_ok_and(|k| k.samples_lights()) {
             self.light_sampler =
                 o.choice("light_sampler", &LightSamplerKind::names())?.parse().map_err(|e: String| o.error(e))?;
         }

@@ -118,7 +118,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml scene file or a built-in scene name (cbox)"),
         ));
     };
-    if job.file.scene.has_media() && !matches!(job.file.integrator, AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_)) {
+    if job.file.scene.has_media() && !job.file.integrator.kind().renders_media() {
         eprintln!(
             "warning: the scene has participating media, which the {} integrator ignores (as Mitsuba's): use --integrator volpath",
             job.file.integrator.name()
@@ -128,17 +128,13 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         job.file.sampler = s;
     }
     if let Some(kind) = a.light_sampler {
-        match &job.file.integrator {
-            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_) | AnyIntegrator::Direct(_) => {
-                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
-            }
-            other => {
-                return Err(usage(format!(
-                    "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
-                    other.name()
-                )))
-            }
+        if !job.file.integrator.kind().samples_lights() {
+            return Err(usage(format!(
+                "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
+                job.file.integrator.name()
+            )));
         }
+        job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
     }
     if let Some(direct) = a.direct {
         match &mut job.file.integrator {
@@ -309,17 +305,13 @@ fn apply_builtin_flags(job: &mut crate::job::Job, a: &RenderArgs) -> Result<(), 
         job.file.seed = s;
     }
     if let Some(kind) = a.light_sampler {
-        match &job.file.integrator {
-            AnyIntegrator::Path(_) | AnyIntegrator::VolPath(_) | AnyIntegrator::VolPathMis(_) | AnyIntegrator::Direct(_) => {
-                job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
-            }
-            other => {
-                return Err(usage(format!(
-                    "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
-                    other.name()
-                )))
-            }
+        if !job.file.integrator.kind().samples_lights() {
+            return Err(usage(format!(
+                "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
+                job.file.integrator.name()
+            )));
         }
+        job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
     }
     Ok(())
 }
