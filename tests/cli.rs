@@ -112,6 +112,11 @@ fn the_destination_is_checked_first() {
     assert!(stderr.contains("does not exist") && start.elapsed() < Duration::from_secs(5), "{stderr}");
     let r = neumann().args(["render", "--threads", "100000", "-o"]).arg(temp("t.png")).output().unwrap();
     assert_eq!(r.status.code(), Some(2));
+    // The film's memory is checked against the budget before rendering.
+    let r = neumann().args(["render", "--res", "16384x4096", "--max-memory", "1G", "-o"]).arg(temp("m.png")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("GiB") && stderr.contains("--max-memory"), "{stderr}");
 }
 
 /// A Mitsuba XML scene renders with -D overrides; a broken one fails with exit code 1 and a

@@ -246,6 +246,12 @@ pub struct Film {
 }
 
 impl Film {
+    /// Bytes a film needs per pixel with `terms` Neumann-series terms and `aovs` AOV channels:
+    /// its accumulators, and the images made from it for writing.
+    pub fn bytes_per_pixel(terms: usize, aovs: usize) -> u64 {
+        (size_of::<Acc>() + size_of::<u32>() + 24 * terms + 8 * aovs) as u64 + 16 * (1 + terms as u64) + 4 * aovs as u64
+    }
+
     /// An empty `width × height` film.
     pub fn new(width: u32, height: u32) -> Film {
         Film { width, height, px: Pixels::new((width as usize) * (height as usize)), aov_names: Vec::new() }

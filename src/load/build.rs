@@ -56,6 +56,8 @@ pub struct Builder {
     shared_bsdfs: HashMap<*const Obj, Arc<Bsdf>>,
     /// How many BSDF evaluations one evaluation of each built BSDF may make (itself included).
     bsdf_sizes: HashMap<*const Obj, u64>,
+    /// Plausible mistakes that change the image (a reflectance above 1), with their position.
+    warnings: Vec<String>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     volumes: HashMap<PathBuf, Arc<GridVolume>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
@@ -77,6 +79,7 @@ impl Builder {
             bsdf_index: HashMap::new(),
             shared_bsdfs: HashMap::new(),
             bsdf_sizes: HashMap::new(),
+            warnings: Vec::new(),
             images: HashMap::new(),
             volumes: HashMap::new(),
             default_bsdf: [None; 2],
@@ -148,7 +151,7 @@ impl Builder {
         // Mitsuba 3 rejects parameters that no plugin reads ("unreferenced property"), and so
         // does neumann: such a parameter is a typo or a feature neumann does not implement.
         root.check_unused(&mut Vec::new())?;
-        let warnings = Vec::new();
+        let warnings = std::mem::take(&mut self.warnings);
         Ok(SceneFile {
             scene,
             integrator: integrator.unwrap_or_default(),
@@ -406,6 +409,22 @@ impl Builder {
             )));
         }
         self.bsdf_sizes.insert(Rc::as_ptr(o), size);
+        // A diffuse reflectance above 1 creates energy: allowed (as in Mitsuba, for a <float>
+        // or <spectrum>), but said, as Mitsuba and pbrt warn.
+        let diffuse = match &bsdf {
+            Bsdf::Diffuse(d) => Some(("reflectance", &d.reflectance)),
+            Bsdf::Plastic(p) => Some(("diffuse_reflectance", &p.diffuse_reflectance)),
+            Bsdf::RoughPlastic(p) => Some(("diffuse_reflectance", &p.diffuse_reflectance)),
+            _ => None,
+        };
+        if let Some((name, Texture::Constant(c))) = diffuse {
+            if c.max_element() > 1.0 {
+                let at = o.get(name).map_or_else(|| o.loc.position(), |p| p.loc.position());
+                self.warnings.push(format!(
+                    "warning: {at}: {name} {c} exceeds 1: the surface reflects more light than it receives"
+                ));
+            }
+        }
         Ok(bsdf)
     }
 

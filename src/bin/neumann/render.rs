@@ -33,6 +33,10 @@ pub struct RenderArgs {
     /// Seed of all random numbers (default: the scene's sampler seed, 0).
     #[arg(long)]
     seed: Option<u64>,
+    /// The most memory the film may take, e.g. 8G or 512M (default: half of this machine's
+    /// memory). A larger render is refused before it starts.
+    #[arg(long)]
+    max_memory: Option<String>,
     /// Worker threads (default: one per core; at most 1024).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=1024))]
     threads: u64,
@@ -195,6 +199,25 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     };
     if let Some(dir) = &a.bounces_out {
         std::fs::create_dir_all(dir).map_err(|e| Failure(1, format!("cannot create '{}': {e}", dir.display())))?;
+    }
+    // The film's memory, checked before anything is allocated for it.
+    let budget = match &a.max_memory {
+        Some(m) => parse_bytes(m).ok_or_else(|| usage(format!("--max-memory expects a size such as 8G or 512M, got '{m}'")))?,
+        None => default_memory_budget(),
+    };
+    let [_, _, fw, fh] = job.file.window.unwrap_or([0, 0, job.file.scene.camera().width(), job.file.scene.camera().height()]);
+    let aov_count = job.file.integrator.camera().map_or(0, |i| i.aov_names().len());
+    let need = u64::from(fw) * u64::from(fh) * neumann::film::Film::bytes_per_pixel(term_count, aov_count);
+    if need > budget {
+        return Err(Failure(
+            1,
+            format!(
+                "the film needs {:.1} GiB ({fw}×{fh} pixels), more than the memory budget of {:.1} GiB: \
+                 render smaller, or raise --max-memory",
+                need as f64 / (1u64 << 30) as f64,
+                budget as f64 / (1u64 << 30) as f64
+            ),
+        ));
     }
     let settings = RenderSettings {
         spp: if a.time.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
@@ -456,4 +479,26 @@ fn aov_summary(channels: &[Channel]) -> String {
         }
     }
     layers.join(", ")
+}
+
+/// A size in bytes: a number with an optional K, M, G or T suffix (powers of 1024).
+fn parse_bytes(s: &str) -> Option<u64> {
+    let s = s.trim();
+    let (digits, shift) = match s.chars().last()?.to_ascii_uppercase() {
+        'K' => (&s[..s.len() - 1], 10),
+        'M' => (&s[..s.len() - 1], 20),
+        'G' => (&s[..s.len() - 1], 30),
+        'T' => (&s[..s.len() - 1], 40),
+        _ => (s, 0),
+    };
+    let v: f64 = digits.trim().parse().ok()?;
+    (v.is_finite() && v > 0.0).then(|| (v * (1u64 << shift) as f64).min(u64::MAX as f64) as u64)
+}
+
+/// Half of the machine's memory (`MemTotal` of `/proc/meminfo`), or 8 GiB where that is unknown.
+fn default_memory_budget() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| t.lines().find(|l| l.starts_with("MemTotal:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()))
+        .map_or(8 << 30, |kib| kib * 1024 / 2)
 }

@@ -1296,3 +1296,15 @@ fn flags_override_the_scene_objects() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A diffuse reflectance above 1 (a <float> or <spectrum>: Mitsuba accepts it) is kept but
+/// warned about at its position; one within [0, 1] is not.
+#[test]
+fn reflectance_above_one_is_warned_about() {
+    let f = load(&scene(r#"<shape type="sphere"><bsdf type="diffuse"><float name="reflectance" value="2"/></bsdf></shape>"#))
+        .unwrap();
+    assert!(f.warnings.len() == 1 && f.warnings[0].contains("test.xml:7:") && f.warnings[0].contains("exceeds 1"), "{:?}", f.warnings);
+    let f = load(&scene(r#"<shape type="sphere"><bsdf type="plastic"><float name="diffuse_reflectance" value="0.9"/></bsdf></shape>"#))
+        .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+}
