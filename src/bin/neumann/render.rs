@@ -131,15 +131,6 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     if let Some(s) = a.sampler {
         job.file.sampler = s;
     }
-    if let Some(kind) = a.light_sampler {
-        if !job.file.integrator.kind().samples_lights() {
-            return Err(usage(format!(
-                "--light-sampler applies to the path, volpath, volpathmis and direct integrators, not '{}'",
-                job.file.integrator.name()
-            )));
-        }
-        job.file.scene.set_light_sampler(kind).map_err(|e| Failure(1, e.to_string()))?
-    }
     if let Some(direct) = a.direct {
         match &mut job.file.integrator {
             AnyIntegrator::Path(p) => {
