@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Fuzzes each loader for SECONDS seconds (default 20) on the nightly toolchain with cargo-fuzz,
+# starting from the seed corpora (scenes/, their assets) and keeping what it finds in
+# fuzz/corpus/<target> (not committed). Usage: fuzz/run.sh [SECONDS] [TARGET ...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+secs=${1:-20}
+shift || true
+targets=${*:-xml obj ply image vol}
+mkdir -p fuzz/corpus
+for t in $targets; do
+    mkdir -p "fuzz/corpus/$t"
+    case $t in
+        xml) cp -n scenes/*.xml "fuzz/corpus/$t/" ;;
+        obj) cp -n scenes/assets/*.obj "fuzz/corpus/$t/" ;;
+        ply) cp -n scenes/assets/*.ply "fuzz/corpus/$t/" ;;
+        vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
+        image) for f in scenes/assets/*.png; do [ -e "fuzz/corpus/$t/png-$(basename "$f")" ] || { printf '\x00' | cat - "$f" > "fuzz/corpus/$t/png-$(basename "$f")"; }; done
+               for f in scenes/assets/*.exr; do [ -e "fuzz/corpus/$t/exr-$(basename "$f")" ] || { printf '\x01' | cat - "$f" > "fuzz/corpus/$t/exr-$(basename "$f")"; }; done ;;
+    esac
+    dict=()
+    [ "$t" = xml ] && dict=(-dict=fuzz/xml.dict)
+    echo "fuzzing $t for $secs s"
+    cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=20 "${dict[@]}" 2>&1 | tail -4
+done
