@@ -339,3 +339,27 @@ fn flags_on_scene_files_are_validated_by_the_plugins() {
     let (w, h, _) = neumann::film::output::read_pfm(&temp("f.pfm")).unwrap();
     assert_eq!((w, h), (16, 8));
 }
+
+/// `--checkpoint` saves the render's state; `--resume` continues it to more samples with the
+/// same image as a render that never stopped (bit-identical pixels), and refuses a state of
+/// other settings or one that already holds the samples asked for.
+#[test]
+fn checkpoint_and_resume() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cbox.xml");
+    let (part, resumed, whole) = (temp("part.pfm"), temp("resumed.pfm"), temp("whole.pfm"));
+    let run = |args: &[&str], out: &std::path::Path| {
+        let r = neumann().args(["render", scene, "--res", "24x16", "--quiet"]).args(args).arg("-o").arg(out).output().unwrap();
+        (r.status.code(), String::from_utf8_lossy(&r.stderr).to_string())
+    };
+    assert_eq!(run(&["--spp", "8", "--checkpoint", "0.001"], &part).0, Some(0));
+    let state = format!("{}.state", part.display());
+    assert_eq!(run(&["--spp", "24", "--resume", &state], &resumed).0, Some(0));
+    assert_eq!(run(&["--spp", "24"], &whole).0, Some(0));
+    let (_, _, a) = neumann::film::output::read_pfm(&resumed).unwrap();
+    let (_, _, b) = neumann::film::output::read_pfm(&whole).unwrap();
+    assert!(a == b, "the resumed render differs from the uninterrupted one");
+    let (code, err) = run(&["--spp", "24", "--seed", "5", "--resume", &state], &resumed);
+    assert!(code == Some(1) && err.contains("other settings"), "{err}");
+    let (code, err) = run(&["--spp", "8", "--resume", &state], &resumed);
+    assert!(code == Some(2) && err.contains("already holds 8 spp"), "{err}");
+}

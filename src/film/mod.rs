@@ -22,6 +22,7 @@
 pub mod filter;
 pub mod metrics;
 pub mod output;
+pub mod state;
 
 use crate::math::{Rgb, Vec2};
 use crate::props::{Obj, Result as PropResult, SceneError};
@@ -311,6 +312,11 @@ impl Film {
                 }
             })
             .collect()
+    }
+
+    /// The names of the AOV channels the film keeps.
+    pub fn aov_names(&self) -> &[String] {
+        &self.aov_names
     }
 
     /// Width in pixels.

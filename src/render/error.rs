@@ -29,6 +29,9 @@ pub enum RenderError {
         /// The pool's error.
         message: String,
     },
+    /// A saved film that does not fit the render resumed from it.
+    #[error("cannot resume: {0}")]
+    Resume(String),
     /// The Neumann-series terms were asked of an integrator that does not separate them.
     #[error("the {integrator} integrator does not separate the terms of the Neumann series")]
     NoTerms {

@@ -159,6 +159,21 @@ pub fn render(
     settings: &RenderSettings,
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, RenderError> {
+    render_from(scene, integrator, settings, cancel, None, &mut |_, _| {})
+}
+
+/// [`render`] continuing from `start` (a film holding the first `spp` samples of every pixel,
+/// e.g. a checkpoint read back), calling `after_pass(film, spp_done)` after every complete pass
+/// (to write checkpoints). Passes end at the same sample counts whatever the target, so a render
+/// continued from a checkpoint that ended at one is bit-identical to one that never stopped.
+pub fn render_from(
+    scene: &Scene,
+    integrator: &dyn Integrator,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+    start: Option<(Film, u32)>,
+    after_pass: &mut dyn FnMut(&Film, u32),
+) -> Result<RenderOutcome, RenderError> {
     let cam = scene.camera();
     let [wx, wy, width, height] = crop_window(settings, cam)?;
     let ts = settings.tile_size.max(1);
@@ -174,7 +189,21 @@ pub fn render(
     let scheduler = Scheduler::new(settings, cancel, width as u64 * height as u64, "samples")?;
     let aov_names = integrator.aov_names();
     let aov_count = aov_names.len();
-    let mut film = Film::new(width, height).with_terms(terms).with_aovs(aov_names);
+    let (mut film, first_spp) = match start {
+        Some((film, done)) => {
+            if (film.width(), film.height()) != (width, height) || film.aov_names() != aov_names.as_slice() {
+                return Err(RenderError::Resume(format!(
+                    "the saved film is {}×{} with AOVs {:?}, this render {width}×{height} with {:?}",
+                    film.width(),
+                    film.height(),
+                    film.aov_names(),
+                    aov_names
+                )));
+            }
+            (film, done)
+        }
+        None => (Film::new(width, height).with_terms(terms).with_aovs(aov_names), 0),
+    };
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -205,9 +234,14 @@ pub fn render(
         }
         (tile, (w * h * count) as u64)
     };
-    let passes = scheduler.run(settings.spp, 16, tiles.len(), render_tile, |results, _| {
+    let mut done = first_spp;
+    let passes = scheduler.run_from(first_spp, settings.spp, 16, tiles.len(), render_tile, |results, count| {
         for tile in results.iter().flatten() {
             film.merge(tile);
+        }
+        if results.iter().all(Option::is_some) {
+            done += count;
+            after_pass(&film, done);
         }
     });
     Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
@@ -298,6 +332,45 @@ mod tests {
                 .unwrap();
         assert!(out.interrupted);
         assert_eq!(out.film.total_samples(), 0);
+    }
+
+    /// A render stopped at a pass boundary, saved, read back and continued to a larger target is
+    /// bit-identical to one that never stopped (the film's bytes, hence the image); a truncated
+    /// or mismatched state is refused.
+    #[test]
+    fn resumed_renders_are_bit_identical() {
+        use crate::film::state::StateInfo;
+        let scene = crate::scene::cornell::cornell_box(20, 12).unwrap();
+        let integrator = crate::integrator::PathIntegrator::default();
+        let never = AtomicBool::new(false);
+        let info = |spp_done| StateInfo { fingerprint: 42, spp_done, seed: 3 };
+        let whole = render(&scene, &integrator, &RenderSettings { spp: 40, seed: 3, ..Default::default() }, &never).unwrap();
+        let mut saved = None;
+        render_from(&scene, &integrator, &RenderSettings { spp: 16, seed: 3, ..Default::default() }, &never, None, &mut |f, done| {
+            saved = Some(f.state_bytes(&info(done)))
+        })
+        .unwrap();
+        let bytes = saved.unwrap();
+        let (film, read) = Film::from_state_bytes(&bytes).unwrap();
+        assert_eq!(read, info(16));
+        let resumed = render_from(
+            &scene,
+            &integrator,
+            &RenderSettings { spp: 40, seed: 3, ..Default::default() },
+            &never,
+            Some((film, read.spp_done)),
+            &mut |_, _| {},
+        )
+        .unwrap();
+        assert_eq!(resumed.film.spp_range(), (40, 40));
+        assert_eq!(resumed.film.state_bytes(&info(40)), whole.film.state_bytes(&info(40)), "bit-identical");
+        for n in [0, 15, 40, bytes.len() - 1] {
+            assert!(Film::from_state_bytes(&bytes[..n]).is_err(), "{n} bytes");
+        }
+        let other = crate::scene::cornell::cornell_box(8, 8).unwrap();
+        let (film, _) = Film::from_state_bytes(&bytes).unwrap();
+        let e = render_from(&other, &integrator, &RenderSettings { spp: 32, ..Default::default() }, &never, Some((film, 16)), &mut |_, _| {});
+        assert!(matches!(e, Err(RenderError::Resume(_))));
     }
 
     #[test]

@@ -4,8 +4,8 @@
 //! path chunks; both hand the scheduler a function that renders one work item of a pass and a
 //! function that merges a pass's results, in item order, into the film.
 //!
-//! Pass sizes: without a time budget, 1, 2, 4, … samples per pixel (each pass doubling the
-//! samples done) up to `clamp(spp / 8, 1, max_pass)` (the last pass takes what remains); with one, one sample first, then as many whole samples as fit in
+//! Pass sizes: without a time budget, passes end at fixed sample counts whatever the target:
+//! 1, 2, 4, … up to `max_pass`, then every multiple of it (the last pass stops at the target); with one, one sample first, then as many whole samples as fit in
 //! the remaining time at the rate measured so far (at most `max_pass`), stopping when not even
 //! one fits. Determinism does not depend on the thread count: results are merged in item order.
 
@@ -58,8 +58,15 @@ impl<'a> Scheduler<'a> {
     /// parallel (samples `first .. first + count` of each pixel; it returns its result and the
     /// work units it did), then `merge(results, count)` in item order, where a `None` result is
     /// an item that cancellation skipped. Passes hold at most `max_pass` samples per pixel.
-    pub fn run<W: Send>(
+    pub fn run<W: Send>(&self, spp: u32, max_pass: u32, items: usize, item: impl Fn(usize, u32, u32) -> (W, u64) + Sync, merge: impl FnMut(Vec<Option<W>>, u32)) -> Passes {
+        self.run_from(0, spp, max_pass, items, item, merge)
+    }
+
+    /// [`Scheduler::run`] continuing a render that has `start` samples per pixel already (a
+    /// resumed checkpoint): passes take samples `start ..`.
+    pub fn run_from<W: Send>(
         &self,
+        start: u32,
         spp: u32,
         max_pass: u32,
         items: usize,
@@ -68,12 +75,12 @@ impl<'a> Scheduler<'a> {
     ) -> Passes {
         let spp = spp.max(1);
         let (bar, bar_len) = self.progress_bar(spp);
-        let start = Instant::now();
+        let started = Instant::now();
         let work_done = AtomicU64::new(0);
-        let mut done = 0u32;
+        let mut done = start;
         let mut interrupted = false;
         while done < spp {
-            let Some(pass) = self.pass_size(spp, done, max_pass, start.elapsed()) else { break };
+            let Some(pass) = self.pass_size(spp, done, start, max_pass, started.elapsed()) else { break };
             let results: Vec<Option<W>> = self.pool.install(|| {
                 (0..items)
                     .into_par_iter()
@@ -84,11 +91,11 @@ impl<'a> Scheduler<'a> {
                         let (w, n) = item(k, done, pass);
                         let total = work_done.fetch_add(n, Ordering::Relaxed) + n;
                         match self.settings.time_budget {
-                            Some(_) => bar.set_position((start.elapsed().as_millis() as u64).min(bar_len)),
+                            Some(_) => bar.set_position((started.elapsed().as_millis() as u64).min(bar_len)),
                             None => bar.inc(n),
                         }
                         if self.settings.progress {
-                            let secs = start.elapsed().as_secs_f64().max(1e-9);
+                            let secs = started.elapsed().as_secs_f64().max(1e-9);
                             bar.set_message(format!("{:.2} M {}/s", total as f64 / secs / 1e6, self.unit));
                         }
                         Some(w)
@@ -104,25 +111,28 @@ impl<'a> Scheduler<'a> {
             done += pass;
         }
         bar.finish_and_clear();
-        Passes { done, interrupted, elapsed: start.elapsed() }
+        Passes { done, interrupted, elapsed: started.elapsed() }
     }
 
     /// Samples per pixel of the next pass, or `None` when the time budget has no room for one.
-    fn pass_size(&self, spp: u32, done: u32, max_pass: u32, elapsed: Duration) -> Option<u32> {
+    fn pass_size(&self, spp: u32, done: u32, start: u32, max_pass: u32, elapsed: Duration) -> Option<u32> {
         let remaining_spp = spp - done;
         match self.settings.time_budget {
-            // Progressive: 1, 2, 4, … samples per pixel up to the steady size, so that an early
-            // interruption still has the whole frame.
-            None => Some((spp / 8).clamp(1, max_pass).min(done.max(1).next_power_of_two()).min(remaining_spp)),
+            // Progressive, at boundaries that do not depend on the target: 1, 2, 4, … up to
+            // `max_pass`, then multiples of it. An early interruption still has the whole
+            // frame, and a render resumed from a boundary continues exactly as one that never
+            // stopped.
+            None => Some((next_boundary(done, max_pass) - done).min(remaining_spp)),
             Some(budget) => {
                 if elapsed >= budget {
                     return None;
                 }
-                if done == 0 {
+                let run = done - start;
+                if run == 0 {
                     return Some(1);
                 }
-                // Whole samples that fit in the remaining time, at the measured rate.
-                let per_spp = elapsed.as_secs_f64() / done as f64;
+                // Whole samples that fit in the remaining time, at the rate measured in this run.
+                let per_spp = elapsed.as_secs_f64() / run as f64;
                 let fit = ((budget - elapsed).as_secs_f64() / per_spp.max(1e-9)).floor() as u32;
                 (fit > 0).then(|| fit.min(max_pass).min(remaining_spp))
             }
@@ -151,6 +161,21 @@ impl<'a> Scheduler<'a> {
     }
 }
 
+/// The first pass boundary after `done` samples per pixel: 1, 2, 4, … up to `max_pass`, then
+/// the multiples of `max_pass`.
+fn next_boundary(done: u32, max_pass: u32) -> u32 {
+    let max_pass = max_pass.max(1);
+    if done < max_pass {
+        let mut b = 1u32;
+        while b <= done {
+            b *= 2;
+        }
+        b.min(max_pass)
+    } else {
+        (done / max_pass + 1).saturating_mul(max_pass)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -176,8 +201,12 @@ mod tests {
         );
         assert_eq!(out.done, 100);
         assert!(!out.interrupted);
-        // Progressive (1, 1, 2, 4, 8 samples), then the steady size, then the rest.
-        assert_eq!(passes, [1, 1, 2, 4, 8, 12, 12, 12, 12, 12, 12, 12]);
+        // Boundaries at 1, 2, 4, 8, 16, then every 16, whatever the target; the last pass stops
+        // at the target; a continued run keeps the same boundaries.
+        assert_eq!(passes, [1, 1, 2, 4, 8, 16, 16, 16, 16, 16, 4]);
+        let mut continued = Vec::new();
+        let out = s.run_from(20, 50, 16, 2, |_, _, _| ((), 1), |_, count| continued.push(count));
+        assert_eq!((out.done, continued), (50, vec![12, 16, 2]));
         let light = s.run(5, 1, 3, |_, _, _| ((), 1), |_, count| assert_eq!(count, 1));
         assert_eq!(light.done, 5);
         let cancelled = AtomicBool::new(true);
@@ -191,11 +220,11 @@ mod tests {
         let settings = RenderSettings { time_budget: Some(Duration::from_millis(100)), ..Default::default() };
         let never = AtomicBool::new(false);
         let s = Scheduler::new(&settings, &never, 1, "things").unwrap();
-        assert_eq!(s.pass_size(1000, 0, 16, Duration::ZERO), Some(1));
+        assert_eq!(s.pass_size(1000, 0, 0, 16, Duration::ZERO), Some(1));
         // 10 ms per sample so far, 60 ms left: 6 fit.
-        assert_eq!(s.pass_size(1000, 4, 16, Duration::from_millis(40)), Some(6));
-        assert_eq!(s.pass_size(1000, 4, 2, Duration::from_millis(40)), Some(2));
-        assert_eq!(s.pass_size(1000, 9, 16, Duration::from_millis(95)), None, "not one more fits");
-        assert_eq!(s.pass_size(1000, 9, 16, Duration::from_millis(120)), None);
+        assert_eq!(s.pass_size(1000, 4, 0, 16, Duration::from_millis(40)), Some(6));
+        assert_eq!(s.pass_size(1000, 4, 0, 2, Duration::from_millis(40)), Some(2));
+        assert_eq!(s.pass_size(1000, 9, 0, 16, Duration::from_millis(95)), None, "not one more fits");
+        assert_eq!(s.pass_size(1000, 9, 0, 16, Duration::from_millis(120)), None);
     }
 }

@@ -37,6 +37,14 @@ pub struct RenderArgs {
     /// memory). A larger render is refused before it starts.
     #[arg(long)]
     max_memory: Option<String>,
+    /// Save the render's state to OUTPUT.state every this many seconds (at the end of a pass)
+    /// and when it finishes, so that --resume can continue it.
+    #[arg(long)]
+    checkpoint: Option<f64>,
+    /// Continue the render saved in this state file (written by --checkpoint) up to --spp: the
+    /// same scene and settings are required; the result equals a render that never stopped.
+    #[arg(long)]
+    resume: Option<PathBuf>,
     /// Worker threads (default: one per core; at most 1024).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=1024))]
     threads: u64,
@@ -236,8 +244,11 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         job.file.integrator.describe(),
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads as usize }
     );
-    let out = render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL)
-        .map_err(|e| Failure(1, e.to_string()))?;
+    let out = if a.checkpoint.is_some() || a.resume.is_some() {
+        resumable_render(&job, &a, &scene_arg, &defines, &settings, &output)?
+    } else {
+        render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e.to_string()))?
+    };
     for line in &out.report {
         say!("{line}");
     }
@@ -492,4 +503,107 @@ fn default_memory_budget() -> u64 {
         .ok()
         .and_then(|t| t.lines().find(|l| l.starts_with("MemTotal:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()))
         .map_or(8 << 30, |kib| kib * 1024 / 2)
+}
+
+/// A render with `--checkpoint` and/or `--resume`: camera-ray integrators only. The state file
+/// holds the film's sums after a whole pass and a fingerprint of the scene file, the `-D`
+/// parameters and every setting that changes the samples (all but the sample target and the
+/// time), which a resumed render must match.
+fn resumable_render(
+    job: &crate::job::Job,
+    a: &RenderArgs,
+    scene_arg: &str,
+    defines: &[(String, String)],
+    settings: &RenderSettings,
+    output: &std::path::Path,
+) -> Result<neumann::render::RenderOutcome, Failure> {
+    use neumann::film::state::StateInfo;
+    use neumann::film::Film;
+    let integrator = job.file.integrator.camera().ok_or_else(|| {
+        usage(format!("--checkpoint and --resume apply to camera-ray integrators, not '{}'", job.file.integrator.name()))
+    })?;
+    let interval = match a.checkpoint {
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t)),
+        Some(t) => return Err(usage(format!("--checkpoint must be a positive number of seconds, got {t}"))),
+        None => None,
+    };
+    let scene_bytes = if scene_arg == "cbox" { Vec::new() } else { std::fs::read(scene_arg).unwrap_or_default() };
+    let fingerprint = neumann::sampling::hash::hash(&[
+        neumann::sampling::hash::hash(&scene_bytes.iter().map(|&b| u64::from(b)).collect::<Vec<_>>()),
+        neumann::sampling::hash::hash(
+            &format!(
+                "{scene_arg}|{defines:?}|{}|{}|{:?}|{:?}|{:?}|{}|{}",
+                job.file.integrator.describe(),
+                settings.seed,
+                settings.sampler,
+                settings.window,
+                settings.filter,
+                settings.alpha,
+                settings.terms
+            )
+            .bytes()
+            .map(u64::from)
+            .chain([job.file.scene.camera().width().into(), job.file.scene.camera().height().into()])
+            .collect::<Vec<_>>(),
+        ),
+    ]);
+    let start = match &a.resume {
+        None => None,
+        Some(path) => {
+            let bytes = neumann::load::limits::read_bounded(path, neumann::load::limits::MAX_FILE_BYTES)
+                .map_err(|e| Failure(1, e.to_string()))?;
+            let (film, info) =
+                Film::from_state_bytes(&bytes).map_err(|e| Failure(1, format!("{}: {e}", path.display())))?;
+            if info.fingerprint != fingerprint {
+                return Err(Failure(
+                    1,
+                    format!(
+                        "{}: saved from another scene or other settings (resume with the same scene file, -D parameters, \
+                         integrator, seed, sampler, resolution and filter)",
+                        path.display()
+                    ),
+                ));
+            }
+            if info.spp_done >= settings.spp {
+                return Err(usage(format!(
+                    "{} already holds {} spp: ask for more with --spp",
+                    path.display(),
+                    info.spp_done
+                )));
+            }
+            say!("resuming {} from {} spp", path.display(), info.spp_done);
+            Some((film, info.spp_done))
+        }
+    };
+    let state_path = {
+        let mut name = output.as_os_str().to_owned();
+        name.push(".state");
+        PathBuf::from(name)
+    };
+    let mut last = std::time::Instant::now();
+    let mut write_error = None;
+    let mut save = |film: &Film, done: u32, force: bool| {
+        if interval.is_none() || write_error.is_some() || !(force || last.elapsed() >= interval.unwrap_or_default()) {
+            return;
+        }
+        let bytes = film.state_bytes(&StateInfo { fingerprint, spp_done: done, seed: settings.seed });
+        if let Err(e) = neumann::film::output::write_atomically(&state_path, |tmp| {
+            std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
+        }) {
+            write_error = Some(e);
+        }
+        last = std::time::Instant::now();
+    };
+    let target = settings.spp;
+    let out = neumann::render::render_from(&job.file.scene, integrator, settings, &CANCEL, start, &mut |film, done| {
+        save(film, done, done == target)
+    })
+    .map_err(|e| Failure(1, e.to_string()))?;
+    if let Some(e) = write_error {
+        return Err(Failure(1, format!("cannot write the checkpoint {}: {e}", state_path.display())));
+    }
+    if interval.is_some() {
+        say!("checkpoint: {} (continue with --resume {0} --spp N)", state_path.display());
+    }
+    Ok(out)
 }
