@@ -409,20 +409,33 @@ impl Builder {
             )));
         }
         self.bsdf_sizes.insert(Rc::as_ptr(o), size);
-        // A diffuse reflectance above 1 creates energy: allowed (as in Mitsuba, for a <float>
-        // or <spectrum>), but said, as Mitsuba and pbrt warn.
-        let diffuse = match &bsdf {
-            Bsdf::Diffuse(d) => Some(("reflectance", &d.reflectance)),
-            Bsdf::Plastic(p) => Some(("diffuse_reflectance", &p.diffuse_reflectance)),
-            Bsdf::RoughPlastic(p) => Some(("diffuse_reflectance", &p.diffuse_reflectance)),
-            _ => None,
+        // Reflectances and transmittance scales above 1 create energy: allowed (as in Mitsuba,
+        // for a <float> or <spectrum>), but said, as Mitsuba and pbrt warn.
+        let scales: Vec<(&str, &Texture)> = match &bsdf {
+            Bsdf::Diffuse(d) => vec![("reflectance", &d.reflectance)],
+            Bsdf::Plastic(p) => vec![("diffuse_reflectance", &p.diffuse_reflectance)],
+            Bsdf::RoughPlastic(p) => vec![("diffuse_reflectance", &p.diffuse_reflectance)],
+            Bsdf::Conductor(c) => vec![("specular_reflectance", &c.specular_reflectance)],
+            Bsdf::RoughConductor(c) => vec![("specular_reflectance", &c.specular_reflectance)],
+            Bsdf::Dielectric(d) => {
+                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+            }
+            Bsdf::ThinDielectric(d) => {
+                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+            }
+            Bsdf::RoughDielectric(d) => {
+                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+            }
+            _ => Vec::new(),
         };
-        if let Some((name, Texture::Constant(c))) = diffuse {
-            if c.max_element() > 1.0 {
-                let at = o.get(name).map_or_else(|| o.loc.position(), |p| p.loc.position());
-                self.warnings.push(format!(
-                    "warning: {at}: {name} {c} exceeds 1: the surface reflects more light than it receives"
-                ));
+        for (name, t) in scales {
+            if let Texture::Constant(c) = t {
+                if c.max_element() > 1.0 {
+                    let at = o.get(name).map_or_else(|| o.loc.position(), |p| p.loc.position());
+                    self.warnings.push(format!(
+                        "warning: {at}: {name} {c} exceeds 1: the surface sends out more light than it receives"
+                    ));
+                }
             }
         }
         Ok(bsdf)

@@ -1307,4 +1307,9 @@ fn reflectance_above_one_is_warned_about() {
     let f = load(&scene(r#"<shape type="sphere"><bsdf type="plastic"><float name="diffuse_reflectance" value="0.9"/></bsdf></shape>"#))
         .unwrap();
     assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let f = load(&scene(
+        r#"<shape type="sphere"><bsdf type="dielectric"><float name="specular_transmittance" value="1.5"/></bsdf></shape>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.len() == 1 && f.warnings[0].contains("specular_transmittance"), "{:?}", f.warnings);
 }
