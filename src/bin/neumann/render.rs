@@ -235,14 +235,15 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let cam = job.file.scene.camera();
     let [_, _, width, height] = job.file.window.unwrap_or([0, 0, cam.width(), cam.height()]);
     say!(
-        "rendering {} at {width}x{height}, {}, {}, {} threads",
+        "rendering {} at {width}x{height}, {}, {}, {} threads, film {:.1} MiB",
         job.name,
         match a.time {
             Some(t) => format!("for {t} s"),
             None => format!("{} spp", job.file.spp),
         },
         job.file.integrator.describe(),
-        if a.threads == 0 { rayon::current_num_threads() } else { a.threads as usize }
+        if a.threads == 0 { rayon::current_num_threads() } else { a.threads as usize },
+        need as f64 / (1u64 << 20) as f64
     );
     let out = if a.checkpoint.is_some() || a.resume.is_some() {
         resumable_render(&job, &a, &scene_arg, &defines, &settings, &output)?
