@@ -337,6 +337,15 @@ impl PathSettings {
     }
 }
 
+/// A generator for the random decisions a path makes in unbounded number (delta and ratio
+/// tracking's collisions), seeded from two of the sampler's numbers so that it is as
+/// deterministic as the sampler.
+pub fn path_rng(sampler: &mut crate::sampling::Sampler) -> crate::sampling::Pcg32 {
+    use crate::sampling::hash::hash;
+    let (a, b) = (sampler.next_1d(), sampler.next_1d());
+    crate::sampling::Pcg32::new(hash(&[u64::from(a.to_bits())]), hash(&[u64::from(b.to_bits()), 1]))
+}
+
 /// A camera sample's coverage (the alpha channel), Mitsuba 3's rule: 1 if the path hit a
 /// surface, or if an environment (constant or envmap emitter) is there to be seen
 /// (`hide_emitters` off); else 0.

@@ -26,7 +26,6 @@ use crate::material::Bsdf;
 use crate::math::float::offset_ray_origin;
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::medium::{FreeFlight, Medium};
-use crate::sampling::hash::hash;
 use crate::sampling::{Pcg32, Sampler};
 use crate::scene::Scene;
 
@@ -87,12 +86,11 @@ pub fn transmittance(scene: &Scene, mut ray: Ray, mut medium: Option<u32>, rng: 
     Rgb::ZERO
 }
 
-/// The generator of a path's tracking decisions in heterogeneous media, seeded from two of the
-/// sampler's numbers; scenes without such media draw none (their images stay as they were).
+/// The generator of a path's tracking decisions in heterogeneous media
+/// ([`trace::path_rng`]); scenes without such media draw none (their images stay as they were).
 pub fn tracking_rng(scene: &Scene, sampler: &mut Sampler) -> Pcg32 {
     if scene.media().iter().any(Medium::is_heterogeneous) {
-        let (a, b) = (sampler.next_1d(), sampler.next_1d());
-        Pcg32::new(hash(&[u64::from(a.to_bits())]), hash(&[u64::from(b.to_bits()), 1]))
+        trace::path_rng(sampler)
     } else {
         Pcg32::default()
     }

@@ -34,7 +34,6 @@ use crate::material::Bsdf;
 use crate::math::float::offset_ray_origin;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::medium::Medium;
-use crate::sampling::hash::hash;
 use crate::sampling::{Pcg32, Sampler};
 use crate::scene::Scene;
 
@@ -217,12 +216,6 @@ impl VolPathMisIntegrator {
     }
 }
 
-/// The per-path generator of tracking decisions.
-fn path_rng(sampler: &mut Sampler) -> Pcg32 {
-    let (a, b) = (sampler.next_1d(), sampler.next_1d());
-    Pcg32::new(hash(&[u64::from(a.to_bits()), 2]), hash(&[u64::from(b.to_bits()), 3]))
-}
-
 impl Integrator for VolPathMisIntegrator {
     fn name(&self) -> &'static str {
         "volpathmis"
@@ -236,7 +229,7 @@ impl Integrator for VolPathMisIntegrator {
             return RadianceSample { l: Rgb::ZERO, alpha: trace::coverage(scene, hit, hide) };
         }
         let channel = ((sampler.next_1d() * 3.0) as usize).min(2);
-        let mut rng = path_rng(sampler);
+        let mut rng = trace::path_rng(sampler);
         let media = scene.media();
         let mut l = Rgb::ZERO;
         let mut covered = false;

@@ -529,25 +529,22 @@ fn resumable_render(
         None => None,
     };
     let scene_bytes = if scene_arg == "cbox" { Vec::new() } else { std::fs::read(scene_arg).unwrap_or_default() };
-    let fingerprint = neumann::sampling::hash::hash(&[
-        neumann::sampling::hash::hash(&scene_bytes.iter().map(|&b| u64::from(b)).collect::<Vec<_>>()),
-        neumann::sampling::hash::hash(
-            &format!(
-                "{scene_arg}|{defines:?}|{}|{}|{:?}|{:?}|{:?}|{}|{}",
-                job.file.integrator.describe(),
-                settings.seed,
-                settings.sampler,
-                settings.window,
-                settings.filter,
-                settings.alpha,
-                settings.terms
-            )
-            .bytes()
-            .map(u64::from)
-            .chain([job.file.scene.camera().width().into(), job.file.scene.camera().height().into()])
-            .collect::<Vec<_>>(),
-        ),
-    ]);
+    let settings_text = format!(
+        "{scene_arg}|{defines:?}|{}|{}|{:?}|{:?}|{:?}|{}|{}|{}x{}",
+        job.file.integrator.describe(),
+        settings.seed,
+        settings.sampler,
+        settings.window,
+        settings.filter,
+        settings.alpha,
+        settings.terms,
+        job.file.scene.camera().width(),
+        job.file.scene.camera().height()
+    );
+    // FNV-1a over the scene file's bytes and the settings (stable across runs and builds).
+    let fingerprint = scene_bytes.iter().chain(settings_text.as_bytes()).fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
     let start = match &a.resume {
         None => None,
         Some(path) => {
