@@ -36,7 +36,7 @@ impl Rng {
 }
 
 fuzz_mutator!(|data: &mut [u8], size: usize, max_size: usize, seed: u32| {
-    let mut rng = Rng(u64::from(seed) * 0x9e37_79b9_7f4a_7c15 + 1);
+    let mut rng = Rng(u64::from(seed).wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
     let text = data[..size].to_vec();
     // Element starts ('<' not followed by '/', '?' or '!') and attribute values ("...").
     let starts: Vec<usize> =
