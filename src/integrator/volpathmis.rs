@@ -135,9 +135,7 @@ fn track_shadow(
     for _ in 0..MAX_COLLISIONS {
         let seg = Ray::new(o, ray.d);
         let tent = medium.sample_tentative(&seg, remaining, channel, rng.next_f32());
-        let end = tent.collision.map_or(tent.t1, |c| c.t);
-        let tr = (-(end - tent.t0) * tent.majorant).exp();
-        let pdf = if tent.collision.is_some() { tr * tent.majorant } else { tr };
+        let (pdf, tr) = tent.pdf_and_transmittance();
         nee.update(pdf, tr);
         uni.update(pdf, tr);
         let Some(c) = tent.collision else { return !(nee.is_zero() && uni.is_zero()) };
@@ -260,9 +258,7 @@ impl Integrator for VolPathMisIntegrator {
                 for _ in 0..MAX_COLLISIONS {
                     let seg = Ray::new(ray.at(travelled), ray.d);
                     let tent = medium_ref.sample_tentative(&seg, t_surface - travelled, channel, rng.next_f32());
-                    let end = tent.collision.map_or(tent.t1, |c| c.t);
-                    let tr = (-(end - tent.t0) * tent.majorant).exp();
-                    let pdf = if tent.collision.is_some() { tr * tent.majorant } else { tr };
+                    let (pdf, tr) = tent.pdf_and_transmittance();
                     path.update(pdf, tr);
                     path_nee.update(pdf, tr);
                     let Some(c) = tent.collision else { break };

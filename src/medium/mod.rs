@@ -63,6 +63,17 @@ pub struct Tentative {
     pub collision: Option<Collision>,
 }
 
+impl Tentative {
+    /// The free flight's density per channel (at the collision: `σ̄ e^(-σ̄ (t - t0))`; passing
+    /// to `t1`: `e^(-σ̄ (t1 - t0))`) and its majorant transmittance `e^(-σ̄ (t - t0))`.
+    #[inline]
+    pub fn pdf_and_transmittance(&self) -> (Rgb, Rgb) {
+        let end = self.collision.map_or(self.t1, |c| c.t);
+        let tr = (-(end - self.t0) * self.majorant).exp();
+        (if self.collision.is_some() { tr * self.majorant } else { tr }, tr)
+    }
+}
+
 /// The coefficients at a tentative collision.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Collision {
