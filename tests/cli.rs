@@ -363,3 +363,58 @@ fn checkpoint_and_resume() {
     let (code, err) = run(&["--spp", "8", "--resume", &state], &resumed);
     assert!(code == Some(2) && err.contains("already holds 8 spp"), "{err}");
 }
+
+/// `render --part` and `--pixel-bounds` write parts that `merge` combines into the single
+/// render's image (within float rounding); bad splits are usage errors, missing parts are named.
+#[test]
+fn split_render_and_merge() {
+    let whole = temp("split-whole.exr");
+    let base = ["render", "--res", "20x12", "--spp", "12", "--seed", "5", "--quiet"];
+    let run = |extra: &[&str], out: &PathBuf| {
+        let r = neumann().args(base).args(extra).arg("-o").arg(out).output().unwrap();
+        assert!(r.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&r.stderr));
+        String::from_utf8_lossy(&r.stdout).to_string()
+    };
+    run(&[], &whole);
+    let parts = [temp("split-1.exr"), temp("split-2a.exr"), temp("split-2b.exr")];
+    let said = run(&["--part", "1/2"], &parts[0]);
+    assert!(said.contains("part 1/2: samples 0–6 of 12") && said.contains("neumann merge"), "{said}");
+    run(&["--part", "2/2", "--pixel-bounds", "0,20,0,5"], &parts[1]);
+    run(&["--part", "2/2", "--pixel-bounds", "0,20,5,12"], &parts[2]);
+    let merged = temp("split-merged.exr");
+    let r = neumann().arg("merge").args(&parts).arg("-o").arg(&merged).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let rgb = |p: &PathBuf| -> Vec<f32> {
+        let image = exr::prelude::read_all_flat_layers_from_file(p).unwrap();
+        let layer = &image.layer_data[0];
+        ["R", "G", "B"]
+            .iter()
+            .flat_map(|n| layer.channel_data.list.iter().find(|c| c.name.eq(*n)).unwrap().sample_data.values_as_f32().collect::<Vec<_>>())
+            .collect()
+    };
+    let (m, w) = (rgb(&merged), rgb(&whole));
+    assert!(m.iter().zip(&w).all(|(a, b)| (a - b).abs() <= b.abs() * 1e-6), "merged differs from the single render");
+    // A missing part is named; --allow-partial merges the rest.
+    let r = neumann().arg("merge").args(&parts[..2]).arg("-o").arg(temp("split-partial.png")).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("missing: samples 6–12 of pixels x 0–20, y 5–12 (part 2/2)"), "{err}");
+    let r = neumann().arg("merge").args(&parts[..2]).arg("--allow-partial").arg("-o").arg(temp("split-partial.png")).output().unwrap();
+    assert!(r.status.success() && String::from_utf8_lossy(&r.stdout).contains("partial"));
+    for (extra, says) in [
+        (vec!["--part", "0/3"], "--part expects I/N"),
+        (vec!["--part", "3"], "--part expects I/N"),
+        (vec!["--part", "13/13"], "do not split into 13 parts"),
+        (vec!["--pixel-bounds", "0,30,0,4"], "reach outside the image"),
+        (vec!["--pixel-bounds", "5,5,0,4"], "X0 < X1"),
+        (vec!["--part", "1/2", "-o", "part.png"], "name the output .exr"),
+    ] {
+        let r = neumann().args(base).args(&extra).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(says), "{extra:?}: {err}");
+    }
+    let r = neumann().args(["merge", "no-such-part.exr", "-o"]).arg(temp("x.exr")).output().unwrap();
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("no-such-part.exr"));
+}

@@ -22,6 +22,7 @@
 pub mod filter;
 pub mod metrics;
 pub mod output;
+pub mod part;
 pub mod state;
 
 use crate::math::{Rgb, Vec2};
@@ -327,6 +328,21 @@ impl Film {
     /// Height in pixels.
     pub fn height(&self) -> u32 {
         self.height
+    }
+
+    /// The sub-rectangle `[x, x + width) × [y, y + height)` of this film (which it must lie in),
+    /// with all its sums.
+    pub fn crop(&self, x: u32, y: u32, width: u32, height: u32) -> Film {
+        assert!(x + width <= self.width && y + height <= self.height, "crop outside the film");
+        let mut out = Film::new(width, height).with_terms(self.px.term_count).with_aovs(self.aov_names.clone());
+        for ty in 0..height {
+            for tx in 0..width {
+                let i = ((y + ty) * self.width + x + tx) as usize;
+                out.px.add_from((ty * width + tx) as usize, &self.px, i);
+            }
+        }
+        out.px.dropped = self.px.dropped;
+        out
     }
 
     /// Adds a tile's samples (its border included).

@@ -53,6 +53,15 @@ pub struct RenderSettings {
     /// Keep this many Neumann-series terms per pixel (`Lₑ`, `T Lₑ`, …; the last collects all
     /// longer paths), if the integrator separates them; 0: off.
     pub terms: usize,
+    /// Render only the sample indices `[first, end)` of every pixel of the `spp`-sample render
+    /// (one part of a render split over machines; `spp` still fixes the sampler's sequence, so
+    /// the parts together take exactly the samples of the whole render). Default: `[0, spp)`.
+    pub sample_range: Option<(u32, u32)>,
+    /// The crop `window` is a tile of this larger window `[x0, y0, width, height]` (the image of a
+    /// render split into tiles): the pixels of that window around the tile whose filter footprint
+    /// reaches into it are sampled too, as the whole window's render samples them, so that tiles
+    /// rendered separately assemble into exactly that render.
+    pub tile_of: Option<[u32; 4]>,
 }
 
 impl Default for RenderSettings {
@@ -69,6 +78,8 @@ impl Default for RenderSettings {
             window: None,
             alpha: false,
             terms: 0,
+            sample_range: None,
+            tile_of: None,
         }
     }
 }
@@ -114,6 +125,37 @@ fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result
         });
     }
     Ok(window)
+}
+
+/// The pixels a render samples (`[x0, y0, width, height]` of the camera's film): the crop
+/// `window`, and with [`RenderSettings::tile_of`] the pixels of the larger window around it whose
+/// filter footprint reaches into it.
+pub fn sampled_region(settings: &RenderSettings, window: [u32; 4]) -> Result<[u32; 4], RenderError> {
+    let Some([ox, oy, ow, oh]) = settings.tile_of else { return Ok(window) };
+    let [x, y, w, h] = window;
+    if x < ox || y < oy || x as u64 + w as u64 > ox as u64 + ow as u64 || y as u64 + h as u64 > oy as u64 + oh as u64 {
+        return Err(RenderError::Unsupported(format!(
+            "the tile {w}x{h} at ({x}, {y}) does not lie inside the window {ow}x{oh} at ({ox}, {oy}) it is a tile of"
+        )));
+    }
+    let b = settings.filter.border();
+    let (x0, y0) = (x.saturating_sub(b).max(ox), y.saturating_sub(b).max(oy));
+    let x1 = (x + w).saturating_add(b).min(ox + ow);
+    let y1 = (y + h).saturating_add(b).min(oy + oh);
+    Ok([x0, y0, x1 - x0, y1 - y0])
+}
+
+/// The sample indices `[first, end)` a render takes of every pixel: its
+/// [`RenderSettings::sample_range`], checked against `spp`, or all of them.
+pub fn sample_range(settings: &RenderSettings) -> Result<(u32, u32), RenderError> {
+    match settings.sample_range {
+        None => Ok((0, settings.spp.max(1))),
+        Some((first, end)) if first < end && end <= settings.spp.max(1) => Ok((first, end)),
+        Some((first, end)) => Err(RenderError::Unsupported(format!(
+            "the sample range {first}–{end} is empty or lies outside the render's {} samples per pixel",
+            settings.spp
+        ))),
+    }
 }
 
 /// Renders `scene` with any of neumann's integrators: camera-ray integrators through
@@ -175,7 +217,11 @@ pub fn render_from(
     after_pass: &mut dyn FnMut(&Film, u32),
 ) -> Result<RenderOutcome, RenderError> {
     let cam = scene.camera();
-    let [wx, wy, width, height] = crop_window(settings, cam)?;
+    let window = crop_window(settings, cam)?;
+    // The pixels sampled: the window, or with `tile_of` also its neighbours in the larger window
+    // whose filter footprint reaches into it. The film covers them; it is cropped at the end.
+    let [rx, ry, width, height] = sampled_region(settings, window)?;
+    let (first_sample, end_sample) = sample_range(settings)?;
     let ts = settings.tile_size.max(1);
     let tiles: Vec<(u32, u32, u32, u32)> = (0..height.div_ceil(ts))
         .flat_map(|ty| (0..width.div_ceil(ts)).map(move |tx| (tx * ts, ty * ts)))
@@ -200,9 +246,14 @@ pub fn render_from(
                     aov_names
                 )));
             }
+            if !(first_sample..=end_sample).contains(&done) {
+                return Err(RenderError::Resume(format!(
+                    "the saved film ends at sample {done}, outside this render's samples {first_sample}–{end_sample}"
+                )));
+            }
             (film, done)
         }
-        None => (Film::new(width, height).with_terms(terms).with_aovs(aov_names), 0),
+        None => (Film::new(width, height).with_terms(terms).with_aovs(aov_names), first_sample),
     };
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
@@ -215,11 +266,11 @@ pub fn render_from(
         for y in y0..y0 + h {
             for x in x0..x0 + w {
                 for i in first..first + count {
-                    sampler.start_pixel_sample([x + wx, y + wy], i, 0);
+                    sampler.start_pixel_sample([x + rx, y + ry], i, 0);
                     // Uniform over the pixel; the filter weighs the sample where it is splatted
                     // (Mitsuba 3's reconstruction).
                     let u_film = sampler.next_2d();
-                    let centre = Vec2::new((x + wx) as f32 + 0.5, (y + wy) as f32 + 0.5);
+                    let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5);
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
                     let ray = cam.generate_ray(film_pos, u_lens);
@@ -235,15 +286,24 @@ pub fn render_from(
         (tile, (w * h * count) as u64)
     };
     let mut done = first_spp;
-    let passes = scheduler.run_from(first_spp, settings.spp, 16, tiles.len(), render_tile, |results, count| {
-        for tile in results.iter().flatten() {
-            film.merge(tile);
+    // A part of a split render keeps whole passes only: its file says which samples it holds.
+    let whole_passes_only = settings.sample_range.is_some();
+    let passes = scheduler.run_from(first_spp, end_sample, 16, tiles.len(), render_tile, |results, count| {
+        let complete = results.iter().all(Option::is_some);
+        if complete || !whole_passes_only {
+            for tile in results.iter().flatten() {
+                film.merge(tile);
+            }
         }
-        if results.iter().all(Option::is_some) {
+        if complete {
             done += count;
             after_pass(&film, done);
         }
     });
+    let [wx, wy, ww, wh] = window;
+    if [rx, ry, width, height] != window {
+        film = film.crop(wx - rx, wy - ry, ww, wh);
+    }
     Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
 }
 

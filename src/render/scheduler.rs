@@ -74,7 +74,7 @@ impl<'a> Scheduler<'a> {
         mut merge: impl FnMut(Vec<Option<W>>, u32),
     ) -> Passes {
         let spp = spp.max(1);
-        let (bar, bar_len) = self.progress_bar(spp);
+        let (bar, bar_len) = self.progress_bar(spp.saturating_sub(start));
         let started = Instant::now();
         let work_done = AtomicU64::new(0);
         let mut done = start;

@@ -107,8 +107,10 @@ pub fn render_light_paths(
         }
         ((out, dropped), n)
     };
+    // Pass k seeds its paths with k: a part of a split render traces passes [first, end).
+    let (first, end) = super::sample_range(settings)?;
     let passes =
-        scheduler.run(settings.spp, 1, chunks as usize, trace_chunk, |records: Vec<Option<ChunkSplats>>, _| {
+        scheduler.run_from(first, end, 1, chunks as usize, trace_chunk, |records: Vec<Option<ChunkSplats>>, _| {
             // A pass that cancellation cut short is left out: its pixels would miss paths.
             if records.iter().any(Option::is_none) {
                 return;

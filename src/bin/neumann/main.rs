@@ -1,5 +1,5 @@
-//! The `neumann` command: one module per subcommand (`render`, `validate`, `converge`, `bench`,
-//! `mc`); the library's option enums parse themselves ([`neumann::choice::Choice`]), so none is
+//! The `neumann` command: one module per subcommand (`render`, `merge`, `validate`, `converge`,
+//! `bench`, `mc`); the library's option enums parse themselves ([`neumann::choice::Choice`]), so none is
 //! mirrored here.
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -22,6 +22,7 @@ mod bench;
 mod converge;
 mod job;
 mod mc;
+mod merge;
 mod render;
 mod validate;
 
@@ -43,6 +44,10 @@ pub fn choice<T: Choice + Clone + Send + Sync>() -> impl TypedValueParser<Value 
 enum Command {
     /// Render a scene (default: the built-in Cornell box) to an image (.png, .exr or .pfm).
     Render(render::RenderArgs),
+    /// Combine the parts of a render split over machines (render --part I/N, --pixel-bounds) into
+    /// the whole image, weighted by their samples; refuses parts of different renders and names
+    /// what is missing.
+    Merge(merge::MergeArgs),
     /// Benchmarks: BVH build, ray throughput (primary, incoherent closest-hit and shadow rays) and
     /// path-tracing samples per second on the Cornell box.
     Bench(bench::BenchArgs),
@@ -116,6 +121,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e.to_string())),
         Command::Converge(args) => converge::run(args),
         Command::Validate { scenes, scene_dir, reference_dir, seed } => {

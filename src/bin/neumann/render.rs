@@ -3,6 +3,7 @@
 
 use crate::job::{builtin_job, file_job, parse_defines, parse_res};
 use crate::{choice, usage, Failure, CANCEL};
+use neumann::film::part::PartInfo;
 use neumann::film::output::{write_image_alpha, write_image_layers, Channel, Format, ImageInfo, WriteError};
 use neumann::integrator::radiosity::Method;
 use neumann::integrator::{AnyIntegrator, DirectStrategy, IntegratorKind, MisHeuristic, PathSettings};
@@ -102,6 +103,68 @@ pub struct RenderArgs {
     /// contact sheet of the terms and their sum side by side.
     #[arg(long, value_name = "DIR")]
     bounces_out: Option<PathBuf>,
+    /// Render part I of N of the samples of every pixel (a render split over machines; the parts
+    /// take the samples a single render takes) and write it as an OpenEXR part for `neumann merge`.
+    #[arg(long, value_name = "I/N")]
+    part: Option<String>,
+    /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 of the image (a tile of a render split over
+    /// machines) and write it as an OpenEXR part for `neumann merge`, which assembles the tiles.
+    #[arg(long, value_name = "X0,X1,Y0,Y1")]
+    pixel_bounds: Option<String>,
+}
+
+/// What part of a split render to render: `--part I/N` and `--pixel-bounds`.
+struct Split {
+    /// `(I, N)`, 1-based.
+    part_of: Option<(u32, u32)>,
+    /// The tile `[x, y, width, height]`.
+    tile: Option<[u32; 4]>,
+}
+
+/// Parses `--part I/N` and `--pixel-bounds X0,X1,Y0,Y1`, the latter checked against `image` (the
+/// film or its crop window).
+fn parse_split(a: &RenderArgs, spp: u32, image: [u32; 4]) -> Result<Option<Split>, Failure> {
+    if a.part.is_none() && a.pixel_bounds.is_none() {
+        return Ok(None);
+    }
+    let part_of = match &a.part {
+        None => None,
+        Some(t) => {
+            let bad = || usage(format!("--part expects I/N with 1 ≤ I ≤ N, e.g. 3/8, got '{t}'"));
+            let (i, n) = t.split_once('/').ok_or_else(bad)?;
+            let (i, n): (u32, u32) = (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+            if i == 0 || i > n {
+                return Err(bad());
+            }
+            if n > spp {
+                return Err(usage(format!(
+                    "--part {i}/{n}: {spp} samples per pixel do not split into {n} parts (raise --spp, or split by tiles with --pixel-bounds)"
+                )));
+            }
+            Some((i, n))
+        }
+    };
+    let tile = match &a.pixel_bounds {
+        None => None,
+        Some(t) => {
+            let bad = || usage(format!("--pixel-bounds expects X0,X1,Y0,Y1 with X0 < X1 and Y0 < Y1, e.g. 0,256,0,128, got '{t}'"));
+            let v: Vec<u32> = t.split(',').map(|x| x.trim().parse()).collect::<Result<_, _>>().map_err(|_| bad())?;
+            let [x0, x1, y0, y1] = v[..] else { return Err(bad()) };
+            if x0 >= x1 || y0 >= y1 {
+                return Err(bad());
+            }
+            let [ix, iy, iw, ih] = image;
+            if x0 < ix || y0 < iy || x1 > ix + iw || y1 > iy + ih {
+                return Err(usage(format!(
+                    "--pixel-bounds {t} reach outside the image, pixels x {ix}–{}, y {iy}–{}",
+                    ix + iw,
+                    iy + ih
+                )));
+            }
+            Some([x0, y0, x1 - x0, y1 - y0])
+        }
+    };
+    Ok(Some(Split { part_of, tile }))
 }
 
 /// `neumann render`.
@@ -177,7 +240,37 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     if !a.exposure.is_finite() {
         return Err(usage(format!("--exposure must be a finite number of stops, got {}", a.exposure)));
     }
-    let output = a.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", job.name)));
+    let image = job.file.window.unwrap_or([0, 0, job.file.scene.camera().width(), job.file.scene.camera().height()]);
+    if (a.part.is_some() || a.pixel_bounds.is_some()) && a.time.is_some() && a.spp.is_none() {
+        return Err(usage(
+            "--part and --pixel-bounds split a render of a sample count: give --spp (with --time each part stops early, and merge names what is missing)".into(),
+        ));
+    }
+    let split = parse_split(&a, job.file.spp, image)?;
+    if split.is_some() {
+        if a.bounces_out.is_some() {
+            return Err(usage("--bounces-out cannot be split into parts: render the terms in one piece".into()));
+        }
+        if let AnyIntegrator::Radiosity(_) = job.file.integrator {
+            return Err(usage("radiosity renders are not split into parts: its solve is the cost, and every part would repeat it".into()));
+        }
+    }
+    let output = a.output.clone().unwrap_or_else(|| match &split {
+        None => PathBuf::from(format!("{}.png", job.name)),
+        Some(s) => {
+            let mut name = job.name.clone();
+            if let Some((i, n)) = s.part_of {
+                name += &format!("-part{i}of{n}");
+            }
+            if let Some([x, y, w, h]) = s.tile {
+                name += &format!("-tile{x}-{}x{y}-{}", x + w, y + h);
+            }
+            PathBuf::from(format!("{name}.exr"))
+        }
+    });
+    if split.is_some() && Format::from_path(&output).ok() != Some(Format::Exr) {
+        return Err(usage(format!("a part of a split render is written as OpenEXR: name the output .exr, not '{}'", output.display())));
+    }
     // Before rendering: a render must not be lost to a missing or read-only folder.
     Format::from_path(&output).map_err(|e| usage(e.to_string()))?;
     neumann::film::output::check_destination(&output).map_err(|e| Failure(1, e.to_string()))?;
@@ -204,7 +297,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         Some(m) => parse_bytes(m).ok_or_else(|| usage(format!("--max-memory expects a size such as 8G or 512M, got '{m}'")))?,
         None => default_memory_budget(),
     };
-    let [_, _, fw, fh] = job.file.window.unwrap_or([0, 0, job.file.scene.camera().width(), job.file.scene.camera().height()]);
+    let [_, _, fw, fh] = split.as_ref().and_then(|s| s.tile).unwrap_or(image);
     let aov_count = job.file.integrator.camera().map_or(0, |i| i.aov_names().len());
     let need = u64::from(fw) * u64::from(fh) * neumann::film::Film::bytes_per_pixel(term_count, aov_count);
     if need > budget {
@@ -226,19 +319,36 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         sampler: job.file.sampler,
         progress: !a.quiet,
         filter: job.file.filter.clone(),
-        window: job.file.window,
         alpha: job.file.alpha,
         terms: term_count,
+        sample_range: split.as_ref().and_then(|s| s.part_of).map(|(i, n)| PartInfo::split(job.file.spp, i, n)),
+        window: split.as_ref().and_then(|s| s.tile).or(job.file.window),
+        tile_of: split.as_ref().and_then(|s| s.tile).map(|_| image),
         ..Default::default()
     };
     crate::handle_signals();
     let cam = job.file.scene.camera();
-    let [_, _, width, height] = job.file.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    let [_, _, width, height] = settings.window.unwrap_or([0, 0, cam.width(), cam.height()]);
+    let (first, end) = settings.sample_range.unwrap_or((0, job.file.spp));
     say!(
-        "rendering {} at {width}x{height}, {}, {}, {} threads, film {:.1} MiB",
+        "rendering {}{} at {width}x{height}, {}, {}, {} threads, film {:.1} MiB",
         job.name,
+        match &split {
+            None => String::new(),
+            Some(s) => format!(
+                " ({}{})",
+                s.part_of.map_or(String::new(), |(i, n)| format!("part {i}/{n}: samples {first}–{end} of {}", job.file.spp)),
+                s.tile.map_or(String::new(), |[x, y, w, h]| format!(
+                    "{}tile x {x}–{}, y {y}–{}",
+                    if s.part_of.is_some() { ", " } else { "" },
+                    x + w,
+                    y + h
+                ))
+            ),
+        },
         match a.time {
             Some(t) => format!("for {t} s"),
+            None if split.is_some() => format!("{} spp", end - first),
             None => format!("{} spp", job.file.spp),
         },
         job.file.integrator.describe(),
@@ -252,6 +362,9 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     };
     for line in &out.report {
         say!("{line}");
+    }
+    if let Some(split) = &split {
+        return write_split_part(&job, &scene_arg, &defines, &settings, split, image, &out, &output);
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
@@ -528,23 +641,9 @@ fn resumable_render(
         Some(t) => return Err(usage(format!("--checkpoint must be a positive number of seconds, got {t}"))),
         None => None,
     };
-    let scene_bytes = if scene_arg == "cbox" { Vec::new() } else { std::fs::read(scene_arg).unwrap_or_default() };
-    let settings_text = format!(
-        "{scene_arg}|{defines:?}|{}|{}|{:?}|{:?}|{:?}|{}|{}|{}x{}",
-        job.file.integrator.describe(),
-        settings.seed,
-        settings.sampler,
-        settings.window,
-        settings.filter,
-        settings.alpha,
-        settings.terms,
-        job.file.scene.camera().width(),
-        job.file.scene.camera().height()
-    );
-    // FNV-1a over the scene file's bytes and the settings (stable across runs and builds).
-    let fingerprint = scene_bytes.iter().chain(settings_text.as_bytes()).fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
-    });
+    let (base, _) = render_fingerprint(job, scene_arg, defines, settings);
+    // A resumed render also continues the same samples of the same pixels.
+    let fingerprint = fnv1a(base, format!("{:?}|{:?}|{:?}", settings.sample_range, settings.window, settings.tile_of).as_bytes());
     let start = match &a.resume {
         None => None,
         Some(path) => {
@@ -562,7 +661,7 @@ fn resumable_render(
                     ),
                 ));
             }
-            if info.spp_done >= settings.spp {
+            if info.spp_done >= settings.sample_range.map_or(settings.spp, |r| r.1) {
                 return Err(usage(format!(
                     "{} already holds {} spp: ask for more with --spp",
                     path.display(),
@@ -592,7 +691,7 @@ fn resumable_render(
         }
         last = std::time::Instant::now();
     };
-    let target = settings.spp;
+    let target = settings.sample_range.map_or(settings.spp, |r| r.1);
     let out = neumann::render::render_from(&job.file.scene, integrator, settings, &CANCEL, start, &mut |film, done| {
         save(film, done, done == target)
     })
@@ -604,4 +703,87 @@ fn resumable_render(
         say!("checkpoint: {} (continue with --resume {0} --spp N)", state_path.display());
     }
     Ok(out)
+}
+
+/// FNV-1a of `bytes`, continuing from `h` (stable across runs and builds).
+fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(h, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
+/// A fingerprint of what makes a render's samples (the scene file's bytes, the `-D` parameters
+/// and every setting but the sample count, time and which part of a split), and those settings
+/// in words.
+fn render_fingerprint(
+    job: &crate::job::Job,
+    scene_arg: &str,
+    defines: &[(String, String)],
+    settings: &RenderSettings,
+) -> (u64, String) {
+    let scene_bytes = if scene_arg == "cbox" { Vec::new() } else { std::fs::read(scene_arg).unwrap_or_default() };
+    let cam = job.file.scene.camera();
+    let settings_text = format!(
+        "{}, sampler {:?}, filter {:?}, film {}x{}, crop {:?}{}{}{}",
+        job.file.integrator.describe(),
+        settings.sampler,
+        settings.filter,
+        cam.width(),
+        cam.height(),
+        job.file.window,
+        if settings.alpha { ", alpha" } else { "" },
+        if settings.terms > 0 { format!(", {} terms", settings.terms) } else { String::new() },
+        if defines.is_empty() { String::new() } else { format!(", -D {defines:?}") },
+    );
+    let hashed = format!("{scene_arg}|{settings_text}|{}", settings.seed);
+    (fnv1a(fnv1a(0xcbf2_9ce4_8422_2325, &scene_bytes), hashed.as_bytes()), settings_text)
+}
+
+/// Writes a part of a split render (`--part`, `--pixel-bounds`): the samples of whole passes
+/// it finished, with what `neumann merge` needs to know.
+#[allow(clippy::too_many_arguments)]
+fn write_split_part(
+    job: &crate::job::Job,
+    scene_arg: &str,
+    defines: &[(String, String)],
+    settings: &RenderSettings,
+    split: &Split,
+    image: [u32; 4],
+    out: &neumann::render::RenderOutcome,
+    output: &std::path::Path,
+) -> Result<(), Failure> {
+    let (first, end) = settings.sample_range.unwrap_or((0, settings.spp));
+    let (done, _) = out.film.spp_range();
+    let stopped_by = crate::STOPPED_BY.load(Ordering::SeqCst);
+    if done == 0 {
+        let code = if stopped_by != 0 { (128 + stopped_by) as u8 } else { 1 };
+        return Err(Failure(code, format!("the part finished no pass of samples: nothing written to {}", output.display())));
+    }
+    let (fingerprint, settings_text) = render_fingerprint(job, scene_arg, defines, settings);
+    let info = PartInfo {
+        fingerprint,
+        scene: job.name.clone(),
+        settings: settings_text,
+        seed: settings.seed,
+        spp: settings.spp,
+        samples: (first, first + done),
+        window: settings.window.unwrap_or(image),
+        image,
+        part_of: split.part_of,
+    };
+    neumann::film::part::write_part(output, &out.film, &info, settings.alpha).map_err(|e| Failure(1, e.to_string()))?;
+    say!(
+        "wrote {} ({info}; {:.2} s, {:.3} M samples/s): combine the parts with neumann merge",
+        output.display(),
+        out.elapsed.as_secs_f64(),
+        out.samples_per_second() / 1e6
+    );
+    if first + done < end {
+        say!("the part stopped early: it holds samples {first}–{} of its {first}–{end}", first + done);
+    }
+    if out.film.dropped() > 0 {
+        say!("warning: {} samples were NaN or infinite and were dropped", out.film.dropped());
+    }
+    if stopped_by != 0 {
+        return Err(Failure((128 + stopped_by) as u8, format!("stopped by signal {stopped_by}; wrote {}", output.display())));
+    }
+    Ok(())
 }
