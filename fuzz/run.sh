@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-targets=${*:-xml obj ply image vol}
+targets=${*:-xml obj ply image vol part}
 mkdir -p fuzz/corpus
 for t in $targets; do
     mkdir -p "fuzz/corpus/$t"
@@ -15,6 +15,11 @@ for t in $targets; do
         obj) cp -n scenes/assets/*.obj "fuzz/corpus/$t/" ;;
         ply) cp -n scenes/assets/*.ply "fuzz/corpus/$t/" ;;
         vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
+        part) # Parts of a split render of the built-in scene (needs the release build).
+              bin=target/release/neumann
+              [ -x "$bin" ] || cargo build --release --quiet
+              [ -e "fuzz/corpus/$t/part.exr" ] || "$bin" render --res 8x6 --spp 4 --part 1/2 --quiet -o "fuzz/corpus/$t/part.exr" >/dev/null
+              [ -e "fuzz/corpus/$t/tile.exr" ] || "$bin" render --res 8x6 --spp 2 --pixel-bounds 2,5,1,4 --quiet -o "fuzz/corpus/$t/tile.exr" >/dev/null ;;
         image) for f in scenes/assets/*.png; do [ -e "fuzz/corpus/$t/png-$(basename "$f")" ] || { printf '\x00' | cat - "$f" > "fuzz/corpus/$t/png-$(basename "$f")"; }; done
                for f in scenes/assets/*.exr; do [ -e "fuzz/corpus/$t/exr-$(basename "$f")" ] || { printf '\x01' | cat - "$f" > "fuzz/corpus/$t/exr-$(basename "$f")"; }; done ;;
     esac

@@ -389,7 +389,7 @@ fn split_render_and_merge() {
         let layer = &image.layer_data[0];
         ["R", "G", "B"]
             .iter()
-            .flat_map(|n| layer.channel_data.list.iter().find(|c| c.name.eq(*n)).unwrap().sample_data.values_as_f32().collect::<Vec<_>>())
+            .flat_map(|n| layer.channel_data.list.iter().find(|c| c.name.eq(n)).unwrap().sample_data.values_as_f32().collect::<Vec<_>>())
             .collect()
     };
     let (m, w) = (rgb(&merged), rgb(&whole));

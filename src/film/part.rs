@@ -681,7 +681,7 @@ mod tests {
         let e = merge_parts(&[p1.clone(), p1.clone()], false).unwrap_err().to_string();
         assert!(e.contains("overlap: both hold samples 0–8 of pixels x 0–8, y 0–6"), "{e}");
         let tile = write("tile.exr", &info((0, 24), [0, 0, 4, 6], image), 1.0);
-        let e = merge_parts(&[tile.clone()], false).unwrap_err().to_string();
+        let e = merge_parts(std::slice::from_ref(&tile), false).unwrap_err().to_string();
         assert!(e.contains("samples 0–24 of pixels x 4–8, y 0–6"), "{e}");
         let e = merge_parts(&[tile, p2], false).unwrap_err().to_string();
         assert!(e.contains("overlap: both hold samples 8–16 of pixels x 0–4"), "{e}");
