@@ -418,3 +418,17 @@ fn split_render_and_merge() {
     assert_eq!(r.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&r.stderr).contains("no-such-part.exr"));
 }
+
+/// The README's excerpt of `neumann mc` is what the command prints (the demo is deterministic).
+#[test]
+fn the_readme_quotes_mc_as_it_prints() {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let start = readme.find("estimator                           N     estimate").expect("the mc excerpt");
+    let excerpt = &readme[start..start + readme[start..].find("```").unwrap()];
+    let r = neumann().arg("mc").output().unwrap();
+    assert!(r.status.success());
+    let out = String::from_utf8_lossy(&r.stdout);
+    for line in excerpt.lines().filter(|l| !l.trim().is_empty()) {
+        assert!(out.lines().any(|l| l == line), "the README quotes a line mc does not print:\n{line}");
+    }
+}

@@ -42,7 +42,7 @@ SchedulerParameters=defer_batch=0
 NodeName=$host CPUs=$(nproc) RealMemory=2000 State=UNKNOWN
 PartitionName=debug Nodes=$host Default=YES MaxTime=INFINITE State=UP
 CONF
-    slurmctld
+    slurmctld -c # a fresh state: no jobs left from an earlier run
     slurmd
     for _ in $(seq 60); do
         if sinfo -h -o %t 2>/dev/null | grep -qx idle; then

@@ -24,6 +24,8 @@ if [ -f "$scene" ]; then scene=$(abs "$scene"); fi
 mkdir -p "$parts_dir"
 rm -f "$parts_dir"/part-*.exr
 export NEUMANN_SCENE=$scene NEUMANN_PARTS_DIR=$parts_dir NEUMANN_OUTPUT=$output NEUMANN_ARGS="$*"
+# A binary named by a relative path is found from the jobs' folders too.
+case "${NEUMANN:-neumann}" in */*) NEUMANN=$(abs "$NEUMANN") ;; esac
 export NEUMANN=${NEUMANN:-neumann}
 array=$(sbatch --parsable --array="1-$n" --cpus-per-task="${CPUS_PER_PART:-1}" \
     --output="$parts_dir/part-%a.log" --export=ALL "$here/render.sbatch")

@@ -6,12 +6,14 @@
 # speed-up of 2 parts over 1 on this machine's cores (printed, not asserted).
 #
 #   deploy/slurm/test.sh [NEUMANN]     (default: target/release/neumann, built if missing)
+#   BENCH_FLAGS="--res 384x384 --spp 128" deploy/slurm/test.sh    (a larger speed-up measurement)
 #
 # Needs root (it starts munged, slurmctld and slurmd) and stops the daemons it started.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 bin=${1:-$root/target/release/neumann}
 [ -x "$bin" ] || (cd "$root" && cargo build --release --quiet)
+bin=$(cd "$(dirname "$bin")" && pwd)/$(basename "$bin") # the jobs run in other folders
 work=$(mktemp -d /tmp/neumann-slurm-test.XXXXXX)
 "$root/deploy/slurm/local-slurm.sh" start >/dev/null
 trap '"$root/deploy/slurm/local-slurm.sh" stop; rm -rf "$work"' EXIT
@@ -79,9 +81,11 @@ grep -q "missing: samples 0–12 of every pixel (part 1/2)" "$work/broken-parts/
     { echo "FAIL: the merge did not name the missing part" >&2; cat "$work/broken-parts/merge.log"; exit 1; }
 echo "a part failing on every attempt: the merge job fails naming it"
 
-# Speed-up of N parts over one on this machine (one core per part).
+# Speed-up of N parts over one on this machine (one core per part). Small in CI, where Slurm's
+# few seconds of overhead per submission weigh; the README's figures come from
+# BENCH_FLAGS="--res 384x384 --spp 128 --seed 3" deploy/slurm/test.sh.
 cpus=$(nproc)
-bench="--res 160x120 --spp 64 --seed 3"
+bench=${BENCH_FLAGS:---res 256x256 --spp 64 --seed 3}
 elapsed() {
     local t0 t1 merge
     t0=$(date +%s.%N)

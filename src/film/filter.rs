@@ -57,6 +57,19 @@ pub enum Filter {
     },
 }
 
+impl std::fmt::Display for Filter {
+    /// The filter as a scene file names it, with its parameters (`gaussian, stddev 0.5`).
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match self {
+            Filter::Box => write!(f, "box"),
+            Filter::Tent { radius } => write!(f, "tent, radius {radius}"),
+            Filter::Gaussian { stddev } => write!(f, "gaussian, stddev {stddev}"),
+            Filter::Cubic { b, c, radius } => write!(f, "cubic, B {b}, C {c}, radius {radius}"),
+            Filter::Lanczos { lobes } => write!(f, "lanczos, lobes {lobes}"),
+        }
+    }
+}
+
 impl Filter {
     /// Mitsuba's `tent` of radius `radius` (pixels, in `(0, MAX_RADIUS]`).
     pub fn tent(radius: f32) -> Option<Filter> {

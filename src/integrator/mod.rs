@@ -368,7 +368,7 @@ impl AnyIntegrator {
                 format!("volumetric path tracer with spectral MIS, max_depth {}", v.settings.depth_text())
             }
             AnyIntegrator::Radiosity(o) => format!(
-                "radiosity, patch size {}, {} form-factor rays per patch, {:?}{}",
+                "radiosity, patch size {}, {} form-factor rays per patch, {}{}",
                 o.patch_size,
                 o.rays_per_patch,
                 o.method,

@@ -188,22 +188,22 @@ pub enum RadiosityError {
     #[error("radiosity handles area emitters only; the scene has a {0} light")]
     Light(&'static str),
     /// A shape's reflectance varies over its surface.
-    #[error("shape {0}: radiosity needs constant reflectances (this one is textured)")]
-    TexturedReflectance(usize),
+    #[error("{0}: radiosity needs constant reflectances (this one is textured)")]
+    TexturedReflectance(String),
     /// A shape whose BSDF is not diffuse.
-    #[error("shape {shape}: radiosity handles diffuse surfaces only, not {bsdf}")]
+    #[error("{shape}: radiosity handles diffuse surfaces only, not the {bsdf} BSDF")]
     NotDiffuse {
-        /// The shape.
-        shape: usize,
-        /// Its BSDF's kind.
-        bsdf: String,
+        /// The shape (its label, [`Scene::shape_label`]).
+        shape: String,
+        /// Its BSDF's plugin name.
+        bsdf: &'static str,
     },
     /// A shape that is no triangle mesh.
-    #[error("shape {0}: radiosity patches triangle meshes (rectangles, cubes, OBJ/PLY); spheres, disks, cylinders and SDF grids are not meshed")]
-    NotAMesh(usize),
+    #[error("{0}: radiosity patches triangle meshes (rectangles, cubes, OBJ/PLY); spheres, disks, cylinders and SDF grids are not meshed")]
+    NotAMesh(String),
     /// Patching a mesh failed.
-    #[error("shape {0}: {1}")]
-    Mesh(usize, crate::geometry::MeshError),
+    #[error("{0}: {1}")]
+    Mesh(String, crate::geometry::MeshError),
     /// The patched scene could not be built.
     #[error("{0}")]
     Build(#[from] crate::scene::BuildError),
@@ -254,14 +254,11 @@ impl Radiosity {
             let reflectance = match &scene.bsdfs()[scene.shapes()[s].bsdf as usize] {
                 Bsdf::Diffuse(d) => match &d.reflectance {
                     Texture::Constant(c) => *c,
-                    _ => return Err(RadiosityError::TexturedReflectance(s)),
+                    _ => return Err(RadiosityError::TexturedReflectance(scene.shape_label(s))),
                 },
-                other => {
-                    let bsdf = format!("{other:?}").split(['(', ' ', '{']).next().unwrap_or("this BSDF").to_string();
-                    return Err(RadiosityError::NotDiffuse { shape: s, bsdf });
-                }
+                other => return Err(RadiosityError::NotDiffuse { shape: scene.shape_label(s), bsdf: other.plugin_name() }),
             };
-            let Geometry::Mesh(mesh) = geometry else { return Err(RadiosityError::NotAMesh(s)) };
+            let Geometry::Mesh(mesh) = geometry else { return Err(RadiosityError::NotAMesh(scene.shape_label(s))) };
             let le = shape_emission(scene, s);
             let mut tris = Vec::new();
             for i in 0..mesh.len() {
@@ -271,7 +268,7 @@ impl Radiosity {
             let positions: Vec<Vec3> = tris.iter().flatten().copied().collect();
             let indices: Vec<[u32; 3]> = (0..tris.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
             let mut patches =
-                TriangleMesh::new(positions, vec![], vec![], indices).map_err(|e| RadiosityError::Mesh(s, e))?;
+                TriangleMesh::new(positions, vec![], vec![], indices).map_err(|e| RadiosityError::Mesh(scene.shape_label(s), e))?;
             patches.flip_normals = mesh.flip_normals;
             for t in &tris {
                 area.push(0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length());
@@ -731,7 +728,8 @@ mod tests {
         b.add_shape(Geometry::Mesh(TriangleMesh::rectangle()), m, Some(Rgb::ONE));
         b.set_camera(Camera::perspective(Transform::IDENTITY, 60.0, FovAxis::X, 4, 4).unwrap());
         let e = Radiosity::solve(&b.build().unwrap(), &Options::default()).unwrap_err();
-        assert!(matches!(&e, RadiosityError::NotDiffuse { shape: 0, bsdf } if bsdf == "Conductor"), "{e}");
+        assert!(matches!(&e, RadiosityError::NotDiffuse { shape, bsdf: "conductor" } if shape == "shape 0"), "{e}");
+        assert_eq!(e.to_string(), "shape 0: radiosity handles diffuse surfaces only, not the conductor BSDF");
         // A tiny patch size is refused before the patches are made (it once took gigabytes).
         let cornell = crate::scene::cornell::cornell_box(4, 4).unwrap();
         let start = std::time::Instant::now();

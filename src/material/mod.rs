@@ -125,6 +125,32 @@ pub enum Bsdf {
 }
 
 impl Bsdf {
+    /// The BSDF's plugin name in scene files (Mitsuba's: `diffuse`, `roughconductor`, …), for
+    /// messages.
+    pub fn plugin_name(&self) -> &'static str {
+        match self {
+            Bsdf::Diffuse(_) => "diffuse",
+            Bsdf::Conductor(_) => "conductor",
+            Bsdf::RoughConductor(_) => "roughconductor",
+            Bsdf::Dielectric(_) => "dielectric",
+            Bsdf::RoughDielectric(_) => "roughdielectric",
+            Bsdf::Plastic(_) => "plastic",
+            Bsdf::RoughPlastic(_) => "roughplastic",
+            Bsdf::PPlastic(_) => "pplastic",
+            Bsdf::Principled(_) => "principled",
+            Bsdf::PrincipledThin(_) => "principledthin",
+            Bsdf::ThinDielectric(_) => "thindielectric",
+            Bsdf::Blend { .. } => "blendbsdf",
+            Bsdf::Mask { .. } => "mask",
+            Bsdf::Null => "null",
+            Bsdf::TwoSided(_) => "twosided",
+            Bsdf::Perturbed(p) => match p.perturbation {
+                Perturbation::NormalMap(_) => "normalmap",
+                Perturbation::BumpMap { .. } => "bumpmap",
+            },
+        }
+    }
+
     /// Whether the BSDF can scatter light to the other side of the surface (transmission or a
     /// null lobe), so that direct light may arrive from the whole sphere.
     pub fn transmits(&self) -> bool {

@@ -23,9 +23,20 @@ pub struct SceneBuilder {
     camera: Option<Camera>,
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
+    /// What messages call each shape (by index; missing ones are called `shape N`).
+    shape_labels: Vec<String>,
 }
 
 impl SceneBuilder {
+    /// Names shape `index` for messages, e.g. `the obj shape 'floor' at scene.xml:12:5`.
+    pub fn set_shape_label(&mut self, index: u32, label: String) {
+        let i = index as usize;
+        if self.shape_labels.len() <= i {
+            self.shape_labels.resize(i + 1, String::new());
+        }
+        self.shape_labels[i] = label;
+    }
+
     /// An empty builder.
     pub fn new() -> Self {
         Self::default()
@@ -201,6 +212,7 @@ impl SceneBuilder {
             infinite_lights,
             media: self.media,
             camera_medium: self.camera_medium,
+            shape_labels: self.shape_labels,
             bvh,
             blocks,
             prims,

@@ -127,6 +127,7 @@ pub struct Scene {
     infinite_lights: Vec<u32>,
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
+    shape_labels: Vec<String>,
     bvh: Bvh,
     /// Triangles of all-triangle leaves, four per block.
     blocks: Vec<Triangle4>,
@@ -140,6 +141,15 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// What messages call shape `index`: its label from the scene file (type, id and position),
+    /// else `shape N`.
+    pub fn shape_label(&self, index: usize) -> String {
+        match self.shape_labels.get(index) {
+            Some(l) if !l.is_empty() => l.clone(),
+            _ => format!("shape {index}"),
+        }
+    }
+
     /// The participating media.
     pub fn media(&self) -> &[crate::medium::Medium] {
         &self.media

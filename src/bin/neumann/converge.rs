@@ -38,9 +38,10 @@ pub struct ConvergeArgs {
     /// Largest samples per pixel (levels 1, 2, 4, … up to it).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=65536))]
     max_spp: u32,
-    /// Film resolution, W or WxH (default: 64, small enough for many renders).
-    #[arg(long, default_value = "64")]
-    res: String,
+    /// Film resolution, W or WxH (default: the reference's, or 64 without one: small enough for
+    /// many renders).
+    #[arg(long)]
+    res: Option<String>,
     /// Longest path in segments (2: direct light only).
     #[arg(long, allow_negative_numbers = true)]
     max_depth: Option<i32>,
@@ -67,7 +68,16 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     } else {
         file_job(std::path::Path::new(&scene_arg), &defines, &Default::default())?
     };
-    let (w, h) = parse_res(&a.res).map_err(usage)?;
+    // The reference, read first: its size is the renders' unless --res says otherwise.
+    let reference_image = match &a.reference {
+        Some(path) => Some(neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e.to_string()))?),
+        None => None,
+    };
+    let (w, h) = match (&a.res, &reference_image) {
+        (Some(r), _) => parse_res(r).map_err(usage)?,
+        (None, Some(img)) => (img.width, img.height),
+        (None, None) => (64, 64),
+    };
     let camera = job.file.scene.camera().with_resolution(w, h).map_err(|e| Failure(1, e.to_string()))?;
     job.file.scene.set_camera(camera);
     let base = match &job.file.integrator {
@@ -84,14 +94,13 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
         return Err(usage(format!("--max-depth must be -1 (unlimited) or ≥ 0, got {max_depth}")));
     }
     std::fs::create_dir_all(&a.out).map_err(|e| Failure(1, format!("cannot create '{}': {e}", a.out.display())))?;
-    let reference = match &a.reference {
-        Some(path) => {
-            let img = neumann::load::image::load_image(path, true).map_err(|e| Failure(1, e.to_string()))?;
+    let reference = match reference_image {
+        Some(img) => {
             if (img.width, img.height) != (w, h) {
-                return Err(Failure(
-                    1,
-                    format!("the reference is {}x{} but the renders are {w}x{h} (use --res)", img.width, img.height),
-                ));
+                return Err(usage(format!(
+                    "the reference is {}x{} but --res asks for {w}x{h} renders: leave --res out to render at the reference's size",
+                    img.width, img.height
+                )));
             }
             img.pixels
         }

@@ -268,6 +268,8 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             PathBuf::from(format!("{name}.exr"))
         }
     });
+    // The default name in the current folder: say so when it replaces an earlier image.
+    let replaces_default = a.output.is_none() && output.exists();
     if split.is_some() && Format::from_path(&output).ok() != Some(Format::Exr) {
         return Err(usage(format!("a part of a split render is written as OpenEXR: name the output .exr, not '{}'", output.display())));
     }
@@ -347,6 +349,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             ),
         },
         match a.time {
+            Some(t) if a.spp.is_some() => format!("{} spp or {t} s, whichever comes first", end - first),
             Some(t) => format!("for {t} s"),
             None if split.is_some() => format!("{} spp", end - first),
             None => format!("{} spp", job.file.spp),
@@ -400,6 +403,21 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     );
     if out.interrupted {
         say!("render interrupted: the image holds {spp_text}");
+    } else if let (Some(budget), Some(target)) = (settings.time_budget, a.spp.or((a.time.is_none()).then_some(job.file.spp))) {
+        // Both limits were set: say which one ended the render.
+        if lo >= target {
+            say!("the render stopped at its sample target ({target} spp) before the time budget ({:.3} s) was used", budget.as_secs_f64());
+        } else {
+            say!("the render stopped when its time budget ({:.3} s) was used, at {lo} of {target} spp", budget.as_secs_f64());
+        }
+    } else if settings.time_budget.is_some() {
+        say!("the render stopped when its time budget was used");
+    }
+    if a.exposure != 0.0 && Format::from_path(&output).ok() != Some(Format::Png) {
+        say!("note: --exposure applies to PNG output; {} holds linear radiance, unscaled", output.display());
+    }
+    if replaces_default {
+        say!("note: replaced the earlier {} (name the output with -o to keep both)", output.display());
     }
     let stopped_by = crate::STOPPED_BY.load(Ordering::SeqCst);
     if out.film.dropped() > 0 {
@@ -722,7 +740,7 @@ fn render_fingerprint(
     let scene_bytes = if scene_arg == "cbox" { Vec::new() } else { std::fs::read(scene_arg).unwrap_or_default() };
     let cam = job.file.scene.camera();
     let settings_text = format!(
-        "{}, sampler {:?}, filter {:?}, film {}x{}, crop {:?}{}{}{}",
+        "{}, sampler {}, filter {}, film {}x{}, crop {:?}{}{}{}",
         job.file.integrator.describe(),
         settings.sampler,
         settings.filter,
