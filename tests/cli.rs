@@ -432,3 +432,66 @@ fn the_readme_quotes_mc_as_it_prints() {
         assert!(out.lines().any(|l| l == line), "the README quotes a line mc does not print:\n{line}");
     }
 }
+
+/// `--aov` writes the listed AOVs and the variance (with the sample count) as EXR layers, and
+/// refuses what it cannot do.
+#[test]
+fn aov_flag_writes_layers() {
+    let out = temp("aov.exr");
+    let r = neumann().args(["render", "--res", "16", "--spp", "8", "--quiet", "--aov", "albedo,normal,depth,position,variance", "-o"]).arg(&out).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let image = exr::prelude::read_all_flat_layers_from_file(&out).unwrap();
+    let names: Vec<String> = image.layer_data[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    for n in ["R", "albedo.R", "normal.Z", "depth.T", "position.X", "variance.G", "spp"] {
+        assert!(names.iter().any(|m| m == n), "{n} missing from {names:?}");
+    }
+    let get = |n: &str| -> Vec<f32> {
+        let c = image.layer_data[0].channel_data.list.iter().find(|c| c.name.eq(n)).unwrap();
+        c.sample_data.values_as_f32().collect()
+    };
+    assert!(get("spp").iter().all(|&s| s == 8.0));
+    let depth = get("depth.T");
+    assert!(depth.iter().filter(|&&d| d > 0.0).count() > depth.len() * 3 / 4, "the box fills most of the frame");
+    assert!(get("variance.G").iter().all(|&v| v >= 0.0) && get("variance.G").iter().any(|&v| v > 0.0));
+    for (flags, says) in [
+        (vec!["--aov", "shininess"], "unknown AOV 'shininess'"),
+        (vec!["--aov", "albedo", "-o", "x.png"], "name the output .exr"),
+        (vec!["--aov", "albedo", "--integrator", "ptracer", "-o", "x.exr"], "traces none"),
+    ] {
+        let r = neumann().args(["render", "--res", "8", "--spp", "1"]).args(&flags).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{flags:?}: {err}");
+        assert!(err.contains(says), "{flags:?}: {err}");
+    }
+}
+
+/// `--display` sends the render to tev: a fake tev on loopback gets the image's creation and
+/// updates whose last one is the written image; an unreachable tev is a warning, not a failure.
+#[test]
+fn display_sends_the_render_to_tev() {
+    use neumann::film::tev::fake::{read_packet, Packet};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let address = listener.local_addr().unwrap().to_string();
+    let server = std::thread::spawn(move || {
+        let (mut stream, _) = listener.accept().unwrap();
+        let mut packets = Vec::new();
+        while let Some(p) = read_packet(&mut stream).unwrap() {
+            packets.push(p);
+        }
+        packets
+    });
+    let out = temp("display.exr");
+    let r = neumann().args(["render", "--res", "20x10", "--spp", "4", "--quiet", "--display", &address, "-o"]).arg(&out).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let packets = server.join().unwrap();
+    let channels: Vec<String> = ["R", "G", "B"].map(String::from).to_vec();
+    assert_eq!(packets[0], Packet::Create { name: "cbox".into(), size: [20, 10], channels: channels.clone() });
+    let Some(Packet::Update { tile, values, channels: c, .. }) = packets.last() else { panic!("no update: {packets:?}") };
+    assert_eq!((tile, c), (&[0, 0, 20, 10], &channels));
+    let image = exr::prelude::read_all_flat_layers_from_file(&out).unwrap();
+    let red: Vec<f32> = image.layer_data[0].channel_data.list.iter().find(|c| c.name.eq("R")).unwrap().sample_data.values_as_f32().collect();
+    assert_eq!(values[0], red, "the last update is the final image");
+    let r = neumann().args(["render", "--res", "8", "--spp", "1", "--quiet", "--display", "127.0.0.1:1", "-o"]).arg(temp("nodisplay.exr")).output().unwrap();
+    assert!(r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("cannot connect to tev at 127.0.0.1:1"));
+}

@@ -24,6 +24,7 @@ pub mod metrics;
 pub mod output;
 pub mod part;
 pub mod state;
+pub mod tev;
 
 use crate::math::{Rgb, Vec2};
 use crate::props::{Obj, Result as PropResult, SceneError};

@@ -72,6 +72,10 @@ pub struct AovIntegrator {
     pub aovs: Vec<(String, AovKind)>,
     /// Nested camera-ray integrators and their names.
     pub nested: Vec<(String, AnyIntegrator)>,
+    /// Whether each nested integrator's image is also a layer `name.R/G/B/A` (Mitsuba's `aov`
+    /// integrator); off for the AOVs the command line adds to an integrator (`--aov`), whose
+    /// image is the render itself.
+    pub image_layers: bool,
 }
 
 impl AovIntegrator {
@@ -99,7 +103,23 @@ impl AovIntegrator {
         if aovs.is_empty() && nested.is_empty() {
             return Err(o.error_at("aovs", "the aov integrator has no AOVs and no nested integrator"));
         }
-        Ok(AovIntegrator { aovs, nested })
+        Ok(AovIntegrator { aovs, nested, image_layers: true })
+    }
+
+    /// The AOVs `aovs` (name and kind) recorded beside `integrator`'s image (a camera-ray
+    /// integrator), its own AOV channels kept under their names: what `--aov` makes of the
+    /// scene's integrator.
+    pub fn around(integrator: AnyIntegrator, aovs: Vec<(String, AovKind)>) -> AovIntegrator {
+        AovIntegrator { aovs, nested: vec![("image".into(), integrator)], image_layers: false }
+    }
+
+    /// Channels per nested integrator's image layer (R, G, B, A, or none).
+    fn image_channels(&self) -> usize {
+        if self.image_layers {
+            4
+        } else {
+            0
+        }
     }
 
     fn inner(&self, k: usize) -> &dyn Integrator {
@@ -122,11 +142,14 @@ impl Integrator for AovIntegrator {
 
     fn aov_names(&self) -> Vec<String> {
         let mut names = Vec::new();
-        for (name, _) in &self.nested {
-            names.extend(["R", "G", "B", "A"].map(|c| format!("{name}.{c}")));
+        if self.image_layers {
+            for (name, _) in &self.nested {
+                names.extend(["R", "G", "B", "A"].map(|c| format!("{name}.{c}")));
+            }
         }
         for (k, (name, _)) in self.nested.iter().enumerate() {
-            names.extend(self.inner(k).aov_names().into_iter().map(|a| format!("{name}.{a}")));
+            let own = self.inner(k).aov_names().into_iter();
+            names.extend(own.map(|a| if self.image_layers { format!("{name}.{a}") } else { a }));
         }
         for (name, kind) in &self.aovs {
             names.extend(kind.channels().iter().map(|c| format!("{name}.{c}")));
@@ -135,7 +158,7 @@ impl Integrator for AovIntegrator {
     }
 
     fn aov_count(&self) -> usize {
-        let nested: usize = (0..self.nested.len()).map(|k| 4 + self.inner(k).aov_count()).sum();
+        let nested: usize = (0..self.nested.len()).map(|k| self.image_channels() + self.inner(k).aov_count()).sum();
         nested + self.aovs.iter().map(|(_, kind)| kind.channels().len()).sum::<usize>()
     }
 
@@ -147,7 +170,8 @@ impl Integrator for AovIntegrator {
         terms: &mut [Rgb],
         aovs: &mut [f32],
     ) -> RadianceSample {
-        let (rgba, mut rest) = aovs.split_at_mut(4 * self.nested.len());
+        let per_image = self.image_channels();
+        let (rgba, mut rest) = aovs.split_at_mut(per_image * self.nested.len());
         let mut result = RadianceSample { l: Rgb::ZERO, alpha: 0.0 };
         for k in 0..self.nested.len() {
             let inner = self.inner(k);
@@ -155,7 +179,9 @@ impl Integrator for AovIntegrator {
             rest = tail;
             let terms: &mut [Rgb] = if k == 0 { terms } else { &mut [] };
             let s = inner.sample_aovs(scene, ray, sampler, terms, own);
-            rgba[4 * k..4 * k + 4].copy_from_slice(&[s.l.x, s.l.y, s.l.z, s.alpha]);
+            if self.image_layers {
+                rgba[4 * k..4 * k + 4].copy_from_slice(&[s.l.x, s.l.y, s.l.z, s.alpha]);
+            }
             if k == 0 {
                 result = s;
             }
@@ -208,6 +234,24 @@ mod tests {
     /// environment: the centre pixel sees the sphere's pole (depth 3, position and normals
     /// (0, 0, 1), shape id 1), the corner pixel sees nothing (every AOV 0) but the environment
     /// (coverage 1, Mitsuba's rule).
+    /// The AOVs `--aov` adds around an integrator leave its image bit-identical (they draw no
+    /// random numbers) and are named after their types, without image layers.
+    #[test]
+    fn aovs_around_an_integrator_keep_its_image() {
+        let scene = crate::scene::cornell::cornell_box(12, 10).unwrap();
+        let plain = AnyIntegrator::with_kind(crate::integrator::IntegratorKind::Path, Default::default());
+        let wrapped = AovIntegrator::around(plain.clone(), vec![("albedo".into(), AovKind::Albedo), ("normal".into(), AovKind::ShNormal)]);
+        assert_eq!(wrapped.aov_names(), ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z"]);
+        let settings = RenderSettings { spp: 4, seed: 2, ..Default::default() };
+        let never = AtomicBool::new(false);
+        let a = render(&scene, plain.camera().unwrap(), &settings, &never).unwrap().film;
+        let b = render(&scene, &wrapped, &settings, &never).unwrap().film;
+        assert!(a.image() == b.image(), "the image changed");
+        let channels = b.aov_channels();
+        let albedo = &channels[0].1;
+        assert!(albedo.iter().all(|v| (0.0..=1.0).contains(v)) && albedo.iter().any(|&v| v > 0.3));
+    }
+
     #[test]
     fn geometric_aovs_of_a_sphere() {
         let mut b = SceneBuilder::new();

@@ -324,7 +324,7 @@ impl AnyIntegrator {
                 use crate::choice::Choice;
                 let path = AnyIntegrator::with_kind(IntegratorKind::Path, settings);
                 let aovs = aov::AovKind::CHOICES.iter().map(|c| (c.1.to_string(), c.0)).collect();
-                AnyIntegrator::Aov(AovIntegrator { aovs, nested: vec![("_arg_0".into(), path)] })
+                AnyIntegrator::Aov(AovIntegrator { aovs, nested: vec![("_arg_0".into(), path)], image_layers: true })
             }
         }
     }
@@ -375,6 +375,11 @@ impl AnyIntegrator {
                 if o.smooth { ", smooth" } else { ", flat" }
             ),
             AnyIntegrator::Moment(m) => format!("moments of {}", describe_nested(&m.nested)),
+            AnyIntegrator::Aov(a) if !a.image_layers && a.nested.len() == 1 => format!(
+                "{}, AOVs {}",
+                a.nested[0].1.describe(),
+                a.aovs.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")
+            ),
             AnyIntegrator::Aov(a) => format!(
                 "AOVs [{}] beside {}",
                 a.aovs.iter().map(|(n, k)| format!("{n}:{k}")).collect::<Vec<_>>().join(", "),

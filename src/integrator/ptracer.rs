@@ -16,7 +16,8 @@
 //! delta), so light that reaches the camera only by specular reflection or refraction (a light
 //! seen in a mirror or through glass) is missing from a ptracer image; diffuse and glossy
 //! transport, caustics included, is all there. Lights at infinity emit parallel rays into the
-//! scene but are not seen directly (no camera connection reaches infinity).
+//! scene; no connection reaches them, so the driver sees them directly through camera rays
+//! that escape the scene (`render::render_light_paths`), as Mitsuba's ptracer does.
 //!
 //! `max_depth` counts path segments including the one to the camera, as for `path`: 1 shows
 //! the emitters only, 2 adds direct light. The image estimate: with `N` paths per pixel
@@ -177,6 +178,34 @@ mod tests {
     /// reference as its own noise allows — relMSE(ptracer, reference) against the relMSE
     /// expected from the two estimates' variances, each measured from two independent renders
     /// — and its mean is within 0.5 %.
+    /// A directly visible environment: camera rays that escape see it, so the sky's pixels equal
+    /// its radiance (exactly, with the box filter) and the lit sphere agrees with the path
+    /// tracer; without a light at infinity the image is bit-identical to before (no camera rays).
+    #[test]
+    fn sees_lights_at_infinity_through_escaping_camera_rays() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, Sphere};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Transform, Vec3};
+        let never = AtomicBool::new(false);
+        let mut b = crate::scene::SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 4.0), 1.0, false)), m, None);
+        b.add_constant_environment(Rgb::new(0.2, 0.4, 0.8));
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 16, 16).unwrap());
+        let scene = b.build().unwrap();
+        let settings = RenderSettings { spp: 256, seed: 5, ..Default::default() };
+        let light = render_light_paths(&scene, &LightTracer::default(), &settings, &never).unwrap().film.image();
+        assert_eq!(light[0], Rgb::new(0.2, 0.4, 0.8), "a corner sees only the sky");
+        let path = render(&scene, &PathIntegrator::default(), &settings, &never).unwrap().film.image();
+        let centre = |im: &[Rgb]| (6..10).flat_map(|y| (6..10).map(move |x| y * 16 + x)).map(|i| im[i].y).sum::<f32>() / 16.0;
+        let (l, p) = (centre(&light), centre(&path));
+        assert!((l - p).abs() < 0.03 * p && p > 0.1, "the lit sphere: light tracer {l}, path tracer {p}");
+        let hidden = LightTracer { settings: PathSettings { hide_emitters: true, ..Default::default() } };
+        let im = render_light_paths(&scene, &hidden, &settings, &never).unwrap().film.image();
+        assert_eq!(im[0], Rgb::ZERO, "hide_emitters hides the sky");
+    }
+
     #[test]
     fn agrees_with_the_path_tracer_on_the_cornell_box() {
         use crate::film::metrics::relmse;

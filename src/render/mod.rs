@@ -167,14 +167,29 @@ pub fn render_integrator(
     settings: &RenderSettings,
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, RenderError> {
+    render_integrator_with(scene, integrator, settings, cancel, &mut |_, _| {})
+}
+
+/// [`render_integrator`] calling `after_pass(film, spp_done)` after every complete pass (a live
+/// preview, checkpoints).
+pub fn render_integrator_with(
+    scene: &Scene,
+    integrator: &AnyIntegrator,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+    after_pass: &mut dyn FnMut(&Film, u32),
+) -> Result<RenderOutcome, RenderError> {
+    let camera = |i: &dyn Integrator, after_pass: &mut dyn FnMut(&Film, u32)| {
+        render_from(scene, i, settings, cancel, None, after_pass)
+    };
     match integrator {
-        AnyIntegrator::Path(i) => render(scene, i, settings, cancel),
-        AnyIntegrator::Direct(i) => render(scene, i, settings, cancel),
-        AnyIntegrator::Ptracer(t) => render_light_paths(scene, t, settings, cancel),
-        AnyIntegrator::VolPath(i) => render(scene, i, settings, cancel),
-        AnyIntegrator::VolPathMis(i) => render(scene, i, settings, cancel),
-        AnyIntegrator::Moment(i) => render(scene, i, settings, cancel),
-        AnyIntegrator::Aov(i) => render(scene, i, settings, cancel),
+        AnyIntegrator::Path(i) => camera(i, after_pass),
+        AnyIntegrator::Direct(i) => camera(i, after_pass),
+        AnyIntegrator::Ptracer(t) => splat::render_light_paths_with(scene, t, settings, cancel, after_pass),
+        AnyIntegrator::VolPath(i) => camera(i, after_pass),
+        AnyIntegrator::VolPathMis(i) => camera(i, after_pass),
+        AnyIntegrator::Moment(i) => camera(i, after_pass),
+        AnyIntegrator::Aov(i) => camera(i, after_pass),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
             let solution = Radiosity::solve(scene, opts).map_err(RenderError::Radiosity)?;
@@ -185,7 +200,7 @@ pub fn render_integrator(
                 report.push(format!("wrote the per-patch solution to {}", path.display()));
             }
             let display = RadiosityIntegrator { solution };
-            let mut out = render(scene, &display, settings, cancel)?;
+            let mut out = render_from(scene, &display, settings, cancel, None, after_pass)?;
             out.elapsed = start.elapsed();
             out.report = report;
             Ok(out)

@@ -2,6 +2,9 @@
 //! film, so a pass adds one sample per pixel), traced in fixed-size chunks over rayon and
 //! splatted through the reconstruction filter.
 //!
+//! Lights at infinity cannot be connected to the camera, so each pass also traces one camera ray
+//! per pixel (uniform in the pixel) and splats what an escaping one sees of them.
+//!
 //! Determinism: chunk `c` of pass `k` draws its random numbers from its own PCG stream
 //! `(seed, k·2³² + c)`, records its splats in order, and the chunks' records are added to the
 //! pass image in chunk order, so the image is bit-identical for a seed whatever the number
@@ -69,6 +72,17 @@ pub fn render_light_paths(
     settings: &RenderSettings,
     cancel: &AtomicBool,
 ) -> Result<RenderOutcome, RenderError> {
+    render_light_paths_with(scene, tracer, settings, cancel, &mut |_, _| {})
+}
+
+/// [`render_light_paths`] calling `after_pass(film, spp_done)` after every pass.
+pub fn render_light_paths_with(
+    scene: &Scene,
+    tracer: &LightTracer,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+    after_pass: &mut dyn FnMut(&Film, u32),
+) -> Result<RenderOutcome, RenderError> {
     let cam = scene.camera();
     let window = super::crop_window(settings, cam)?;
     let [_, _, width, height] = window;
@@ -89,6 +103,10 @@ pub fn render_light_paths(
     let scheduler = Scheduler::new(settings, cancel, paths_per_pass, "light paths")?;
     let mut film = Film::new(width, height);
     let mut image = vec![[0.0f64; 3]; (width * height) as usize];
+    // Lights at infinity seen directly: no light path reaches the camera from them, so camera
+    // rays that escape the scene (one per pixel per pass) see them, as in Mitsuba's ptracer.
+    let sees_sky = !scene.infinite_lights().is_empty() && !tracer.settings.hide_emitters && tracer.settings.allows(1);
+    let film_width = cam.width() as u64;
     // One pass per sample per pixel: each pass is added to the film as one sample per pixel.
     let trace_chunk = |c: usize, pass: u32, _: u32| {
         let c = c as u64;
@@ -105,10 +123,29 @@ pub fn render_light_paths(
                 }
             });
         }
+        if sees_sky {
+            // The chunk's pixels of the whole film (as many as its light paths).
+            for j in c * CHUNK..c * CHUNK + n {
+                let (x, y) = ((j % film_width) as f32, (j / film_width) as f32);
+                let film_pos = Vec2::new(x + rng.next_f32(), y + rng.next_f32());
+                let ray = cam.generate_ray(film_pos, Vec2::new(rng.next_f32(), rng.next_f32()));
+                if scene.intersect(&ray).is_some() {
+                    continue;
+                }
+                let le: Rgb =
+                    scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(ray.d)).sum();
+                if le.is_finite() {
+                    splatter.splat(film_pos, le, &mut out);
+                } else {
+                    dropped += 1;
+                }
+            }
+        }
         ((out, dropped), n)
     };
     // Pass k seeds its paths with k: a part of a split render traces passes [first, end).
     let (first, end) = super::sample_range(settings)?;
+    let mut done = first;
     let passes =
         scheduler.run_from(first, end, 1, chunks as usize, trace_chunk, |records: Vec<Option<ChunkSplats>>, _| {
             // A pass that cancellation cut short is left out: its pixels would miss paths.
@@ -127,6 +164,8 @@ pub fn render_light_paths(
                 }
             }
             film.add_pass(&image, dropped);
+            done += 1;
+            after_pass(&film, done);
         });
     Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
 }

@@ -43,7 +43,7 @@ pub fn choice<T: Choice + Clone + Send + Sync>() -> impl TypedValueParser<Value 
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene (default: the built-in Cornell box) to an image (.png, .exr or .pfm).
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Combine the parts of a render split over machines (render --part I/N, --pixel-bounds) into
     /// the whole image, weighted by their samples; refuses parts of different renders and names
     /// what is missing.
@@ -120,7 +120,7 @@ pub fn usage(msg: String) -> Failure {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render::run(args),
+        Command::Render(args) => render::run(*args),
         Command::Merge(args) => merge::run(args),
         Command::Bench(args) => bench::run(&args).map_err(|e| Failure(1, e.to_string())),
         Command::Converge(args) => converge::run(args),

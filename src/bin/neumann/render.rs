@@ -9,7 +9,7 @@ use neumann::integrator::radiosity::Method;
 use neumann::integrator::{AnyIntegrator, DirectStrategy, IntegratorKind, MisHeuristic, PathSettings};
 use neumann::load::overrides::Overrides;
 use neumann::light::LightSamplerKind;
-use neumann::render::{render_integrator, RenderSettings};
+use neumann::render::{render_integrator_with, RenderSettings};
 use neumann::sampling::sampler::SamplerKind;
 use std::path::PathBuf;
 use std::sync::atomic::Ordering;
@@ -103,6 +103,16 @@ pub struct RenderArgs {
     /// contact sheet of the terms and their sum side by side.
     #[arg(long, value_name = "DIR")]
     bounces_out: Option<PathBuf>,
+    /// Show the render live in the tev image viewer listening at HOST:PORT (tev's default:
+    /// 127.0.0.1:14158), updated after each pass (at most once a second) and at the end.
+    #[arg(long, value_name = "HOST:PORT")]
+    display: Option<String>,
+    /// Arbitrary output variables written as layers of the EXR beside the image, comma-separated:
+    /// albedo, normal (shading normal), depth, position, uv, geo_normal, sh_normal, prim_index,
+    /// shape_index (of the first surface the camera ray hits), and variance (each pixel's
+    /// estimated variance of its mean, with its sample count `spp`).
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// Render part I of N of the samples of every pixel (a render split over machines; the parts
     /// take the samples a single render takes) and write it as an OpenEXR part for `neumann merge`.
     #[arg(long, value_name = "I/N")]
@@ -283,6 +293,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         )));
     }
 
+    let want_variance = add_aovs(&mut job, &a, &output)?;
     let term_count = match (&a.bounces_out, &job.file.integrator) {
         (None, _) => 0,
         (Some(_), AnyIntegrator::Path(p)) if (1..=16).contains(&p.settings.max_depth) => p.settings.max_depth as usize,
@@ -358,11 +369,21 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         if a.threads == 0 { rayon::current_num_threads() } else { a.threads as usize },
         need as f64 / (1u64 << 20) as f64
     );
-    let out = if a.checkpoint.is_some() || a.resume.is_some() {
-        resumable_render(&job, &a, &scene_arg, &defines, &settings, &output)?
-    } else {
-        render_integrator(&job.file.scene, &job.file.integrator, &settings, &CANCEL).map_err(|e| Failure(1, e.to_string()))?
+    let mut preview = a.display.as_ref().map(|address| Preview::new(address, &job.name, job.file.alpha));
+    let mut on_pass = |film: &neumann::film::Film, _done: u32| {
+        if let Some(p) = &mut preview {
+            p.show(film, false);
+        }
     };
+    let out = if a.checkpoint.is_some() || a.resume.is_some() {
+        resumable_render(&job, &a, &scene_arg, &defines, &settings, &output, &mut on_pass)?
+    } else {
+        render_integrator_with(&job.file.scene, &job.file.integrator, &settings, &CANCEL, &mut on_pass)
+            .map_err(|e| Failure(1, e.to_string()))?
+    };
+    if let Some(p) = &mut preview {
+        p.show(&out.film, true);
+    }
     for line in &out.report {
         say!("{line}");
     }
@@ -373,7 +394,13 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
     let mut channels = out.film.aov_channels();
-    if lo != hi && Format::from_path(&output).ok() == Some(Format::Exr) {
+    if want_variance {
+        let variance = out.film.variance_of_mean();
+        for (c, name) in ["variance.R", "variance.G", "variance.B"].into_iter().enumerate() {
+            channels.push((name.to_string(), variance.iter().map(|v| v[c]).collect()));
+        }
+    }
+    if (want_variance || lo != hi) && Format::from_path(&output).ok() == Some(Format::Exr) {
         // An interrupted render: the pixels hold different sample counts; say which.
         channels.push(("spp".to_string(), out.film.sample_counts()));
     }
@@ -648,6 +675,7 @@ fn resumable_render(
     defines: &[(String, String)],
     settings: &RenderSettings,
     output: &std::path::Path,
+    on_pass: &mut dyn FnMut(&neumann::film::Film, u32),
 ) -> Result<neumann::render::RenderOutcome, Failure> {
     use neumann::film::state::StateInfo;
     use neumann::film::Film;
@@ -711,7 +739,8 @@ fn resumable_render(
     };
     let target = settings.sample_range.map_or(settings.spp, |r| r.1);
     let out = neumann::render::render_from(&job.file.scene, integrator, settings, &CANCEL, start, &mut |film, done| {
-        save(film, done, done == target)
+        save(film, done, done == target);
+        on_pass(film, done);
     })
     .map_err(|e| Failure(1, e.to_string()))?;
     if let Some(e) = write_error {
@@ -804,4 +833,113 @@ fn write_split_part(
         return Err(Failure((128 + stopped_by) as u8, format!("stopped by signal {stopped_by}; wrote {}", output.display())));
     }
     Ok(())
+}
+
+/// `--aov LIST`: wraps the scene's integrator to record the listed AOVs (or adds them to its
+/// `aov` integrator), and says whether the variance is asked for (the film computes it).
+fn add_aovs(job: &mut crate::job::Job, a: &RenderArgs, output: &std::path::Path) -> Result<bool, Failure> {
+    use neumann::choice::Choice;
+    use neumann::integrator::aov::{AovIntegrator, AovKind};
+    let Some(list) = &a.aov else { return Ok(false) };
+    let mut variance = false;
+    let mut kinds: Vec<(String, AovKind)> = Vec::new();
+    for item in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let kind = match item {
+            "variance" => {
+                variance = true;
+                continue;
+            }
+            "normal" => AovKind::ShNormal,
+            other => AovKind::parse_name(other).map_err(|_| {
+                let names: Vec<&str> = AovKind::CHOICES.iter().map(|c| c.1).collect();
+                usage(format!("--aov: unknown AOV '{other}' (expected normal, variance, {})", names.join(", ")))
+            })?,
+        };
+        if kinds.iter().any(|(n, _)| n == item) {
+            return Err(usage(format!("--aov names '{item}' twice")));
+        }
+        kinds.push((item.to_string(), kind));
+    }
+    if kinds.is_empty() && !variance {
+        return Err(usage("--aov expects a list such as albedo,normal,depth,variance".into()));
+    }
+    if Format::from_path(output).ok() != Some(Format::Exr) {
+        return Err(usage(format!("--aov writes layers of an OpenEXR image: name the output .exr, not '{}'", output.display())));
+    }
+    if job.file.integrator.camera().is_none() {
+        return Err(usage(format!(
+            "--aov records what camera rays see: the {} integrator traces none (use path, volpath, volpathmis or direct)",
+            job.file.integrator.name()
+        )));
+    }
+    if kinds.is_empty() {
+        return Ok(variance);
+    }
+    let current = std::mem::replace(&mut job.file.integrator, AnyIntegrator::with_kind(IntegratorKind::Path, Default::default()));
+    job.file.integrator = match current {
+        // The scene's own aov integrator gets the new AOVs beside its own.
+        AnyIntegrator::Aov(mut existing) => {
+            for (name, kind) in kinds {
+                if existing.aovs.iter().any(|(n, _)| *n == name) {
+                    return Err(usage(format!("--aov {name}: the scene's aov integrator already records an AOV of that name")));
+                }
+                existing.aovs.push((name, kind));
+            }
+            AnyIntegrator::Aov(existing)
+        }
+        other => AnyIntegrator::Aov(AovIntegrator::around(other, kinds)),
+    };
+    Ok(variance)
+}
+
+/// The live preview of `--display`: the film's image sent to tev after a pass, at most once a
+/// second, and at the end. A tev that cannot be reached, or goes away, is reported once; the
+/// render goes on.
+struct Preview {
+    address: String,
+    name: String,
+    alpha: bool,
+    display: Option<(neumann::film::tev::TevDisplay, [u32; 2])>,
+    last: Option<std::time::Instant>,
+    failed: bool,
+}
+
+impl Preview {
+    fn new(address: &str, name: &str, alpha: bool) -> Preview {
+        Preview { address: address.to_string(), name: name.to_string(), alpha, display: None, last: None, failed: false }
+    }
+
+    fn show(&mut self, film: &neumann::film::Film, force: bool) {
+        use neumann::film::tev::TevDisplay;
+        if self.failed || (!force && self.last.is_some_and(|t| t.elapsed() < Duration::from_secs(1))) {
+            return;
+        }
+        let size = [film.width(), film.height()];
+        if self.display.as_ref().is_none_or(|(_, s)| *s != size) {
+            let channels: Vec<String> =
+                ["R", "G", "B", "A"].iter().take(if self.alpha { 4 } else { 3 }).map(|c| c.to_string()).collect();
+            match TevDisplay::connect(&self.address, &self.name, size[0], size[1], channels) {
+                Ok(d) => self.display = Some((d, size)),
+                Err(e) => {
+                    eprintln!("warning: {e}; rendering without the live preview");
+                    self.failed = true;
+                    return;
+                }
+            }
+        }
+        let image = film.image();
+        let alpha = self.alpha.then(|| film.alpha());
+        let pixels: Vec<f32> = image
+            .iter()
+            .enumerate()
+            .flat_map(|(i, c)| [c.x, c.y, c.z].into_iter().chain(alpha.as_ref().map(|a| a[i])))
+            .collect();
+        if let Some((d, _)) = &mut self.display {
+            if let Err(e) = d.update(&pixels) {
+                eprintln!("warning: {e}; the live preview stops (the render goes on)");
+                self.failed = true;
+            }
+        }
+        self.last = Some(std::time::Instant::now());
+    }
 }
