@@ -495,3 +495,36 @@ fn display_sends_the_render_to_tev() {
     assert!(r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("cannot connect to tev at 127.0.0.1:1"));
 }
+
+/// Without the `oidn` feature, `--denoise` says how to get it (exit 2).
+#[cfg(not(feature = "oidn"))]
+#[test]
+fn denoise_without_the_feature_says_how_to_enable_it() {
+    let r = neumann().args(["render", "--res", "8", "--spp", "1", "--denoise", "-o"]).arg(temp("d.png")).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(err.contains("built without denoising") && err.contains("--features oidn") && err.contains("pyoidn"), "{err}");
+}
+
+/// With the `oidn` feature, `--denoise` writes the denoised image with the noisy one as a layer
+/// of an EXR, or beside a PNG; the denoised image is smoother than the noisy one.
+#[cfg(feature = "oidn")]
+#[test]
+fn denoise_writes_the_denoised_image_and_keeps_the_noisy_one() {
+    let out = temp("denoised.exr");
+    let r = neumann().args(["render", "--res", "32", "--spp", "4", "--quiet", "--denoise", "-o"]).arg(&out).output().unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(String::from_utf8_lossy(&r.stdout).contains("denoised with Open Image Denoise"));
+    let image = exr::prelude::read_all_flat_layers_from_file(&out).unwrap();
+    let get = |n: &str| -> Vec<f32> {
+        let c = image.layer_data[0].channel_data.list.iter().find(|c| c.name.eq(n)).unwrap_or_else(|| panic!("no {n}"));
+        c.sample_data.values_as_f32().collect()
+    };
+    let roughness = |v: &[f32]| v.windows(2).map(|w| (w[1] - w[0]).abs().min(1.0)).sum::<f32>();
+    let (clean, noisy) = (get("G"), get("noisy.G"));
+    assert!(roughness(&clean) < roughness(&noisy) / 2.0, "{} vs {}", roughness(&clean), roughness(&noisy));
+    let png = temp("denoised.png");
+    let r = neumann().args(["render", "--res", "16", "--spp", "2", "--quiet", "--denoise", "-o"]).arg(&png).output().unwrap();
+    assert!(r.status.success());
+    assert!(temp("denoised.noisy.png").exists(), "the noisy image beside the PNG");
+}

@@ -19,6 +19,8 @@
 //! `n_eff = (Σ w)² / Σ w²`: `Var R ≈ (Σ w L² / Σ w − R²) · n_eff / (n_eff − 1) / n_eff` (for unit
 //! weights exactly `s² / n`).
 
+#[cfg(feature = "oidn")]
+pub mod denoise;
 pub mod filter;
 pub mod metrics;
 pub mod output;

@@ -39,6 +39,14 @@ pub enum AovKind {
     PrimIndex,
     /// Shape id (1-based).
     ShapeIndex,
+    /// Radiance emitted toward the camera by the first surface (an area emitter's side facing
+    /// it), or by the lights at infinity for a ray that escapes: the part of the image a
+    /// denoiser leaves alone.
+    Emission,
+    /// The denoiser's albedo guide: the diffuse reflectance, except on an emitter seen from its
+    /// emitting side, where it is the emitted radiance scaled to a largest channel of 1 (so that
+    /// a light and the surface around it differ in the guide as they do in the image).
+    DenoisingAlbedo,
 }
 
 crate::choices!(AovKind, "AOV type", {
@@ -50,13 +58,15 @@ crate::choices!(AovKind, "AOV type", {
     AovKind::ShNormal => "sh_normal", "shading normal (X, Y, Z)";
     AovKind::PrimIndex => "prim_index", "primitive index within its shape (I)";
     AovKind::ShapeIndex => "shape_index", "1 + the shape's index in the scene (I)";
+    AovKind::Emission => "emission", "radiance emitted toward the camera by the first surface or the sky (R, G, B)";
+    AovKind::DenoisingAlbedo => "denoising_albedo", "albedo, or an emitter's normalised radiance: the denoiser's guide (R, G, B)";
 });
 
 impl AovKind {
     /// Channel suffixes.
     fn channels(self) -> &'static [&'static str] {
         match self {
-            AovKind::Albedo => &["R", "G", "B"],
+            AovKind::Albedo | AovKind::DenoisingAlbedo | AovKind::Emission => &["R", "G", "B"],
             AovKind::Depth => &["T"],
             AovKind::Position | AovKind::GeoNormal | AovKind::ShNormal => &["X", "Y", "Z"],
             AovKind::Uv => &["U", "V"],
@@ -188,6 +198,16 @@ impl Integrator for AovIntegrator {
         }
         let Some(si) = scene.intersect(ray) else {
             rest.fill(0.0);
+            // Only the emission AOV sees anything of an escaping ray: the sky.
+            let mut at = 0;
+            for &(_, kind) in &self.aovs {
+                if kind == AovKind::Emission {
+                    let d = ray.d.normalize();
+                    let sky: Rgb = scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(d)).sum();
+                    rest[at..at + 3].copy_from_slice(&[sky.x, sky.y, sky.z]);
+                }
+                at += kind.channels().len();
+            }
             return result;
         };
         let mut out = rest.iter_mut();
@@ -198,12 +218,27 @@ impl Integrator for AovIntegrator {
         };
         for &(_, kind) in &self.aovs {
             match kind {
-                AovKind::Albedo => {
+                AovKind::Albedo | AovKind::DenoisingAlbedo => {
                     let shape = &scene.shapes()[si.shape as usize];
-                    let bsdf = &scene.bsdfs()[shape.bsdf as usize];
-                    let wo = si.frame().to_local(-ray.d.normalize());
-                    let a = bsdf.diffuse_reflectance(&scene.bsdf_context(&si), wo);
+                    let le = match (kind, shape.light) {
+                        (AovKind::DenoisingAlbedo, Some(l)) => scene.lights()[l as usize].le(si.ns, -ray.d.normalize(), si.uv),
+                        _ => Rgb::ZERO,
+                    };
+                    let a = if le.max_element() > 0.0 && le.is_finite() {
+                        le / le.max_element()
+                    } else {
+                        let bsdf = &scene.bsdfs()[shape.bsdf as usize];
+                        let wo = si.frame().to_local(-ray.d.normalize());
+                        bsdf.diffuse_reflectance(&scene.bsdf_context(&si), wo)
+                    };
                     put(&[a.x, a.y, a.z]);
+                }
+                AovKind::Emission => {
+                    let le = match scene.shapes()[si.shape as usize].light {
+                        Some(l) => scene.lights()[l as usize].le(si.ns, -ray.d.normalize(), si.uv),
+                        None => Rgb::ZERO,
+                    };
+                    put(&[le.x, le.y, le.z]);
                 }
                 AovKind::Depth => put(&[si.t * ray.d.length()]),
                 AovKind::Position => put(&[si.p.x, si.p.y, si.p.z]),

@@ -20,6 +20,7 @@ macro_rules! say {
 
 mod bench;
 mod converge;
+mod denoise;
 mod job;
 mod mc;
 mod merge;
