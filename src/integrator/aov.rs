@@ -285,6 +285,17 @@ mod tests {
         let channels = b.aov_channels();
         let albedo = &channels[0].1;
         assert!(albedo.iter().all(|v| (0.0..=1.0).contains(v)) && albedo.iter().any(|&v| v > 0.3));
+        // Emission and the denoiser's albedo: the light's pixel sees its radiance (18.4, 14, 6.75)
+        // and, in the albedo guide, that radiance scaled to a largest channel of 1.
+        let kinds = vec![("emission".into(), AovKind::Emission), ("denoising_albedo".into(), AovKind::DenoisingAlbedo)];
+        let big = crate::scene::cornell::cornell_box(48, 48).unwrap();
+        let lit = render(&big, &AovIntegrator::around(plain, kinds), &RenderSettings { spp: 4, ..settings }, &never).unwrap().film;
+        let ch = lit.aov_channels();
+        let (er, eb, ar, ab) = (&ch[0].1, &ch[2].1, &ch[3].1, &ch[5].1);
+        let i = (0..er.len()).max_by(|&a, &b| er[a].total_cmp(&er[b])).unwrap();
+        assert!((er[i] - 18.387).abs() < 0.01 && (eb[i] - 6.7536).abs() < 0.01, "emission {} {}", er[i], eb[i]);
+        assert!((ar[i] - 1.0).abs() < 1e-5 && (ab[i] - 6.7536 / 18.387).abs() < 1e-3, "albedo guide {} {}", ar[i], ab[i]);
+        assert!(er.iter().filter(|&&v| v == 0.0).count() > er.len() / 2, "most pixels see no emitter");
     }
 
     #[test]
@@ -315,8 +326,12 @@ mod tests {
         assert_eq!(get("prim_index.I", centre), 0.0);
         assert!(get("uv.U", centre) > 0.0 && get("uv.V", centre) > 0.0);
         for c in &channels[4..] {
-            assert_eq!(c.1[0], 0.0, "{} at the corner", c.0);
+            // An escaping ray sees nothing but the sky, which only `emission` records.
+            let expected = if c.0.starts_with("emission.") { 1.0 } else { 0.0 };
+            assert_eq!(c.1[0], expected, "{} at the corner", c.0);
         }
+        assert_eq!(get("emission.G", centre), 0.0, "the sphere emits nothing");
+        assert_eq!(get("denoising_albedo.B", centre), 0.6, "the albedo where nothing emits");
         assert_eq!(get("_arg_0.A", 0), 1.0, "the environment covers the corner");
         assert_eq!(out.film.image()[0], Rgb::splat(1.0));
         assert_eq!(get("_arg_0.R", centre), out.film.image()[centre].x);
