@@ -528,3 +528,28 @@ fn denoise_writes_the_denoised_image_and_keeps_the_noisy_one() {
     assert!(r.status.success());
     assert!(temp("denoised.noisy.png").exists(), "the noisy image beside the PNG");
 }
+
+/// `--noise-threshold`: an adaptive render reports its mean samples per pixel and writes the
+/// per-pixel counts; bad values and misplaced companions are usage errors.
+#[test]
+fn noise_threshold_renders_adaptively() {
+    let out = temp("adaptive.exr");
+    let r = neumann().args(["render", "--res", "24", "--spp", "64", "--quiet", "--noise-threshold", "0.05", "-o"]).arg(&out).output().unwrap();
+    let said = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(said.contains("adaptive sampling (noise threshold 0.05): mean"), "{said}");
+    let image = exr::prelude::read_all_flat_layers_from_file(&out).unwrap();
+    let spp: Vec<f32> = image.layer_data[0].channel_data.list.iter().find(|c| c.name.eq("spp")).unwrap().sample_data.values_as_f32().collect();
+    assert!(spp.iter().any(|&c| c < 64.0) && spp.iter().all(|&c| (16.0..=64.0).contains(&c)), "{spp:?}");
+    for (flags, says) in [
+        (vec!["--noise-threshold", "0"], "positive number"),
+        (vec!["--min-spp", "8"], "give --noise-threshold too"),
+        (vec!["--noise-threshold", "0.1", "--integrator", "ptracer"], "has none"),
+        (vec!["--noise-threshold", "0.1", "--part", "1/2", "-o", "p.exr"], "not with --part"),
+    ] {
+        let r = neumann().args(["render", "--res", "8", "--spp", "4"]).args(&flags).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{flags:?}: {err}");
+        assert!(err.contains(says), "{flags:?}: {err}");
+    }
+}

@@ -61,6 +61,9 @@ struct Pixels {
     /// `aov_count` sums `Σ w v` per pixel (arbitrary output variables: named channels).
     aovs: Vec<f64>,
     aov_count: usize,
+    /// Adaptive sampling's half buffer: `Σ w L` and `Σ w` of the odd-numbered samples only
+    /// (empty unless kept).
+    half: Vec<[f64; 4]>,
     dropped: u64,
 }
 
@@ -73,8 +76,13 @@ impl Pixels {
             term_count: 0,
             aovs: Vec::new(),
             aov_count: 0,
+            half: Vec::new(),
             dropped: 0,
         }
+    }
+
+    fn keep_half(&mut self) {
+        self.half = vec![[0.0; 4]; self.count.len()];
     }
 
     fn keep_aovs(&mut self, count: usize) {
@@ -87,9 +95,17 @@ impl Pixels {
         self.term_count = count;
     }
 
-    /// Adds `w L` (and `w a`, `w T`, `w v`) to pixel `i`.
+    /// Adds `w L` (and `w a`, `w T`, `w v`) to pixel `i`, and to its half buffer if `half`.
     #[inline]
-    fn put(&mut self, i: usize, w: f64, l: Rgb, alpha: Option<f32>, terms: &[Rgb], aovs: &[f32]) {
+    fn put(&mut self, i: usize, w: f64, sample: &FilmSample) {
+        let FilmSample { l, alpha, terms, aovs, half } = *sample;
+        if half && !self.half.is_empty() {
+            let h = &mut self.half[i];
+            for c in 0..3 {
+                h[c] += w * l[c] as f64;
+            }
+            h[3] += w;
+        }
         let a = &mut self.acc[i];
         for c in 0..3 {
             let wv = w * l[c] as f64;
@@ -131,6 +147,11 @@ impl Pixels {
         a.w2 += b.w2;
         a.alpha += b.alpha;
         self.count[i] += other.count[j];
+        if !self.half.is_empty() && !other.half.is_empty() {
+            for c in 0..4 {
+                self.half[i][c] += other.half[j][c];
+            }
+        }
         for k in 0..self.term_count.min(other.term_count) {
             let (a, b) = (i * self.term_count + k, j * other.term_count + k);
             for c in 0..3 {
@@ -170,6 +191,9 @@ pub struct FilmSample<'a> {
     /// Values of the arbitrary output variables, one per channel of
     /// [`Film::with_aovs`] (empty if none are kept).
     pub aovs: &'a [f32],
+    /// Whether the sample also goes into the half buffer of adaptive sampling (the
+    /// odd-numbered samples of each pixel).
+    pub half: bool,
 }
 
 impl TileBuffer {
@@ -201,6 +225,14 @@ impl TileBuffer {
         self
     }
 
+    /// The same buffer keeping adaptive sampling's half buffer (if `keep`).
+    pub fn with_half(mut self, keep: bool) -> TileBuffer {
+        if keep {
+            self.px.keep_half();
+        }
+        self
+    }
+
     /// Adds a sample taken in pixel `pixel` (image coordinates, a pixel of this buffer) at
     /// `offset ∈ [0, 1)²` from the pixel's corner, through `filter`: Mitsuba's weighted splat
     /// over the pixels whose centres lie within the filter's radius, clipped to the buffer.
@@ -217,14 +249,15 @@ impl TileBuffer {
             return;
         }
         let terms = if sample.terms.iter().all(|t| t.is_finite()) { sample.terms } else { &[] };
+        let sample = FilmSample { terms, ..sample };
         if let Filter::Box = filter {
-            self.px.put(own, 1.0, sample.l, sample.alpha, terms, sample.aovs);
+            self.px.put(own, 1.0, &sample);
             return;
         }
         let (width, height) = (self.width as i64, self.height as i64);
         let px = &mut self.px;
         filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
-            px.put((y * width + x) as usize, w as f64, sample.l, sample.alpha, terms, sample.aovs);
+            px.put((y * width + x) as usize, w as f64, &sample);
         });
     }
 
@@ -286,6 +319,56 @@ impl Film {
                 (name.clone(), values)
             })
             .collect()
+    }
+
+    /// The same film keeping adaptive sampling's half buffer (the odd-numbered samples' sums).
+    pub fn with_half(mut self) -> Film {
+        self.px.keep_half();
+        self
+    }
+
+    /// Adaptive sampling's error estimate per pixel (Cycles' rule): with `I` the pixel's mean
+    /// over all its samples and `A` the mean over its odd-numbered samples only,
+    /// `|I − A|₁ / (10⁻⁴ + √(I_r + I_g + I_b))` — the difference between the estimate and an
+    /// estimate from half of its samples, relative to the square root of the brightness (noise
+    /// is judged as the eye sees it in dark and bright regions). `None` without a half buffer;
+    /// infinite where the half holds no weight yet.
+    pub fn adaptive_errors(&self) -> Option<Vec<f32>> {
+        if self.px.half.is_empty() {
+            return None;
+        }
+        let err = |(a, h): (&Acc, &[f64; 4])| {
+            if a.w <= 0.0 || h[3] <= 0.0 {
+                return f32::INFINITY;
+            }
+            let i = [a.sum[0] / a.w, a.sum[1] / a.w, a.sum[2] / a.w];
+            let diff: f64 = (0..3).map(|c| (i[c] - h[c] / h[3]).abs()).sum();
+            let norm = (i[0] + i[1] + i[2]).max(0.0).sqrt();
+            (diff / (1e-4 + norm)) as f32
+        };
+        Some(self.px.acc.iter().zip(&self.px.half).map(err).collect())
+    }
+
+    /// The pixel estimates from the even-numbered samples alone (`(Σ w L − Σ_odd w L) / (Σ w −
+    /// Σ_odd w)`), which adaptive sampling's stopping rule does not look at: unbiased whatever
+    /// the rule decided. `None` without a half buffer.
+    pub fn even_image(&self) -> Option<Vec<Rgb>> {
+        if self.px.half.is_empty() {
+            return None;
+        }
+        let px = self.px.acc.iter().zip(&self.px.half).map(|(a, h)| {
+            let w = a.w - h[3];
+            if w <= 1e-12 * a.w.max(1e-300) {
+                return Rgb::ZERO;
+            }
+            let c = Rgb::new(((a.sum[0] - h[0]) / w) as f32, ((a.sum[1] - h[1]) / w) as f32, ((a.sum[2] - h[2]) / w) as f32);
+            if c.is_finite() {
+                c.max(Rgb::ZERO)
+            } else {
+                Rgb::ZERO
+            }
+        });
+        Some(px.collect())
     }
 
     /// The same film keeping `count` Neumann-series terms per pixel.

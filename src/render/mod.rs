@@ -22,7 +22,8 @@ use crate::integrator::{AnyIntegrator, Integrator};
 use crate::math::{Rgb, Vec2};
 use crate::sampling::sampler::SamplerKind;
 use crate::scene::Scene;
-use std::sync::atomic::AtomicBool;
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Render settings.
@@ -62,6 +63,13 @@ pub struct RenderSettings {
     /// reaches into it are sampled too, as the whole window's render samples them, so that tiles
     /// rendered separately assemble into exactly that render.
     pub tile_of: Option<[u32; 4]>,
+    /// Adaptive sampling (camera-ray integrators): after `min_spp` samples, a pixel whose
+    /// error estimate ([`Film::adaptive_errors`]) is below this threshold — and whose eight
+    /// neighbours' are too — takes no more samples; the render ends when every pixel has
+    /// stopped, at `spp`, or at the time budget. `None`: every pixel takes every sample.
+    pub noise_threshold: Option<f32>,
+    /// Samples every pixel takes before adaptive sampling may stop it.
+    pub min_spp: u32,
 }
 
 impl Default for RenderSettings {
@@ -80,6 +88,8 @@ impl Default for RenderSettings {
             terms: 0,
             sample_range: None,
             tile_of: None,
+            noise_threshold: None,
+            min_spp: 16,
         }
     }
 }
@@ -125,6 +135,26 @@ fn crop_window(settings: &RenderSettings, cam: &crate::camera::Camera) -> Result
         });
     }
     Ok(window)
+}
+
+/// Adaptive sampling after a pass: marks the pixels that go on (error at or above `threshold`,
+/// or a neighbour's within one pixel — Cycles' dilation, so that a noisy region's edge is not
+/// stopped early) and says whether any does.
+fn update_active(film: &Film, threshold: f32, active: &[AtomicBool]) -> bool {
+    let Some(errors) = film.adaptive_errors() else { return true };
+    let (w, h) = (film.width() as usize, film.height() as usize);
+    let noisy: Vec<bool> = errors.iter().map(|&e| e >= threshold || e.is_nan()).collect();
+    let mut any = false;
+    for y in 0..h {
+        for x in 0..w {
+            let near = (y.saturating_sub(1)..(y + 2).min(h)).any(|j| (x.saturating_sub(1)..(x + 2).min(w)).any(|i| noisy[j * w + i]));
+            // A pixel once stopped stays stopped: its estimate no longer changes.
+            let on = near && active[y * w + x].load(Ordering::Relaxed);
+            active[y * w + x].store(on, Ordering::Relaxed);
+            any |= on;
+        }
+    }
+    any
 }
 
 /// The pixels a render samples (`[x0, y0, width, height]` of the camera's film): the crop
@@ -268,18 +298,33 @@ pub fn render_from(
             }
             (film, done)
         }
-        None => (Film::new(width, height).with_terms(terms).with_aovs(aov_names), first_sample),
+        None => {
+            let film = Film::new(width, height).with_terms(terms).with_aovs(aov_names);
+            (if settings.noise_threshold.is_some() { film.with_half() } else { film }, first_sample)
+        }
     };
+    let adaptive = settings.noise_threshold;
+    if adaptive.is_some() && first_spp > first_sample {
+        return Err(RenderError::Unsupported("adaptive sampling cannot continue a saved render".into()));
+    }
+    // Which pixels still take samples (adaptive sampling); written between passes only.
+    let active: Vec<AtomicBool> = (0..width as usize * height as usize).map(|_| AtomicBool::new(true)).collect();
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
         let mut tile = (TileBuffer::for_tile(x0, y0, w, h, &settings.filter, [width, height]))
             .with_terms(terms)
-            .with_aovs(aov_count);
+            .with_aovs(aov_count)
+            .with_half(adaptive.is_some());
         let mut sample_terms = vec![Rgb::ZERO; terms];
         let mut aovs = vec![0.0f32; aov_count];
+        let mut taken = 0u64;
         for y in y0..y0 + h {
             for x in x0..x0 + w {
+                if adaptive.is_some() && !active[(y * width + x) as usize].load(Ordering::Relaxed) {
+                    continue;
+                }
+                taken += u64::from(count);
                 for i in first..first + count {
                     sampler.start_pixel_sample([x + rx, y + ry], i, 0);
                     // Uniform over the pixel; the filter weighs the sample where it is splatted
@@ -293,12 +338,12 @@ pub fn render_from(
                     aovs.fill(0.0);
                     let s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
                     let alpha = settings.alpha.then_some(s.alpha);
-                    let sample = FilmSample { l: s.l, alpha, terms: &sample_terms, aovs: &aovs };
+                    let sample = FilmSample { l: s.l, alpha, terms: &sample_terms, aovs: &aovs, half: i % 2 == 1 };
                     tile.put([x, y], u_film, &settings.filter, sample);
                 }
             }
         }
-        (tile, (w * h * count) as u64)
+        (tile, taken)
     };
     let mut done = first_spp;
     // A part of a split render keeps whole passes only: its file says which samples it holds.
@@ -313,7 +358,13 @@ pub fn render_from(
         if complete {
             done += count;
             after_pass(&film, done);
+            if let Some(threshold) = adaptive {
+                if done >= settings.min_spp.max(2) && !update_active(&film, threshold, &active) {
+                    return ControlFlow::Break(());
+                }
+            }
         }
+        ControlFlow::Continue(())
     });
     let [wx, wy, ww, wh] = window;
     if [rx, ry, width, height] != window {
@@ -446,6 +497,62 @@ mod tests {
         let (film, _) = Film::from_state_bytes(&bytes).unwrap();
         let e = render_from(&other, &integrator, &RenderSettings { spp: 32, ..Default::default() }, &never, Some((film, 16)), &mut |_, _| {});
         assert!(matches!(e, Err(RenderError::Resume(_))));
+    }
+
+    /// Adaptive sampling: the less noisy pixels stop early, the noisy ones go on; a threshold every pixel meets ends the render at the minimum; the
+    /// result does not depend on the thread count; without a threshold nothing changes.
+    #[test]
+    fn adaptive_sampling_stops_converged_pixels() {
+        let scene = cornell_box(64, 64).unwrap();
+        let integrator = PathIntegrator::default();
+        let never = AtomicBool::new(false);
+        let settings = |threads, threshold| RenderSettings {
+            spp: 128,
+            seed: 4,
+            threads,
+            noise_threshold: Some(threshold),
+            min_spp: 16,
+            ..Default::default()
+        };
+        let a = render(&scene, &integrator, &settings(1, 0.05), &never).unwrap().film;
+        let b = render(&scene, &integrator, &settings(2, 0.05), &never).unwrap().film;
+        assert!(a.image() == b.image() && a.sample_counts() == b.sample_counts(), "deterministic");
+        let counts = a.sample_counts();
+        let (lo, hi) = a.spp_range();
+        assert!(lo <= 32 && hi == 128, "some pixels stop early, some take every sample: {lo}..{hi}");
+        let uniform = render(&scene, &integrator, &RenderSettings { spp: 128, seed: 4, ..Default::default() }, &never).unwrap().film;
+        let emitted = uniform.image();
+        // Samples go where the noise is: the pixels that stopped early are, by the uniform
+        // render's own variance estimate, much less noisy (relative to √brightness, the rule's
+        // measure) than those that took every sample.
+        let var = uniform.variance_of_mean();
+        let noise = |k: usize| (var[k].x + var[k].y + var[k].z).sqrt() / (1e-4 + (emitted[k].x + emitted[k].y + emitted[k].z).sqrt());
+        let mean_noise = |pick: &dyn Fn(f32) -> bool| {
+            let ks: Vec<usize> = (0..counts.len()).filter(|&k| pick(counts[k])).collect();
+            ks.iter().map(|&k| noise(k)).sum::<f32>() / ks.len().max(1) as f32
+        };
+        let (early, full) = (mean_noise(&|c| c < 128.0), mean_noise(&|c| c == 128.0));
+        assert!(early < 0.5 * full, "noise of pixels stopped early {early}, of the others {full}");
+        assert!(counts.iter().filter(|&&c| c == 128.0).count() > counts.len() / 4, "noisy pixels go on");
+        let all = render(&scene, &integrator, &settings(2, 1e9), &never).unwrap();
+        assert_eq!(all.film.spp_range(), (16, 16), "every pixel converged: the render ends");
+        assert!(!all.interrupted);
+        // The errors: 0 for a pixel whose samples agree, and the even-sample image is the mean
+        // of the even-numbered samples exactly.
+        let mut tile = TileBuffer::new(0, 0, 2, 1).with_half(true);
+        for i in 0..8u32 {
+            let l = Rgb::splat(if i % 2 == 0 { 1.0 } else { 3.0 });
+            tile.put([0, 0], Vec2::splat(0.5), &Filter::Box, FilmSample { l, half: i % 2 == 1, ..Default::default() });
+            tile.put([1, 0], Vec2::splat(0.5), &Filter::Box, FilmSample { l: Rgb::ONE, half: i % 2 == 1, ..Default::default() });
+        }
+        let mut film = Film::new(2, 1).with_half();
+        film.merge(&tile);
+        let errors = film.adaptive_errors().unwrap();
+        assert_eq!(errors[1], 0.0);
+        assert!((errors[0] - 3.0 / (1e-4 + 6f32.sqrt())).abs() < 1e-4, "|2 - 3|·3 / √6: {}", errors[0]);
+        assert_eq!(film.even_image().unwrap(), vec![Rgb::ONE, Rgb::ONE]);
+        assert_eq!(film.image()[0], Rgb::splat(2.0));
+        assert!(Film::new(1, 1).adaptive_errors().is_none());
     }
 
     #[test]

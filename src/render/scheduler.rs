@@ -12,6 +12,7 @@
 use super::{RenderError, RenderSettings};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -58,12 +59,20 @@ impl<'a> Scheduler<'a> {
     /// parallel (samples `first .. first + count` of each pixel; it returns its result and the
     /// work units it did), then `merge(results, count)` in item order, where a `None` result is
     /// an item that cancellation skipped. Passes hold at most `max_pass` samples per pixel.
-    pub fn run<W: Send>(&self, spp: u32, max_pass: u32, items: usize, item: impl Fn(usize, u32, u32) -> (W, u64) + Sync, merge: impl FnMut(Vec<Option<W>>, u32)) -> Passes {
+    pub fn run<W: Send>(
+        &self,
+        spp: u32,
+        max_pass: u32,
+        items: usize,
+        item: impl Fn(usize, u32, u32) -> (W, u64) + Sync,
+        merge: impl FnMut(Vec<Option<W>>, u32) -> ControlFlow<()>,
+    ) -> Passes {
         self.run_from(0, spp, max_pass, items, item, merge)
     }
 
     /// [`Scheduler::run`] continuing a render that has `start` samples per pixel already (a
-    /// resumed checkpoint): passes take samples `start ..`.
+    /// resumed checkpoint): passes take samples `start ..`. `merge` returning
+    /// `ControlFlow::Break` ends the run after that pass (adaptive sampling: every pixel done).
     pub fn run_from<W: Send>(
         &self,
         start: u32,
@@ -71,7 +80,7 @@ impl<'a> Scheduler<'a> {
         max_pass: u32,
         items: usize,
         item: impl Fn(usize, u32, u32) -> (W, u64) + Sync,
-        mut merge: impl FnMut(Vec<Option<W>>, u32),
+        mut merge: impl FnMut(Vec<Option<W>>, u32) -> ControlFlow<()>,
     ) -> Passes {
         let spp = spp.max(1);
         let (bar, bar_len) = self.progress_bar(spp.saturating_sub(start));
@@ -103,12 +112,15 @@ impl<'a> Scheduler<'a> {
                     .collect()
             });
             let complete = results.iter().all(Option::is_some);
-            merge(results, pass);
+            let flow = merge(results, pass);
             if !complete {
                 interrupted = true;
                 break;
             }
             done += pass;
+            if flow.is_break() {
+                break;
+            }
         }
         bar.finish_and_clear();
         Passes { done, interrupted, elapsed: started.elapsed() }
@@ -197,6 +209,7 @@ mod tests {
                 let got: Vec<usize> = results.iter().map(|r| r.unwrap().0).collect();
                 assert_eq!(got, (0..7).collect::<Vec<_>>(), "merged in item order");
                 passes.push(count);
+                ControlFlow::Continue(())
             },
         );
         assert_eq!(out.done, 100);
@@ -205,13 +218,25 @@ mod tests {
         // at the target; a continued run keeps the same boundaries.
         assert_eq!(passes, [1, 1, 2, 4, 8, 16, 16, 16, 16, 16, 4]);
         let mut continued = Vec::new();
-        let out = s.run_from(20, 50, 16, 2, |_, _, _| ((), 1), |_, count| continued.push(count));
+        let out = s.run_from(20, 50, 16, 2, |_, _, _| ((), 1), |_, count| {
+            continued.push(count);
+            ControlFlow::Continue(())
+        });
         assert_eq!((out.done, continued), (50, vec![12, 16, 2]));
-        let light = s.run(5, 1, 3, |_, _, _| ((), 1), |_, count| assert_eq!(count, 1));
+        let light = s.run(5, 1, 3, |_, _, _| ((), 1), |_, count| {
+            assert_eq!(count, 1);
+            ControlFlow::Continue(())
+        });
         assert_eq!(light.done, 5);
+        // A merge that says stop ends the run after its pass, not as an interruption.
+        let stopped = s.run(100, 16, 2, |_, _, _| ((), 1), |_, _| ControlFlow::Break(()));
+        assert_eq!((stopped.done, stopped.interrupted), (1, false));
         let cancelled = AtomicBool::new(true);
         let s = Scheduler::new(&settings, &cancelled, 10, "things").unwrap();
-        let out = s.run(100, 16, 4, |_, _, _| ((), 1), |results, _| assert!(results.iter().all(Option::is_none)));
+        let out = s.run(100, 16, 4, |_, _, _| ((), 1), |results, _| {
+            assert!(results.iter().all(Option::is_none));
+            ControlFlow::Continue(())
+        });
         assert!(out.interrupted && out.done == 0);
     }
 

@@ -150,7 +150,7 @@ pub fn render_light_paths_with(
         scheduler.run_from(first, end, 1, chunks as usize, trace_chunk, |records: Vec<Option<ChunkSplats>>, _| {
             // A pass that cancellation cut short is left out: its pixels would miss paths.
             if records.iter().any(Option::is_none) {
-                return;
+                return std::ops::ControlFlow::Continue(());
             }
             image.fill([0.0; 3]);
             let mut dropped = 0;
@@ -166,6 +166,7 @@ pub fn render_light_paths_with(
             film.add_pass(&image, dropped);
             done += 1;
             after_pass(&film, done);
+            std::ops::ControlFlow::Continue(())
         });
     Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
 }

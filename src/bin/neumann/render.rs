@@ -103,6 +103,20 @@ pub struct RenderArgs {
     /// contact sheet of the terms and their sum side by side.
     #[arg(long, value_name = "DIR")]
     bounces_out: Option<PathBuf>,
+    /// Adaptive sampling (Cycles' noise threshold): a pixel stops taking samples once its
+    /// relative error estimate, from a separate half of its samples, is below T (and its
+    /// neighbours' too), after --min-spp samples; --spp (or --time) bounds the render. E.g. 0.01.
+    #[arg(long, value_name = "T")]
+    noise_threshold: Option<f32>,
+    /// With --noise-threshold: the image averages the even-numbered samples only, which the
+    /// stopping rule (judged on the odd-numbered ones) does not see: unbiased, at twice the
+    /// variance per sample. Without it the image averages all samples (Cycles' rule, slightly
+    /// biased toward the pixels' typical values).
+    #[arg(long)]
+    unbiased_adaptive: bool,
+    /// Samples every pixel takes before adaptive sampling may stop it (default 16).
+    #[arg(long, value_name = "N")]
+    min_spp: Option<u32>,
     /// Show the render live in the tev image viewer listening at HOST:PORT (tev's default:
     /// 127.0.0.1:14158), updated after each pass (at most once a second) and at the end.
     #[arg(long, value_name = "HOST:PORT")]
@@ -334,7 +348,28 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             ),
         ));
     }
+    if let Some(t) = a.noise_threshold {
+        if !(t > 0.0 && t.is_finite()) {
+            return Err(usage(format!("--noise-threshold must be a positive number, e.g. 0.01, got {t}")));
+        }
+        if job.file.integrator.camera().is_none() {
+            return Err(usage(format!(
+                "--noise-threshold stops pixels that camera rays sample: the {} integrator has none (use path, volpath, volpathmis or direct)",
+                job.file.integrator.name()
+            )));
+        }
+        if split.is_some() || a.checkpoint.is_some() || a.resume.is_some() {
+            return Err(usage("--noise-threshold applies to a whole render in one go (not with --part, --pixel-bounds, --checkpoint or --resume)".into()));
+        }
+    } else if a.min_spp.is_some() || a.unbiased_adaptive {
+        return Err(usage("--min-spp and --unbiased-adaptive apply to adaptive sampling: give --noise-threshold too".into()));
+    }
+    if a.min_spp == Some(0) {
+        return Err(usage("--min-spp must be at least 1".into()));
+    }
     let settings = RenderSettings {
+        noise_threshold: a.noise_threshold,
+        min_spp: a.min_spp.unwrap_or(16),
         spp: if a.time.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
         time_budget,
         seed: job.file.seed,
@@ -403,7 +438,10 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
     let info = ImageInfo { spp: lo, exposure: a.exposure };
-    let mut image = out.film.image();
+    let mut image = match (a.unbiased_adaptive, out.film.even_image()) {
+        (true, Some(even)) => even,
+        _ => out.film.image(),
+    };
     let mut noisy = None;
     if a.denoise {
         let start = std::time::Instant::now();
@@ -424,7 +462,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
             channels.push((name.to_string(), variance.iter().map(|v| v[c]).collect()));
         }
     }
-    if (want_variance || lo != hi) && Format::from_path(&output).ok() == Some(Format::Exr) {
+    if (want_variance || lo != hi || a.noise_threshold.is_some()) && Format::from_path(&output).ok() == Some(Format::Exr) {
         // An interrupted render: the pixels hold different sample counts; say which.
         channels.push(("spp".to_string(), out.film.sample_counts()));
     }
@@ -450,13 +488,26 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         write_terms(dir, &out.film, width, height, &info).map_err(|e| Failure(1, e.to_string()))?;
         say!("wrote {} Neumann-series terms, their sum and a contact sheet to {}", term_count, dir.display());
     }
-    let spp_text = if lo == hi { format!("{lo} spp") } else { format!("{lo}–{hi} spp (interrupted mid-pass)") };
+    let spp_text = match (lo == hi, a.noise_threshold.is_some()) {
+        (true, _) => format!("{lo} spp"),
+        (false, true) => format!("{lo}–{hi} spp, adaptive"),
+        (false, false) => format!("{lo}–{hi} spp (interrupted mid-pass)"),
+    };
     say!(
         "wrote {} ({spp_text}, {:.2} s, {:.3} M samples/s)",
         output.display(),
         out.elapsed.as_secs_f64(),
         out.samples_per_second() / 1e6
     );
+    if let Some(t) = a.noise_threshold {
+        let counts = out.film.sample_counts();
+        let mean = counts.iter().map(|&c| c as f64).sum::<f64>() / counts.len().max(1) as f64;
+        let stopped = counts.iter().filter(|&&c| (c as u32) < hi).count();
+        say!(
+            "adaptive sampling (noise threshold {t}): mean {mean:.1} spp, {:.1} % of pixels stopped before {hi} spp (each pixel's count is the EXR's spp channel)",
+            100.0 * stopped as f64 / counts.len().max(1) as f64
+        );
+    }
     if out.interrupted {
         say!("render interrupted: the image holds {spp_text}");
     } else if let (Some(budget), Some(target)) = (settings.time_budget, a.spp.or((a.time.is_none()).then_some(job.file.spp))) {
