@@ -469,21 +469,12 @@ fn aov_flag_writes_layers() {
 /// updates whose last one is the written image; an unreachable tev is a warning, not a failure.
 #[test]
 fn display_sends_the_render_to_tev() {
-    use neumann::film::tev::fake::{read_packet, Packet};
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let address = listener.local_addr().unwrap().to_string();
-    let server = std::thread::spawn(move || {
-        let (mut stream, _) = listener.accept().unwrap();
-        let mut packets = Vec::new();
-        while let Some(p) = read_packet(&mut stream).unwrap() {
-            packets.push(p);
-        }
-        packets
-    });
+    use neumann::film::tev::fake::{serve, Packet};
+    let (address, server) = serve().unwrap();
     let out = temp("display.exr");
     let r = neumann().args(["render", "--res", "20x10", "--spp", "4", "--quiet", "--display", &address, "-o"]).arg(&out).output().unwrap();
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let packets = server.join().unwrap();
+    let packets = server.join().unwrap().unwrap();
     let channels: Vec<String> = ["R", "G", "B"].map(String::from).to_vec();
     assert_eq!(packets[0], Packet::Create { name: "cbox".into(), size: [20, 10], channels: channels.clone() });
     let Some(Packet::Update { tile, values, channels: c, .. }) = packets.last() else { panic!("no update: {packets:?}") };

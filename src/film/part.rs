@@ -324,11 +324,18 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
     let channel = |name: &str| -> Option<Vec<f32>> {
         layer.channel_data.list.iter().find(|c| c.name.eq(name)).map(|c| c.sample_data.values_as_f32().collect())
     };
-    let need = |name: &str| channel(name).ok_or_else(|| fail(format!("the channel '{name}' is missing")));
+    let pixels = w as usize * h as usize;
+    let need = |name: &str| {
+        let values = channel(name).ok_or_else(|| fail(format!("the channel '{name}' is missing")))?;
+        if values.len() != pixels {
+            return Err(fail(format!("the channel '{name}' holds {} values for {pixels} pixels (subsampled?)", values.len())));
+        }
+        Ok(values)
+    };
     let reserved = |name: &str| ["R", "G", "B", "A"].contains(&name) || SUM_CHANNELS.contains(&name);
     let aov_names: Vec<String> =
         layer.channel_data.list.iter().map(|c| c.name.to_string()).filter(|n| !reserved(n)).collect();
-    let alpha = channel("A");
+    let alpha = if channel("A").is_some() { Some(need("A")?) } else { None };
     let rgb = [need("R")?, need("G")?, need("B")?];
     let [weight, weight2, m_r, m_g, m_b, count] = SUM_CHANNELS.map(need);
     let (weight, weight2, m2, count) = (weight?, weight2?, [m_r?, m_g?, m_b?], count?);
@@ -342,7 +349,7 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             Err(fail("a pixel holds a value that is not finite".into()))
         }
     };
-    for i in 0..(w as usize * h as usize) {
+    for i in 0..pixels {
         let wt = finite(weight[i])?;
         if wt < 0.0 || !(count[i] >= 0.0 && count[i] <= u32::MAX as f32) {
             return Err(fail(format!("pixel {i} has a negative weight or sample count")));

@@ -181,6 +181,25 @@ pub mod fake {
         }
     }
 
+    /// The thread of a fake tev: the packets its client sent, once it hung up.
+    pub type Server = std::thread::JoinHandle<Result<Vec<Packet>, String>>;
+
+    /// A fake tev listening on a free loopback port: its `HOST:PORT`, and a thread that accepts
+    /// one client and returns the packets it sent once it hangs up.
+    pub fn serve() -> std::io::Result<(String, Server)> {
+        let listener = std::net::TcpListener::bind("127.0.0.1:0")?;
+        let address = listener.local_addr()?.to_string();
+        let server = std::thread::spawn(move || {
+            let (mut stream, _) = listener.accept().map_err(|e| e.to_string())?;
+            let mut packets = Vec::new();
+            while let Some(p) = read_packet(&mut stream)? {
+                packets.push(p);
+            }
+            Ok(packets)
+        });
+        Ok((address, server))
+    }
+
     /// Reads one packet from `r`; `Ok(None)` at the end of the stream.
     pub fn read_packet(r: &mut impl Read) -> Result<Option<Packet>, String> {
         let mut len = [0u8; 4];
@@ -231,30 +250,21 @@ pub mod fake {
 
 #[cfg(test)]
 mod tests {
-    use super::fake::{read_packet, Packet};
+    use super::fake::Packet;
     use super::*;
 
     /// A fake tev on loopback receives the image's creation, then tiles that cover it with the
     /// pixels sent (a 300 × 140 image: three tiles across, two down, clipped at the edges).
     #[test]
     fn a_fake_tev_receives_the_image() {
-        let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-        let address = listener.local_addr().unwrap().to_string();
-        let server = std::thread::spawn(move || {
-            let (mut stream, _) = listener.accept().unwrap();
-            let mut packets = Vec::new();
-            while let Some(p) = read_packet(&mut stream).unwrap() {
-                packets.push(p);
-            }
-            packets
-        });
+        let (address, server) = super::fake::serve().unwrap();
         let (w, h) = (300u32, 140u32);
         let channels: Vec<String> = ["R", "G", "B"].map(String::from).to_vec();
         let pixels: Vec<f32> = (0..w * h * 3).map(|i| i as f32 * 0.5).collect();
         let mut d = TevDisplay::connect(&address, "cbox", w, h, channels.clone()).unwrap();
         d.update(&pixels).unwrap();
         drop(d);
-        let packets = server.join().unwrap();
+        let packets = server.join().unwrap().unwrap();
         assert_eq!(packets[0], Packet::Create { name: "cbox".into(), size: [300, 140], channels: channels.clone() });
         assert_eq!(packets.len(), 1 + 3 * 2);
         let mut seen = vec![0u32; (w * h) as usize];
