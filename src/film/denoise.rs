@@ -7,40 +7,35 @@
 //! the device's error state, so a failure is an error message, never a crash or a silent no-op.
 
 use super::Film;
-use crate::integrator::aov::AovKind;
 use crate::math::Rgb;
 use oidn::sys;
 use std::ffi::{CStr, CString};
 
-/// The AOVs a film needs for [`denoise_film`] (name and kind): the albedo guide, the normal
-/// guide, and the emission seen directly, which the denoiser leaves alone.
-pub const GUIDE_AOVS: [(&str, AovKind); 3] =
-    [("denoising_albedo", AovKind::DenoisingAlbedo), ("normal", AovKind::ShNormal), ("emission", AovKind::Emission)];
-
-/// The channels `name.{suffixes}` of `film` as colours, if it has them.
-fn channel_image(film: &Film, name: &str, suffixes: [&str; 3]) -> Option<Vec<Rgb>> {
-    let channels = film.aov_channels();
+/// The channels `name.{suffixes}` of `channels` (a film's AOV channels) as colours, if there.
+fn channel_image(channels: &[super::output::Channel], name: &str, suffixes: [&str; 3]) -> Option<Vec<Rgb>> {
     let get = |s: &str| channels.iter().find(|(n, _)| *n == format!("{name}.{s}")).map(|(_, v)| v);
     let (x, y, z) = (get(suffixes[0])?, get(suffixes[1])?, get(suffixes[2])?);
     Some((0..x.len()).map(|i| Rgb::new(x[i], y[i], z[i])).collect())
 }
 
-/// Denoises `film`'s image, guided by its [`GUIDE_AOVS`] where it has them. The emission seen
+/// Denoises `image` (`film`'s pixel estimates), guided by the film's
+/// [`DENOISER_AOVS`](crate::integrator::aov::DENOISER_AOVS) where
+/// it has them. The emission seen
 /// directly (exact but for its edges' coverage) is taken out of what the denoiser sees, which
 /// would otherwise spread a bright light into the dark around it, and added back after: the
 /// result is `denoise(image − emission) + emission`.
-pub fn denoise_film(film: &Film) -> Result<Vec<Rgb>, String> {
-    let image = film.image();
-    let albedo = channel_image(film, "denoising_albedo", ["R", "G", "B"]);
-    let normal = channel_image(film, "normal", ["X", "Y", "Z"]);
+pub fn denoise_film(film: &Film, image: &[Rgb]) -> Result<Vec<Rgb>, String> {
+    let channels = film.aov_channels();
+    let albedo = channel_image(&channels, "denoising_albedo", ["R", "G", "B"]);
+    let normal = channel_image(&channels, "normal", ["X", "Y", "Z"]);
     let guides = match (&albedo, &normal) {
         (Some(albedo), Some(normal)) => Some(Guides { albedo, normal }),
         _ => None,
     };
-    let emission = channel_image(film, "emission", ["R", "G", "B"]);
+    let emission = channel_image(&channels, "emission", ["R", "G", "B"]);
     let scattered: Vec<Rgb> = match &emission {
         Some(e) => image.iter().zip(e).map(|(c, e)| (*c - *e).max(Rgb::ZERO)).collect(),
-        None => image,
+        None => image.to_vec(),
     };
     let mut out = denoise(&scattered, guides, film.width(), film.height())?;
     if let Some(e) = &emission {
@@ -149,7 +144,7 @@ pub fn denoise(color: &[Rgb], guides: Option<Guides>, width: u32, height: u32) -
 mod tests {
     use super::*;
     use crate::film::metrics::relmse;
-    use crate::integrator::aov::AovIntegrator;
+    use crate::integrator::aov::{AovIntegrator, DENOISER_AOVS};
     use crate::integrator::{AnyIntegrator, IntegratorKind};
     use crate::render::{render, RenderSettings};
     use std::sync::atomic::AtomicBool;
@@ -165,14 +160,14 @@ mod tests {
         let reference = crate::load::image::load_image(&root.join("references/cbox.exr"), true).unwrap().pixels;
         let never = AtomicBool::new(false);
         let path = AnyIntegrator::with_kind(IntegratorKind::Path, Default::default());
-        let guided = AovIntegrator::around(path.clone(), GUIDE_AOVS.iter().map(|(n, k)| (n.to_string(), *k)).collect());
+        let guided = AovIntegrator::around(path.clone(), DENOISER_AOVS.iter().map(|(n, k)| (n.to_string(), *k)).collect());
         let settings = |spp, seed| RenderSettings { spp, seed, filter: file.filter.clone(), ..Default::default() };
         let plain = render(&file.scene, path.camera().unwrap(), &settings(256, 7), &never).unwrap().film.image();
         let e256 = relmse(&plain, &reference);
         let mean = |im: &[Rgb]| im.iter().map(|c| (c.x + c.y + c.z) as f64).sum::<f64>();
         for seed in 0..3 {
             let film = render(&file.scene, &guided, &settings(16, seed), &never).unwrap().film;
-            let denoised = denoise_film(&film).unwrap();
+            let denoised = denoise_film(&film, &film.image()).unwrap();
             let (ed, e16) = (relmse(&denoised, &reference), relmse(&film.image(), &reference));
             assert!(ed < e256 && ed < e16 / 10.0, "seed {seed}: denoised 16 spp {ed}, noisy 16 spp {e16}, 256 spp {e256}");
             assert!((mean(&denoised) / mean(&reference) - 1.0).abs() < 0.01, "seed {seed}: the mean moved");

@@ -75,6 +75,11 @@ impl AovKind {
     }
 }
 
+/// The AOVs a denoiser is guided by (name and kind): the albedo guide, the normal guide, and
+/// the emission seen directly, which it leaves alone (`film::denoise::denoise_film`, `--denoise`).
+pub const DENOISER_AOVS: [(&str, AovKind); 3] =
+    [("denoising_albedo", AovKind::DenoisingAlbedo), ("normal", AovKind::ShNormal), ("emission", AovKind::Emission)];
+
 /// The AOV integrator.
 #[derive(Clone, Debug)]
 pub struct AovIntegrator {

@@ -307,8 +307,9 @@ pub fn render_from(
     if adaptive.is_some() && first_spp > first_sample {
         return Err(RenderError::Unsupported("adaptive sampling cannot continue a saved render".into()));
     }
-    // Which pixels still take samples (adaptive sampling); written between passes only.
-    let active: Vec<AtomicBool> = (0..width as usize * height as usize).map(|_| AtomicBool::new(true)).collect();
+    // Which pixels still take samples (adaptive sampling only); written between passes only.
+    let pixels = if adaptive.is_some() { width as usize * height as usize } else { 0 };
+    let active: Vec<AtomicBool> = (0..pixels).map(|_| AtomicBool::new(true)).collect();
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();

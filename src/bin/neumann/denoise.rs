@@ -4,7 +4,7 @@
 
 use crate::{usage, Failure};
 use neumann::film::Film;
-use neumann::integrator::aov::{AovIntegrator, AovKind};
+use neumann::integrator::aov::{AovIntegrator, DENOISER_AOVS};
 use neumann::integrator::{AnyIntegrator, IntegratorKind};
 use neumann::math::Rgb;
 
@@ -23,9 +23,7 @@ pub fn add_guides(integrator: &mut AnyIntegrator) -> Result<bool, Failure> {
     if integrator.camera().is_none() {
         return Ok(false);
     }
-    // The library's list (neumann::film::denoise::GUIDE_AOVS), which exists only with the feature.
-    let guides =
-        [("denoising_albedo", AovKind::DenoisingAlbedo), ("normal", AovKind::ShNormal), ("emission", AovKind::Emission)];
+    let guides = DENOISER_AOVS;
     let current = std::mem::replace(integrator, AnyIntegrator::with_kind(IntegratorKind::Path, Default::default()));
     *integrator = match current {
         AnyIntegrator::Aov(mut existing) => {
@@ -47,14 +45,14 @@ pub fn add_guides(integrator: &mut AnyIntegrator) -> Result<bool, Failure> {
     Ok(true)
 }
 
-/// The denoised image of `film` (`neumann::film::denoise::denoise_film`).
+/// `image` (`film`'s pixel estimates) denoised (`neumann::film::denoise::denoise_film`).
 #[cfg(feature = "oidn")]
-pub fn apply(film: &Film) -> Result<Vec<Rgb>, Failure> {
-    neumann::film::denoise::denoise_film(film).map_err(|e| Failure(1, e))
+pub fn apply(film: &Film, image: &[Rgb]) -> Result<Vec<Rgb>, Failure> {
+    neumann::film::denoise::denoise_film(film, image).map_err(|e| Failure(1, e))
 }
 
 /// Without the feature [`add_guides`] has refused `--denoise` already.
 #[cfg(not(feature = "oidn"))]
-pub fn apply(_film: &Film) -> Result<Vec<Rgb>, Failure> {
+pub fn apply(_film: &Film, _image: &[Rgb]) -> Result<Vec<Rgb>, Failure> {
     Err(usage(HOW.to_string()))
 }

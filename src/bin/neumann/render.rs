@@ -445,7 +445,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     let mut noisy = None;
     if a.denoise {
         let start = std::time::Instant::now();
-        let denoised = crate::denoise::apply(&out.film)?;
+        let denoised = crate::denoise::apply(&out.film, &image)?;
         noisy = Some(std::mem::replace(&mut image, denoised));
         say!("denoised with Open Image Denoise in {:.2} s", start.elapsed().as_secs_f64());
     }
