@@ -544,3 +544,29 @@ fn noise_threshold_renders_adaptively() {
         assert!(err.contains(says), "{flags:?}: {err}");
     }
 }
+
+/// glTF files render like Mitsuba scenes; `--camera` chooses among their cameras; the flags
+/// that do not apply to a format are usage errors.
+#[test]
+fn gltf_scenes_render_and_choose_their_camera() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/gltf_demo.gltf");
+    let out = temp("gltf.png");
+    let r = neumann().arg("render").arg(&scene).args(["--res", "24x16", "--spp", "2", "--camera", "view", "--quiet", "-o"]).arg(&out).output().unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("at 24x16") && stdout.contains("2 spp"), "{stdout}");
+    for (args, needle) in [
+        (vec!["--camera", "nope"], "--camera nope"),
+        (vec!["-Dres=4"], "-D res"),
+    ] {
+        let r = neumann().arg("render").arg(&scene).args(&args).args(["--quiet", "-o"]).arg(&out).output().unwrap();
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{err}");
+    }
+    let xml = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox.xml");
+    let r = neumann().arg("render").arg(&xml).args(["--camera", "0", "--quiet", "-o"]).arg(&out).output().unwrap();
+    assert_eq!(r.status.code(), Some(2), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = neumann().args(["render", "--camera", "0", "--quiet", "-o"]).arg(&out).output().unwrap();
+    assert_eq!(r.status.code(), Some(2), "the built-in scene has one camera: {}", String::from_utf8_lossy(&r.stderr));
+}

@@ -35,6 +35,7 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("obj", mesh_file),
     ("ply", mesh_file),
     ("serialized", mesh_file),
+    ("mesh", decoded_mesh),
     ("rectangle", rectangle),
     ("cube", cube),
     ("disk", disk),
@@ -68,6 +69,15 @@ fn mesh_file(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSou
     if !face_normals {
         mesh.compute_vertex_normals();
     }
+    mesh.flip_normals ^= flip;
+    Ok(Geometry::Mesh(mesh))
+}
+
+/// neumann's `mesh`: a mesh that a scene format decoded itself (glTF's primitives), named by
+/// `filename`, with its own normals (none: flat shading, as glTF asks), placed by `to_world`.
+fn decoded_mesh(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
+    let MeshFile { mut mesh, .. } = meshes.mesh(o, "filename")?;
+    mesh.transform(to_world);
     mesh.flip_normals ^= flip;
     Ok(Geometry::Mesh(mesh))
 }

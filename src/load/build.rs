@@ -21,6 +21,7 @@ use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
 use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
 use crate::load::image::load_image;
+use crate::load::memory::MemoryFiles;
 use crate::load::FileResolver;
 use crate::material::{bsdf_plugin, Bsdf, BsdfBuilder, Diffuse, BSDF_PLUGINS};
 use crate::math::spectrum::SpectrumKind;
@@ -69,6 +70,8 @@ pub struct Builder {
     time_limit: Option<std::time::Duration>,
     /// Where plugins' relative file names are looked for.
     resolver: FileResolver,
+    /// Meshes and images the scene's format decoded itself (glTF's).
+    memory: MemoryFiles,
 }
 
 impl Builder {
@@ -87,7 +90,14 @@ impl Builder {
             light_sampler: LightSamplerKind::default(),
             time_limit: None,
             resolver,
+            memory: MemoryFiles::default(),
         }
+    }
+
+    /// A builder whose plugins also find the meshes and images in `memory` (by name, before
+    /// files on disk).
+    pub fn with_memory(resolver: FileResolver, memory: MemoryFiles) -> Builder {
+        Builder { memory, ..Builder::new(resolver) }
     }
 
     /// Builds everything under `root` (a `<scene>`).
@@ -510,7 +520,19 @@ impl BsdfBuilder for Builder {
 
 impl ImageSource for Builder {
     fn image(&mut self, o: &Obj, name: &str, raw: bool) -> Result<Arc<Image>> {
-        let path = self.resolver.resolve(&o.string(name)?);
+        let file = o.string(name)?;
+        if !self.memory.images.is_empty() {
+            let key = (PathBuf::from(format!("#memory/{file}")), raw);
+            if let Some(i) = self.images.get(&key) {
+                return Ok(i.clone());
+            }
+            if let Some(img) = self.memory.image(&file, raw) {
+                let img = Arc::new(img);
+                self.images.insert(key, img.clone());
+                return Ok(img);
+            }
+        }
+        let path = self.resolver.resolve(&file);
         let key = (path.clone(), raw);
         if let Some(i) = self.images.get(&key) {
             return Ok(i.clone());
@@ -535,6 +557,13 @@ impl VolumeSource for Builder {
 
 impl MeshSource for Builder {
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile> {
+        if o.ty == "mesh" {
+            let file = o.string(name)?;
+            let mesh = self.memory.meshes.get(&file).cloned().ok_or_else(|| {
+                o.error_at(name, format!("no decoded mesh named '{file}' (the 'mesh' shape holds meshes a scene format decoded itself, such as glTF's)"))
+            })?;
+            return Ok(MeshFile { mesh, face_normals: false });
+        }
         let path = self.resolver.resolve(&o.string(name)?);
         let located = |e: crate::load::LoadError| o.error_at(name, e.to_string());
         match o.ty.as_str() {

@@ -3,6 +3,7 @@
 //! and environment maps.
 
 use super::{limits, LoadError};
+use crate::load::memory::{Channel, EncodedImage};
 use crate::math::color::srgb_decode;
 use crate::math::Rgb;
 use std::path::Path;
@@ -77,8 +78,15 @@ fn message(e: LoadError) -> String {
 
 fn load_png(path: &Path, raw: bool) -> Result<Image, String> {
     let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(message)?;
-    check_png(path, &bytes)?;
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(&bytes));
+    let decoded = decode_png(path, &bytes)?;
+    Ok(decoded.image(Channel::Rgb, raw))
+}
+
+/// A PNG's values as stored (grey replicated to RGB; alpha 1 where it has none), checked first
+/// ([`check_png`]); `path` names it in size-limit messages.
+fn decode_png(path: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
+    check_png(path, bytes)?;
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
     let mut buf = vec![0u8; reader.output_buffer_size().ok_or("PNG too large")?];
@@ -93,17 +101,40 @@ fn load_png(path: &Path, raw: bool) -> Result<Image, String> {
             buf[i] as f32 / 255.0
         }
     };
-    let decode = |v: f32| if raw { v } else { srgb_decode(v) };
-    let mut pixels = Vec::with_capacity((w * h) as usize);
+    let mut rgba = Vec::with_capacity((w * h) as usize);
     for p in 0..(w * h) as usize {
         let base = p * channels;
-        let c = match channels {
-            1 | 2 => Rgb::splat(decode(sample(base))),
-            _ => Rgb::new(decode(sample(base)), decode(sample(base + 1)), decode(sample(base + 2))),
-        };
-        pixels.push(c);
+        rgba.push(match channels {
+            1 => {
+                let v = sample(base);
+                [v, v, v, 1.0]
+            }
+            2 => [sample(base), sample(base), sample(base), sample(base + 1)],
+            3 => [sample(base), sample(base + 1), sample(base + 2), 1.0],
+            _ => [sample(base), sample(base + 1), sample(base + 2), sample(base + 3)],
+        });
     }
-    Ok(Image { width: w, height: h, pixels })
+    Ok(EncodedImage { width: w, height: h, rgba })
+}
+
+/// An 8- or 16-bit PNG or JPEG held in memory (glTF's images), as stored: sRGB values not yet
+/// decoded, with alpha. `name` names it in messages.
+pub fn decode_encoded(name: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
+    if bytes.starts_with(b"\x89PNG") {
+        return decode_png(name, bytes);
+    }
+    if !bytes.starts_with(&[0xFF, 0xD8]) {
+        return Err("not a PNG or JPEG image (the formats glTF allows)".into());
+    }
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+    reader.set_format(image::ImageFormat::Jpeg);
+    let (w, h) = reader.into_dimensions().map_err(|e| format!("not a readable JPEG: {e}"))?;
+    limits::check_image_size(name, w.into(), h.into()).map_err(message)?;
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+    reader.set_format(image::ImageFormat::Jpeg);
+    let decoded = reader.decode().map_err(|e| format!("not a readable JPEG: {e}"))?.to_rgba32f();
+    let rgba = decoded.pixels().map(|p| p.0).collect();
+    Ok(EncodedImage { width: decoded.width(), height: decoded.height(), rgba })
 }
 
 /// JPEG, BMP, TGA (8-bit, sRGB-encoded unless `raw`, as Mitsuba reads them) and Radiance HDR

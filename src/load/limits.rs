@@ -17,6 +17,8 @@ pub const MAX_IMAGE_PIXELS: u64 = 1 << 28;
 pub const MAX_INCLUDES: usize = 1024;
 /// Bytes of scene text (the main file and its includes) one scene may have: 1 GiB.
 pub const MAX_SCENE_BYTES: usize = 1 << 30;
+/// The most numbers one glTF accessor may hold (2²⁸: 1 GiB as f32 during loading).
+pub const MAX_ACCESSOR_VALUES: usize = 1 << 28;
 /// How deeply objects may nest in a scene file.
 pub const MAX_NESTING: usize = 128;
 

@@ -1,12 +1,14 @@
-//! Loading files, the top layer: scene formats (Mitsuba 3 XML, [`mitsuba`]), which construct
+//! Loading files, the top layer: scene formats (Mitsuba 3 XML, [`mitsuba`]; glTF 2.0, [`gltf`]), which construct
 //! scenes, integrators and render settings, and the files they name: Wavefront OBJ, Stanford
 //! PLY and Mitsuba serialized meshes, and images. Errors name the file, the line (for text formats) and what
 //! was expected.
 
 pub mod build;
 mod error;
+pub mod gltf;
 pub mod image;
 pub mod limits;
+pub mod memory;
 pub mod mitsuba;
 pub mod obj;
 pub mod overrides;
@@ -50,6 +52,36 @@ pub struct SceneFile {
     pub time_limit: Option<std::time::Duration>,
     /// Warnings: things that cannot change the image (`-D` parameters the scene never uses).
     pub warnings: Vec<String>,
+}
+
+/// What kind of scene file `path` is, by its extension: glTF (`.gltf`, `.glb`) or Mitsuba 3 XML
+/// (anything else).
+pub fn is_gltf(path: &Path) -> bool {
+    matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
+}
+
+/// Loads a scene file of any format neumann reads (by extension: glTF 2.0 `.gltf` / `.glb`,
+/// else Mitsuba 3 XML), with `-D` parameters (`defines`, Mitsuba only), settings from the command
+/// line, and the glTF camera to render (`camera`: a name or index).
+pub fn load_scene(
+    path: &Path,
+    defines: &[(String, String)],
+    settings: &overrides::Overrides,
+    camera: Option<&str>,
+) -> Result<SceneFile, crate::props::SceneError> {
+    use crate::props::SceneError;
+    if is_gltf(path) {
+        if let Some((name, _)) = defines.first() {
+            return Err(SceneError::new(format!("-D {name}: a glTF file has no parameters to set (-D is for Mitsuba scenes)")));
+        }
+        return gltf::load_gltf_file(path, settings, camera);
+    }
+    if let Some(c) = camera {
+        return Err(SceneError::new(format!(
+            "--camera {c}: choosing a camera is for glTF files (a Mitsuba scene has one sensor)"
+        )));
+    }
+    mitsuba::load_scene_file_with(path, defines, settings)
 }
 
 /// Loads a triangle mesh from an `.obj` or `.ply` file (by extension).

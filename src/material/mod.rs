@@ -145,7 +145,7 @@ impl Bsdf {
             Bsdf::Null => "null",
             Bsdf::TwoSided(_) => "twosided",
             Bsdf::Perturbed(p) => match p.perturbation {
-                Perturbation::NormalMap(_) => "normalmap",
+                Perturbation::NormalMap { .. } => "normalmap",
                 Perturbation::BumpMap { .. } => "bumpmap",
             },
         }
@@ -381,7 +381,7 @@ impl Bsdf {
             Bsdf::TwoSided(b) => distinct(b).iter().flat_map(|b| b.textures()).collect(),
             Bsdf::Perturbed(n) => {
                 let mut v = vec![match &n.perturbation {
-                    Perturbation::NormalMap(t) | Perturbation::BumpMap { height: t, .. } => t,
+                    Perturbation::NormalMap { map: t, .. } | Perturbation::BumpMap { height: t, .. } => t,
                 }];
                 v.extend(n.bsdf.textures());
                 v

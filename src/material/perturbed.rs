@@ -29,7 +29,13 @@ use crate::texture::Texture;
 #[derive(Clone, Debug)]
 pub enum Perturbation {
     /// Tangent-space normals, encoded as `(n + 1) / 2`.
-    NormalMap(Texture),
+    NormalMap {
+        /// The tangent-space normal, encoded as `(n + 1) / 2`.
+        map: Texture,
+        /// A factor on the normal's tangential components before it is normalized (glTF's
+        /// `normalTexture.scale`; 1 in Mitsuba).
+        scale: f32,
+    },
     /// A height field (a bitmap's luminance) times `scale`.
     BumpMap {
         /// The height field.
@@ -93,7 +99,10 @@ impl Perturbation {
     /// +z without a surface interaction to perturb).
     fn normal(&self, ctx: &BsdfContext) -> Vec3 {
         match self {
-            Perturbation::NormalMap(map) => ctx.eval(map) * 2.0 - Vec3::ONE,
+            Perturbation::NormalMap { map, scale } => {
+                let n = ctx.eval(map) * 2.0 - Vec3::ONE;
+                Vec3::new(n.x * scale, n.y * scale, n.z)
+            }
             Perturbation::BumpMap { height, scale } => {
                 let Some(si) = ctx.si else { return Vec3::Z };
                 let g = height.eval_scalar_grad(ctx.uv) * *scale;
@@ -165,13 +174,17 @@ impl Perturbed {
         Ok(Bsdf::Perturbed(Perturbed { perturbation, bsdf, flip_invalid_normals, shadowing }))
     }
 
-    /// Mitsuba's `normalmap`: `normalmap` (a texture, required) and the shared parameters.
+    /// Mitsuba's `normalmap`: `normalmap` (a texture, required), neumann's `scale` (1, glTF's
+    /// `normalTexture.scale`: a factor on the normal's tangential components) and the shared
+    /// parameters.
     pub fn normalmap_from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
         if !o.has("normalmap") {
             return Err(o.error("a normalmap needs its 'normalmap' texture (a bitmap read with raw = true)"));
         }
         let map = b.texture_of(o, "normalmap", Rgb::new(0.5, 0.5, 1.0), crate::math::spectrum::SpectrumKind::Unbounded)?;
-        Perturbed::from_props(Perturbation::NormalMap(map), o, b)
+        // neumann's `scale` (1): glTF's normalTexture.scale.
+        let scale = o.float_checked("scale", 1.0, f32::is_finite, "a number")?;
+        Perturbed::from_props(Perturbation::NormalMap { map, scale }, o, b)
     }
 
     /// Mitsuba's `bumpmap`: one nested (unnamed) bitmap texture, the height field; `scale` (1);
@@ -201,7 +214,7 @@ mod tests {
 
     fn map(n: Vec3, bsdf: Bsdf, shadowing: bool) -> Perturbed {
         Perturbed {
-            perturbation: Perturbation::NormalMap(((n.normalize() + Vec3::ONE) * 0.5).into()),
+            perturbation: Perturbation::NormalMap { map: ((n.normalize() + Vec3::ONE) * 0.5).into(), scale: 1.0 },
             bsdf: Arc::new(bsdf),
             flip_invalid_normals: true,
             shadowing,
@@ -221,7 +234,7 @@ mod tests {
             pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec(),
         });
         let height = Texture::Bitmap {
-            bitmap: Bitmap { image: ramp, filter: Filter::Bilinear, wrap: Wrap::Clamp },
+            bitmap: Bitmap { image: ramp, filter: Filter::Bilinear, wrap: [Wrap::Clamp; 2] },
             to_uv: glam::Mat3::IDENTITY,
         };
         // Slope of the height field along u: 0.25 per texel × 4 texels = 1, times scale 0.3.

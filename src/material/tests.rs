@@ -231,7 +231,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     v.push((
         "normalmap(diffuse)".into(),
         Bsdf::Perturbed(Perturbed {
-            perturbation: Perturbation::NormalMap(tilted(Vec3::new(0.4, -0.2, 1.0))),
+            perturbation: Perturbation::NormalMap { map: tilted(Vec3::new(0.4, -0.2, 1.0)), scale: 1.0 },
             bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7)))),
             flip_invalid_normals: true,
             shadowing: true,
@@ -240,7 +240,7 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
     v.push((
         "normalmap(roughconductor)".into(),
         Bsdf::Perturbed(Perturbed {
-            perturbation: Perturbation::NormalMap(tilted(Vec3::new(-0.3, 0.35, 1.0))),
+            perturbation: Perturbation::NormalMap { map: tilted(Vec3::new(-0.3, 0.35, 1.0)), scale: 1.0 },
             bsdf: Arc::new(rough_conductors().remove(1).1),
             flip_invalid_normals: true,
             shadowing: true,

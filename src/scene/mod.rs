@@ -488,7 +488,7 @@ mod tests {
                 bitmap: crate::texture::Bitmap {
                     image: std::sync::Arc::new(crate::image::Image { width: 1, height: 1, pixels: vec![Rgb::ONE] }),
                     filter: crate::texture::Filter::Bilinear,
-                    wrap: crate::texture::Wrap::Repeat,
+                    wrap: [crate::texture::Wrap::Repeat; 2],
                 },
                 to_uv: crate::math::Mat3::IDENTITY,
             };

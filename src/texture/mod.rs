@@ -2,7 +2,8 @@
 //!
 //! Mitsuba 3's plugins: `bitmap` (an image; bilinear or nearest filtering; repeat, mirror or
 //! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`),
-//! `rawconstant` and constant values. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
+//! `rawconstant` and constant values; pbrt-v4's `scale` (the product of two textures) and
+//! neumann's `threshold` (a step of a texture's value), which glTF's materials need. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
 //! Image convention (Mitsuba 3's, checked against it): uv (0, 0) is the *top-left* corner of the
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
@@ -41,8 +42,9 @@ pub struct Bitmap {
     pub image: Arc<Image>,
     /// Filtering.
     pub filter: Filter,
-    /// Wrapping.
-    pub wrap: Wrap,
+    /// Wrapping along u and along v (Mitsuba's `wrap_mode` sets both; glTF's samplers set
+    /// each).
+    pub wrap: [Wrap; 2],
 }
 
 /// A texture (closed set).
@@ -64,6 +66,17 @@ pub enum Texture {
         name: String,
         /// A factor on the value.
         scale: f32,
+    },
+    /// The product of two textures (pbrt-v4's `scale` texture: `tex` × `scale`; glTF's factors
+    /// times its textures times vertex colours).
+    Scale(Box<[Texture; 2]>),
+    /// 1 where the texture's scalar value (luminance) reaches `threshold`, else 0 (glTF's
+    /// `alphaMode` `MASK` with its `alphaCutoff`).
+    Threshold {
+        /// The thresholded texture.
+        texture: Box<Texture>,
+        /// The least value that gives 1.
+        threshold: f32,
     },
     /// Mitsuba's `checkerboard`: `color0` where the fractional parts of u and v (after `to_uv`)
     /// lie on the same side of 1/2, `color1` elsewhere; the colours are textures themselves,
@@ -102,7 +115,7 @@ impl From<Rgb> for Texture {
 impl Bitmap {
     fn texel(&self, x: i64, y: i64) -> Rgb {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
-        let wrap = |i: i64, n: i64| match self.wrap {
+        let wrap = |i: i64, n: i64, axis: usize| match self.wrap[axis] {
             Wrap::Repeat => i.rem_euclid(n),
             Wrap::Clamp => i.clamp(0, n - 1),
             Wrap::Mirror => {
@@ -115,7 +128,7 @@ impl Bitmap {
             }
         };
         // Row 0 of the image is its top: v = 0.
-        self.image.get(wrap(x, w), wrap(y, h))
+        self.image.get(wrap(x, w, 0), wrap(y, h, 1))
     }
 
     /// The bilinear cell holding `uv`: the texel whose centre is its lower corner, and `uv`'s
@@ -163,6 +176,10 @@ impl Texture {
             }
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
+            Texture::Scale(t) => t[0].eval_at(uv, mesh) * t[1].eval_at(uv, mesh),
+            Texture::Threshold { texture, threshold } => {
+                Rgb::splat(if texture.eval_scalar(uv, mesh) >= *threshold { 1.0 } else { 0.0 })
+            }
             Texture::Checkerboard { color0, color1, to_uv } => {
                 if Texture::checker_cell0(to_uv, uv) {
                     color0.eval_at(uv, mesh)
@@ -220,6 +237,12 @@ impl Texture {
                 bitmap.image.pixels.iter().copied().sum::<Rgb>() / bitmap.image.pixels.len().max(1) as f32
             }
             Texture::Checkerboard { color0, color1, .. } => 0.5 * (color0.mean() + color1.mean()),
+            // Exact when the two are independent (a factor times a texture); an estimate for
+            // sampling weights otherwise.
+            Texture::Scale(t) => t[0].mean() * t[1].mean(),
+            Texture::Threshold { texture, threshold } => {
+                Rgb::splat(if crate::math::luminance(texture.mean()) >= *threshold { 1.0 } else { 0.0 })
+            }
             // Unknown without the mesh: an estimate for sampling weights only.
             Texture::MeshAttribute { scale, .. } => Rgb::splat(0.5 * scale),
         }
@@ -232,7 +255,22 @@ impl Texture {
             Texture::Constant(c) => ok(*c),
             Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
             Texture::Checkerboard { color0, color1, .. } => color0.is_reflectance() && color1.is_reflectance(),
-            Texture::MeshAttribute { .. } => true,
+            Texture::MeshAttribute { .. } | Texture::Threshold { .. } => true,
+            Texture::Scale(t) => {
+                let bound = |t: &Texture| match t {
+                    Texture::Constant(c) => c.max_element(),
+                    Texture::Bitmap { bitmap, .. } => {
+                        bitmap.image.pixels.iter().map(|c| c.max_element()).fold(0.0, f32::max)
+                    }
+                    Texture::Threshold { .. } | Texture::MeshAttribute { .. } => 1.0,
+                    _ => f32::INFINITY,
+                };
+                let non_negative = |t: &Texture| match t {
+                    Texture::Constant(c) => c.min_element() >= 0.0,
+                    _ => t.is_reflectance(),
+                };
+                non_negative(&t[0]) && non_negative(&t[1]) && bound(&t[0]) * bound(&t[1]) <= 1.0
+            }
         }
     }
 }
@@ -281,6 +319,8 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("rawconstant", rawconstant_from_props),
         ("srgb", srgb_from_props),
         ("mesh_attribute", mesh_attribute_from_props),
+        ("scale", scale_from_props),
+        ("threshold", threshold_from_props),
     ];
 
 /// The constructor of the texture plugin `name`.
@@ -314,7 +354,43 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
         "mirror" => Wrap::Mirror,
         _ => Wrap::Clamp,
     };
+    // neumann's `wrap_mode_u` / `wrap_mode_v` set one axis each (glTF samplers do).
+    let axis = |name: &str| -> PropResult<Wrap> {
+        if !o.has(name) {
+            return Ok(wrap);
+        }
+        Ok(match o.choice(name, &["repeat", "mirror", "clamp"])?.as_str() {
+            "repeat" => Wrap::Repeat,
+            "mirror" => Wrap::Mirror,
+            _ => Wrap::Clamp,
+        })
+    };
+    let wrap = [axis("wrap_mode_u")?, axis("wrap_mode_v")?];
     Ok(Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? })
+}
+
+/// pbrt-v4's `scale`: `tex` (1) times `scale` (1), both texturable; their product. glTF's
+/// materials use it for factor × texture × vertex colour.
+fn scale_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    let kind = SpectrumKind::Unbounded;
+    let tex = b.texture_of(o, "tex", Rgb::ONE, kind)?;
+    let scale = b.texture_of(o, "scale", Rgb::ONE, kind)?;
+    Ok(match (tex, scale) {
+        (Texture::Constant(a), Texture::Constant(b)) => Texture::Constant(a * b),
+        (t, s) => Texture::Scale(Box::new([t, s])),
+    })
+}
+
+/// neumann's `threshold`: 1 where the texture `tex` (required) as a scalar reaches `threshold`
+/// (0.5), else 0 (glTF's `alphaMode` `MASK` with `alphaCutoff`, as rasterizers apply it: after
+/// filtering).
+fn threshold_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    if !o.has("tex") {
+        return Err(o.error("a threshold texture needs its 'tex'"));
+    }
+    let texture = Box::new(b.texture_of(o, "tex", Rgb::ONE, SpectrumKind::Unbounded)?);
+    let threshold = o.float_checked("threshold", 0.5, f32::is_finite, "a number")?;
+    Ok(Texture::Threshold { texture, threshold })
 }
 
 /// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`.
@@ -344,6 +420,12 @@ impl Texture {
                 v.extend(color1.mesh_attributes());
                 v
             }
+            Texture::Scale(t) => {
+                let mut v = t[0].mesh_attributes();
+                v.extend(t[1].mesh_attributes());
+                v
+            }
+            Texture::Threshold { texture, .. } => texture.mesh_attributes(),
             _ => Vec::new(),
         }
     }
@@ -393,25 +475,25 @@ mod tests {
     fn bitmap_gradients() {
         let ramp = Arc::new(Image { width: 4, height: 1, pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec() });
         let to_uv = Mat3::from_scale(Vec2::new(2.0, 3.0));
-        let bilinear = Texture::Bitmap { bitmap: Bitmap { image: ramp.clone(), filter: Filter::Bilinear, wrap: Wrap::Clamp }, to_uv };
+        let bilinear = Texture::Bitmap { bitmap: Bitmap { image: ramp.clone(), filter: Filter::Bilinear, wrap: [Wrap::Clamp; 2] }, to_uv };
         let g = bilinear.eval_scalar_grad(Vec2::new(0.25, 0.1));
         assert!((g - Vec2::new(2.0, 0.0)).length() < 1e-5, "{g}");
-        let nearest = Texture::Bitmap { bitmap: Bitmap { image: ramp, filter: Filter::Nearest, wrap: Wrap::Clamp }, to_uv };
+        let nearest = Texture::Bitmap { bitmap: Bitmap { image: ramp, filter: Filter::Nearest, wrap: [Wrap::Clamp; 2] }, to_uv };
         assert_eq!(nearest.eval_scalar_grad(Vec2::new(0.25, 0.1)), Vec2::ZERO);
         assert_eq!(Texture::Constant(Rgb::ONE).eval_scalar_grad(Vec2::ZERO), Vec2::ZERO);
     }
 
     #[test]
     fn bitmap_orientation_filtering_and_wrapping() {
-        let nearest = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Repeat };
+        let nearest = Bitmap { image: image(), filter: Filter::Nearest, wrap: [Wrap::Repeat; 2] };
         assert_eq!(nearest.eval(Vec2::new(0.25, 0.25)), Rgb::X, "top-left texel at v near 0");
         assert_eq!(nearest.eval(Vec2::new(0.25, 0.75)), Rgb::Z, "bottom-left texel at v near 1");
         assert_eq!(nearest.eval(Vec2::new(1.25, -0.25)), Rgb::Z, "repeat");
-        let bilinear = Bitmap { image: image(), filter: Filter::Bilinear, wrap: Wrap::Clamp };
+        let bilinear = Bitmap { image: image(), filter: Filter::Bilinear, wrap: [Wrap::Clamp; 2] };
         assert_eq!(bilinear.eval(Vec2::new(0.25, 0.25)), Rgb::X, "texel centres are exact");
         let mid = bilinear.eval(Vec2::new(0.5, 0.5));
         assert!((mid - Rgb::new(0.5, 0.5, 0.5)).abs().max_element() < 1e-6, "{mid}");
-        let mirror = Bitmap { image: image(), filter: Filter::Nearest, wrap: Wrap::Mirror };
+        let mirror = Bitmap { image: image(), filter: Filter::Nearest, wrap: [Wrap::Mirror; 2] };
         assert_eq!(mirror.eval(Vec2::new(1.25, 0.25)), Rgb::Y, "mirrored copy");
     }
 

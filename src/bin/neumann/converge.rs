@@ -66,7 +66,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
     let mut job = if scene_arg == "cbox" {
         builtin_job(&scene_arg, &defines)?
     } else {
-        file_job(std::path::Path::new(&scene_arg), &defines, &Default::default())?
+        file_job(std::path::Path::new(&scene_arg), &defines, &Default::default(), None)?
     };
     // The reference, read first: its size is the renders' unless --res says otherwise.
     let reference_image = match &a.reference {

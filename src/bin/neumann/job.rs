@@ -4,7 +4,7 @@
 use crate::{usage, Failure};
 use neumann::film::filter::Filter;
 use neumann::integrator::{AnyIntegrator, PathIntegrator};
-use neumann::load::mitsuba::load_scene_file_with;
+use neumann::load::load_scene;
 use neumann::load::overrides::Overrides;
 use neumann::load::SceneFile;
 use neumann::sampling::sampler::SamplerKind;
@@ -82,15 +82,18 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
     Ok(Job { name: name.to_string(), file })
 }
 
-/// A Mitsuba XML scene file, with command-line flags as `overrides` of its objects. A problem
-/// with a flag is a usage error (exit 2), one in the file exit 1.
+/// A scene file (Mitsuba XML or glTF), with command-line flags as `overrides` of its objects and
+/// the glTF `camera` to render. A problem with a flag is a usage error (exit 2), one in the
+/// file exit 1.
 pub fn file_job(
     path: &std::path::Path,
     defines: &[(String, String)],
     overrides: &Overrides,
+    camera: Option<&str>,
 ) -> Result<Job, Failure> {
-    let file = load_scene_file_with(path, defines, overrides).map_err(|e| {
-        let from_flag = e.loc.as_ref().is_some_and(|l| l.file.path.as_os_str() == "command line");
+    let file = load_scene(path, defines, overrides, camera).map_err(|e| {
+        let flag_problem = e.loc.is_none() && (e.message.starts_with("--camera") || e.message.starts_with("-D "));
+        let from_flag = flag_problem || e.loc.as_ref().is_some_and(|l| l.file.path.as_os_str() == "command line");
         Failure(if from_flag { 2 } else { 1 }, e.to_string())
     })?;
     for w in &file.warnings {

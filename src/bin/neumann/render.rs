@@ -17,8 +17,13 @@ use std::time::Duration;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// Scene to render: a Mitsuba 3 XML file, or a built-in scene name (cbox, the default).
+    /// Scene to render: a Mitsuba 3 XML file, a glTF 2.0 file (.gltf, .glb), or a built-in
+    /// scene name (cbox, the default).
     scene: Option<String>,
+    /// glTF: the camera to render, by name or index in the file's cameras (or the name of the
+    /// node holding it); default: the first, or one framing the scene if the file has none.
+    #[arg(long, value_name = "NAME|INDEX")]
+    camera: Option<String>,
     /// Output image; the extension picks the format (default: <scene>.png).
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -205,12 +210,19 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         return Err(usage("--spp must be at least 1".into()));
     }
     let mut job = if builtin {
+        if let Some(c) = &a.camera {
+            return Err(usage(format!("--camera {c}: choosing a camera is for glTF files (the built-in scene has one)")));
+        }
         let mut job = builtin_job(&scene_arg, &defines)?;
         apply_builtin_flags(&mut job, &a)?;
         job
-    } else if scene_arg.to_ascii_lowercase().ends_with(".xml") || std::path::Path::new(&scene_arg).exists() {
+    } else if scene_arg.to_ascii_lowercase().ends_with(".xml")
+        || neumann::load::is_gltf(std::path::Path::new(&scene_arg))
+        || std::path::Path::new(&scene_arg).exists()
+    {
         // A scene file: the flags become parameters of its objects, validated by the plugins.
-        let mut job = file_job(std::path::Path::new(&scene_arg), &defines, &flag_overrides(&a)?)?;
+        let path = std::path::Path::new(&scene_arg);
+        let mut job = file_job(path, &defines, &flag_overrides(&a)?, a.camera.as_deref())?;
         select_integrator(&mut job.file.integrator, &a)?;
         if a.res.is_some() {
             job.file.window = None;
@@ -219,7 +231,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     } else {
         return Err(Failure(
             1,
-            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml scene file or a built-in scene name (cbox)"),
+            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml or glTF (.gltf, .glb) scene file or a built-in scene name (cbox)"),
         ));
     };
     if job.file.scene.has_media() && !job.file.integrator.kind().renders_media() {
