@@ -67,6 +67,15 @@ pub enum Texture {
         /// A factor on the value.
         scale: f32,
     },
+    /// A texture looked up at texture coordinates read from a mesh attribute instead of the
+    /// surface's uv (glTF's second and later `TEXCOORD_n` sets, kept as the attributes
+    /// `vertex_texcoordN`); the surface's uv where there is no mesh.
+    AttributeUv {
+        /// The attribute holding (u, v, 0) per vertex.
+        attribute: String,
+        /// The texture.
+        texture: Box<Texture>,
+    },
     /// The product of two textures (pbrt-v4's `scale` texture: `tex` × `scale`; glTF's factors
     /// times its textures times vertex colours).
     Scale(Box<[Texture; 2]>),
@@ -104,6 +113,12 @@ impl Texture {
         let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
         (fu > 0.5) == (fv > 0.5)
     }
+}
+
+/// The texture coordinates the mesh attribute `attribute` holds at `mesh` (its x and y), or `uv`.
+#[inline]
+fn attribute_uv(attribute: &str, uv: Vec2, mesh: Option<&MeshPoint>) -> Vec2 {
+    mesh.and_then(|m| m.attribute(attribute)).map_or(uv, |v| Vec2::new(v.x, v.y))
 }
 
 impl From<Rgb> for Texture {
@@ -177,6 +192,7 @@ impl Texture {
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
             Texture::Scale(t) => t[0].eval_at(uv, mesh) * t[1].eval_at(uv, mesh),
+            Texture::AttributeUv { attribute, texture } => texture.eval_at(attribute_uv(attribute, uv, mesh), mesh),
             Texture::Threshold { texture, threshold } => {
                 Rgb::splat(if texture.eval_scalar(uv, mesh) >= *threshold { 1.0 } else { 0.0 })
             }
@@ -205,6 +221,7 @@ impl Texture {
                     color0.eval_scalar(uv, mesh)
                 }
             }
+            Texture::AttributeUv { attribute, texture } => texture.eval_scalar(attribute_uv(attribute, uv, mesh), mesh),
             t => crate::math::luminance(t.eval_at(uv, mesh)),
         }
     }
@@ -240,6 +257,7 @@ impl Texture {
             // Exact when the two are independent (a factor times a texture); an estimate for
             // sampling weights otherwise.
             Texture::Scale(t) => t[0].mean() * t[1].mean(),
+            Texture::AttributeUv { texture, .. } => texture.mean(),
             Texture::Threshold { texture, threshold } => {
                 Rgb::splat(if crate::math::luminance(texture.mean()) >= *threshold { 1.0 } else { 0.0 })
             }
@@ -256,6 +274,7 @@ impl Texture {
             Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
             Texture::Checkerboard { color0, color1, .. } => color0.is_reflectance() && color1.is_reflectance(),
             Texture::MeshAttribute { .. } | Texture::Threshold { .. } => true,
+            Texture::AttributeUv { texture, .. } => texture.is_reflectance(),
             Texture::Scale(t) => {
                 let bound = |t: &Texture| match t {
                     Texture::Constant(c) => c.max_element(),
@@ -339,7 +358,9 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 }
 
 /// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
-/// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`.
+/// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`; neumann's
+/// `wrap_mode_u` / `wrap_mode_v` (one axis each) and `uv_attribute` (look up at the texture
+/// coordinates of that per-vertex mesh attribute).
 fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Texture> {
     let raw = o.bool("raw", false)?;
     // Mitsuba's `accel` (hardware texture lookups on GPUs) changes no value.
@@ -366,7 +387,13 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
         })
     };
     let wrap = [axis("wrap_mode_u")?, axis("wrap_mode_v")?];
-    Ok(Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? })
+    let texture = Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? };
+    // neumann's `uv_attribute`: texture coordinates from a mesh attribute (glTF's TEXCOORD_1…).
+    Ok(match o.string_opt("uv_attribute")? {
+        None => texture,
+        Some(attribute) if attribute.starts_with("vertex_") => Texture::AttributeUv { attribute, texture: Box::new(texture) },
+        Some(a) => return Err(o.error_at("uv_attribute", format!("a uv attribute is per vertex ('vertex_…'), got '{a}'"))),
+    })
 }
 
 /// pbrt-v4's `scale`: `tex` (1) times `scale` (1), both texturable; their product. glTF's
@@ -426,6 +453,11 @@ impl Texture {
                 v
             }
             Texture::Threshold { texture, .. } => texture.mesh_attributes(),
+            Texture::AttributeUv { attribute, texture } => {
+                let mut v = texture.mesh_attributes();
+                v.push(attribute.as_str());
+                v
+            }
             _ => Vec::new(),
         }
     }

@@ -5,7 +5,9 @@
 //!   channel; `roughness` = `roughnessFactor` × its green channel (both renderers square it);
 //!   `KHR_materials_ior` → `eta`; `KHR_materials_specular` → `specular` = F0 / 0.08 with
 //!   F0 = ((ior − 1)/(ior + 1))² × `specularFactor` × max(`specularColorFactor`);
-//!   `KHR_materials_transmission` → `spec_trans` (× the texture's red channel);
+//!   `KHR_materials_transmission` → `spec_trans` (× the texture's red channel), on
+//!   `principledthin` when the material has no volume (glTF's transmission is thin-walled
+//!   then: light passes straight through; no metallic or clearcoat lobes there, a warning);
 //!   `KHR_materials_clearcoat` → `clearcoat` (× red) and `clearcoat_gloss` chosen so that the
 //!   coat's GGX α = roughness² (α ≥ 0.001, the principled coat's range: roughness ≤ 0.316);
 //!   `KHR_materials_sheen` → `sheen` = max(`sheenColorFactor`) (the principled sheen is white or
@@ -124,21 +126,18 @@ impl Translator<'_> {
         out
     }
 
-    /// The texture-coordinate set a material's textures use (0 without textures): neumann
-    /// keeps one set per mesh, so textures that need different sets are an error.
-    pub(super) fn uv_set(&self, m: &gltf::Material) -> Result<u32> {
+    /// The texture-coordinate sets a material's textures use: the mesh's uv set and the others,
+    /// which the mesh keeps as `vertex_texcoordN` attributes. The mesh's set is the emissive
+    /// texture's (area emitters look up the surface's uv only), else the normal map's (it also
+    /// orients the shading frame), else the first texture's, 0 without textures.
+    pub(super) fn uv_sets(&self, m: &gltf::Material) -> (u32, Vec<u32>) {
         let refs = self.texture_refs(m.index());
-        let Some(first) = refs.first() else { return Ok(0) };
-        if let Some(other) = refs.iter().find(|r| r.tex_coord != first.tex_coord) {
-            return Err(self.src.err(
-                &other.path,
-                format!(
-                    "this texture reads TEXCOORD_{} and {} reads TEXCOORD_{}: neumann supports one texture-coordinate set per material",
-                    other.tex_coord, first.path, first.tex_coord
-                ),
-            ));
-        }
-        Ok(first.tex_coord)
+        let find = |suffix: &str| refs.iter().find(|r| r.path.ends_with(suffix));
+        let primary = find("emissiveTexture").or(find("normalTexture")).or(refs.first()).map_or(0, |r| r.tex_coord);
+        let mut others: Vec<u32> = refs.iter().map(|r| r.tex_coord).filter(|&t| t != primary).collect();
+        others.sort_unstable();
+        others.dedup();
+        (primary, others)
     }
 
     /// A `texture` object of type `ty` at `path`.
@@ -190,6 +189,9 @@ impl Translator<'_> {
             None => name,
         };
         self.set(&mut o, "filename", Value::String(file), &r.path);
+        if r.tex_coord != self.primary_uv {
+            self.set(&mut o, "uv_attribute", Value::String(format!("vertex_texcoord{}", r.tex_coord)), &r.path);
+        }
         self.set(&mut o, "raw", Value::Bool(raw || channel.is_some()), &r.path);
         let sampler = tex.sampler();
         let spath = sampler.index().map_or(r.path.clone(), |i| format!("samplers[{i}]"));
@@ -268,6 +270,7 @@ impl Translator<'_> {
         if let Some(b) = self.materials.get(&key) {
             return Ok(b.clone());
         }
+        self.primary_uv = uv_set;
         let built = self.build_material(m, vertex_color)?;
         self.materials.insert(key, built.clone());
         Ok(built)
@@ -279,7 +282,13 @@ impl Translator<'_> {
         let tex = |rel: &str, p: &str| TexRef::from_json(json.pointer(rel), format!("{path}.{p}"));
         let number = |ptr: &str, default: f64| json.pointer(ptr).and_then(|v| v.as_f64()).unwrap_or(default) as f32;
         let pbr = m.pbr_metallic_roughness();
-        let mut p = self.obj("bsdf", "principled", &path);
+        // Transmission without a volume is thin-walled in glTF (light passes straight through):
+        // Mitsuba's `principledthin`; with a volume it refracts into it: `principled`.
+        let transmission = number("/extensions/KHR_materials_transmission/transmissionFactor", 0.0);
+        let transmissive = transmission > 0.0;
+        let thick = number("/extensions/KHR_materials_volume/thicknessFactor", 0.0) > 0.0;
+        let thin = transmissive && !thick;
+        let mut p = self.obj("bsdf", if thin { "principledthin" } else { "principled" }, &path);
         // Base colour.
         let [r, g, b, alpha] = pbr.base_color_factor();
         let base_tex = match tex("/pbrMetallicRoughness/baseColorTexture", "pbrMetallicRoughness.baseColorTexture") {
@@ -293,19 +302,24 @@ impl Translator<'_> {
             || tex("/pbrMetallicRoughness/metallicRoughnessTexture", "pbrMetallicRoughness.metallicRoughnessTexture");
         let mpath = format!("{path}.pbrMetallicRoughness.metallicFactor");
         if let Some(v) = self.scalar(pbr.metallic_factor(), mr(), "b", &mpath)? {
-            self.set(&mut p, "metallic", v, &mpath);
+            if thin {
+                self.warn(
+                    &mpath,
+                    "a thin-walled transmissive material has no metallic lobe in neumann (principledthin): ignored",
+                );
+            } else {
+                self.set(&mut p, "metallic", v, &mpath);
+            }
         }
         let rpath = format!("{path}.pbrMetallicRoughness.roughnessFactor");
         let rough = self.scalar(pbr.roughness_factor(), mr(), "g", &rpath)?.unwrap_or(Value::Float(0.0));
         self.set(&mut p, "roughness", rough, &rpath);
         // Transmission.
-        let transmission = number("/extensions/KHR_materials_transmission/transmissionFactor", 0.0);
         let ttex = tex(
             "/extensions/KHR_materials_transmission/transmissionTexture",
             "extensions.KHR_materials_transmission.transmissionTexture",
         );
         let tpath = format!("{path}.extensions.KHR_materials_transmission");
-        let transmissive = transmission > 0.0;
         if let Some(v) = self.scalar(transmission, ttex, "r", &tpath)? {
             self.set(&mut p, "spec_trans", v, &tpath);
         }
@@ -328,7 +342,7 @@ impl Translator<'_> {
             if s.get("specularTexture").is_some() || s.get("specularColorTexture").is_some() {
                 self.warn(&spath, "the specular textures are not applied (their factors are)");
             }
-        } else if m.ior().is_some() {
+        } else if m.ior().is_some() || thin {
             self.set(&mut p, "eta", Value::Float(ior.max(1.0001) as f64), &ipath);
         }
         // Clearcoat.
@@ -338,7 +352,11 @@ impl Translator<'_> {
             "/extensions/KHR_materials_clearcoat/clearcoatTexture",
             "extensions.KHR_materials_clearcoat.clearcoatTexture",
         );
-        if let Some(v) = self.scalar(coat, ctex, "r", &cc)? {
+        let coat_value = self.scalar(coat, ctex, "r", &cc)?;
+        if coat_value.is_some() && thin {
+            self.warn(&cc, "a thin-walled transmissive material has no clearcoat in neumann (principledthin): ignored");
+        }
+        if let Some(v) = coat_value.filter(|_| !thin) {
             self.set(&mut p, "clearcoat", v, &cc);
             let rough = number("/extensions/KHR_materials_clearcoat/clearcoatRoughnessFactor", 0.0);
             let gloss = ((0.1 - rough * rough) / 0.099).clamp(0.0, 1.0);

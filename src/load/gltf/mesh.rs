@@ -39,10 +39,10 @@ impl Translator<'_> {
                 continue;
             }
             let material = p.material();
-            let uv_set = self.uv_set(&material)?;
+            let (uv_set, other_sets) = self.uv_sets(&material);
             let name = if posed { format!("{path}@{node_path}") } else { path.clone() };
             if !self.memory.meshes.contains_key(&name) {
-                let Some(mut tri) = self.primitive(&p, &path, uv_set, &weights)? else { continue };
+                let Some(mut tri) = self.primitive(&p, &path, (uv_set, &other_sets), &weights)? else { continue };
                 if let Some(j) = &joints {
                     self.skin_mesh(&p, &path, &mut tri, j)?;
                 }
@@ -79,7 +79,7 @@ impl Translator<'_> {
         &mut self,
         p: &gltf::Primitive,
         path: &str,
-        uv_set: u32,
+        (uv_set, other_sets): (u32, &[u32]),
         weights: &[f32],
     ) -> Result<Option<TriangleMesh>> {
         let (src, buffers) = (self.src, self.buffers);
@@ -138,6 +138,21 @@ impl Translator<'_> {
             }
             None => Vec::new(),
         };
+        let mut extra_uvs = Vec::new();
+        for &set in other_sets {
+            let a = p.get(&Semantic::TexCoords(set)).ok_or_else(|| {
+                src.err(
+                    &format!("{path}.attributes"),
+                    format!("the material's textures read TEXCOORD_{set}, which the primitive lacks"),
+                )
+            })?;
+            same_count(&a, "TEXCOORD")?;
+            let values = read_vectors::<2>(src, buffers, &a, "TEXCOORD")?
+                .into_iter()
+                .map(|[u, v]| Vec3::new(u, v, 0.0))
+                .collect();
+            extra_uvs.push(MeshAttribute { name: format!("vertex_texcoord{set}"), per_face: false, values });
+        }
         let colors = match p.get(&Semantic::Colors(0)) {
             Some(a) => {
                 same_count(&a, "COLOR_0")?;
@@ -183,6 +198,7 @@ impl Translator<'_> {
         if let Some(values) = colors {
             mesh.attributes.push(MeshAttribute { name: "vertex_color".into(), per_face: false, values });
         }
+        mesh.attributes.extend(extra_uvs);
         Ok(Some(mesh))
     }
 

@@ -237,6 +237,9 @@ struct Translator<'a> {
     has_media: bool,
     /// Whether any material emits.
     has_emission: bool,
+    /// The texture-coordinate set of the meshes of the material being built (textures on other
+    /// sets read them from mesh attributes).
+    primary_uv: u32,
 }
 
 impl<'a> Translator<'a> {
@@ -262,6 +265,7 @@ impl<'a> Translator<'a> {
             materials: HashMap::new(),
             has_media: false,
             has_emission: false,
+            primary_uv: 0,
         }
     }
 
@@ -593,7 +597,10 @@ impl<'a> Translator<'a> {
         let dir = Vec3::new(0.0, 0.35, 1.0).normalize();
         let origin = center + dir * distance;
         let look = Transform::look_at(origin, center, Vec3::Y).filter(|_| origin.is_finite()).ok_or_else(|| {
-            self.src.err("", format!("cannot frame the scene with a default camera: its bounds (radius {radius}) are too large"))
+            self.src.err(
+                "",
+                format!("cannot frame the scene with a default camera: its bounds (radius {radius}) are too large"),
+            )
         })?;
         let mut o = self.obj("sensor", "perspective", "");
         self.set(&mut o, "fov", Value::Float(fov as f64), "");

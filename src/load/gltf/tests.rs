@@ -562,6 +562,17 @@ fn transmission_volume_and_the_other_lobes() {
     // The volume: σ = −ln(colour) / distance, rendered by the volumetric path tracer.
     assert_eq!(f.integrator.kind(), crate::integrator::IntegratorKind::Volpath);
     assert_eq!(f.scene.media().len(), 1);
+    // Transmission without a volume is thin-walled: principledthin.
+    let mut w = Writer::default();
+    let doc = quad_doc(
+        &mut w,
+        json!([{"extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}}}]),
+        json!({}),
+    );
+    let f = load_text(&dir, &w.gltf(doc)).unwrap();
+    let (names, _) = layers(&f);
+    assert_eq!(names, ["principledthin"]);
+    assert!(f.warnings.iter().any(|w| w.contains("no metallic lobe")), "glTF's default metallic is 1: {:?}", f.warnings);
     // KHR_materials_specular: F0 = 0.04 × 0.5 → specular 0.25 (η 1.5 without an ior).
     let mut w = Writer::default();
     let doc = quad_doc(&mut w, json!([{"extensions": {"KHR_materials_specular": {"specularFactor": 0.5}}}]), json!({}));
@@ -764,4 +775,42 @@ fn inconsistent_documents_are_errors() {
         let e = err_text(&dir, &text);
         assert!(e.contains(needle), "{doc}: {e}");
     }
+}
+
+#[test]
+fn textures_on_a_second_texture_coordinate_set() {
+    let dir = tmp("uv1");
+    let mut w = Writer::default();
+    // 2 × 1: left texel black, right texel white (sRGB 255 → 1).
+    let png = png_rgba(2, 1, &[[0, 0, 0, 255], [255, 255, 255, 255]]);
+    let img = w.bytes(&png);
+    let p = w.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0], "VEC3");
+    let uv0 = w.floats(&[0.1, 0.5, 0.1, 0.5, 0.1, 0.5], "VEC2");
+    let uv1 = w.floats(&[0.9, 0.5, 0.9, 0.5, 0.9, 0.5], "VEC2");
+    let doc = json!({
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": p, "TEXCOORD_0": uv0, "TEXCOORD_1": uv1}, "material": 0}]}],
+        "materials": [{
+            "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}},
+            "emissiveFactor": [1.0, 1.0, 1.0],
+            "emissiveTexture": {"index": 0, "texCoord": 1}
+        }],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9728}],
+        "images": [{"bufferView": img, "mimeType": "image/png"}]
+    });
+    let f = load_text(&dir, &w.gltf(doc)).unwrap();
+    let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!() };
+    // The emissive texture's set is the mesh's uv (emitters read no attributes); TEXCOORD_0
+    // becomes an attribute.
+    assert_eq!(m.uvs[0], Vec2::new(0.9, 0.5));
+    assert_eq!(m.attributes[0].name, "vertex_texcoord0");
+    let point = crate::geometry::mesh::MeshPoint { mesh: m, tri: 0, bary: Vec2::splat(0.3) };
+    let Light::Area { radiance, .. } = &f.scene.lights()[0] else { panic!() };
+    // The emission reads TEXCOORD_1 (white), the base colour TEXCOORD_0 (black).
+    assert_eq!(radiance.eval(m.uvs[0]), Rgb::ONE);
+    let (_, inner) = layers(&f);
+    let Bsdf::Principled(pr) = inner else { unreachable!() };
+    assert_eq!(pr.base_color.eval_at(m.uvs[0], Some(&point)), Rgb::ZERO);
 }
