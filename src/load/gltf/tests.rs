@@ -572,7 +572,11 @@ fn transmission_volume_and_the_other_lobes() {
     let f = load_text(&dir, &w.gltf(doc)).unwrap();
     let (names, _) = layers(&f);
     assert_eq!(names, ["principledthin"]);
-    assert!(f.warnings.iter().any(|w| w.contains("no metallic lobe")), "glTF's default metallic is 1: {:?}", f.warnings);
+    assert!(
+        f.warnings.iter().any(|w| w.contains("no metallic lobe")),
+        "glTF's default metallic is 1: {:?}",
+        f.warnings
+    );
     // KHR_materials_specular: F0 = 0.04 × 0.5 → specular 0.25 (η 1.5 without an ior).
     let mut w = Writer::default();
     let doc = quad_doc(&mut w, json!([{"extensions": {"KHR_materials_specular": {"specularFactor": 0.5}}}]), json!({}));
@@ -813,4 +817,108 @@ fn textures_on_a_second_texture_coordinate_set() {
     let (_, inner) = layers(&f);
     let Bsdf::Principled(pr) = inner else { unreachable!() };
     assert_eq!(pr.base_color.eval_at(m.uvs[0], Some(&point)), Rgb::ZERO);
+}
+
+/// A textured floor (nearest-filtered checker, repeated 3 × by KHR_texture_transform), a
+/// double-sided emissive panel and a spot light, in glTF and in Mitsuba XML.
+#[test]
+fn a_textured_scene_in_gltf_and_mitsuba_xml_renders_the_same() {
+    let dir = tmp("compare-textured");
+    let checker: Vec<[u8; 4]> =
+        (0..16).map(|i| if (i % 4 < 2) ^ (i / 4 < 2) { [200, 180, 40, 255] } else { [30, 60, 160, 255] }).collect();
+    let png = png_rgba(4, 4, &checker);
+    std::fs::write(dir.join("checker.png"), &png).unwrap();
+    let floor = [-2.0f32, 0.0, 2.0, 2.0, 0.0, 2.0, 2.0, 0.0, -2.0, -2.0, 0.0, -2.0];
+    let uvs = [0.0f32, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0];
+    let mut obj = String::new();
+    for c in floor.chunks(3) {
+        obj += &format!("v {} {} {}\n", c[0], c[1], c[2]);
+    }
+    // OBJ's v points up: Mitsuba's loader flips it back to glTF's.
+    for c in uvs.chunks(2) {
+        obj += &format!("vt {} {}\n", c[0], 1.0 - c[1]);
+    }
+    obj += "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    std::fs::write(dir.join("floor.obj"), obj).unwrap();
+    let panel = [-0.3f32, 1.5, 0.3, 0.3, 1.5, 0.3, 0.3, 1.5, -0.3, -0.3, 1.5, -0.3];
+    let mut pobj = String::new();
+    for c in panel.chunks(3) {
+        pobj += &format!("v {} {} {}\n", c[0], c[1], c[2]);
+    }
+    // Facing down (−y): clockwise seen from above.
+    pobj += "f 1 3 2\nf 1 4 3\n";
+    std::fs::write(dir.join("panel.obj"), pobj).unwrap();
+    let xml = r#"<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="45.836624"/><string name="fov_axis" value="y"/><float name="near_clip" value="0.01"/>
+        <transform name="to_world"><lookat origin="0, 1.2, 3" target="0, 1.2, 2" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film>
+        <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+    </sensor>
+    <emitter type="spot">
+        <transform name="to_world"><lookat origin="1, 2, 1" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <rgb name="intensity" value="2"/><float name="cutoff_angle" value="34.377468"/><float name="beam_width" value="11.459156"/>
+    </emitter>
+    <shape type="obj">
+        <string name="filename" value="floor.obj"/><boolean name="face_normals" value="true"/>
+        <bsdf type="principled">
+            <texture type="bitmap" name="base_color">
+                <string name="filename" value="checker.png"/><string name="filter_type" value="nearest"/>
+                <transform name="to_uv"><scale x="3" y="3"/></transform>
+            </texture>
+            <float name="roughness" value="0.5"/>
+        </bsdf>
+    </shape>
+    <shape type="obj">
+        <string name="filename" value="panel.obj"/><boolean name="face_normals" value="true"/>
+        <emitter type="area"><rgb name="radiance" value="3, 2.5, 2"/></emitter>
+        <bsdf type="twosided"><bsdf type="principled"><rgb name="base_color" value="0"/><float name="roughness" value="1"/></bsdf></bsdf>
+    </shape>
+</scene>"#;
+    std::fs::write(dir.join("scene.xml"), xml).unwrap();
+    let xml = crate::load::mitsuba::load_scene_file(&dir.join("scene.xml"), &[]).unwrap();
+    let mut w = Writer::default();
+    let fp = w.floats(&floor, "VEC3");
+    let fuv = w.floats(&uvs, "VEC2");
+    let fi = w.u16s(&[0, 1, 2, 0, 2, 3], "SCALAR");
+    let pp = w.floats(&panel, "VEC3");
+    let pi = w.u16s(&[0, 2, 1, 0, 3, 2], "SCALAR");
+    let img = w.bytes(&png);
+    // The spot's node: −z toward the origin from (1, 2, 1), +y up (its roll does not matter).
+    let look = Transform::look_at(Vec3::new(1.0, 2.0, 1.0), Vec3::new(2.0, 4.0, 2.0), Vec3::Y).unwrap();
+    let m = look.matrix().to_cols_array();
+    let doc = json!({
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_texture_transform"],
+        "scenes": [{"nodes": [0, 1, 2, 3]}],
+        "nodes": [
+            {"mesh": 0},
+            {"mesh": 1},
+            {"camera": 0, "translation": [0.0, 1.2, 3.0]},
+            {"extensions": {"KHR_lights_punctual": {"light": 0}}, "matrix": m}
+        ],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": fp, "TEXCOORD_0": fuv}, "indices": fi, "material": 0}]},
+            {"primitives": [{"attributes": {"POSITION": pp}, "indices": pi, "material": 1}]}
+        ],
+        "materials": [
+            {"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "extensions": {"KHR_texture_transform": {"scale": [3.0, 3.0]}}},
+                                      "metallicFactor": 0.0, "roughnessFactor": 0.5}},
+            {"pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0}, "doubleSided": true,
+             "emissiveFactor": [1.0, 0.8333333, 0.6666667], "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 3.0}}}
+        ],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"magFilter": 9728}],
+        "images": [{"bufferView": img, "mimeType": "image/png"}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "aspectRatio": 1.3333334, "znear": 0.01}}],
+        "extensions": {"KHR_lights_punctual": {"lights": [{"type": "spot", "intensity": 1366.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}}]}}
+    });
+    std::fs::write(dir.join("scene.gltf"), w.gltf(doc)).unwrap();
+    let gltf = load_gltf_file(&dir.join("scene.gltf"), &res(40, 30), None).unwrap();
+    let (a, b) = (render(&gltf, 64, 1), render(&xml, 64, 1));
+    let (ma, mb) = (mean(&a), mean(&b));
+    assert!(mb > 0.01, "the scene is lit: {mb}");
+    assert!((ma / mb - 1.0).abs() < 0.005, "means {ma} vs {mb}");
+    let noise = rel_mse(&render(&xml, 64, 2), &b);
+    let diff = rel_mse(&a, &b);
+    assert!(diff <= 1.5 * noise, "relMSE {diff} against a noise level of {noise}");
 }
