@@ -570,3 +570,20 @@ fn gltf_scenes_render_and_choose_their_camera() {
     let r = neumann().args(["render", "--camera", "0", "--quiet", "-o"]).arg(&out).output().unwrap();
     assert_eq!(r.status.code(), Some(2), "the built-in scene has one camera: {}", String::from_utf8_lossy(&r.stderr));
 }
+
+/// pbrt-v4 files render from the command line.
+#[test]
+fn pbrt_scenes_render() {
+    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/pbrt_demo.pbrt");
+    let out = temp("pbrt.png");
+    let r = neumann().arg("render").arg(&scene).args(["--res", "24x16", "--spp", "2", "--quiet", "-o"]).arg(&out).output().unwrap();
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("at 24x16") && stdout.contains("2 spp"), "{stdout}");
+    let bad = temp("bad.pbrt");
+    std::fs::write(&bad, "WorldBegin\nShape \"sphere\" \"float radius\" [ 1 ] \"float raduis\" [ 2 ]\n").unwrap();
+    let r = neumann().arg("render").arg(&bad).args(["--quiet", "-o"]).arg(&out).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(err.contains("bad.pbrt:2:") && err.contains("unused parameter \"float raduis\""), "{err}");
+}

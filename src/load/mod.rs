@@ -12,6 +12,7 @@ pub mod memory;
 pub mod mitsuba;
 pub mod obj;
 pub mod overrides;
+pub mod pbrt;
 pub mod ply;
 mod resolver;
 pub mod serialized;
@@ -60,8 +61,8 @@ pub fn is_gltf(path: &Path) -> bool {
     matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
 }
 
-/// Loads a scene file of any format neumann reads (by extension: glTF 2.0 `.gltf` / `.glb`,
-/// else Mitsuba 3 XML), with `-D` parameters (`defines`, Mitsuba only), settings from the command
+/// Loads a scene file of any format neumann reads (by extension: pbrt-v4 `.pbrt` (or
+/// `.pbrt.gz`), glTF 2.0 `.gltf` / `.glb`, else Mitsuba 3 XML), with `-D` parameters (`defines`, Mitsuba only), settings from the command
 /// line, and the glTF camera to render (`camera`: a name or index).
 pub fn load_scene(
     path: &Path,
@@ -70,6 +71,17 @@ pub fn load_scene(
     camera: Option<&str>,
 ) -> Result<SceneFile, crate::props::SceneError> {
     use crate::props::SceneError;
+    let pbrt = matches!(path.extension().and_then(|e| e.to_str()), Some("pbrt"))
+        || path.to_str().is_some_and(|p| p.ends_with(".pbrt.gz"));
+    if pbrt {
+        if let Some((name, _)) = defines.first() {
+            return Err(SceneError::new(format!("-D {name}: a pbrt file has no parameters to set (-D is for Mitsuba scenes)")));
+        }
+        if let Some(c) = camera {
+            return Err(SceneError::new(format!("--camera {c}: choosing a camera is for glTF files (a pbrt scene has one)")));
+        }
+        return pbrt::load_pbrt_file(path, settings);
+    }
     if is_gltf(path) {
         if let Some((name, _)) = defines.first() {
             return Err(SceneError::new(format!("-D {name}: a glTF file has no parameters to set (-D is for Mitsuba scenes)")));

@@ -17,7 +17,7 @@ use std::time::Duration;
 
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// Scene to render: a Mitsuba 3 XML file, a glTF 2.0 file (.gltf, .glb), or a built-in
+    /// Scene to render: a Mitsuba 3 XML file, a pbrt-v4 file (.pbrt), a glTF 2.0 file (.gltf, .glb), or a built-in
     /// scene name (cbox, the default).
     scene: Option<String>,
     /// glTF: the camera to render, by name or index in the file's cameras (or the name of the
@@ -217,6 +217,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         apply_builtin_flags(&mut job, &a)?;
         job
     } else if scene_arg.to_ascii_lowercase().ends_with(".xml")
+        || scene_arg.ends_with(".pbrt")
         || neumann::load::is_gltf(std::path::Path::new(&scene_arg))
         || std::path::Path::new(&scene_arg).exists()
     {
@@ -231,7 +232,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     } else {
         return Err(Failure(
             1,
-            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml or glTF (.gltf, .glb) scene file or a built-in scene name (cbox)"),
+            format!("unknown scene '{scene_arg}': give a Mitsuba 3 .xml, pbrt-v4 .pbrt or glTF (.gltf, .glb) scene file or a built-in scene name (cbox)"),
         ));
     };
     if job.file.scene.has_media() && !job.file.integrator.kind().renders_media() {

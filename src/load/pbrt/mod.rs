@@ -1,0 +1,374 @@
+//! pbrt-v4 scene files: `neumann render scene.pbrt`.
+//!
+//! [`lexer`] splits the text into located tokens, [`parser`] executes the directives over pbrt's
+//! graphics state (transforms, attribute blocks, named coordinate systems, materials, textures,
+//! object instances, `Include` / `Import`), and `translate` turns each camera, film, sampler,
+//! filter, integrator, shape, material, texture and light into the plugin objects a Mitsuba file
+//! gives ([`crate::props::Obj`]), which the shared builder makes into the scene. Problems are
+//! errors at `file:line:col`; a parameter that nothing reads is an error (pbrt-v4 stops on them
+//! too), and so is every directive, plugin or parameter neumann does not implement.
+
+pub mod lexer;
+mod mesh;
+pub mod params;
+pub mod parser;
+mod translate;
+
+use crate::load::overrides::Overrides;
+use crate::load::SceneFile;
+use crate::math::{Mat4, Vec3};
+use crate::props::{Loc, Obj, Prop, SceneError, SourceFile, Value};
+use params::ParamSet;
+use std::cell::Cell;
+use std::path::Path;
+use std::rc::Rc;
+use std::sync::Arc;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Loads a pbrt-v4 scene file with settings from outside the file (command-line flags).
+pub fn load_pbrt_file(path: &Path, settings: &Overrides) -> Result<SceneFile> {
+    let mut parser = parser::Parser::new(path);
+    parser.parse_file(path, None)?;
+    finish(parser, path, settings)
+}
+
+/// Loads a pbrt-v4 scene from text (`path` names it and anchors relative file names).
+pub fn load_pbrt_text(path: &Path, text: &str, settings: &Overrides) -> Result<SceneFile> {
+    let mut parser = parser::Parser::new(path);
+    parser.parse_text(path.to_path_buf(), text.to_string())?;
+    finish(parser, path, settings)
+}
+
+fn finish(mut parser: parser::Parser, path: &Path, settings: &Overrides) -> Result<SceneFile> {
+    let file = Arc::new(SourceFile { path: path.to_path_buf(), text: String::new() });
+    parser.finish_checks(&file)?;
+    let loc = Loc { file, offset: 0 };
+    let mut scene = obj("scene", "scene", &loc);
+    scene.children.push(Rc::new(integrator(&mut parser, &loc)?));
+    scene.children.push(Rc::new(sensor(&mut parser, &loc)?));
+    scene.children.append(&mut parser.emitters);
+    scene.children.append(&mut parser.shapes);
+    let root = crate::load::overrides::apply(&Rc::new(scene), settings);
+    let resolver = parser.resolver.clone();
+    let memory = std::mem::take(&mut parser.memory);
+    let mut out = crate::load::build::Builder::with_memory(resolver, memory).build(&root)?;
+    out.warnings.extend(parser.warnings);
+    Ok(out)
+}
+
+fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
+    Obj {
+        tag: tag.into(),
+        ty: ty.into(),
+        id: None,
+        loc: loc.clone(),
+        props: Vec::new(),
+        children: Vec::new(),
+        built: Cell::new(false),
+    }
+}
+
+fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
+    o.props.push(Prop { name: name.into(), value, loc: loc.clone(), used: Cell::new(false) });
+}
+
+fn loc_of(ps: &ParamSet, name: &str) -> Loc {
+    ps.params.iter().find(|p| p.name == name).map_or(ps.loc.clone(), |p| p.loc.clone())
+}
+
+/// The directive's plugin type.
+fn plugin_type(ps: &ParamSet) -> String {
+    ps.string("__type").ok().flatten().unwrap_or_default()
+}
+
+/// `Integrator` (default `volpath`, pbrt-v4's; neumann's `path` renders the same image without
+/// media): `maxdepth` (5 bounces) → `max_depth` = `maxdepth` + 1.
+fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
+    let Some(ps) = p.integrator.take() else {
+        let mut o = obj("integrator", "path", loc);
+        set(&mut o, "max_depth", Value::Integer(6), loc);
+        return Ok(o);
+    };
+    let ty = plugin_type(&ps);
+    let kind = match ty.as_str() {
+        "path" | "simplepath" | "randomwalk" => "path",
+        "volpath" => "volpath",
+        "lightpath" => "ptracer",
+        "bdpt" | "mlt" | "sppm" => {
+            p.warnings.push(format!(
+                "warning: {}: Integrator \"{ty}\" is not implemented by neumann: rendered by the path tracer (the same expected image, with other noise; caustics may converge slower)",
+                ps.loc.position()
+            ));
+            for name in ["maxdepth", "regularize", "visualizestrategies", "visualizeweights", "bootstrapsamples", "chains", "mutationsperpixel", "largestepprobability", "sigma", "photonsperiteration", "radius", "seed", "iterations"] {
+                if let Some(q) = ps.params.iter().find(|q| q.name == name) {
+                    if name != "maxdepth" {
+                        q.used.set(true);
+                    }
+                }
+            }
+            "path"
+        }
+        "ambientocclusion" | "aov" => return Err(ps.error(format!("the \"{ty}\" integrator is not implemented by neumann (its image is not the rendering equation's solution)"))),
+        other => return Err(ps.error(format!("unknown integrator \"{other}\""))),
+    };
+    let mut o = obj("integrator", kind, &ps.loc);
+    let depth = ps.int("maxdepth", 5)?;
+    if depth < 0 {
+        return Err(ps.error_at("maxdepth", "maxdepth must be ≥ 0"));
+    }
+    set(&mut o, "max_depth", Value::Integer(depth + 1), &loc_of(&ps, "maxdepth"));
+    if ty == "path" || ty == "volpath" {
+        if ps.bool("regularize", false)? {
+            return Err(ps.error_at("regularize", "path regularization (biased) is not implemented by neumann"));
+        }
+        if let Some(s) = ps.string("lightsampler")? {
+            let neumann = match s.as_str() {
+                "bvh" => "bvh",
+                "power" => "power",
+                "uniform" => "uniform",
+                other => return Err(ps.error_at("lightsampler", format!("unknown light sampler \"{other}\""))),
+            };
+            set(&mut o, "light_sampler", Value::String(neumann.into()), &loc_of(&ps, "lightsampler"));
+        }
+    }
+    ps.check_unused()?;
+    Ok(o)
+}
+
+/// The sensor: `Camera`, `Film`, `Sampler`, `PixelFilter`.
+fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
+    let (cam, world_from_camera) = match p.camera.take() {
+        Some(c) => c,
+        None => {
+            // pbrt's default: a perspective camera at the origin looking down +z.
+            let ps = ParamSet { params: Vec::new(), loc: loc.clone(), what: "Camera".into() };
+            (ps, Mat4::IDENTITY)
+        }
+    };
+    let ty = if cam.has("__type") { plugin_type(&cam) } else { "perspective".into() };
+    // Film.
+    let (mut width, mut height) = (1280i64, 720i64);
+    let mut crop: Option<[i64; 4]> = None;
+    if let Some(f) = p.film.take() {
+        let fty = plugin_type(&f);
+        if fty != "rgb" && fty != "gbuffer" {
+            return Err(f.error(format!("the \"{fty}\" film is not implemented by neumann (rgb, gbuffer)")));
+        }
+        width = f.int("xresolution", 1280)?;
+        height = f.int("yresolution", 720)?;
+        if !(1..=1 << 16).contains(&width) || !(1..=1 << 16).contains(&height) {
+            return Err(f.error_at("xresolution", format!("resolution {width}×{height} out of range")));
+        }
+        if let Some(w) = f.floats("cropwindow", &["float"])? {
+            let [x0, x1, y0, y1] = w[..] else { return Err(f.error_at("cropwindow", "takes x0 x1 y0 y1")) };
+            // pbrt: pixels ⌈w·x0⌉ … ⌈w·x1⌉ (exclusive).
+            let px = |v: f64, n: i64| ((v.clamp(0.0, 1.0) * n as f64).ceil() as i64).clamp(0, n);
+            crop = Some([px(x0, width), px(x1, width), px(y0, height), px(y1, height)]);
+        }
+        if let Some(b) = f.floats("pixelbounds", &["integer"])? {
+            let [x0, x1, y0, y1] = b[..] else { return Err(f.error_at("pixelbounds", "takes x0 x1 y0 y1")) };
+            crop = Some([x0 as i64, x1 as i64, y0 as i64, y1 as i64]);
+        }
+        if let Some([x0, x1, y0, y1]) = crop {
+            if !(0 <= x0 && x0 < x1 && x1 <= width && 0 <= y0 && y0 < y1 && y1 <= height) {
+                return Err(f.error("the crop window is empty or outside the image"));
+            }
+        }
+        if f.float("iso", 100.0)? != 100.0 || f.float("exposuretime", 1.0)? != 1.0 {
+            return Err(
+                f.error_at("iso", "a film sensitivity other than ISO 100 × 1 s is not implemented by neumann yet")
+            );
+        }
+        if f.float("whitebalance", 0.0)? != 0.0 {
+            return Err(f.error_at("whitebalance", "white balancing is not implemented by neumann yet"));
+        }
+        if let Some(s) = f.string("sensor")? {
+            if s != "cie1931" {
+                return Err(f.error_at("sensor", format!("the sensor \"{s}\" is not implemented by neumann (cie1931)")));
+            }
+        }
+        // The output's name and storage cannot change the image: neumann's -o decides.
+        for name in ["filename", "savefp16", "diagonal", "maxcomponentvalue", "writefp16"] {
+            if let Some(q) = f.params.iter().find(|q| q.name == name) {
+                q.used.set(true);
+            }
+        }
+        if f.has("maxcomponentvalue") {
+            // Read above; clamping would bias, so only the default (infinite) is accepted.
+            let v = f.params.iter().find(|q| q.name == "maxcomponentvalue").map(|q| q.values.clone());
+            if v != Some(vec![params::PVal::Num(f64::INFINITY)]) {
+                return Err(f.error_at("maxcomponentvalue", "clamping sample values is not implemented by neumann"));
+            }
+        }
+        f.check_unused()?;
+    }
+    let mut s = obj("sensor", "perspective", &cam.loc);
+    // pbrt's camera space has +x at the image's right; Mitsuba's at its left.
+    let to_world = world_from_camera * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    let aspect = width as f32 / height as f32;
+    match ty.as_str() {
+        "perspective" => {
+            let fov = cam.float("fov", 90.0)?;
+            if !(fov > 0.0 && fov < 180.0) {
+                return Err(cam.error_at("fov", format!("fov must lie in (0, 180), got {fov}")));
+            }
+            set(&mut s, "fov", Value::Float(fov as f64), &loc_of(&cam, "fov"));
+            set(&mut s, "fov_axis", Value::String("smaller".into()), &cam.loc);
+            let lens = cam.float("lensradius", 0.0)?;
+            if lens > 0.0 {
+                s.ty = "thinlens".into();
+                set(&mut s, "aperture_radius", Value::Float(lens as f64), &loc_of(&cam, "lensradius"));
+                set(
+                    &mut s,
+                    "focus_distance",
+                    Value::Float(cam.float("focaldistance", 1e6)? as f64),
+                    &loc_of(&cam, "focaldistance"),
+                );
+            } else {
+                cam.float("focaldistance", 1e6)?;
+            }
+        }
+        "orthographic" => {
+            s.ty = "orthographic".into();
+            if cam.float("lensradius", 0.0)? > 0.0 {
+                return Err(cam.error_at("lensradius", "a thin-lens orthographic camera is not implemented by neumann"));
+            }
+            cam.float("focaldistance", 1e6)?;
+        }
+        "realistic" | "spherical" => {
+            return Err(cam.error(format!("the \"{ty}\" camera is not implemented by neumann yet")))
+        }
+        other => return Err(cam.error(format!("unknown camera \"{other}\""))),
+    }
+    if let Some(a) = cam.floats("frameaspectratio", &["float"])? {
+        if (a[0] as f32 - aspect).abs() > 1e-4 {
+            return Err(cam.error_at(
+                "frameaspectratio",
+                "a frame aspect ratio other than the film's is not implemented by neumann",
+            ));
+        }
+    }
+    // pbrt's screen window: [-aspect, aspect] × [-1, 1] (wide images), or [-1, 1] × [-1/aspect,
+    // 1/aspect]; the orthographic camera scales it into Mitsuba's x ∈ [-1, 1].
+    let half = if aspect >= 1.0 { aspect } else { 1.0 };
+    if let Some(w) = cam.floats("screenwindow", &["float"])? {
+        let default =
+            if aspect >= 1.0 { [-aspect, aspect, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect] };
+        if w.len() != 4 || w.iter().zip(default).any(|(a, b)| (*a as f32 - b).abs() > 1e-4) {
+            return Err(cam
+                .error_at("screenwindow", "a screen window other than the default is not implemented by neumann yet"));
+        }
+    }
+    let to_world =
+        if ty == "orthographic" { to_world * Mat4::from_scale(Vec3::new(half, half, 1.0)) } else { to_world };
+    let t =
+        crate::math::Transform::from_matrix(to_world).ok_or_else(|| cam.error("the camera transform is singular"))?;
+    set(&mut s, "to_world", Value::Transform(t), &cam.loc);
+    for name in ["shutteropen", "shutterclose"] {
+        cam.float(name, 0.0)?;
+    }
+    cam.string("__type")?;
+    cam.check_unused()?;
+    let mut film = obj("film", "hdrfilm", loc);
+    set(&mut film, "width", Value::Integer(width), loc);
+    set(&mut film, "height", Value::Integer(height), loc);
+    if let Some([x0, x1, y0, y1]) = crop {
+        set(&mut film, "crop_offset_x", Value::Integer(x0), loc);
+        set(&mut film, "crop_offset_y", Value::Integer(y0), loc);
+        set(&mut film, "crop_width", Value::Integer(x1 - x0), loc);
+        set(&mut film, "crop_height", Value::Integer(y1 - y0), loc);
+    }
+    // Filter (pbrt-v4's default: Gaussian, σ 0.5).
+    let mut rfilter = obj("rfilter", "gaussian", loc);
+    if let Some(f) = p.filter.take() {
+        let fty = plugin_type(&f);
+        rfilter.loc = f.loc.clone();
+        match fty.as_str() {
+            "gaussian" => {
+                set(&mut rfilter, "stddev", Value::Float(f.float("sigma", 0.5)? as f64), &loc_of(&f, "sigma"));
+                f.floats("radius", &["float"])?;
+            }
+            "box" => {
+                rfilter.ty = "box".into();
+                if let Some(r) = f.floats("radius", &["float"])? {
+                    if r.iter().any(|&x| (x - 0.5).abs() > 1e-6) {
+                        return Err(f.error_at(
+                            "radius",
+                            "a box filter other than one pixel (radius 0.5) is not implemented by neumann",
+                        ));
+                    }
+                }
+            }
+            "triangle" => {
+                rfilter.ty = "tent".into();
+                let r = f.floats("radius", &["float"])?.unwrap_or(vec![2.0, 2.0]);
+                if r.len() != 2 || r[0] != r[1] {
+                    return Err(f.error_at("radius", "the triangle filter's radius must be one value for x and y"));
+                }
+                set(&mut rfilter, "radius", Value::Float(r[0]), &loc_of(&f, "radius"));
+            }
+            "mitchell" => {
+                rfilter.ty = "mitchell".into();
+                set(&mut rfilter, "B", Value::Float(f.float("B", 1.0 / 3.0)? as f64), &loc_of(&f, "B"));
+                set(&mut rfilter, "C", Value::Float(f.float("C", 1.0 / 3.0)? as f64), &loc_of(&f, "C"));
+                let r = f.floats("radius", &["float"])?.unwrap_or(vec![2.0, 2.0]);
+                if r.len() != 2 || r[0] != r[1] {
+                    return Err(f.error_at("radius", "the filter's radius must be one value for x and y"));
+                }
+                set(&mut rfilter, "radius", Value::Float(r[0]), &loc_of(&f, "radius"));
+            }
+            "lanczos" | "sinc" => {
+                rfilter.ty = "lanczos".into();
+                let tau = f.float("tau", 3.0)?;
+                let r = f.floats("radius", &["float"])?.unwrap_or(vec![4.0, 4.0]);
+                if r.iter().any(|&x| (x as f32 - tau).abs() > 1e-6) {
+                    return Err(
+                        f.error_at("radius", "neumann's Lanczos filter has radius = tau (lobes); give both equal")
+                    );
+                }
+                set(&mut rfilter, "lobes", Value::Float(tau as f64), &loc_of(&f, "tau"));
+            }
+            other => return Err(f.error(format!("unknown filter \"{other}\""))),
+        }
+        f.check_unused()?;
+    }
+    film.children.push(Rc::new(rfilter));
+    // Sampler (pbrt-v4's default: zsobol, 16 samples per pixel).
+    let mut sampler = obj("sampler", "ldsampler", loc);
+    let mut spp = 16;
+    if let Some(sp) = p.sampler.take() {
+        let sty = plugin_type(&sp);
+        sampler.loc = sp.loc.clone();
+        sampler.ty = match sty.as_str() {
+            "zsobol" | "sobol" | "paddedsobol" | "halton" => "ldsampler",
+            "pmj02bn" => "stratified",
+            "independent" => "independent",
+            "stratified" => {
+                let (x, y) = (sp.int("xsamples", 4)?, sp.int("ysamples", 4)?);
+                sp.bool("jitter", true)?;
+                spp = x * y;
+                "stratified"
+            }
+            other => return Err(sp.error(format!("unknown sampler \"{other}\""))),
+        }
+        .into();
+        if sty != "stratified" {
+            spp = sp.int("pixelsamples", 16)?;
+        }
+        if let Some(seed) = sp.floats("seed", &["integer"])? {
+            set(&mut sampler, "seed", Value::Integer(seed[0] as i64), &loc_of(&sp, "seed"));
+        }
+        // The randomization changes the noise, not the expected image.
+        sp.string("randomization")?;
+        sp.check_unused()?;
+    }
+    let sloc = sampler.loc.clone();
+    set(&mut sampler, "sample_count", Value::Integer(spp), &sloc);
+    s.children.push(Rc::new(film));
+    s.children.push(Rc::new(sampler));
+    Ok(s)
+}
+
+#[cfg(test)]
+mod tests;

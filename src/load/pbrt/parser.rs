@@ -1,0 +1,702 @@
+//! pbrt-v4 directives, executed in order over the graphics state (transform stack, attributes,
+//! named coordinate systems, materials, textures, objects), each scene object translated at its
+//! directive into neumann's plugin objects (Mitsuba's names, [`crate::props::Obj`]).
+
+use super::lexer::{tokenize, Kind, Token};
+use super::params::{PVal, Param, ParamSet};
+use super::translate;
+use crate::load::limits;
+use crate::load::memory::MemoryFiles;
+use crate::load::FileResolver;
+use crate::math::{Mat4, Transform, Vec3};
+use crate::props::{Loc, Obj, SceneError, SourceFile};
+use std::cell::Cell;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+use std::sync::Arc;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// The material a shape gets.
+#[derive(Clone, Debug)]
+pub enum MaterialRef {
+    /// pbrt's default (`diffuse` 0.5) or one from `Material`.
+    Object(Rc<Obj>),
+    /// `NamedMaterial`.
+    Named(String, Loc),
+}
+
+/// The attributes `AttributeBegin` saves.
+#[derive(Clone, Debug)]
+pub struct Graphics {
+    /// The current transform (object to world).
+    pub ctm: Mat4,
+    /// `ReverseOrientation`.
+    pub reverse: bool,
+    /// The material.
+    pub material: MaterialRef,
+    /// `AreaLightSource` (its translated emitter properties).
+    pub area_light: Option<Rc<ParamSet>>,
+    /// Whether the transform block is a `TransformBegin` (only the transform is restored).
+    transform_only: bool,
+}
+
+/// The state of a pbrt-v4 file being read.
+pub struct Parser {
+    /// Where relative file names resolve (the main file's folder).
+    pub resolver: FileResolver,
+    /// Decoded meshes (`trianglemesh`, PLY files).
+    pub memory: MemoryFiles,
+    /// Warnings (things that cannot change the image).
+    pub warnings: Vec<String>,
+    pub(super) gs: Graphics,
+    stack: Vec<Graphics>,
+    named_coords: HashMap<String, Mat4>,
+    pub(super) named_materials: HashMap<String, Rc<Obj>>,
+    pub(super) float_textures: HashMap<String, Rc<Obj>>,
+    pub(super) spectrum_textures: HashMap<String, Rc<Obj>>,
+    objects: HashMap<String, Vec<Rc<Obj>>>,
+    current_object: Option<(String, Vec<Rc<Obj>>)>,
+    pub(super) camera: Option<(ParamSet, Mat4)>,
+    pub(super) film: Option<ParamSet>,
+    pub(super) sampler: Option<ParamSet>,
+    pub(super) filter: Option<ParamSet>,
+    pub(super) integrator: Option<ParamSet>,
+    pub(super) shapes: Vec<Rc<Obj>>,
+    pub(super) emitters: Vec<Rc<Obj>>,
+    world: bool,
+    files: usize,
+    bytes: usize,
+    pub(super) mesh_count: usize,
+}
+
+/// A token cursor over one file.
+struct Cursor<'a> {
+    tokens: &'a [Token],
+    pos: usize,
+    file: Arc<SourceFile>,
+}
+
+impl Cursor<'_> {
+    fn loc_at(&self, offset: usize) -> Loc {
+        Loc { file: self.file.clone(), offset }
+    }
+
+    fn here(&self) -> Loc {
+        self.loc_at(self.tokens.get(self.pos).map_or(self.file.text.len(), |t| t.offset))
+    }
+
+    fn err(&self, message: impl Into<String>) -> SceneError {
+        SceneError::at(&self.here(), message)
+    }
+
+    fn string(&mut self, what: &str) -> Result<String> {
+        match self.tokens.get(self.pos) {
+            Some(Token { kind: Kind::Str(s), .. }) => {
+                self.pos += 1;
+                Ok(s.clone())
+            }
+            Some(t) => Err(self.err(format!("expected {what} (a quoted string), found {}", t.kind.describe()))),
+            None => Err(self.err(format!("expected {what} (a quoted string), found the end of the file"))),
+        }
+    }
+
+    fn number(&mut self, what: &str) -> Result<f64> {
+        match self.tokens.get(self.pos) {
+            Some(Token { kind: Kind::Num(n), .. }) => {
+                self.pos += 1;
+                Ok(*n)
+            }
+            Some(t) => Err(self.err(format!("expected {what} (a number), found {}", t.kind.describe()))),
+            None => Err(self.err(format!("expected {what} (a number), found the end of the file"))),
+        }
+    }
+
+    /// `n` numbers, optionally in brackets.
+    fn numbers(&mut self, n: usize, what: &str) -> Result<Vec<f64>> {
+        let bracket = matches!(self.tokens.get(self.pos), Some(Token { kind: Kind::Open, .. }));
+        if bracket {
+            self.pos += 1;
+        }
+        let v = (0..n).map(|_| self.number(what)).collect::<Result<Vec<_>>>()?;
+        if bracket {
+            match self.tokens.get(self.pos) {
+                Some(Token { kind: Kind::Close, .. }) => self.pos += 1,
+                _ => return Err(self.err(format!("expected ']' after the {n} numbers of {what}"))),
+            }
+        }
+        Ok(v)
+    }
+
+    /// The parameter list that follows a directive.
+    fn params(&mut self, what: String, loc: Loc) -> Result<ParamSet> {
+        let mut params: Vec<Param> = Vec::new();
+        while let Some(Token { kind: Kind::Str(decl), offset }) = self.tokens.get(self.pos) {
+            let ploc = self.loc_at(*offset);
+            let mut words = decl.split_whitespace();
+            let (Some(ty), Some(name), None) = (words.next(), words.next(), words.next()) else {
+                return Err(SceneError::at(
+                    &ploc,
+                    format!("expected a parameter declaration \"type name\", found \"{decl}\""),
+                ));
+            };
+            const TYPES: &[&str] = &[
+                "integer",
+                "float",
+                "point2",
+                "vector2",
+                "point3",
+                "vector3",
+                "normal3",
+                "point",
+                "vector",
+                "normal",
+                "rgb",
+                "color",
+                "spectrum",
+                "blackbody",
+                "bool",
+                "string",
+                "texture",
+            ];
+            if !TYPES.contains(&ty) {
+                let hint = crate::choice::nearest(ty, TYPES.iter().copied())
+                    .map(|n| format!("; the nearest is '{n}'"))
+                    .unwrap_or_default();
+                return Err(SceneError::at(
+                    &ploc,
+                    format!("unknown parameter type '{ty}' (types: {}{hint})", TYPES.join(", ")),
+                ));
+            }
+            if params.iter().any(|p| p.name == name) {
+                return Err(SceneError::at(&ploc, format!("parameter '{name}' is given twice")));
+            }
+            self.pos += 1;
+            let mut values = Vec::new();
+            let value = |t: &Token| -> Option<PVal> {
+                match &t.kind {
+                    Kind::Num(n) => Some(PVal::Num(*n)),
+                    Kind::Str(s) => Some(PVal::Str(s.clone())),
+                    Kind::Ident(b) if b == "true" || b == "false" => Some(PVal::Bool(b == "true")),
+                    _ => None,
+                }
+            };
+            match self.tokens.get(self.pos) {
+                Some(Token { kind: Kind::Open, .. }) => {
+                    self.pos += 1;
+                    loop {
+                        match self.tokens.get(self.pos) {
+                            Some(Token { kind: Kind::Close, .. }) => {
+                                self.pos += 1;
+                                break;
+                            }
+                            Some(t) => match value(t) {
+                                Some(v) => {
+                                    values.push(v);
+                                    self.pos += 1;
+                                }
+                                None => {
+                                    return Err(
+                                        self.err(format!("expected a value or ']', found {}", t.kind.describe()))
+                                    )
+                                }
+                            },
+                            None => return Err(self.err("expected ']' before the end of the file")),
+                        }
+                    }
+                }
+                Some(t) => match value(t) {
+                    Some(v) => {
+                        values.push(v);
+                        self.pos += 1;
+                    }
+                    None => {
+                        return Err(self.err(format!("expected the value of \"{decl}\", found {}", t.kind.describe())))
+                    }
+                },
+                None => return Err(self.err(format!("expected the value of \"{decl}\""))),
+            }
+            let mixed =
+                values.iter().any(|v| matches!(v, PVal::Num(_))) && values.iter().any(|v| !matches!(v, PVal::Num(_)));
+            if values.is_empty() || mixed {
+                return Err(SceneError::at(&ploc, format!("\"{decl}\" needs values of one kind")));
+            }
+            params.push(Param { ty: ty.into(), name: name.into(), values, loc: ploc, used: Cell::new(false) });
+        }
+        Ok(ParamSet { params, loc, what })
+    }
+}
+
+impl Parser {
+    /// A parser for the scene file `path`.
+    pub fn new(path: &Path) -> Parser {
+        let default_material = Rc::new(translate::default_material());
+        Parser {
+            resolver: FileResolver::for_scene(path),
+            memory: MemoryFiles::default(),
+            warnings: Vec::new(),
+            gs: Graphics {
+                ctm: Mat4::IDENTITY,
+                reverse: false,
+                material: MaterialRef::Object(default_material),
+                area_light: None,
+                transform_only: false,
+            },
+            stack: Vec::new(),
+            named_coords: HashMap::new(),
+            named_materials: HashMap::new(),
+            float_textures: HashMap::new(),
+            spectrum_textures: HashMap::new(),
+            objects: HashMap::new(),
+            current_object: None,
+            camera: None,
+            film: None,
+            sampler: None,
+            filter: None,
+            integrator: None,
+            shapes: Vec::new(),
+            emitters: Vec::new(),
+            world: false,
+            files: 0,
+            bytes: 0,
+            mesh_count: 0,
+        }
+    }
+
+    /// Reads and executes the file `path` (and what it includes).
+    pub fn parse_file(&mut self, path: &Path, from: Option<&Loc>) -> Result<()> {
+        self.files += 1;
+        if self.files > limits::MAX_INCLUDES {
+            return Err(SceneError::new(format!(
+                "{}: more than {} included files",
+                path.display(),
+                limits::MAX_INCLUDES
+            )));
+        }
+        let located = |m: String| match from {
+            Some(l) => SceneError::at(l, m),
+            None => SceneError::new(m),
+        };
+        let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(|e| located(e.to_string()))?;
+        let bytes = if bytes.starts_with(&[0x1f, 0x8b]) {
+            let mut out = Vec::new();
+            use std::io::Read;
+            flate2::read::GzDecoder::new(&bytes[..])
+                .take(limits::MAX_SCENE_BYTES as u64 + 1)
+                .read_to_end(&mut out)
+                .map_err(|e| located(format!("{}: corrupt gzip data: {e}", path.display())))?;
+            out
+        } else {
+            bytes
+        };
+        self.bytes += bytes.len();
+        if self.bytes > limits::MAX_SCENE_BYTES {
+            return Err(located(format!(
+                "{}: the scene's files exceed {} bytes",
+                path.display(),
+                limits::MAX_SCENE_BYTES
+            )));
+        }
+        let text = String::from_utf8(bytes).map_err(|e| located(format!("{}: not UTF-8 text: {e}", path.display())))?;
+        self.parse_text(path.to_path_buf(), text)
+    }
+
+    /// Executes the directives of `text` (named `path` in messages).
+    pub fn parse_text(&mut self, path: PathBuf, text: String) -> Result<()> {
+        let file = Arc::new(SourceFile { path, text });
+        let tokens =
+            tokenize(&file.text).map_err(|(offset, m)| SceneError::at(&Loc { file: file.clone(), offset }, m))?;
+        let mut c = Cursor { tokens: &tokens, pos: 0, file: file.clone() };
+        while c.pos < tokens.len() {
+            self.directive(&mut c)?;
+        }
+        Ok(())
+    }
+
+    fn directive(&mut self, c: &mut Cursor) -> Result<()> {
+        let t = &c.tokens[c.pos];
+        let loc = c.loc_at(t.offset);
+        let Kind::Ident(name) = &t.kind else {
+            return Err(c.err(format!("expected a directive, found {}", t.kind.describe())));
+        };
+        let name = name.clone();
+        c.pos += 1;
+        let ctm = &mut self.gs.ctm;
+        match name.as_str() {
+            "Translate" => {
+                let v = c.numbers(3, "Translate's x y z")?;
+                *ctm *= Mat4::from_translation(vec3(&v));
+            }
+            "Scale" => {
+                let v = c.numbers(3, "Scale's x y z")?;
+                *ctm *= Mat4::from_scale(vec3(&v));
+            }
+            "Rotate" => {
+                let v = c.numbers(4, "Rotate's angle x y z")?;
+                let axis = vec3(&v[1..]);
+                if axis.length_squared() == 0.0 {
+                    return Err(SceneError::at(&loc, "Rotate: the axis is zero"));
+                }
+                *ctm *= Mat4::from_axis_angle(axis.normalize(), (v[0] as f32).to_radians());
+            }
+            "LookAt" => {
+                let v = c.numbers(9, "LookAt's eye, look and up points")?;
+                let (eye, look, up) = (vec3(&v[0..3]), vec3(&v[3..6]), vec3(&v[6..9]));
+                // pbrt's LookAt: the camera-from-world transform whose camera looks down +z.
+                let t = Transform::look_at(eye, look, up).ok_or_else(|| {
+                    SceneError::at(&loc, "LookAt: the eye and look points coincide, or up is parallel to the view")
+                })?;
+                *ctm *= *t.inverse_matrix();
+            }
+            "Transform" | "ConcatTransform" => {
+                let v = c.numbers(16, &format!("{name}'s 16 matrix entries"))?;
+                let m: [f32; 16] = std::array::from_fn(|i| v[i] as f32);
+                // pbrt lists the matrix by columns (it transposes what it reads).
+                let m = Mat4::from_cols_array(&m);
+                if !m.is_finite() {
+                    return Err(SceneError::at(&loc, format!("{name}: the matrix is not finite")));
+                }
+                if name == "Transform" {
+                    *ctm = m;
+                } else {
+                    *ctm *= m;
+                }
+            }
+            "CoordinateSystem" => {
+                let n = c.string("the coordinate system's name")?;
+                self.named_coords.insert(n, self.gs.ctm);
+            }
+            "CoordSysTransform" => {
+                let n = c.string("the coordinate system's name")?;
+                match self.named_coords.get(&n) {
+                    Some(m) => self.gs.ctm = *m,
+                    None => {
+                        let names: Vec<&str> = self.named_coords.keys().map(String::as_str).collect();
+                        return Err(SceneError::at(
+                            &loc,
+                            format!(
+                                "CoordSysTransform: no coordinate system named \"{n}\" (defined: {})",
+                                if names.is_empty() { "none".into() } else { names.join(", ") }
+                            ),
+                        ));
+                    }
+                }
+            }
+            "ReverseOrientation" => self.gs.reverse = !self.gs.reverse,
+            "Identity" => self.gs.ctm = Mat4::IDENTITY,
+            "ActiveTransform" => {
+                let Some(Token { kind: Kind::Ident(which), .. }) = c.tokens.get(c.pos) else {
+                    return Err(c.err("expected StartTime, EndTime or All after ActiveTransform"));
+                };
+                c.pos += 1;
+                match which.as_str() {
+                    "All" => {}
+                    "StartTime" | "EndTime" => {
+                        return Err(SceneError::at(
+                            &loc,
+                            "ActiveTransform StartTime/EndTime: animated transforms (motion blur) are not implemented by neumann",
+                        ))
+                    }
+                    other => return Err(SceneError::at(&loc, format!("ActiveTransform {other}: expected StartTime, EndTime or All"))),
+                }
+            }
+            "TransformTimes" => {
+                c.numbers(2, "TransformTimes' start and end")?;
+            }
+            "AttributeBegin" | "TransformBegin" => {
+                if self.stack.len() >= limits::MAX_NESTING * 8 {
+                    return Err(SceneError::at(&loc, "attribute blocks nest too deeply"));
+                }
+                let mut saved = self.gs.clone();
+                saved.transform_only = name == "TransformBegin";
+                self.stack.push(saved);
+            }
+            "AttributeEnd" | "TransformEnd" => {
+                let Some(saved) = self.stack.pop() else {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!("{name} without a matching {}", name.replace("End", "Begin")),
+                    ));
+                };
+                if saved.transform_only != (name == "TransformEnd") {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!("{name} closes a block opened by the other kind of Begin"),
+                    ));
+                }
+                if saved.transform_only {
+                    self.gs.ctm = saved.ctm;
+                } else {
+                    self.gs = saved;
+                }
+            }
+            "Option" => {
+                let ps = c.params("Option".into(), loc)?;
+                translate::option(self, &ps)?;
+            }
+            "ColorSpace" => {
+                let n = c.string("the color space's name")?;
+                if n != "srgb" {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!("ColorSpace \"{n}\": neumann renders in linear sRGB only (\"srgb\")"),
+                    ));
+                }
+            }
+            "Camera" => {
+                let ty = c.string("the camera type")?;
+                let ps = c.params(format!("Camera \"{ty}\""), loc.clone())?;
+                if self.world {
+                    return Err(SceneError::at(&loc, "Camera must come before WorldBegin"));
+                }
+                // pbrt names the camera's space "camera".
+                let camera_from_world = self.gs.ctm;
+                let world_from_camera = camera_from_world.inverse();
+                if !world_from_camera.is_finite() {
+                    return Err(SceneError::at(&loc, "Camera: the current transform is singular"));
+                }
+                self.named_coords.insert("camera".into(), world_from_camera);
+                let mut ps = ps;
+                ps.params.push(type_param(&ty, &loc));
+                self.camera = Some((ps, world_from_camera));
+            }
+            "Film" | "Sampler" | "PixelFilter" | "Integrator" | "Accelerator" => {
+                let ty = c.string(&format!("the {name} type"))?;
+                let mut ps = c.params(format!("{name} \"{ty}\""), loc.clone())?;
+                if self.world {
+                    return Err(SceneError::at(&loc, format!("{name} must come before WorldBegin")));
+                }
+                ps.params.push(type_param(&ty, &loc));
+                match name.as_str() {
+                    "Film" => self.film = Some(ps),
+                    "Sampler" => self.sampler = Some(ps),
+                    "PixelFilter" => self.filter = Some(ps),
+                    "Integrator" => self.integrator = Some(ps),
+                    // The acceleration structure cannot change the image.
+                    _ => {
+                        for p in &ps.params {
+                            p.used.set(true);
+                        }
+                    }
+                }
+            }
+            "WorldBegin" => {
+                if self.world {
+                    return Err(SceneError::at(&loc, "WorldBegin appears twice"));
+                }
+                self.world = true;
+                self.gs.ctm = Mat4::IDENTITY;
+                self.named_coords.insert("world".into(), Mat4::IDENTITY);
+            }
+            "WorldEnd" => {}
+            "MakeNamedMedium" | "MediumInterface" => {
+                return Err(SceneError::at(
+                    &loc,
+                    format!("{name}: participating media in pbrt scenes are not implemented by neumann yet"),
+                ));
+            }
+            "Attribute" => {
+                let target = c.string("the attribute's target (shape, light, material, medium, texture)")?;
+                let ps = c.params(format!("Attribute \"{target}\""), loc.clone())?;
+                return Err(ps.error("Attribute: per-target default parameters are not implemented by neumann yet"));
+            }
+            "Texture" => {
+                let tex_name = c.string("the texture's name")?;
+                let class = c.string("the texture's type (\"spectrum\" or \"float\")")?;
+                let ty = c.string("the texture's class (imagemap, checkerboard, …)")?;
+                let ps = c.params(format!("Texture \"{tex_name}\" \"{class}\" \"{ty}\""), loc.clone())?;
+                let obj = translate::texture(self, &ty, &class, &ps)?;
+                ps.check_unused()?;
+                match class.as_str() {
+                    "float" => self.float_textures.insert(tex_name, Rc::new(obj)),
+                    "spectrum" | "color" => self.spectrum_textures.insert(tex_name, Rc::new(obj)),
+                    other => {
+                        return Err(SceneError::at(
+                            &loc,
+                            format!("Texture type \"{other}\": expected \"spectrum\" or \"float\""),
+                        ))
+                    }
+                };
+            }
+            "Material" => {
+                let ty = c.string("the material type")?;
+                let ps = c.params(format!("Material \"{ty}\""), loc.clone())?;
+                let obj = translate::material(self, &ty, &ps)?;
+                ps.check_unused()?;
+                self.gs.material = MaterialRef::Object(Rc::new(obj));
+            }
+            "MakeNamedMaterial" => {
+                let mat = c.string("the material's name")?;
+                let ps = c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?;
+                let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
+                let obj = translate::material(self, &ty, &ps)?;
+                ps.check_unused()?;
+                self.named_materials.insert(mat, Rc::new(obj));
+            }
+            "NamedMaterial" => {
+                let mat = c.string("the material's name")?;
+                self.gs.material = MaterialRef::Named(mat, loc);
+            }
+            "LightSource" => {
+                let ty = c.string("the light type")?;
+                let ps = c.params(format!("LightSource \"{ty}\""), loc.clone())?;
+                let obj = translate::light(self, &ty, &ps)?;
+                ps.check_unused()?;
+                self.emitters.push(Rc::new(obj));
+            }
+            "AreaLightSource" => {
+                let ty = c.string("the area light type")?;
+                let ps = c.params(format!("AreaLightSource \"{ty}\""), loc.clone())?;
+                if ty != "diffuse" {
+                    return Err(ps.error("the only area light is \"diffuse\""));
+                }
+                self.gs.area_light = Some(Rc::new(ps));
+            }
+            "Shape" => {
+                let ty = c.string("the shape type")?;
+                let ps = c.params(format!("Shape \"{ty}\""), loc.clone())?;
+                let shapes = translate::shape(self, &ty, &ps)?;
+                ps.check_unused()?;
+                if let Some(al) = &self.gs.area_light {
+                    al.check_unused()?;
+                }
+                match &mut self.current_object {
+                    Some((_, list)) => list.extend(shapes),
+                    None => self.shapes.extend(shapes),
+                }
+            }
+            "ObjectBegin" => {
+                let n = c.string("the object's name")?;
+                if self.current_object.is_some() {
+                    return Err(SceneError::at(&loc, "ObjectBegin inside another object"));
+                }
+                self.stack.push(Graphics { transform_only: false, ..self.gs.clone() });
+                self.current_object = Some((n, Vec::new()));
+            }
+            "ObjectEnd" => {
+                let Some((n, list)) = self.current_object.take() else {
+                    return Err(SceneError::at(&loc, "ObjectEnd without ObjectBegin"));
+                };
+                self.objects.insert(n, list);
+                if let Some(saved) = self.stack.pop() {
+                    self.gs = saved;
+                }
+            }
+            "ObjectInstance" => {
+                let n = c.string("the object's name")?;
+                let Some(list) = self.objects.get(&n) else {
+                    return Err(SceneError::at(
+                        &loc,
+                        format!("ObjectInstance: no object named \"{n}\" (ObjectBegin defines them)"),
+                    ));
+                };
+                let instance = self.gs.ctm;
+                let copies: Vec<Rc<Obj>> = list.iter().map(|o| Rc::new(translate::placed(o, &instance))).collect();
+                self.shapes.extend(copies);
+            }
+            "Include" | "Import" => {
+                let f = c.string("the file name")?;
+                let path = self.resolver.resolve(&f);
+                if name == "Include" {
+                    self.parse_file(&path, Some(&loc))?;
+                } else {
+                    // Import shares only named things; neumann's state is the same.
+                    self.parse_file(&path, Some(&loc))?;
+                }
+            }
+            "MakeNamedCamera" | "CameraBegin" => {
+                return Err(SceneError::at(&loc, format!("{name} is not a pbrt-v4 directive")));
+            }
+            other => {
+                const DIRECTIVES: &[&str] = &[
+                    "Translate",
+                    "Scale",
+                    "Rotate",
+                    "LookAt",
+                    "Transform",
+                    "ConcatTransform",
+                    "CoordinateSystem",
+                    "CoordSysTransform",
+                    "ReverseOrientation",
+                    "Identity",
+                    "ActiveTransform",
+                    "TransformTimes",
+                    "AttributeBegin",
+                    "AttributeEnd",
+                    "TransformBegin",
+                    "TransformEnd",
+                    "Option",
+                    "ColorSpace",
+                    "Camera",
+                    "Film",
+                    "Sampler",
+                    "PixelFilter",
+                    "Integrator",
+                    "Accelerator",
+                    "WorldBegin",
+                    "MakeNamedMedium",
+                    "MediumInterface",
+                    "Attribute",
+                    "Texture",
+                    "Material",
+                    "MakeNamedMaterial",
+                    "NamedMaterial",
+                    "LightSource",
+                    "AreaLightSource",
+                    "Shape",
+                    "ObjectBegin",
+                    "ObjectEnd",
+                    "ObjectInstance",
+                    "Include",
+                    "Import",
+                ];
+                let hint = crate::choice::nearest(other, DIRECTIVES.iter().copied())
+                    .map(|n| format!(" (the nearest is '{n}')"))
+                    .unwrap_or_default();
+                return Err(SceneError::at(&loc, format!("unknown directive '{other}'{hint}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The material object shapes get now.
+    pub(super) fn current_material(&self) -> Result<Rc<Obj>> {
+        match &self.gs.material {
+            MaterialRef::Object(o) => Ok(o.clone()),
+            MaterialRef::Named(n, loc) => self.named_materials.get(n).cloned().ok_or_else(|| {
+                SceneError::at(
+                    loc,
+                    format!("NamedMaterial: no material named \"{n}\" (MakeNamedMaterial defines them)"),
+                )
+            }),
+        }
+    }
+
+    /// Checks the end state: balanced blocks, a camera.
+    pub(super) fn finish_checks(&self, file: &Arc<SourceFile>) -> Result<()> {
+        let end = Loc { file: file.clone(), offset: file.text.len() };
+        if self.current_object.is_some() {
+            return Err(SceneError::at(&end, "ObjectBegin without ObjectEnd"));
+        }
+        if !self.world {
+            return Err(SceneError::at(&end, "the file has no WorldBegin"));
+        }
+        Ok(())
+    }
+}
+
+fn vec3(v: &[f64]) -> Vec3 {
+    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
+}
+
+/// The directive's plugin type as a parameter (read by the translator).
+fn type_param(ty: &str, loc: &Loc) -> Param {
+    Param {
+        ty: "string".into(),
+        name: "__type".into(),
+        values: vec![PVal::Str(ty.into())],
+        loc: loc.clone(),
+        used: Cell::new(false),
+    }
+}

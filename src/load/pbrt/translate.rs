@@ -1,0 +1,659 @@
+//! pbrt-v4's plugins as neumann's (Mitsuba-named) plugin objects:
+//!
+//! - cameras `perspective` (`fov` on the shorter image axis, `lensradius` / `focaldistance` →
+//!   thin lens, `screenwindow` and `frameaspectratio` → errors unless default) and
+//!   `orthographic`; pbrt's camera space has +x to the image's right, Mitsuba's to its left, so
+//!   the sensor's `to_world` is pbrt's world-from-camera times a mirror in x;
+//! - `Film` `rgb` / `gbuffer` (`xresolution`, `yresolution`, `cropwindow`, `pixelbounds`;
+//!   `filename` is the default output's name only; `iso`, `exposuretime`, `whitebalance` at
+//!   their defaults), `PixelFilter`s (`box`, `gaussian` → Gaussian of that σ, `triangle` →
+//!   tent, `mitchell`, `lanczos`), `Sampler`s (`pixelsamples`; `zsobol`, `sobol`,
+//!   `paddedsobol`, `halton` → Owen-scrambled Sobol, `pmj02bn`, `stratified` → stratified,
+//!   `independent`), `Integrator`s (`path`, `volpath`, `lightpath` → `ptracer`, `simplepath`,
+//!   `randomwalk` → `path`; `bdpt`, `mlt`, `sppm` → `path` with a warning; `maxdepth` bounces →
+//!   `max_depth` = `maxdepth` + 1 segments);
+//! - shapes `trianglemesh`, `plymesh` (also gzip-compressed), `bilinearmesh` (two triangles per
+//!   patch), `sphere`, `disk`, `cylinder` (whole ones);
+//! - materials `diffuse`, `conductor` (`eta`/`k` of pbrt's named metals, RGB or spectra, or
+//!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
+//!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`);
+//! - textures `imagemap`, `checkerboard` (2D), `scale`, `constant`;
+//! - lights `point`, `spot`, `distant`, `infinite` (constant `L`), area `diffuse`.
+//!
+//! Anything else is an error naming it; parameters not read are errors too.
+
+use super::params::{ParamSet, SpectrumParam};
+use super::parser::Parser;
+use crate::math::{Mat4, Rgb, Transform, Vec3};
+use crate::props::{Loc, Obj, Prop, SceneError, SpectrumValue, Value};
+use std::cell::Cell;
+use std::rc::Rc;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// A new object at `loc`.
+fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
+    Obj {
+        tag: tag.into(),
+        ty: ty.into(),
+        id: None,
+        loc: loc.clone(),
+        props: Vec::new(),
+        children: Vec::new(),
+        built: Cell::new(false),
+    }
+}
+
+/// Sets property `name`, located at `loc`.
+fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
+    o.props.push(Prop { name: name.into(), value, loc: loc.clone(), used: Cell::new(false) });
+}
+
+/// The location of parameter `name` (or of the directive).
+fn ploc(ps: &ParamSet, name: &str) -> Loc {
+    ps.params.iter().find(|p| p.name == name).map_or(ps.loc.clone(), |p| p.loc.clone())
+}
+
+fn transform(m: Mat4, ps: &ParamSet) -> Result<Transform> {
+    Transform::from_matrix(m).ok_or_else(|| ps.error("the current transform is singular"))
+}
+
+/// pbrt's default material: `diffuse` with reflectance 0.5.
+pub fn default_material() -> Obj {
+    let file =
+        std::sync::Arc::new(crate::props::SourceFile { path: "pbrt default material".into(), text: String::new() });
+    let loc = Loc { file, offset: 0 };
+    let mut o = obj("bsdf", "diffuse", &loc);
+    set(&mut o, "reflectance", Value::Float(0.5), &loc);
+    o
+}
+
+/// `Option`: the options that cannot change the expected image (`rendercoordsys`, `wavefront`,
+/// `pixelstats`, `msereferenceimage`, `msereferenceout`) are accepted; the others are errors.
+pub fn option(_: &mut Parser, ps: &ParamSet) -> Result<()> {
+    for p in &ps.params {
+        match p.name.as_str() {
+            "rendercoordsys" | "wavefront" | "pixelstats" | "msereferenceimage" | "msereferenceout" => p.used.set(true),
+            "disablepixeljitter"
+            | "disabletexturefiltering"
+            | "disablewavelengthjitter"
+            | "forcediffuse"
+            | "displacementedgescale"
+            | "seed" => {
+                return Err(ps.error_at(&p.name, format!("Option \"{}\" is not implemented by neumann", p.name)))
+            }
+            _ => return Err(ps.error_at(&p.name, format!("unknown Option \"{}\"", p.name))),
+        }
+    }
+    Ok(())
+}
+
+/// A spectrum parameter as a property value: `illuminant` says how pbrt reads it (lights:
+/// RGB as given, named standard illuminants normalised to luminance 1).
+fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool) -> Result<Value> {
+    Ok(match s {
+        SpectrumParam::Rgb(c) => Value::Rgb(c),
+        SpectrumParam::Constant(v) => Value::Float(v as f64),
+        SpectrumParam::Samples(v) => Value::Spectrum(SpectrumValue::Samples(v)),
+        SpectrumParam::Named(n) if illuminant && n == "stdillum-D65" => Value::Float(1.0),
+        SpectrumParam::Named(n) => {
+            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-D65)")))
+        }
+        SpectrumParam::Blackbody(t) => {
+            return Err(ps.error_at(name, format!("blackbody spectra ({t} K) are not implemented by neumann yet")))
+        }
+    })
+}
+
+/// A texturable parameter: a `texture` reference (to a texture of `class`) or a spectrum or
+/// float value; `None` if absent.
+fn texturable(p: &Parser, ps: &ParamSet, name: &str, float: bool) -> Result<Option<Value>> {
+    match ps.type_of(name) {
+        None => Ok(None),
+        Some("texture") => {
+            let t = ps.string_of(name, "texture")?.expect("present");
+            let table = if float { &p.float_textures } else { &p.spectrum_textures };
+            match table.get(&t) {
+                Some(o) => Ok(Some(Value::Object(o.clone()))),
+                None => Err(
+                    ps.error_at(name, format!("no {} texture named \"{t}\"", if float { "float" } else { "spectrum" }))
+                ),
+            }
+        }
+        Some(_) if float => Ok(Some(Value::Float(ps.float(name, 0.0)? as f64))),
+        Some(_) => {
+            let s = ps.spectrum(name)?.expect("present");
+            spectrum_value(ps, name, s, false).map(Some)
+        }
+    }
+}
+
+/// `Texture`: `imagemap`, `checkerboard`, `scale`, `constant`.
+pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<Obj> {
+    let float = class == "float";
+    // pbrt's (u, v) mapping: s = su u + du, t = sv v + dv.
+    let mapping = ps.string("mapping")?.unwrap_or_else(|| "uv".into());
+    if mapping != "uv" {
+        return Err(ps.error_at(
+            "mapping",
+            format!("texture mapping \"{mapping}\" is not implemented by neumann (only \"uv\")"),
+        ));
+    }
+    let (su, sv) = (ps.float("uscale", 1.0)?, ps.float("vscale", 1.0)?);
+    let (du, dv) = (ps.float("udelta", 0.0)?, ps.float("vdelta", 0.0)?);
+    let o = match ty {
+        "imagemap" => {
+            let mut o = obj("texture", "bitmap", &ps.loc);
+            let file = ps.string("filename")?.ok_or_else(|| ps.error("an imagemap needs its \"string filename\""))?;
+            set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
+            let encoding = ps.string("encoding")?.unwrap_or_else(|| "sRGB".into());
+            match encoding.as_str() {
+                "sRGB" => {}
+                "linear" => set(&mut o, "raw", Value::Bool(true), &ploc(ps, "encoding")),
+                other => {
+                    return Err(
+                        ps.error_at("encoding", format!("encoding \"{other}\" is not implemented (sRGB or linear)"))
+                    )
+                }
+            }
+            match ps.string("filter")?.as_deref() {
+                None | Some("bilinear") | Some("trilinear") | Some("ewa") => {}
+                Some("point") => set(&mut o, "filter_type", Value::String("nearest".into()), &ploc(ps, "filter")),
+                Some(other) => return Err(ps.error_at("filter", format!("unknown filter \"{other}\""))),
+            }
+            let wrap = match ps.string("wrap")?.as_deref() {
+                None | Some("repeat") => "repeat",
+                Some("clamp") => "clamp",
+                Some("octahedralsphere") => "repeat",
+                Some("black") => return Err(ps.error_at("wrap", "wrap \"black\" is not implemented by neumann")),
+                Some(other) => return Err(ps.error_at("wrap", format!("unknown wrap \"{other}\""))),
+            };
+            set(&mut o, "wrap_mode", Value::String(wrap.into()), &ps.loc);
+            if ps.bool("invert", false)? {
+                return Err(ps.error_at("invert", "inverted image textures are not implemented by neumann"));
+            }
+            let scale = ps.float("scale", 1.0)?;
+            // pbrt looks images up with t pointing up (1 − t down the rows).
+            use crate::math::Vec4;
+            let m = Mat4::from_cols(
+                Vec4::new(su, 0.0, 0.0, 0.0),
+                Vec4::new(0.0, -sv, 0.0, 0.0),
+                Vec4::Z,
+                Vec4::new(du, 1.0 - dv, 0.0, 1.0),
+            );
+            let t = Transform::from_matrix(m).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
+            set(&mut o, "to_uv", Value::Transform(t), &ps.loc);
+            if scale != 1.0 {
+                let mut s = obj("texture", "scale", &ps.loc);
+                set(&mut s, "tex", Value::Object(Rc::new(o)), &ps.loc);
+                set(&mut s, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
+                s
+            } else {
+                o
+            }
+        }
+        "checkerboard" => {
+            if ps.int("dimension", 2)? != 2 {
+                return Err(ps.error_at("dimension", "3D checkerboards are not implemented by neumann"));
+            }
+            let mut o = obj("texture", "checkerboard", &ps.loc);
+            let t1 = texturable(p, ps, "tex1", float)?.unwrap_or(Value::Float(1.0));
+            let t2 = texturable(p, ps, "tex2", float)?.unwrap_or(Value::Float(0.0));
+            set(&mut o, "color0", t1, &ploc(ps, "tex1"));
+            set(&mut o, "color1", t2, &ploc(ps, "tex2"));
+            // pbrt: tex1 where ⌊s⌋ + ⌊t⌋ is even; Mitsuba's: color0 where the fractional parts of
+            // (u, v) lie on the same side of ½ — the same cells at half the frequency.
+            let m = Mat4::from_cols_array(&[
+                su / 2.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                sv / 2.0,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+                0.0,
+                du / 2.0,
+                dv / 2.0,
+                0.0,
+                1.0,
+            ]);
+            let t = Transform::from_matrix(m).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
+            set(&mut o, "to_uv", Value::Transform(t), &ps.loc);
+            o
+        }
+        "scale" => {
+            let mut o = obj("texture", "scale", &ps.loc);
+            if let Some(v) = texturable(p, ps, "tex", float)? {
+                set(&mut o, "tex", v, &ploc(ps, "tex"));
+            }
+            if let Some(v) = texturable(p, ps, "scale", true)? {
+                set(&mut o, "scale", v, &ploc(ps, "scale"));
+            }
+            o
+        }
+        "constant" => {
+            let v = texturable(p, ps, "value", float)?.unwrap_or(Value::Float(1.0));
+            let mut o = obj("texture", "scale", &ps.loc);
+            set(&mut o, "tex", v, &ploc(ps, "value"));
+            o
+        }
+        "mix" | "directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble" | "ptex" => {
+            return Err(ps.error(format!("the \"{ty}\" texture is not implemented by neumann yet")))
+        }
+        other => return Err(ps.error(format!("unknown texture class \"{other}\""))),
+    };
+    Ok(o)
+}
+
+/// pbrt-v4's roughness parameters as an α pair (`remaproughness`: α = √roughness).
+fn roughness(p: &Parser, ps: &ParamSet) -> Result<Option<(Value, Value)>> {
+    let remap = ps.bool("remaproughness", true)?;
+    let r = texturable(p, ps, "roughness", true)?;
+    let u = texturable(p, ps, "uroughness", true)?.or(r.clone());
+    let v = texturable(p, ps, "vroughness", true)?.or(r);
+    let (Some(u), Some(v)) = (u, v) else { return Ok(None) };
+    let alpha = |x: Value| -> Result<Option<Value>> {
+        match x {
+            Value::Float(0.0) => Ok(None),
+            Value::Float(f) => Ok(Some(Value::Float(if remap { f.max(0.0).sqrt() } else { f }))),
+            t if !remap => Ok(Some(t)),
+            _ => Err(ps.error_at("roughness", "a roughness texture with remaproughness true is not implemented by neumann (give α directly with remaproughness false)")),
+        }
+    };
+    match (alpha(u)?, alpha(v)?) {
+        (Some(a), Some(b)) => Ok(Some((a, b))),
+        (None, None) => Ok(None),
+        _ => Err(ps.error_at(
+            "uroughness",
+            "one of uroughness and vroughness is zero: neumann needs both rough or both smooth",
+        )),
+    }
+}
+
+/// pbrt's named glasses at the d line (587.6 nm): neumann's dielectrics do not disperse.
+fn named_ior(name: &str) -> Option<f32> {
+    Some(match name {
+        "glass-BK7" => 1.5168,
+        "glass-BAF10" => 1.6700,
+        "glass-FK51A" => 1.4866,
+        "glass-LASF9" => 1.8503,
+        "glass-F5" | "glass-SF5" => 1.6034,
+        "glass-F10" | "glass-SF10" => 1.7283,
+        "glass-F11" | "glass-SF11" => 1.7847,
+        _ => return None,
+    })
+}
+
+/// `Material` / `MakeNamedMaterial`.
+pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
+    if ps.has("displacement") {
+        return Err(ps.error_at("displacement", "displacement is not implemented by neumann"));
+    }
+    if ps.has("normalmap") {
+        return Err(ps.error_at("normalmap", "pbrt normal maps are not implemented by neumann yet"));
+    }
+    let l = &ps.loc;
+    Ok(match ty {
+        "diffuse" => {
+            let mut o = obj("bsdf", "diffuse", l);
+            let r = texturable(p, ps, "reflectance", false)?.unwrap_or(Value::Float(0.5));
+            set(&mut o, "reflectance", r, &ploc(ps, "reflectance"));
+            o
+        }
+        "conductor" => {
+            let rough = roughness(p, ps)?;
+            let mut o = obj("bsdf", if rough.is_some() { "roughconductor" } else { "conductor" }, l);
+            if let Some((u, v)) = rough {
+                set(&mut o, "distribution", Value::String("ggx".into()), l);
+                set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
+                set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
+            }
+            if ps.has("reflectance") {
+                // pbrt-v4: η = 1 and k = 2√r / √(1 − r), which reflects r at normal incidence.
+                let r = match ps.spectrum("reflectance")? {
+                    Some(SpectrumParam::Rgb(c)) => c,
+                    Some(SpectrumParam::Constant(v)) => Rgb::splat(v),
+                    _ => {
+                        return Err(ps.error_at("reflectance", "a conductor's reflectance must be an rgb or a constant"))
+                    }
+                };
+                let k = r.map(|x| 2.0 * x.clamp(0.0, 0.9999).sqrt() / (1.0 - x.clamp(0.0, 0.9999)).sqrt());
+                set(&mut o, "eta", Value::Float(1.0), &ploc(ps, "reflectance"));
+                set(&mut o, "k", Value::Rgb(k), &ploc(ps, "reflectance"));
+            } else {
+                let eta = ps.spectrum("eta")?.unwrap_or(SpectrumParam::Named("metal-Cu-eta".into()));
+                let k = ps.spectrum("k")?.unwrap_or(SpectrumParam::Named("metal-Cu-k".into()));
+                match (&eta, &k) {
+                    (SpectrumParam::Named(e), SpectrumParam::Named(kk)) => {
+                        let metal = e.strip_prefix("metal-").and_then(|m| m.strip_suffix("-eta"));
+                        let metal_k = kk.strip_prefix("metal-").and_then(|m| m.strip_suffix("-k"));
+                        match (metal, metal_k) {
+                            (Some(a), Some(b)) if a == b && crate::material::named_conductor(a).is_some() => {
+                                set(&mut o, "material", Value::String(a.into()), &ploc(ps, "eta"))
+                            }
+                            _ => return Err(ps.error_at("eta", format!("the conductor spectra \"{e}\" / \"{kk}\" are not available in neumann (named metals: Ag, Al, Au, Cu, MgO, TiO2, …, eta and k of the same metal)"))),
+                        }
+                    }
+                    _ => {
+                        set(&mut o, "eta", spectrum_value(ps, "eta", eta, false)?, &ploc(ps, "eta"));
+                        set(&mut o, "k", spectrum_value(ps, "k", k, false)?, &ploc(ps, "k"));
+                    }
+                }
+            }
+            o
+        }
+        "dielectric" | "thindielectric" => {
+            let eta = match ps.type_of("eta") {
+                None => 1.5,
+                Some("float") => ps.float("eta", 1.5)?,
+                Some(_) => match ps.spectrum("eta")? {
+                    Some(SpectrumParam::Constant(v)) => v,
+                    Some(SpectrumParam::Named(n)) => {
+                        named_ior(&n).ok_or_else(|| ps.error_at("eta", format!("unknown glass \"{n}\"")))?
+                    }
+                    _ => {
+                        return Err(
+                            ps.error_at("eta", "a spectrally varying eta (dispersion) is not implemented by neumann")
+                        )
+                    }
+                },
+            };
+            let rough = if ty == "dielectric" { roughness(p, ps)? } else { None };
+            let kind = match (ty, rough.is_some()) {
+                ("thindielectric", _) => "thindielectric",
+                (_, true) => "roughdielectric",
+                _ => "dielectric",
+            };
+            let mut o = obj("bsdf", kind, l);
+            set(&mut o, "int_ior", Value::Float(eta as f64), &ploc(ps, "eta"));
+            set(&mut o, "ext_ior", Value::Float(1.0), l);
+            if let Some((u, v)) = rough {
+                set(&mut o, "distribution", Value::String("ggx".into()), l);
+                set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
+                set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
+            }
+            o
+        }
+        "mix" => {
+            let names = match ps.params.iter().find(|q| q.name == "materials") {
+                Some(q) => {
+                    q.used.set(true);
+                    q.values
+                        .iter()
+                        .filter_map(|v| if let super::params::PVal::Str(s) = v { Some(s.clone()) } else { None })
+                        .collect::<Vec<_>>()
+                }
+                None => Vec::new(),
+            };
+            let [a, b] = &names[..] else {
+                return Err(ps.error_at("materials", "a mix needs \"string materials\" with two names"));
+            };
+            let get = |n: &str| {
+                p.named_materials
+                    .get(n)
+                    .cloned()
+                    .ok_or_else(|| ps.error_at("materials", format!("no material named \"{n}\"")))
+            };
+            let mut o = obj("bsdf", "blendbsdf", l);
+            let w = texturable(p, ps, "amount", true)?.unwrap_or(Value::Float(0.5));
+            set(&mut o, "weight", w, &ploc(ps, "amount"));
+            o.children.push(get(a)?);
+            o.children.push(get(b)?);
+            o
+        }
+        "interface" => obj("bsdf", "null", l),
+        "coateddiffuse" | "coatedconductor" | "diffusetransmission" | "hair" | "measured" | "subsurface" => {
+            return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
+        }
+        other => return Err(ps.error(format!("unknown material \"{other}\""))),
+    })
+}
+
+/// The scale of a light (`scale`, and `power` where given).
+fn light_scale(ps: &ParamSet) -> Result<f32> {
+    let s = ps.float("scale", 1.0)?;
+    if s.is_nan() || s < 0.0 {
+        return Err(ps.error_at("scale", "must be ≥ 0"));
+    }
+    Ok(s)
+}
+
+fn scaled(v: Value, s: f32) -> Value {
+    match v {
+        Value::Rgb(c) => Value::Rgb(c * s),
+        Value::Float(f) => Value::Float(f * s as f64),
+        other => other,
+    }
+}
+
+/// `LightSource`.
+pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
+    let ctm = p.gs.ctm;
+    let l = &ps.loc;
+    let spectrum = |name: &str| -> Result<Value> {
+        match ps.spectrum(name)? {
+            Some(s) => spectrum_value(ps, name, s, true),
+            None => Ok(Value::Float(1.0)),
+        }
+    };
+    Ok(match ty {
+        "point" => {
+            let from = ps.point("from", Vec3::ZERO)?;
+            let mut s = light_scale(ps)?;
+            if ps.has("power") {
+                s *= ps.float("power", 1.0)? / (4.0 * std::f32::consts::PI);
+            }
+            let mut o = obj("emitter", "point", l);
+            set(&mut o, "position", Value::Point(ctm.transform_point3(from)), l);
+            set(&mut o, "intensity", scaled(spectrum("I")?, s), &ploc(ps, "I"));
+            o
+        }
+        "spot" => {
+            let from = ps.point("from", Vec3::ZERO)?;
+            let to = ps.point("to", Vec3::Z)?;
+            let cone = ps.float("coneangle", 30.0)?;
+            let delta = ps.float("conedelta", 5.0)?;
+            if ps.has("power") {
+                return Err(ps.error_at("power", "a spot light's power is not implemented by neumann yet (use scale)"));
+            }
+            let s = light_scale(ps)?;
+            let (wf, wt) = (ctm.transform_point3(from), ctm.transform_point3(to));
+            let d = (wt - wf).normalize_or_zero();
+            let up = if d.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
+            let t = Transform::look_at(wf, wt, up).ok_or_else(|| ps.error_at("to", "from and to coincide"))?;
+            let mut o = obj("emitter", "spot", l);
+            set(&mut o, "to_world", Value::Transform(t), l);
+            set(&mut o, "intensity", scaled(spectrum("I")?, s), &ploc(ps, "I"));
+            set(&mut o, "cutoff_angle", Value::Float(cone.clamp(1e-3, 180.0) as f64), &ploc(ps, "coneangle"));
+            set(&mut o, "beam_width", Value::Float((cone - delta).clamp(0.0, cone) as f64), &ploc(ps, "conedelta"));
+            o
+        }
+        "distant" => {
+            let from = ps.point("from", Vec3::ZERO)?;
+            let to = ps.point("to", Vec3::Z)?;
+            if ps.has("illuminance") {
+                return Err(ps.error_at(
+                    "illuminance",
+                    "a distant light's illuminance is not implemented by neumann yet (use scale)",
+                ));
+            }
+            let s = light_scale(ps)?;
+            let d = ctm.transform_vector3(to - from).normalize_or_zero();
+            if d == Vec3::ZERO {
+                return Err(ps.error_at("to", "from and to coincide"));
+            }
+            let mut o = obj("emitter", "directional", l);
+            set(&mut o, "direction", Value::Vector(d), l);
+            set(&mut o, "irradiance", scaled(spectrum("L")?, s), &ploc(ps, "L"));
+            o
+        }
+        "infinite" => {
+            if ps.has("filename") {
+                return Err(ps.error_at("filename", "image-based infinite lights (pbrt-v4's equal-area octahedral maps) are not implemented by neumann yet"));
+            }
+            if ps.has("illuminance") {
+                return Err(ps.error_at(
+                    "illuminance",
+                    "an infinite light's illuminance is not implemented by neumann yet (use scale)",
+                ));
+            }
+            let s = light_scale(ps)?;
+            let mut o = obj("emitter", "constant", l);
+            set(&mut o, "radiance", scaled(spectrum("L")?, s), &ploc(ps, "L"));
+            o
+        }
+        "goniometric" | "projection" => {
+            return Err(ps.error(format!("the \"{ty}\" light is not implemented by neumann yet")))
+        }
+        other => return Err(ps.error(format!("unknown light \"{other}\""))),
+    })
+}
+
+/// A shape object with the current material, area light, orientation and transform.
+fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform>) -> Result<Obj> {
+    let mut o = obj("shape", ty, &ps.loc);
+    if let Some(t) = to_world {
+        set(&mut o, "to_world", Value::Transform(t), &ps.loc);
+    }
+    if p.gs.reverse {
+        set(&mut o, "flip_normals", Value::Bool(true), &ps.loc);
+    }
+    o.children.push(p.current_material()?);
+    if let Some(al) = p.gs.area_light.clone() {
+        if al.bool("twosided", false)? {
+            return Err(al.error_at("twosided", "two-sided area lights are not implemented by neumann yet"));
+        }
+        if al.has("power") {
+            return Err(al.error_at("power", "an area light's power is not implemented by neumann yet (use scale)"));
+        }
+        if al.has("filename") {
+            return Err(al.error_at("filename", "image area lights are not implemented by neumann yet"));
+        }
+        let s = light_scale(&al)?;
+        let l = match al.spectrum("L")? {
+            Some(x) => spectrum_value(&al, "L", x, true)?,
+            None => Value::Float(1.0),
+        };
+        let mut e = obj("emitter", "area", &al.loc);
+        set(&mut e, "radiance", scaled(l, s), &ploc(&al, "L"));
+        o.children.push(Rc::new(e));
+    }
+    if ps.has("alpha") {
+        return Err(ps.error_at("alpha", "alpha cut-outs on pbrt shapes are not implemented by neumann yet"));
+    }
+    Ok(o)
+}
+
+/// `Shape`: the objects it adds.
+pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
+    let ctm = p.gs.ctm;
+    for ignored in ["emissionfilename"] {
+        if ps.has(ignored) {
+            return Err(ps.error_at(ignored, format!("\"{ignored}\" is not implemented by neumann")));
+        }
+    }
+    let obj = match ty {
+        "sphere" => {
+            let r = ps.float("radius", 1.0)?;
+            let (zmin, zmax, phimax) = (ps.float("zmin", -r)?, ps.float("zmax", r)?, ps.float("phimax", 360.0)?);
+            if zmin > -r || zmax < r || phimax < 360.0 {
+                return Err(ps.error("partial spheres (zmin, zmax, phimax) are not implemented by neumann yet"));
+            }
+            let mut o = shape_obj(p, "sphere", ps, Some(transform(ctm, ps)?))?;
+            set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
+            o
+        }
+        "disk" => {
+            let (h, r, ri, phimax) = (
+                ps.float("height", 0.0)?,
+                ps.float("radius", 1.0)?,
+                ps.float("innerradius", 0.0)?,
+                ps.float("phimax", 360.0)?,
+            );
+            if ri > 0.0 || phimax < 360.0 {
+                return Err(ps.error("partial disks (innerradius, phimax) are not implemented by neumann yet"));
+            }
+            let m = ctm * Mat4::from_translation(Vec3::new(0.0, 0.0, h)) * Mat4::from_scale(Vec3::new(r, r, 1.0));
+            shape_obj(p, "disk", ps, Some(transform(m, ps)?))?
+        }
+        "cylinder" => {
+            let (r, zmin, zmax, phimax) =
+                (ps.float("radius", 1.0)?, ps.float("zmin", -1.0)?, ps.float("zmax", 1.0)?, ps.float("phimax", 360.0)?);
+            if phimax < 360.0 {
+                return Err(ps.error_at("phimax", "partial cylinders are not implemented by neumann yet"));
+            }
+            let mut o = shape_obj(p, "cylinder", ps, Some(transform(ctm, ps)?))?;
+            set(&mut o, "p0", Value::Point(Vec3::new(0.0, 0.0, zmin)), &ploc(ps, "zmin"));
+            set(&mut o, "p1", Value::Point(Vec3::new(0.0, 0.0, zmax)), &ploc(ps, "zmax"));
+            set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
+            o
+        }
+        "trianglemesh" | "bilinearmesh" => {
+            let mesh = super::mesh::from_params(ps, ty == "bilinearmesh")?;
+            let name = format!("#pbrt-mesh-{}", p.mesh_count);
+            p.mesh_count += 1;
+            p.memory.meshes.insert(name.clone(), mesh);
+            let mut o = shape_obj(p, "mesh", ps, Some(transform(ctm, ps)?))?;
+            set(&mut o, "filename", Value::String(name), &ps.loc);
+            o
+        }
+        "plymesh" => {
+            let file = ps.string("filename")?.ok_or_else(|| ps.error("a plymesh needs its \"string filename\""))?;
+            if ps.has("displacement") {
+                return Err(ps.error_at("displacement", "displacement is not implemented by neumann"));
+            }
+            let path = p.resolver.resolve(&file);
+            let mesh = super::mesh::read_ply(&path).map_err(|e| ps.error_at("filename", e))?;
+            let name = format!("#pbrt-mesh-{}", p.mesh_count);
+            p.mesh_count += 1;
+            p.memory.meshes.insert(name.clone(), mesh);
+            let mut o = shape_obj(p, "mesh", ps, Some(transform(ctm, ps)?))?;
+            set(&mut o, "filename", Value::String(name), &ploc(ps, "filename"));
+            o
+        }
+        "loopsubdiv" | "curve" | "cone" | "paraboloid" | "hyperboloid" => {
+            return Err(ps.error(format!("the \"{ty}\" shape is not implemented by neumann yet")))
+        }
+        other => return Err(ps.error(format!("unknown shape \"{other}\""))),
+    };
+    Ok(vec![Rc::new(obj)])
+}
+
+/// A copy of a shape object placed by `instance` (applied after its own `to_world`).
+pub fn placed(o: &Obj, instance: &Mat4) -> Obj {
+    let mut props: Vec<Prop> = Vec::new();
+    let mut had = false;
+    for p in &o.props {
+        let value = match (&p.name[..], &p.value) {
+            ("to_world", Value::Transform(t)) => {
+                had = true;
+                Value::Transform(Transform::from_matrix(*instance * *t.matrix()).unwrap_or(*t))
+            }
+            (_, v) => v.clone(),
+        };
+        props.push(Prop { name: p.name.clone(), value, loc: p.loc.clone(), used: Cell::new(false) });
+    }
+    if !had {
+        if let Some(t) = Transform::from_matrix(*instance) {
+            props.push(Prop {
+                name: "to_world".into(),
+                value: Value::Transform(t),
+                loc: o.loc.clone(),
+                used: Cell::new(false),
+            });
+        }
+    }
+    Obj {
+        tag: o.tag.clone(),
+        ty: o.ty.clone(),
+        id: None,
+        loc: o.loc.clone(),
+        props,
+        children: o.children.clone(),
+        built: Cell::new(false),
+    }
+}
