@@ -235,6 +235,35 @@ pub fn write_part(path: &Path, film: &Film, info: &PartInfo, alpha: bool) -> Res
     write_atomically(path, |tmp| image.write().to_file(tmp).map_err(|e| e.to_string())).map_err(fail)
 }
 
+/// Checks that every tile of a single-part, single-level tiled OpenEXR file says it belongs to
+/// level (0, 0), as the exr crate's reader assumes without checking.
+fn tiles_at_level_zero(bytes: &[u8], chunks: usize) -> Result<(), String> {
+    let bad = || "a corrupt OpenEXR file (its tile table does not match its header)".to_string();
+    let mut pos = 8;
+    // Header attributes: name\0 type\0 size value, up to an empty name.
+    loop {
+        let name_end = bytes.get(pos..).and_then(|b| b.iter().position(|&c| c == 0)).ok_or_else(bad)? + pos;
+        if name_end == pos {
+            pos += 1;
+            break;
+        }
+        let type_end = bytes.get(name_end + 1..).and_then(|b| b.iter().position(|&c| c == 0)).ok_or_else(bad)? + name_end + 1;
+        let size = bytes.get(type_end + 1..type_end + 5).ok_or_else(bad)?;
+        let size = i32::from_le_bytes(size.try_into().expect("4 bytes"));
+        pos = type_end + 5 + usize::try_from(size).map_err(|_| bad())?;
+    }
+    for c in 0..chunks {
+        let at = pos + 8 * c;
+        let offset = u64::from_le_bytes(bytes.get(at..at + 8).ok_or_else(bad)?.try_into().expect("8 bytes"));
+        let offset = usize::try_from(offset).map_err(|_| bad())?;
+        let levels = bytes.get(offset.saturating_add(8)..offset.saturating_add(16)).ok_or_else(bad)?;
+        if levels.iter().any(|&b| b != 0) {
+            return Err(bad());
+        }
+    }
+    Ok(())
+}
+
 /// Reads a part written by [`write_part`].
 pub fn read_part(path: &Path) -> Result<Part, PartError> {
     use exr::meta::attribute::AttributeValue;
@@ -242,6 +271,24 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| fail(format!("not a readable OpenEXR file: {e}")))?;
     let header = meta.headers.first().ok_or_else(|| fail("an OpenEXR file without a layer".into()))?;
+    // neumann writes one flat single-resolution layer; other layouts (mip or rip levels, deep
+    // data, several layers) are no parts, and the exr crate's reader trips over inconsistent
+    // level indices in them (found by fuzzing).
+    let single_level = match &header.blocks {
+        exr::meta::BlockDescription::ScanLines => true,
+        exr::meta::BlockDescription::Tiles(t) => matches!(t.level_mode, exr::meta::attribute::LevelMode::Singular),
+    };
+    if meta.headers.len() != 1 || header.deep || !single_level {
+        return Err(fail("not a part of a split render (a multi-resolution, multi-layer or deep OpenEXR file)".into()));
+    }
+    if matches!(header.blocks, exr::meta::BlockDescription::Tiles(_)) {
+        let mut bytes = Vec::new();
+        use std::io::Read;
+        std::fs::File::open(path)
+            .and_then(|f| f.take(16 << 30).read_to_end(&mut bytes))
+            .map_err(|e| fail(format!("cannot read: {e}")))?;
+        tiles_at_level_zero(&bytes, header.chunk_count).map_err(fail)?;
+    }
     let size = header.layer_size;
     if size.width() as u64 * size.height() as u64 > MAX_PIXELS {
         return Err(fail(format!("{}×{} pixels, more than the limit of {MAX_PIXELS}", size.width(), size.height())));

@@ -210,3 +210,16 @@ fn errors_name_the_place_and_what_was_expected() {
         let _ = load(&PBRT_SCENE[..n]);
     }
 }
+
+#[test]
+fn blackbody_lights_have_luminance_one_and_their_colour() {
+    let warm = translate::blackbody_rgb(2700.0);
+    let d65ish = translate::blackbody_rgb(6504.0);
+    assert!((crate::math::luminance(warm) - 1.0).abs() < 1e-4);
+    assert!(warm.x > warm.y && warm.y > warm.z, "warm light is red-orange: {warm}");
+    // A 6504 K black body is close to D65's white (its chromaticity is slightly off the locus).
+    assert!((d65ish - Rgb::ONE).abs().max_element() < 0.15, "{d65ish}");
+    let f = load("WorldBegin\nLightSource \"point\" \"blackbody I\" [ 2700 ] \"float scale\" 2\n").unwrap();
+    let Light::Point { intensity, .. } = &f.scene.lights()[0] else { panic!() };
+    assert!((*intensity - warm * 2.0).abs().max_element() < 1e-5);
+}

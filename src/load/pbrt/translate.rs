@@ -99,10 +99,27 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
         SpectrumParam::Named(n) => {
             return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-D65)")))
         }
-        SpectrumParam::Blackbody(t) => {
-            return Err(ps.error_at(name, format!("blackbody spectra ({t} K) are not implemented by neumann yet")))
-        }
+        SpectrumParam::Blackbody(t) if illuminant => Value::Rgb(blackbody_rgb(t)),
+        SpectrumParam::Blackbody(_) => return Err(ps.error_at(name, "a blackbody spectrum is for emitted light only")),
     })
+}
+
+/// The linear sRGB colour of a black body at `kelvin`, at luminance 1 (pbrt-v4 normalises a
+/// light's spectrum to 1 nit, which its sRGB film shows as Y = 1).
+pub fn blackbody_rgb(kelvin: f32) -> Rgb {
+    const H: f64 = 6.626_070_15e-34;
+    const C: f64 = 299_792_458.0;
+    const K: f64 = 1.380_649e-23;
+    let samples: Vec<(f32, f32)> = (0..=94)
+        .map(|i| {
+            let nm = 360.0 + 5.0 * i as f64;
+            let l = nm * 1e-9;
+            let b = 2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * kelvin as f64)).exp() - 1.0);
+            (nm as f32, (b * 1e-13) as f32)
+        })
+        .collect();
+    let rgb = crate::math::spectrum::spectrum_to_rgb(&samples, crate::math::spectrum::SpectrumKind::Illuminant);
+    rgb / crate::math::luminance(rgb).max(1e-30)
 }
 
 /// A texturable parameter: a `texture` reference (to a texture of `class`) or a spectrum or
