@@ -15,6 +15,8 @@ pub mod overrides;
 pub mod pbrt;
 pub mod ply;
 mod resolver;
+#[cfg(test)]
+pub(crate) mod test_support;
 pub mod serialized;
 pub mod volume;
 

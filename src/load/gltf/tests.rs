@@ -5,6 +5,7 @@ use super::*;
 use crate::geometry::Geometry;
 use crate::light::Light;
 use crate::load::overrides::{Override, Target};
+use crate::load::test_support::{assert_renders_like, mean, render};
 use crate::material::Bsdf;
 use crate::math::Vec2;
 use crate::math::{Rgb, Vec3};
@@ -244,28 +245,6 @@ fn res(w: i64, h: i64) -> Overrides {
     }
 }
 
-fn render(file: &SceneFile, spp: u32, seed: u64) -> Vec<Rgb> {
-    let settings = crate::render::RenderSettings { spp, seed, filter: file.filter.clone(), ..Default::default() };
-    let never = std::sync::atomic::AtomicBool::new(false);
-    crate::render::render_integrator(&file.scene, &file.integrator, &settings, &never).unwrap().film.image()
-}
-
-fn mean(img: &[Rgb]) -> f64 {
-    img.iter().map(|c| (c.x + c.y + c.z) as f64 / 3.0).sum::<f64>() / img.len() as f64
-}
-
-/// relMSE of `a` against `b` (per channel, ε = 0.01).
-fn rel_mse(a: &[Rgb], b: &[Rgb]) -> f64 {
-    let mut s = 0.0;
-    for (x, y) in a.iter().zip(b) {
-        for k in 0..3 {
-            let d = (x[k] - y[k]) as f64;
-            s += d * d / ((y[k] as f64).powi(2) + 0.01);
-        }
-    }
-    s / (3 * a.len()) as f64
-}
-
 #[test]
 fn the_same_scene_in_gltf_and_mitsuba_xml_renders_the_same() {
     let dir = tmp("compare");
@@ -279,14 +258,7 @@ fn the_same_scene_in_gltf_and_mitsuba_xml_renders_the_same() {
     let gltf = load_gltf_file(&dir.join("scene.gltf"), &res(48, 36), None).unwrap();
     assert_eq!((gltf.scene.camera().width(), gltf.scene.camera().height(), gltf.spp), (48, 36, 64));
     assert!(gltf.warnings.is_empty(), "{:?}", gltf.warnings);
-    let (a, b) = (render(&gltf, 64, 1), render(&xml, 64, 1));
-    let (ma, mb) = (mean(&a), mean(&b));
-    assert!(mb > 0.01, "the scene is lit: {mb}");
-    assert!((ma / mb - 1.0).abs() < 0.005, "means {ma} vs {mb}");
-    // The noise level: two seeds of the XML scene.
-    let noise = rel_mse(&render(&xml, 64, 2), &b);
-    let diff = rel_mse(&a, &b);
-    assert!(diff <= 1.5 * noise, "relMSE {diff} against a noise level of {noise}");
+    assert_renders_like(&gltf, &xml);
     // The same document as .glb, and with the buffer in an external file, loads the same scene.
     std::fs::write(dir.join("scene.glb"), w.glb(doc.clone())).unwrap();
     let glb = load_gltf_file(&dir.join("scene.glb"), &res(48, 36), None).unwrap();
@@ -914,11 +886,5 @@ fn a_textured_scene_in_gltf_and_mitsuba_xml_renders_the_same() {
     });
     std::fs::write(dir.join("scene.gltf"), w.gltf(doc)).unwrap();
     let gltf = load_gltf_file(&dir.join("scene.gltf"), &res(40, 30), None).unwrap();
-    let (a, b) = (render(&gltf, 64, 1), render(&xml, 64, 1));
-    let (ma, mb) = (mean(&a), mean(&b));
-    assert!(mb > 0.01, "the scene is lit: {mb}");
-    assert!((ma / mb - 1.0).abs() < 0.005, "means {ma} vs {mb}");
-    let noise = rel_mse(&render(&xml, 64, 2), &b);
-    let diff = rel_mse(&a, &b);
-    assert!(diff <= 1.5 * noise, "relMSE {diff} against a noise level of {noise}");
+    assert_renders_like(&gltf, &xml);
 }

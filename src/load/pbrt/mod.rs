@@ -17,9 +17,9 @@ mod translate;
 use crate::load::overrides::Overrides;
 use crate::load::SceneFile;
 use crate::math::{Mat4, Vec3};
-use crate::props::{Loc, Obj, Prop, SceneError, SourceFile, Value};
+use crate::props::{Loc, Obj, SceneError, SourceFile, Value};
 use params::ParamSet;
-use std::cell::Cell;
+use translate::{obj, ploc as loc_of, set};
 use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
@@ -57,26 +57,6 @@ fn finish(mut parser: parser::Parser, path: &Path, settings: &Overrides) -> Resu
     Ok(out)
 }
 
-fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
-    Obj {
-        tag: tag.into(),
-        ty: ty.into(),
-        id: None,
-        loc: loc.clone(),
-        props: Vec::new(),
-        children: Vec::new(),
-        built: Cell::new(false),
-    }
-}
-
-fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
-    o.props.push(Prop { name: name.into(), value, loc: loc.clone(), used: Cell::new(false) });
-}
-
-fn loc_of(ps: &ParamSet, name: &str) -> Loc {
-    ps.params.iter().find(|p| p.name == name).map_or(ps.loc.clone(), |p| p.loc.clone())
-}
-
 /// The directive's plugin type.
 fn plugin_type(ps: &ParamSet) -> String {
     ps.string("__type").ok().flatten().unwrap_or_default()
@@ -86,7 +66,8 @@ fn plugin_type(ps: &ParamSet) -> String {
 /// media): `maxdepth` (5 bounces) → `max_depth` = `maxdepth` + 1.
 fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let Some(ps) = p.integrator.take() else {
-        let mut o = obj("integrator", "path", loc);
+        // pbrt-v4's default, volpath; neumann's path renders the same image without media.
+        let mut o = obj("integrator", if p.media.is_empty() { "path" } else { "volpath" }, loc);
         set(&mut o, "max_depth", Value::Integer(6), loc);
         return Ok(o);
     };
@@ -367,6 +348,9 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     set(&mut sampler, "sample_count", Value::Integer(spp), &sloc);
     s.children.push(Rc::new(film));
     s.children.push(Rc::new(sampler));
+    if let Some(m) = p.camera_medium.take() {
+        s.children.push(m);
+    }
     Ok(s)
 }
 

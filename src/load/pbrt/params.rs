@@ -19,7 +19,7 @@ pub enum PVal {
 }
 
 /// A parameter: `"type name" values`.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Param {
     /// The declared type (`float`, `integer`, `point3`, `rgb`, `spectrum`, `texture`, …).
     pub ty: String,

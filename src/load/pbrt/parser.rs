@@ -38,6 +38,14 @@ pub struct Graphics {
     pub material: MaterialRef,
     /// `AreaLightSource` (its translated emitter properties).
     pub area_light: Option<Rc<ParamSet>>,
+    /// `Attribute` defaults by target (`shape`, `light`, `material`, `texture`): parameters the
+    /// target's directives get when they do not give them.
+    attributes: Rc<Vec<(String, Param)>>,
+    /// `MediumInterface`: the media inside and outside the shapes that follow (the outside one
+    /// at `Camera` is the camera's).
+    pub inside: Option<String>,
+    /// See `inside`.
+    pub outside: Option<String>,
     /// Whether the transform block is a `TransformBegin` (only the transform is restored).
     transform_only: bool,
 }
@@ -55,6 +63,10 @@ pub struct Parser {
     named_coords: HashMap<String, Mat4>,
     pub(super) named_materials: HashMap<String, Rc<Obj>>,
     pub(super) float_textures: HashMap<String, Rc<Obj>>,
+    /// Named media (`MakeNamedMedium`).
+    pub(super) media: HashMap<String, Rc<Obj>>,
+    /// The camera's medium (the outside medium at `Camera`).
+    pub(super) camera_medium: Option<Rc<Obj>>,
     pub(super) spectrum_textures: HashMap<String, Rc<Obj>>,
     objects: HashMap<String, Vec<Rc<Obj>>>,
     current_object: Option<(String, Vec<Rc<Obj>>)>,
@@ -241,12 +253,17 @@ impl Parser {
                 reverse: false,
                 material: MaterialRef::Object(default_material),
                 area_light: None,
+                attributes: Rc::new(Vec::new()),
+                inside: None,
+                outside: None,
                 transform_only: false,
             },
             stack: Vec::new(),
             named_coords: HashMap::new(),
             named_materials: HashMap::new(),
             float_textures: HashMap::new(),
+            media: HashMap::new(),
+            camera_medium: None,
             spectrum_textures: HashMap::new(),
             objects: HashMap::new(),
             current_object: None,
@@ -460,6 +477,7 @@ impl Parser {
                 let mut ps = ps;
                 ps.params.push(type_param(&ty, &loc));
                 self.camera = Some((ps, world_from_camera));
+                self.camera_medium = self.gs.outside.as_ref().and_then(|n| self.media.get(n).cloned());
             }
             "Film" | "Sampler" | "PixelFilter" | "Integrator" | "Accelerator" => {
                 let ty = c.string(&format!("the {name} type"))?;
@@ -490,22 +508,53 @@ impl Parser {
                 self.named_coords.insert("world".into(), Mat4::IDENTITY);
             }
             "WorldEnd" => {}
-            "MakeNamedMedium" | "MediumInterface" => {
-                return Err(SceneError::at(
-                    &loc,
-                    format!("{name}: participating media in pbrt scenes are not implemented by neumann yet"),
-                ));
+            "MakeNamedMedium" => {
+                let medium = c.string("the medium's name")?;
+                let ps = c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?;
+                let obj = translate::medium(&ps)?;
+                ps.check_unused()?;
+                self.media.insert(medium, Rc::new(obj));
+            }
+            "MediumInterface" => {
+                let inside = c.string("the inside medium's name")?;
+                // One name: the same medium on both sides.
+                let outside = match c.tokens.get(c.pos) {
+                    Some(Token { kind: Kind::Str(_), .. }) => c.string("the outside medium's name")?,
+                    _ => inside.clone(),
+                };
+                for n in [&inside, &outside] {
+                    if !n.is_empty() && !self.media.contains_key(n) {
+                        return Err(SceneError::at(
+                            &loc,
+                            format!("MediumInterface: no medium named \"{n}\" (MakeNamedMedium defines them)"),
+                        ));
+                    }
+                }
+                self.gs.inside = (!inside.is_empty()).then_some(inside);
+                self.gs.outside = (!outside.is_empty()).then_some(outside);
             }
             "Attribute" => {
                 let target = c.string("the attribute's target (shape, light, material, medium, texture)")?;
                 let ps = c.params(format!("Attribute \"{target}\""), loc.clone())?;
-                return Err(ps.error("Attribute: per-target default parameters are not implemented by neumann yet"));
+                if !["shape", "light", "material", "texture"].contains(&target.as_str()) {
+                    return Err(ps.error(format!(
+                        "the target \"{target}\" is not implemented by neumann (shape, light, material, texture; media are not yet)"
+                    )));
+                }
+                let mut list: Vec<(String, Param)> =
+                    self.gs.attributes.iter().map(|(t, p)| (t.clone(), p.clone())).collect();
+                for p in ps.params {
+                    list.retain(|(t, q)| !(*t == target && q.name == p.name));
+                    list.push((target.clone(), p));
+                }
+                self.gs.attributes = Rc::new(list);
             }
             "Texture" => {
                 let tex_name = c.string("the texture's name")?;
                 let class = c.string("the texture's type (\"spectrum\" or \"float\")")?;
                 let ty = c.string("the texture's class (imagemap, checkerboard, …)")?;
-                let ps = c.params(format!("Texture \"{tex_name}\" \"{class}\" \"{ty}\""), loc.clone())?;
+                let mut ps = c.params(format!("Texture \"{tex_name}\" \"{class}\" \"{ty}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "texture");
                 let obj = translate::texture(self, &ty, &class, &ps)?;
                 ps.check_unused()?;
                 match class.as_str() {
@@ -521,14 +570,16 @@ impl Parser {
             }
             "Material" => {
                 let ty = c.string("the material type")?;
-                let ps = c.params(format!("Material \"{ty}\""), loc.clone())?;
+                let mut ps = c.params(format!("Material \"{ty}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "material");
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
                 self.gs.material = MaterialRef::Object(Rc::new(obj));
             }
             "MakeNamedMaterial" => {
                 let mat = c.string("the material's name")?;
-                let ps = c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?;
+                let mut ps = c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "material");
                 let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
@@ -540,7 +591,8 @@ impl Parser {
             }
             "LightSource" => {
                 let ty = c.string("the light type")?;
-                let ps = c.params(format!("LightSource \"{ty}\""), loc.clone())?;
+                let mut ps = c.params(format!("LightSource \"{ty}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "light");
                 let obj = translate::light(self, &ty, &ps)?;
                 ps.check_unused()?;
                 self.emitters.push(Rc::new(obj));
@@ -555,7 +607,8 @@ impl Parser {
             }
             "Shape" => {
                 let ty = c.string("the shape type")?;
-                let ps = c.params(format!("Shape \"{ty}\""), loc.clone())?;
+                let mut ps = c.params(format!("Shape \"{ty}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "shape");
                 let shapes = translate::shape(self, &ty, &ps)?;
                 ps.check_unused()?;
                 if let Some(al) = &self.gs.area_light {
@@ -658,6 +711,19 @@ impl Parser {
             }
         }
         Ok(())
+    }
+
+    /// Adds the `Attribute` defaults of `target` that `ps` does not give (they are read by the
+    /// plugins that take them and ignored by the others).
+    fn with_attributes(&self, ps: &mut ParamSet, target: &str) {
+        for (t, p) in self.gs.attributes.iter() {
+            if t == target && !ps.has(&p.name) {
+                // A default for every shape (say) need not apply to each: never "unused".
+                let p = p.clone();
+                p.used.set(true);
+                ps.params.push(p);
+            }
+        }
     }
 
     /// The material object shapes get now.

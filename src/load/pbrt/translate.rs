@@ -32,7 +32,7 @@ use std::rc::Rc;
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// A new object at `loc`.
-fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
+pub(super) fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
     Obj {
         tag: tag.into(),
         ty: ty.into(),
@@ -45,12 +45,12 @@ fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
 }
 
 /// Sets property `name`, located at `loc`.
-fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
+pub(super) fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
     o.props.push(Prop { name: name.into(), value, loc: loc.clone(), used: Cell::new(false) });
 }
 
 /// The location of parameter `name` (or of the directive).
-fn ploc(ps: &ParamSet, name: &str) -> Loc {
+pub(super) fn ploc(ps: &ParamSet, name: &str) -> Loc {
     ps.params.iter().find(|p| p.name == name).map_or(ps.loc.clone(), |p| p.loc.clone())
 }
 
@@ -530,6 +530,58 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     })
 }
 
+/// `MakeNamedMedium`: `homogeneous` (`sigma_a`, `sigma_s` in mm⁻¹… per scene unit, pbrt's
+/// defaults, `scale`, `g` → Henyey–Greenstein) as Mitsuba's `homogeneous` (σₜ = σₐ + σₛ, albedo
+/// σₛ/σₜ).
+pub fn medium(ps: &ParamSet) -> Result<Obj> {
+    let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
+    if ty != "homogeneous" {
+        return Err(ps.error_at("type", format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous)")));
+    }
+    if ps.has("preset") {
+        return Err(ps.error_at("preset", "named scattering presets are not implemented by neumann yet"));
+    }
+    let rgb = |name: &str, default: Rgb| -> Result<Rgb> {
+        match ps.spectrum(name)? {
+            None => Ok(default),
+            Some(SpectrumParam::Rgb(c)) => Ok(c),
+            Some(SpectrumParam::Constant(v)) => Ok(Rgb::splat(v)),
+            Some(_) => Err(ps.error_at(name, "give an rgb or a constant")),
+        }
+    };
+    let sigma_a = rgb("sigma_a", Rgb::new(0.0011, 0.0024, 0.014))?;
+    let sigma_s = rgb("sigma_s", Rgb::new(2.55, 3.21, 3.77))?;
+    let scale = ps.float("scale", 1.0)?;
+    if let Some(le) = ps.spectrum("Le")? {
+        if le != SpectrumParam::Constant(0.0) && le != SpectrumParam::Rgb(Rgb::ZERO) {
+            return Err(ps.error_at("Le", "emissive media are not implemented by neumann"));
+        }
+    }
+    ps.float("Lescale", 1.0)?;
+    let g = ps.float("g", 0.0)?;
+    if !(g > -1.0 && g < 1.0) {
+        return Err(ps.error_at("g", format!("g must lie in (-1, 1), got {g}")));
+    }
+    let sigma_t = sigma_a + sigma_s;
+    if sigma_a.min_element() < 0.0 || sigma_s.min_element() < 0.0 || !sigma_t.is_finite() || scale < 0.0 {
+        return Err(ps.error("sigma_a, sigma_s and scale must be finite and ≥ 0"));
+    }
+    let peak = sigma_t.max_element();
+    let albedo = Rgb::from_array(std::array::from_fn(|c| if sigma_t[c] > 0.0 { sigma_s[c] / sigma_t[c] } else { 0.0 }));
+    let mut o = obj("medium", "homogeneous", &ps.loc);
+    // Mitsuba reads an rgb σₜ in [0, 1]: the peak goes into its scale.
+    let unit = if peak > 0.0 { sigma_t / peak } else { Rgb::ZERO };
+    set(&mut o, "sigma_t", Value::Rgb(unit), &ploc(ps, "sigma_a"));
+    set(&mut o, "scale", Value::Float((peak * scale) as f64), &ploc(ps, "scale"));
+    set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
+    if g != 0.0 {
+        let mut phase = obj("phase", "hg", &ploc(ps, "g"));
+        set(&mut phase, "g", Value::Float(g as f64), &ploc(ps, "g"));
+        o.children.push(Rc::new(phase));
+    }
+    Ok(o)
+}
+
 /// A shape object with the current material, area light, orientation and transform.
 fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform>) -> Result<Obj> {
     let mut o = obj("shape", ty, &ps.loc);
@@ -538,6 +590,11 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
     }
     if p.gs.reverse {
         set(&mut o, "flip_normals", Value::Bool(true), &ps.loc);
+    }
+    for (side, name) in [("interior", p.gs.inside.clone()), ("exterior", p.gs.outside.clone())] {
+        if let Some(m) = name.and_then(|n| p.media.get(&n).cloned()) {
+            set(&mut o, side, Value::Object(m), &ps.loc);
+        }
     }
     o.children.push(p.current_material()?);
     if let Some(al) = p.gs.area_light.clone() {
