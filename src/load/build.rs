@@ -338,7 +338,7 @@ impl Builder {
         let index = self.sb.add_shape_textured(geometry, bsdf, emission);
         self.sb.set_shape_media(index, interior, exterior);
         let id = o.id.as_deref().map_or(String::new(), |id| format!(" '{id}'"));
-        self.sb.set_shape_label(index, format!("the {} shape{id} at {}", o.ty, o.loc.position()));
+        self.sb.set_shape_label(index, format!("the {} shape{id}", o.ty), Some(o.loc.clone()));
         Ok(())
     }
 

@@ -23,18 +23,21 @@ pub struct SceneBuilder {
     camera: Option<Camera>,
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
-    /// What messages call each shape (by index; missing ones are called `shape N`).
-    shape_labels: Vec<String>,
+    /// What messages call each shape (by index; missing ones are called `shape N`): a
+    /// description and where the shape was written, formatted only when a message needs it
+    /// (finding a line and column in a large file for every shape would cost more than loading).
+    shape_labels: Vec<(String, Option<crate::props::Loc>)>,
 }
 
 impl SceneBuilder {
-    /// Names shape `index` for messages, e.g. `the obj shape 'floor' at scene.xml:12:5`.
-    pub fn set_shape_label(&mut self, index: u32, label: String) {
+    /// Names shape `index` for messages, e.g. `the obj shape 'floor'` written at `loc`
+    /// (messages say `the obj shape 'floor' at scene.xml:12:5`).
+    pub fn set_shape_label(&mut self, index: u32, label: String, loc: Option<crate::props::Loc>) {
         let i = index as usize;
         if self.shape_labels.len() <= i {
-            self.shape_labels.resize(i + 1, String::new());
+            self.shape_labels.resize(i + 1, (String::new(), None));
         }
-        self.shape_labels[i] = label;
+        self.shape_labels[i] = (label, loc);
     }
 
     /// An empty builder.

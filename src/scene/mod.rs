@@ -127,7 +127,7 @@ pub struct Scene {
     infinite_lights: Vec<u32>,
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
-    shape_labels: Vec<String>,
+    shape_labels: Vec<(String, Option<crate::props::Loc>)>,
     bvh: Bvh,
     /// Triangles of all-triangle leaves, four per block.
     blocks: Vec<Triangle4>,
@@ -145,7 +145,8 @@ impl Scene {
     /// else `shape N`.
     pub fn shape_label(&self, index: usize) -> String {
         match self.shape_labels.get(index) {
-            Some(l) if !l.is_empty() => l.clone(),
+            Some((l, Some(loc))) if !l.is_empty() => format!("{l} at {}", loc.position()),
+            Some((l, None)) if !l.is_empty() => l.clone(),
             _ => format!("shape {index}"),
         }
     }

@@ -60,12 +60,13 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
 /// The glTF file's JSON text, for locating errors.
 pub struct Src {
     file: Arc<SourceFile>,
+    index: json::Index,
 }
 
 impl Src {
     /// The location of the value at the JSON `path` (`gltf` crate notation).
     pub fn loc(&self, path: &str) -> Loc {
-        Loc { file: self.file.clone(), offset: json::locate(&self.file.text, &json::parse_path(path)) }
+        Loc { file: self.file.clone(), offset: self.index.locate(&self.file.text, &json::parse_path(path)) }
     }
 
     /// An error at the value at `path`.
@@ -92,7 +93,8 @@ pub fn load_gltf_bytes(path: &Path, bytes: &[u8], settings: &Overrides, camera: 
         (bytes.to_vec(), None)
     };
     let text = String::from_utf8(json_bytes).map_err(|e| whole(format!("the glTF JSON is not UTF-8: {e}")))?;
-    let src = Src { file: Arc::new(SourceFile { path: path.to_path_buf(), text }) };
+    let index = json::Index::new(&text);
+    let src = Src { file: Arc::new(SourceFile { path: path.to_path_buf(), text }), index };
     let text = &src.file.text;
     // JSON syntax, with the position serde_json found the problem at.
     let at_line_col = |e: &serde_json::Error, what: &str| {
@@ -298,13 +300,14 @@ impl<'a> Translator<'a> {
         };
         let world = self.world_transforms()?;
         let mut visited = vec![false; self.doc.nodes().len()];
+        let nodes: Vec<gltf::Node> = self.doc.nodes().collect();
         // Depth first, in document order.
         let mut stack: Vec<usize> = roots.iter().rev().copied().collect();
         while let Some(i) = stack.pop() {
             if std::mem::replace(&mut visited[i], true) {
                 continue;
             }
-            let node = self.doc.nodes().nth(i).expect("validated index");
+            let node = nodes[i].clone();
             self.node(&node, &world)?;
             let children: Vec<usize> = node.children().map(|c| c.index()).collect();
             stack.extend(children.into_iter().rev());
