@@ -651,11 +651,12 @@ impl Parser {
             "Include" | "Import" => {
                 let f = c.string("the file name")?;
                 let path = self.resolver.resolve(&f);
-                if name == "Include" {
-                    self.parse_file(&path, Some(&loc))?;
-                } else {
-                    // Import shares only named things; neumann's state is the same.
-                    self.parse_file(&path, Some(&loc))?;
+                // An imported file adds shapes and named things but cannot change the
+                // importer's graphics state (pbrt-v4 parses it apart); an included one can.
+                let saved = (name == "Import").then(|| self.gs.clone());
+                self.parse_file(&path, Some(&loc))?;
+                if let Some(gs) = saved {
+                    self.gs = gs;
                 }
             }
             "MakeNamedCamera" | "CameraBegin" => {

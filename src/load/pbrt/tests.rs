@@ -186,6 +186,19 @@ fn errors_name_the_place_and_what_was_expected() {
 }
 
 #[test]
+fn import_keeps_the_importers_state_and_include_does_not() {
+    let dir = tmp("import");
+    std::fs::write(dir.join("part.pbrt"), "Translate 5 0 0\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nShape \"sphere\"\n").unwrap();
+    for (directive, x) in [("Import", 0.0), ("Include", 5.0)] {
+        let text = format!("WorldBegin\n{directive} \"part.pbrt\"\nNamedMaterial \"m\"\nShape \"sphere\"\n");
+        std::fs::write(dir.join("main.pbrt"), text).unwrap();
+        let f = load_pbrt_file(&dir.join("main.pbrt"), &Overrides::default()).unwrap();
+        let Geometry::Sphere(s) = &f.scene.geometries()[1] else { panic!() };
+        assert!((s.center.x - x).abs() < 1e-6, "{directive}: {}", s.center);
+    }
+}
+
+#[test]
 fn attribute_defaults_apply_to_their_targets_until_the_block_ends() {
     let f = load(
         r#"WorldBegin
