@@ -135,7 +135,7 @@ fn layout(dims: Dimensions, t: DataType) -> (usize, usize, usize) {
 }
 
 /// The bytes of a buffer view, checked against its buffer.
-fn view_bytes<'a>(src: &Src, buffers: &'a [Vec<u8>], view: &gltf::buffer::View) -> Result<&'a [u8]> {
+pub fn view_bytes<'a>(src: &Src, buffers: &'a [Vec<u8>], view: &gltf::buffer::View) -> Result<&'a [u8]> {
     let buffer = &buffers[view.buffer().index()];
     let (start, len) = (view.offset(), view.length());
     start.checked_add(len).and_then(|end| buffer.get(start..end)).ok_or_else(|| {

@@ -167,14 +167,7 @@ impl Translator<'_> {
                         .views()
                         .nth(v as usize)
                         .ok_or_else(|| self.src.err(&name, "bufferView out of range"))?;
-                    let buffer = &self.buffers[view.buffer().index()];
-                    let range = view.offset()..view.offset().saturating_add(view.length());
-                    buffer
-                        .get(range)
-                        .ok_or_else(|| {
-                            self.src.err(&format!("bufferViews[{}]", view.index()), "the view lies outside its buffer")
-                        })?
-                        .to_vec()
+                    super::data::view_bytes(self.src, self.buffers, &view)?.to_vec()
                 }
                 (None, Some(uri)) => super::data::read_uri(self.src, &format!("{name}.uri"), uri, &self.resolver)?,
                 (None, None) => return Err(self.src.err(&name, "an image needs a 'uri' or a 'bufferView'")),

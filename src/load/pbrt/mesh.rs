@@ -79,16 +79,21 @@ pub fn from_params(ps: &ParamSet, bilinear: bool) -> Result<TriangleMesh> {
 /// A PLY file (`.ply` or gzip-compressed `.ply.gz`), normals and uv as stored.
 pub fn read_ply(path: &Path) -> std::result::Result<TriangleMesh, String> {
     let data = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(|e| e.to_string())?;
-    let data = if data.starts_with(&[0x1f, 0x8b]) {
-        use std::io::Read;
-        let mut out = Vec::new();
-        flate2::read::GzDecoder::new(&data[..])
-            .take(limits::MAX_FILE_BYTES + 1)
-            .read_to_end(&mut out)
-            .map_err(|e| format!("{}: corrupt gzip data: {e}", path.display()))?;
-        out
-    } else {
-        data
-    };
+    let data = gunzip_if_compressed(path, data, limits::MAX_FILE_BYTES)?;
     crate::load::ply::parse_ply(&data).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// `data` decompressed if it is gzip data (at most `limit` + 1 bytes, so that a size check after
+/// it sees any excess), else as it is.
+pub fn gunzip_if_compressed(path: &Path, data: Vec<u8>, limit: u64) -> std::result::Result<Vec<u8>, String> {
+    if !data.starts_with(&[0x1f, 0x8b]) {
+        return Ok(data);
+    }
+    use std::io::Read;
+    let mut out = Vec::new();
+    flate2::read::GzDecoder::new(&data[..])
+        .take(limit + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| format!("{}: corrupt gzip data: {e}", path.display()))?;
+    Ok(out)
 }

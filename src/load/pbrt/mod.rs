@@ -19,10 +19,10 @@ use crate::load::SceneFile;
 use crate::math::{Mat4, Vec3};
 use crate::props::{Loc, Obj, SceneError, SourceFile, Value};
 use params::ParamSet;
-use translate::{obj, ploc as loc_of, set};
 use std::path::Path;
 use std::rc::Rc;
 use std::sync::Arc;
+use translate::{obj, ploc as loc_of, set};
 
 type Result<T> = std::result::Result<T, SceneError>;
 

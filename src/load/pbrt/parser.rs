@@ -296,17 +296,7 @@ impl Parser {
             None => SceneError::new(m),
         };
         let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(|e| located(e.to_string()))?;
-        let bytes = if bytes.starts_with(&[0x1f, 0x8b]) {
-            let mut out = Vec::new();
-            use std::io::Read;
-            flate2::read::GzDecoder::new(&bytes[..])
-                .take(limits::MAX_SCENE_BYTES as u64 + 1)
-                .read_to_end(&mut out)
-                .map_err(|e| located(format!("{}: corrupt gzip data: {e}", path.display())))?;
-            out
-        } else {
-            bytes
-        };
+        let bytes = super::mesh::gunzip_if_compressed(path, bytes, limits::MAX_SCENE_BYTES as u64).map_err(located)?;
         self.bytes += bytes.len();
         if self.bytes > limits::MAX_SCENE_BYTES {
             return Err(located(format!(

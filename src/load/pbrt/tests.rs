@@ -188,7 +188,11 @@ fn errors_name_the_place_and_what_was_expected() {
 #[test]
 fn import_keeps_the_importers_state_and_include_does_not() {
     let dir = tmp("import");
-    std::fs::write(dir.join("part.pbrt"), "Translate 5 0 0\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nShape \"sphere\"\n").unwrap();
+    std::fs::write(
+        dir.join("part.pbrt"),
+        "Translate 5 0 0\nMakeNamedMaterial \"m\" \"string type\" \"diffuse\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
     for (directive, x) in [("Import", 0.0), ("Include", 5.0)] {
         let text = format!("WorldBegin\n{directive} \"part.pbrt\"\nNamedMaterial \"m\"\nShape \"sphere\"\n");
         std::fs::write(dir.join("main.pbrt"), text).unwrap();
