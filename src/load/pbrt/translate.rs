@@ -485,7 +485,13 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let mut o = obj("emitter", "spot", l);
             set(&mut o, "to_world", Value::Transform(t), l);
             set(&mut o, "intensity", scaled(spectrum("I")?, s), &ploc(ps, "I"));
-            set(&mut o, "cutoff_angle", Value::Float(cone.clamp(1e-3, 180.0) as f64), &ploc(ps, "coneangle"));
+            if !(cone > 0.0 && cone <= 180.0 && delta.is_finite()) {
+                return Err(ps.error_at(
+                    "coneangle",
+                    format!("need 0 < coneangle ≤ 180 and a finite conedelta, got {cone} and {delta}"),
+                ));
+            }
+            set(&mut o, "cutoff_angle", Value::Float(cone as f64), &ploc(ps, "coneangle"));
             set(&mut o, "beam_width", Value::Float((cone - delta).clamp(0.0, cone) as f64), &ploc(ps, "conedelta"));
             o
         }
