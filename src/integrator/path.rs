@@ -585,6 +585,17 @@ mod tests {
             cutoff,
             beam,
             texture: None,
+            falloff: crate::light::SpotFalloff::Linear,
+        });
+        // pbrt-v4's spot: smoothstep in cos θ between the cutoff's and the beam's cosines.
+        let pbrt_spot = build(Light::Spot {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            frame: Frame::from_z(-Vec3::Y),
+            intensity: Rgb::splat(8.0),
+            cutoff,
+            beam,
+            texture: None,
+            falloff: crate::light::SpotFalloff::SmoothStep,
         });
         for theta_deg in [0.0f32, 10.0, 25.0, 35.0] {
             let theta = theta_deg.to_radians();
@@ -600,6 +611,10 @@ mod tests {
             let expected = rho / std::f32::consts::PI * 8.0 * falloff * theta.cos() / r2;
             let got = radiance_at(&spot, x);
             assert!((got - expected).abs() <= 1e-4 * expected.max(1e-3), "spot at {theta_deg}°: {got} vs {expected}");
+            let t = ((theta.cos() - cutoff.cos()) / (beam.cos() - cutoff.cos())).clamp(0.0, 1.0);
+            let expected = rho / std::f32::consts::PI * 8.0 * t * t * (3.0 - 2.0 * t) * theta.cos() / r2;
+            let got = radiance_at(&pbrt_spot, x);
+            assert!((got - expected).abs() <= 1e-4 * expected.max(1e-3), "pbrt spot at {theta_deg}°: {got} vs {expected}");
         }
     }
 

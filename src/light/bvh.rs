@@ -476,6 +476,7 @@ mod tests {
             cutoff: 0.5,
             beam: 0.3,
             texture: None,
+            falloff: crate::light::SpotFalloff::SmoothStep,
         });
         // Lights that stop sharply at their cone: a spot whose beam is its cutoff, a projector.
         lights.push(Light::Spot {
@@ -485,6 +486,7 @@ mod tests {
             cutoff: 0.4,
             beam: 0.4,
             texture: None,
+            falloff: crate::light::SpotFalloff::Linear,
         });
         let to_world = crate::math::Transform::look_at(Vec3::new(-2.0, 3.0, 0.0), Vec3::new(-1.0, 0.0, 0.5), Vec3::Y).unwrap();
         lights.push(Light::Projector(Box::new(crate::light::Projector::new(

@@ -13,16 +13,34 @@
 //! becomes `p(ω) = p(u, v) / (2π² sin θ)` per solid angle (the Jacobian of `(u, v) ↦ ω`, since
 //! `dω = sin θ dθ dφ = 2π² sin θ du dv`).
 //!
-//! Parameters (Mitsuba): `filename`, `scale` (default 1), `to_world` (rotation).
+//! pbrt-v4's layout ([`EnvMap::new_equal_area`]): a square image in Clarberg's equal-area
+//! octahedral mapping ([`crate::sampling::equal_area`]) around the local +z axis, radiance the
+//! nearest texel (as pbrt-v4's `ImageInfiniteLight`), sampled per texel in proportion to its
+//! channel average (pbrt's sampling distribution); the mapping preserves area, so
+//! `p(ω) = p(u, v) / 4π`.
+//!
+//! Parameters (Mitsuba): `filename`, `scale` (default 1), `to_world` (rotation); neumann's
+//! `mapping` (`latlong`, the default, or `equal_area`).
 
 use crate::image::Image;
-use crate::math::{luminance, Rgb, Transform, Vec2, Vec3, PI};
+use crate::math::{luminance, Rgb, Transform, Vec2, Vec3, INV_4PI, PI};
+use crate::sampling::equal_area::{equal_area_sphere_to_square, equal_area_square_to_sphere};
 use crate::sampling::PiecewiseConstant2D;
 use std::sync::Arc;
 
-/// A lat-long environment map with its sampling distribution.
+/// How image coordinates cover the sphere.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Mitsuba's latitude-longitude layout, bilinear (+y up).
+    LatLong,
+    /// pbrt-v4's equal-area octahedral square, nearest texel (+z up).
+    EqualArea,
+}
+
+/// An environment map with its sampling distribution.
 #[derive(Clone, Debug)]
 pub struct EnvMap {
+    layout: Layout,
     image: Arc<Image>,
     distribution: Arc<PiecewiseConstant2D>,
     /// `∫ luminance dω` of the unscaled map.
@@ -44,6 +62,9 @@ pub enum EnvMapError {
     /// A pixel is negative or not finite.
     #[error("environment map pixel {0} is negative or not finite")]
     Pixel(usize),
+    /// An equal-area map must be square.
+    #[error("an equal-area (octahedral) environment map must be square, got {0} × {1}")]
+    NotSquare(u32, u32),
     /// One row cannot span the sphere's latitudes.
     #[error("environment map must be at least 2 pixels high")]
     TooLow,
@@ -89,6 +110,7 @@ impl EnvMap {
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
         Ok(EnvMap {
+            layout: Layout::LatLong,
             image,
             distribution: Arc::new(distribution),
             integral,
@@ -96,6 +118,74 @@ impl EnvMap {
             to_world,
             to_local: to_world.inverse(),
         })
+    }
+
+    /// pbrt-v4's equal-area environment: a square `image` (see the module notes), radiance
+    /// multiplied by `scale`, local +z (the square's centre) turned by `to_world`.
+    pub fn new_equal_area(
+        image: impl Into<Arc<Image>>,
+        scale: f32,
+        to_world: Transform,
+    ) -> Result<EnvMap, EnvMapError> {
+        let image: Arc<Image> = image.into();
+        if image.width == 0 || image.height == 0 {
+            return Err(EnvMapError::Empty);
+        }
+        if image.width != image.height {
+            return Err(EnvMapError::NotSquare(image.width, image.height));
+        }
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(EnvMapError::Scale(scale));
+        }
+        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
+            return Err(EnvMapError::Pixel(i));
+        }
+        let (w, h) = (image.width as usize, image.height as usize);
+        let func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+        let distribution = PiecewiseConstant2D::new(&func, w, h).ok_or(EnvMapError::Black)?;
+        let sum: f64 = image.pixels.iter().map(|&p| luminance(p) as f64).sum();
+        let integral = (sum * 4.0 * PI as f64 / (w * h) as f64) as f32;
+        Ok(EnvMap {
+            layout: Layout::EqualArea,
+            image,
+            distribution: Arc::new(distribution),
+            integral,
+            scale,
+            to_world,
+            to_local: to_world.inverse(),
+        })
+    }
+
+    /// pbrt-v4's illuminance of an equal-area map at a point facing its +z, which its
+    /// `illuminance` parameter divides by: `2π/N Σ luminance · cos θ` over the N texels whose
+    /// centre lies above the horizon. (pbrt's normalisation; the integral it estimates,
+    /// `∫ L cos θ dω`, has `4π/N` there, so pbrt's maps come out twice as bright as asked.)
+    pub fn pbrt_illuminance(image: &Image) -> f32 {
+        let (w, h) = (image.width as usize, image.height as usize);
+        let mut sum = 0.0f64;
+        for y in 0..h {
+            for x in 0..w {
+                let d = equal_area_square_to_sphere(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
+                if d.z > 0.0 {
+                    sum += (luminance(image.pixels[y * w + x]) * d.z) as f64;
+                }
+            }
+        }
+        (sum * 2.0 * PI as f64 / (w * h).max(1) as f64) as f32
+    }
+
+    /// The nearest texel of equal-area coordinates (pbrt's `LookupNearest`).
+    #[inline]
+    fn nearest(&self, uv: Vec2) -> Rgb {
+        let (w, h) = (self.image.width as usize, self.image.height as usize);
+        let x = ((uv.x * w as f32) as usize).min(w - 1);
+        let y = ((uv.y * h as f32) as usize).min(h - 1);
+        self.image.pixels[y * w + x] * self.scale
+    }
+
+    /// Which layout the map has.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     /// Image coordinates of a local unit direction.
@@ -150,7 +240,11 @@ impl EnvMap {
     /// Radiance arriving from world direction `d` (unit).
     #[inline]
     pub fn eval(&self, d: Vec3) -> Rgb {
-        self.lookup(Self::uv(self.to_local.apply_vector(d).normalize()))
+        let local = self.to_local.apply_vector(d).normalize();
+        match self.layout {
+            Layout::LatLong => self.lookup(Self::uv(local)),
+            Layout::EqualArea => self.nearest(equal_area_sphere_to_square(local)),
+        }
     }
 
     /// A world direction sampled proportionally to luminance, its radiance and its solid-angle
@@ -158,6 +252,13 @@ impl EnvMap {
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
         let s = self.distribution.sample(u);
+        if self.layout == Layout::EqualArea {
+            if s.pdf <= 0.0 {
+                return None;
+            }
+            let d = equal_area_square_to_sphere(s.value);
+            return Some((self.to_world.apply_vector(d).normalize(), self.nearest(s.value), s.pdf * INV_4PI));
+        }
         let mut uv = Vec2::new(s.value.x + self.half_texel(), s.value.y);
         if uv.x >= 1.0 {
             uv.x -= 1.0;
@@ -174,6 +275,9 @@ impl EnvMap {
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
         let local = self.to_local.apply_vector(d).normalize();
+        if self.layout == Layout::EqualArea {
+            return self.distribution.pdf(equal_area_sphere_to_square(local)) * INV_4PI;
+        }
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         if sin_theta <= 0.0 {
             return 0.0;
@@ -273,6 +377,44 @@ mod tests {
         // Between two black rows the radiance is zero: never sampled, zero pdf.
         let (band, _) = EnvMap::direction(Vec2::new(0.3, 4.5 / 7.0));
         assert_eq!(env.pdf(to_world.apply_vector(band)), 0.0);
+    }
+
+    #[test]
+    fn equal_area_maps_sample_as_their_pdf_and_radiance_say() {
+        let to_world = Transform::rotate(Vec3::new(0.3, 0.2, 1.0), 70.0).unwrap();
+        let env = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap();
+        assert_eq!(env.layout(), Layout::EqualArea);
+        let out = chi2_2d(&SPHERE, [31, 61], 500_000, |r| env.sample(u2(r)).map(|s| s.0), |d| env.pdf(*d) as f64, &Chi2Config::default());
+        assert!(out.passed(), "{out}");
+        let mut rng = crate::sampling::Pcg32::new(1, 3);
+        for _ in 0..1000 {
+            let (d, l, pdf) = env.sample(u2(&mut rng)).unwrap();
+            assert!((pdf - env.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", env.pdf(d));
+            assert!((l - env.eval(d)).abs().max_element() <= 1e-3 * l.max_element().max(1.0));
+        }
+        // Texel (x, y) holds the direction of the square's point ((x + ½)/W, (y + ½)/H) in
+        // the light's frame (+z at the centre): pbrt-v4's layout.
+        let img = test_sky(16, 16);
+        for (x, y) in [(0usize, 0usize), (8, 8), (15, 3), (5, 12)] {
+            let local = equal_area_square_to_sphere(Vec2::new((x as f32 + 0.5) / 16.0, (y as f32 + 0.5) / 16.0));
+            let l = env.eval(to_world.apply_vector(local));
+            assert!((l - img.pixels[y * 16 + x] * 1.5).abs().max_element() < 1e-4, "{x},{y}");
+        }
+        // The power estimate: ∫ luminance dω.
+        let mut rng = crate::sampling::Pcg32::new(3, 5);
+        let n = 400_000;
+        let mc: f64 = (0..n)
+            .map(|_| {
+                let s = crate::sampling::sample_uniform_sphere(u2(&mut rng));
+                (luminance(env.eval(s.value)) / s.pdf) as f64
+            })
+            .sum::<f64>()
+            / n as f64;
+        assert!((env.integral_luminance() as f64 / mc - 1.0).abs() < 0.03, "{} vs {mc}", env.integral_luminance());
+        assert!(matches!(EnvMap::new_equal_area(test_sky(16, 8), 1.0, Transform::IDENTITY), Err(EnvMapError::NotSquare(16, 8))));
+        // pbrt's illuminance of a white map: half of π (see pbrt_illuminance).
+        let white = Image { width: 64, height: 64, pixels: vec![Rgb::ONE; 64 * 64] };
+        assert!((EnvMap::pbrt_illuminance(&white) - 0.5 * PI).abs() < 0.01, "{}", EnvMap::pbrt_illuminance(&white));
     }
 
     #[test]

@@ -12,7 +12,7 @@ mod registry;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh};
-pub use envmap::{EnvMap, EnvMapError};
+pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
 pub use projector::Projector;
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
@@ -82,6 +82,8 @@ pub enum Light {
         /// An image projected over the cutoff cone (Mitsuba's `texture`), multiplying the
         /// intensity.
         texture: Option<Box<crate::texture::Texture>>,
+        /// The shape of the falloff between the beam and the cutoff.
+        falloff: SpotFalloff,
     },
     /// Mitsuba's `projector` emitter (see [`Projector`]).
     Projector(Box<Projector>),
@@ -93,6 +95,16 @@ pub enum Light {
         /// Radiant intensity.
         intensity: Rgb,
     },
+}
+
+/// How a spot light fades between its beam width and its cutoff angle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpotFalloff {
+    /// Mitsuba's: linear in the angle θ.
+    Linear,
+    /// pbrt-v4's: `smoothstep` in cos θ (`t²(3 − 2t)` with `t` the position of cos θ between
+    /// the cutoff's and the beam's cosines).
+    SmoothStep,
 }
 
 /// Incident radiance sampled toward a light.
@@ -187,6 +199,7 @@ impl Light {
             // Flux through the scene's cross-section.
             Light::Directional { irradiance, radius, .. } => PI * radius * radius * luminance(*irradiance),
             // ∫ falloff dω, with the transition band counted at half strength.
+            // (exact for the smoothstep, whose integral over the band is half its width in cos θ).
             Light::Spot { intensity, cutoff, beam, texture, .. } => {
                 let tex = texture.as_ref().map_or(1.0, |t| luminance(t.mean()));
                 2.0 * PI * (1.0 - 0.5 * (cutoff.cos() + beam.cos())) * luminance(*intensity) * tex
@@ -203,8 +216,14 @@ impl Light {
     /// A spot light's emission toward the unit direction `w_local` of its frame: the falloff,
     /// times its texture where it has one (Mitsuba's uv: ½ + ½ (x, y) / (z tan cutoff)).
     #[inline]
-    fn spot_profile(w_local: Vec3, cutoff: f32, beam: f32, texture: &Option<Box<crate::texture::Texture>>) -> Rgb {
-        let falloff = Self::spot_falloff(w_local.z, cutoff, beam);
+    fn spot_profile(
+        w_local: Vec3,
+        cutoff: f32,
+        beam: f32,
+        texture: &Option<Box<crate::texture::Texture>>,
+        shape: SpotFalloff,
+    ) -> Rgb {
+        let falloff = Self::spot_falloff(w_local.z, cutoff, beam, shape);
         match texture {
             Some(t) if falloff > 0.0 => {
                 let k = 0.5 / (w_local.z * cutoff.tan());
@@ -215,15 +234,21 @@ impl Light {
     }
 
     /// Spot falloff for a unit direction `w_local` in the spot's frame: 1 inside the beam, 0
-    /// beyond the cutoff, linear in angle between.
+    /// beyond the cutoff, `shape` between.
     #[inline]
-    fn spot_falloff(cos_theta: f32, cutoff: f32, beam: f32) -> f32 {
+    fn spot_falloff(cos_theta: f32, cutoff: f32, beam: f32, shape: SpotFalloff) -> f32 {
         if cos_theta >= beam.cos() {
             1.0
         } else if cos_theta <= cutoff.cos() {
             0.0
         } else {
-            ((cutoff - crate::math::safe_acos(cos_theta)) / (cutoff - beam)).clamp(0.0, 1.0)
+            match shape {
+                SpotFalloff::Linear => ((cutoff - crate::math::safe_acos(cos_theta)) / (cutoff - beam)).clamp(0.0, 1.0),
+                SpotFalloff::SmoothStep => {
+                    let t = ((cos_theta - cutoff.cos()) / (beam.cos() - cutoff.cos())).clamp(0.0, 1.0);
+                    t * t * (3.0 - 2.0 * t)
+                }
+            }
         }
     }
 
@@ -296,14 +321,14 @@ impl Light {
                     delta: true,
                 })
             }
-            Light::Spot { position, frame, intensity, cutoff, beam, texture } => {
+            Light::Spot { position, frame, intensity, cutoff, beam, texture, falloff } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
                 if dist2 == 0.0 {
                     return None;
                 }
                 let wi = d / dist2.sqrt();
-                let profile = Self::spot_profile(frame.to_local(-wi), *cutoff, *beam, texture);
+                let profile = Self::spot_profile(frame.to_local(-wi), *cutoff, *beam, texture, *falloff);
                 if profile.max_element() <= 0.0 {
                     return None;
                 }
@@ -397,9 +422,9 @@ impl Light {
                     weight: *intensity / d.pdf,
                 }
             }
-            Light::Spot { position, frame, intensity, cutoff, beam, texture } => {
+            Light::Spot { position, frame, intensity, cutoff, beam, texture, falloff } => {
                 let d = sample_uniform_cone(u_dir, cutoff.cos());
-                let profile = Self::spot_profile(d.value, *cutoff, *beam, texture);
+                let profile = Self::spot_profile(d.value, *cutoff, *beam, texture, *falloff);
                 if profile.max_element() <= 0.0 || d.pdf <= 0.0 {
                     return None;
                 }
@@ -460,8 +485,8 @@ impl Light {
         match self {
             Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => radiance.eval(pos.uv),
             Light::Point { intensity, .. } => *intensity,
-            Light::Spot { frame, intensity, cutoff, beam, texture, .. } => {
-                *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture)
+            Light::Spot { frame, intensity, cutoff, beam, texture, falloff, .. } => {
+                *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture, *falloff)
             }
             Light::Projector(p) => p.intensity_toward(d),
             _ => Rgb::ZERO,
@@ -619,7 +644,7 @@ mod tests {
             (0..n)
                 .map(|i| {
                     let t = (i as f64 + 0.5) * h;
-                    Light::spot_falloff(t.cos() as f32, cutoff, beam) as f64 * t.sin() * h
+                    Light::spot_falloff(t.cos() as f32, cutoff, beam, SpotFalloff::Linear) as f64 * t.sin() * h
                 })
                 .sum::<f64>()
                 * 2.0
@@ -636,6 +661,7 @@ mod tests {
                     cutoff,
                     beam,
                     texture: None,
+                    falloff: SpotFalloff::Linear,
                 },
                 spot_integral,
             ),

@@ -4,7 +4,7 @@
 //! Mitsuba's `area` emitter is not here: it is a property of the shape that emits, whose loader
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
-use super::{EnvMap, Light, Projector};
+use super::{EnvMap, Light, Projector, SpotFalloff};
 use crate::texture::{Texture, TextureSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
@@ -45,7 +45,9 @@ fn point(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 
 /// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
 /// (20°), `beam_width` (¾ of the cutoff), `texture` (optional: an image projected over the
-/// cutoff cone, multiplying the intensity; uv = ½ + ½ (x, y) / (z tan cutoff) in the local frame).
+/// cutoff cone, multiplying the intensity; uv = ½ + ½ (x, y) / (z tan cutoff) in the local frame);
+/// neumann's `falloff`: `linear` in angle (Mitsuba's, the default) or `smoothstep` in cos θ
+/// (pbrt-v4's).
 fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     let to_world = o.transform("to_world")?;
     let cutoff = o.float_checked("cutoff_angle", 20.0, |c| c > 0.0 && c <= 180.0, "in (0, 180] degrees")?;
@@ -61,6 +63,10 @@ fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
         beam: beam.to_radians(),
         texture: without_mesh_attributes(o, "texture", textures.texture_opt(o, "texture", SpectrumKind::Reflectance)?)?
             .map(Box::new),
+        falloff: match o.choice("falloff", &["linear", "smoothstep"])?.as_str() {
+            "smoothstep" => SpotFalloff::SmoothStep,
+            _ => SpotFalloff::Linear,
+        },
     })
 }
 
@@ -122,12 +128,28 @@ fn constant(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 }
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
-/// (`mis_compensation` is read and has no effect on the expected image).
+/// (`mis_compensation` is read and has no effect on the expected image); neumann's `mapping`
+/// (`latlong`, or pbrt-v4's `equal_area` square, which may take pbrt-v4's `illuminance`).
 fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
     // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).
     o.bool("mis_compensation", false)?;
-    let map = EnvMap::new(image, scale, o.transform("to_world")?).map_err(|e| o.error(e.to_string()))?;
+    let to_world = o.transform("to_world")?;
+    let map = match o.choice("mapping", &["latlong", "equal_area"])?.as_str() {
+        "equal_area" => {
+            let mut scale = scale;
+            if let Some(e) = o.float_opt("illuminance")? {
+                let k = EnvMap::pbrt_illuminance(&image);
+                if !(e > 0.0 && e.is_finite() && k > 0.0) {
+                    return Err(o.error_at("illuminance", "needs a positive illuminance and a map lit above its horizon"));
+                }
+                scale *= e / k;
+            }
+            EnvMap::new_equal_area(image, scale, to_world)
+        }
+        _ => EnvMap::new(image, scale, to_world),
+    }
+    .map_err(|e| o.error(e.to_string()))?;
     Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
 }

@@ -11,6 +11,7 @@ mod conductor;
 mod conductor_presets;
 mod dielectric;
 mod diffuse;
+pub mod layered;
 pub mod fresnel;
 pub mod microfacet;
 mod perturbed;
@@ -26,6 +27,7 @@ pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
+pub use layered::Layered;
 pub use perturbed::{Perturbation, Perturbed};
 pub use pplastic::PPlastic;
 pub use principled::Principled;
@@ -98,6 +100,9 @@ pub enum Bsdf {
     PrincipledThin(Box<PrincipledThin>),
     /// Thin dielectric pane.
     ThinDielectric(ThinDielectric),
+    /// pbrt-v4's layered BSDF (`coateddiffuse`, `coatedconductor`): a stochastic random walk
+    /// between a dielectric coating and a base.
+    Layered(Box<Layered>),
     /// Mitsuba's `blendbsdf`: `(1 - w) f₀ + w f₁` with blend weight `w ∈ [0, 1]` (constant or
     /// textured, luminance used).
     Blend {
@@ -140,6 +145,10 @@ impl Bsdf {
             Bsdf::Principled(_) => "principled",
             Bsdf::PrincipledThin(_) => "principledthin",
             Bsdf::ThinDielectric(_) => "thindielectric",
+            Bsdf::Layered(l) => match l.base {
+                layered::Base::Diffuse { .. } => "coateddiffuse",
+                layered::Base::Conductor { .. } => "coatedconductor",
+            },
             Bsdf::Blend { .. } => "blendbsdf",
             Bsdf::Mask { .. } => "mask",
             Bsdf::Null => "null",
@@ -188,6 +197,7 @@ impl Bsdf {
             Bsdf::Principled(b) => b.eval(ctx, wo, wi),
             Bsdf::PPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.eval(ctx, wo, wi),
+            Bsdf::Layered(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -217,6 +227,7 @@ impl Bsdf {
             Bsdf::Principled(b) => b.pdf(ctx, wo, wi),
             Bsdf::PPlastic(b) => b.pdf(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.pdf(ctx, wo, wi),
+            Bsdf::Layered(b) => b.pdf(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -248,6 +259,7 @@ impl Bsdf {
             Bsdf::Principled(b) => b.sample(ctx, wo, u1, u),
             Bsdf::PPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::PrincipledThin(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::Layered(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
             Bsdf::Blend { weight, bsdfs } => {
@@ -319,6 +331,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::Principled(b) => ctx.eval(&b.base_color),
             Bsdf::PrincipledThin(b) => ctx.eval(&b.base_color),
+            Bsdf::Layered(b) => b.diffuse_reflectance(ctx),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].diffuse_reflectance(ctx, wo) * (1.0 - w) + bsdfs[1].diffuse_reflectance(ctx, wo) * w
@@ -368,6 +381,7 @@ impl Bsdf {
             Bsdf::Principled(b) => b.textures(),
             Bsdf::PPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::PrincipledThin(b) => b.textures(),
+            Bsdf::Layered(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
                 let mut v = vec![weight];
                 v.extend(distinct(bsdfs).iter().flat_map(|b| b.textures()));
@@ -415,6 +429,7 @@ impl Bsdf {
             | Bsdf::PrincipledThin(_)
             | Bsdf::PPlastic(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
+            Bsdf::Layered(b) => b.is_delta(),
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.
             _ => self.is_delta_nested(),
         }

@@ -39,6 +39,8 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("pplastic", super::PPlastic::from_props),
     ("principled", super::Principled::from_props),
     ("principledthin", super::PrincipledThin::from_props),
+    ("coateddiffuse", super::Layered::coated_diffuse_from_props),
+    ("coatedconductor", super::Layered::coated_conductor_from_props),
     ("twosided", two_sided),
     ("blendbsdf", blend),
     ("mask", mask),

@@ -15,6 +15,7 @@
 //! | uniform disk (polar `r=√ξ₁, φ=2πξ₂`; concentric) | [`disk`] |
 //! | uniform / cosine-weighted hemisphere (Malley; inversion `θ=asin √ξ₁`) | [`hemisphere`] |
 //! | uniform sphere, spherical cap (cone) | [`sphere`] |
+//! | equal-area octahedral square ↔ sphere (pbrt-v4's environment maps) | [`equal_area`] |
 //! | uniform triangle (`u=1-√(1-ξ₁), v=ξ₂√(1-ξ₁)`) | [`triangle`] |
 //! | power `(n+1)xⁿ`, cosine-power lobe | [`power`] |
 //! | exponential `a e^(-ax)` | [`exponential`] |
@@ -27,6 +28,7 @@
 pub mod alias;
 pub mod discrete;
 pub mod disk;
+pub mod equal_area;
 pub mod exponential;
 pub mod hash;
 pub mod hemisphere;

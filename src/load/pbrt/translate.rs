@@ -266,29 +266,109 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
     Ok(o)
 }
 
-/// pbrt-v4's roughness parameters as an α pair (`remaproughness`: α = √roughness).
-fn roughness(p: &Parser, ps: &ParamSet) -> Result<Option<(Value, Value)>> {
+/// pbrt-v4's roughness parameters `{prefix}roughness`, `{prefix}uroughness` and
+/// `{prefix}vroughness` (default 0) as an α pair (`remaproughness`: α = √roughness).
+fn roughness_pair(p: &Parser, ps: &ParamSet, prefix: &str) -> Result<(Value, Value)> {
     let remap = ps.bool("remaproughness", true)?;
-    let r = texturable(p, ps, "roughness", true)?;
-    let u = texturable(p, ps, "uroughness", true)?.or(r.clone());
-    let v = texturable(p, ps, "vroughness", true)?.or(r);
-    let (Some(u), Some(v)) = (u, v) else { return Ok(None) };
-    let alpha = |x: Value| -> Result<Option<Value>> {
+    let name = |n: &str| format!("{prefix}{n}");
+    let r = texturable(p, ps, &name("roughness"), true)?;
+    let u = texturable(p, ps, &name("uroughness"), true)?.or(r.clone()).unwrap_or(Value::Float(0.0));
+    let v = texturable(p, ps, &name("vroughness"), true)?.or(r).unwrap_or(Value::Float(0.0));
+    let alpha = |x: Value| -> Result<Value> {
         match x {
-            Value::Float(0.0) => Ok(None),
-            Value::Float(f) => Ok(Some(Value::Float(if remap { f.max(0.0).sqrt() } else { f }))),
-            t if !remap => Ok(Some(t)),
-            _ => Err(ps.error_at("roughness", "a roughness texture with remaproughness true is not implemented by neumann (give α directly with remaproughness false)")),
+            Value::Float(f) => Ok(Value::Float(if remap { f.max(0.0).sqrt() } else { f })),
+            t if !remap => Ok(t),
+            _ => Err(ps.error_at(&name("roughness"), "a roughness texture with remaproughness true is not implemented by neumann (give α directly with remaproughness false)")),
         }
     };
-    match (alpha(u)?, alpha(v)?) {
-        (Some(a), Some(b)) => Ok(Some((a, b))),
-        (None, None) => Ok(None),
-        _ => Err(ps.error_at(
+    Ok((alpha(u)?, alpha(v)?))
+}
+
+/// [`roughness_pair`] for neumann's one-lobe BSDFs: `None` when smooth (both zero).
+fn roughness(p: &Parser, ps: &ParamSet) -> Result<Option<(Value, Value)>> {
+    match roughness_pair(p, ps, "")? {
+        (Value::Float(a), Value::Float(b)) if a == 0.0 && b == 0.0 => Ok(None),
+        (Value::Float(a), Value::Float(b)) if a == 0.0 || b == 0.0 => Err(ps.error_at(
             "uroughness",
             "one of uroughness and vroughness is zero: neumann needs both rough or both smooth",
         )),
+        (u, v) => Ok(Some((u, v))),
     }
+}
+
+/// A conductor's complex index from `{prefix}eta` / `{prefix}k` (pbrt's default: copper) or
+/// `reflectance`, set on `o` as Mitsuba's `material` or `eta` / `k`.
+fn conductor_ior(ps: &ParamSet, o: &mut Obj, prefix: &str) -> Result<()> {
+    let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
+    if ps.has("reflectance") {
+        // pbrt-v4: η = 1 and k = 2√r / √(1 − r), which reflects r at normal incidence.
+        let r = match ps.spectrum("reflectance")? {
+            Some(SpectrumParam::Rgb(c)) => c,
+            Some(SpectrumParam::Constant(v)) => Rgb::splat(v),
+            _ => return Err(ps.error_at("reflectance", "a conductor's reflectance must be an rgb or a constant")),
+        };
+        let k = r.map(|x| 2.0 * x.clamp(0.0, 0.9999).sqrt() / (1.0 - x.clamp(0.0, 0.9999)).sqrt());
+        set(o, "eta", Value::Float(1.0), &ploc(ps, "reflectance"));
+        set(o, "k", Value::Rgb(k), &ploc(ps, "reflectance"));
+        return Ok(());
+    }
+    let eta = ps.spectrum(&eta_name)?.unwrap_or(SpectrumParam::Named("metal-Cu-eta".into()));
+    let k = ps.spectrum(&k_name)?.unwrap_or(SpectrumParam::Named("metal-Cu-k".into()));
+    match (&eta, &k) {
+        (SpectrumParam::Named(e), SpectrumParam::Named(kk)) => {
+            let metal = e.strip_prefix("metal-").and_then(|m| m.strip_suffix("-eta"));
+            let metal_k = kk.strip_prefix("metal-").and_then(|m| m.strip_suffix("-k"));
+            match (metal, metal_k) {
+                (Some(a), Some(b)) if a == b && crate::material::named_conductor(a).is_some() => {
+                    set(o, "material", Value::String(a.into()), &ploc(ps, &eta_name))
+                }
+                _ => return Err(ps.error_at(&eta_name, format!("the conductor spectra \"{e}\" / \"{kk}\" are not available in neumann (named metals: Ag, Al, Au, Cu, MgO, TiO2, …, eta and k of the same metal)"))),
+            }
+        }
+        _ => {
+            set(o, "eta", spectrum_value(ps, &eta_name, eta, false)?, &ploc(ps, &eta_name));
+            set(o, "k", spectrum_value(ps, &k_name, k, false)?, &ploc(ps, &k_name));
+        }
+    }
+    Ok(())
+}
+
+/// The coating's index: a float or a constant / named spectrum (`eta`, `interface.eta`).
+fn dielectric_eta(ps: &ParamSet, name: &str) -> Result<f32> {
+    Ok(match ps.type_of(name) {
+        None => 1.5,
+        Some("float") => ps.float(name, 1.5)?,
+        Some(_) => match ps.spectrum(name)? {
+            Some(SpectrumParam::Constant(v)) => v,
+            Some(SpectrumParam::Named(n)) => {
+                named_ior(&n).ok_or_else(|| ps.error_at(name, format!("unknown glass \"{n}\"")))?
+            }
+            _ => return Err(ps.error_at(name, "a spectrally varying eta (dispersion) is not implemented by neumann")),
+        },
+    })
+}
+
+/// pbrt's coated materials' layer: `thickness`, `albedo`, `g`, `maxdepth`, `nsamples`.
+fn layer_params(p: &Parser, ps: &ParamSet, o: &mut Obj) -> Result<()> {
+    if let Some(t) = texturable(p, ps, "thickness", true)? {
+        set(o, "thickness", t, &ploc(ps, "thickness"));
+    }
+    if let Some(a) = texturable(p, ps, "albedo", false)? {
+        set(o, "albedo", a, &ploc(ps, "albedo"));
+    }
+    if let Some(g) = texturable(p, ps, "g", true)? {
+        set(o, "g", g, &ploc(ps, "g"));
+    }
+    set(o, "max_depth", Value::Integer(ps.int("maxdepth", 10)?), &ploc(ps, "maxdepth"));
+    set(o, "nsamples", Value::Integer(ps.int("nsamples", 1)?), &ploc(ps, "nsamples"));
+    Ok(())
+}
+
+/// `o` wrapped in Mitsuba's `twosided`: pbrt's reflective BSDFs work from both sides.
+fn two_sided(o: Obj) -> Obj {
+    let mut t = obj("bsdf", "twosided", &o.loc);
+    t.children.push(Rc::new(o));
+    t
 }
 
 /// pbrt's named glasses at the d line (587.6 nm): neumann's dielectrics do not disperse.
@@ -319,7 +399,7 @@ pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let mut o = obj("bsdf", "diffuse", l);
             let r = texturable(p, ps, "reflectance", false)?.unwrap_or(Value::Float(0.5));
             set(&mut o, "reflectance", r, &ploc(ps, "reflectance"));
-            o
+            two_sided(o)
         }
         "conductor" => {
             let rough = roughness(p, ps)?;
@@ -329,56 +409,11 @@ pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                 set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
                 set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
             }
-            if ps.has("reflectance") {
-                // pbrt-v4: η = 1 and k = 2√r / √(1 − r), which reflects r at normal incidence.
-                let r = match ps.spectrum("reflectance")? {
-                    Some(SpectrumParam::Rgb(c)) => c,
-                    Some(SpectrumParam::Constant(v)) => Rgb::splat(v),
-                    _ => {
-                        return Err(ps.error_at("reflectance", "a conductor's reflectance must be an rgb or a constant"))
-                    }
-                };
-                let k = r.map(|x| 2.0 * x.clamp(0.0, 0.9999).sqrt() / (1.0 - x.clamp(0.0, 0.9999)).sqrt());
-                set(&mut o, "eta", Value::Float(1.0), &ploc(ps, "reflectance"));
-                set(&mut o, "k", Value::Rgb(k), &ploc(ps, "reflectance"));
-            } else {
-                let eta = ps.spectrum("eta")?.unwrap_or(SpectrumParam::Named("metal-Cu-eta".into()));
-                let k = ps.spectrum("k")?.unwrap_or(SpectrumParam::Named("metal-Cu-k".into()));
-                match (&eta, &k) {
-                    (SpectrumParam::Named(e), SpectrumParam::Named(kk)) => {
-                        let metal = e.strip_prefix("metal-").and_then(|m| m.strip_suffix("-eta"));
-                        let metal_k = kk.strip_prefix("metal-").and_then(|m| m.strip_suffix("-k"));
-                        match (metal, metal_k) {
-                            (Some(a), Some(b)) if a == b && crate::material::named_conductor(a).is_some() => {
-                                set(&mut o, "material", Value::String(a.into()), &ploc(ps, "eta"))
-                            }
-                            _ => return Err(ps.error_at("eta", format!("the conductor spectra \"{e}\" / \"{kk}\" are not available in neumann (named metals: Ag, Al, Au, Cu, MgO, TiO2, …, eta and k of the same metal)"))),
-                        }
-                    }
-                    _ => {
-                        set(&mut o, "eta", spectrum_value(ps, "eta", eta, false)?, &ploc(ps, "eta"));
-                        set(&mut o, "k", spectrum_value(ps, "k", k, false)?, &ploc(ps, "k"));
-                    }
-                }
-            }
-            o
+            conductor_ior(ps, &mut o, "")?;
+            two_sided(o)
         }
         "dielectric" | "thindielectric" => {
-            let eta = match ps.type_of("eta") {
-                None => 1.5,
-                Some("float") => ps.float("eta", 1.5)?,
-                Some(_) => match ps.spectrum("eta")? {
-                    Some(SpectrumParam::Constant(v)) => v,
-                    Some(SpectrumParam::Named(n)) => {
-                        named_ior(&n).ok_or_else(|| ps.error_at("eta", format!("unknown glass \"{n}\"")))?
-                    }
-                    _ => {
-                        return Err(
-                            ps.error_at("eta", "a spectrally varying eta (dispersion) is not implemented by neumann")
-                        )
-                    }
-                },
-            };
+            let eta = dielectric_eta(ps, "eta")?;
             let rough = if ty == "dielectric" { roughness(p, ps)? } else { None };
             let kind = match (ty, rough.is_some()) {
                 ("thindielectric", _) => "thindielectric",
@@ -423,7 +458,32 @@ pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             o
         }
         "interface" => obj("bsdf", "null", l),
-        "coateddiffuse" | "coatedconductor" | "diffusetransmission" | "hair" | "measured" | "subsurface" => {
+        "coateddiffuse" => {
+            let mut o = obj("bsdf", "coateddiffuse", l);
+            let r = texturable(p, ps, "reflectance", false)?.unwrap_or(Value::Float(0.5));
+            set(&mut o, "reflectance", r, &ploc(ps, "reflectance"));
+            let (u, v) = roughness_pair(p, ps, "")?;
+            set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
+            set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
+            set(&mut o, "eta", Value::Float(dielectric_eta(ps, "eta")? as f64), &ploc(ps, "eta"));
+            layer_params(p, ps, &mut o)?;
+            o
+        }
+        "coatedconductor" => {
+            let mut o = obj("bsdf", "coatedconductor", l);
+            let (u, v) = roughness_pair(p, ps, "interface.")?;
+            set(&mut o, "interface_alpha_u", u, &ploc(ps, "interface.roughness"));
+            set(&mut o, "interface_alpha_v", v, &ploc(ps, "interface.roughness"));
+            let eta = dielectric_eta(ps, "interface.eta")?;
+            set(&mut o, "interface_eta", Value::Float(eta as f64), &ploc(ps, "interface.eta"));
+            let (u, v) = roughness_pair(p, ps, "conductor.")?;
+            set(&mut o, "conductor_alpha_u", u, &ploc(ps, "conductor.roughness"));
+            set(&mut o, "conductor_alpha_v", v, &ploc(ps, "conductor.roughness"));
+            conductor_ior(ps, &mut o, "conductor.")?;
+            layer_params(p, ps, &mut o)?;
+            o
+        }
+        "diffusetransmission" | "hair" | "measured" | "subsurface" => {
             return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
         }
         other => return Err(ps.error(format!("unknown material \"{other}\""))),
@@ -461,8 +521,10 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
         "point" => {
             let from = ps.point("from", Vec3::ZERO)?;
             let mut s = light_scale(ps)?;
-            if ps.has("power") {
-                s *= ps.float("power", 1.0)? / (4.0 * std::f32::consts::PI);
+            // pbrt-v4 applies a power only where it is positive.
+            let power = ps.float("power", -1.0)?;
+            if power > 0.0 {
+                s *= power / (4.0 * std::f32::consts::PI);
             }
             let mut o = obj("emitter", "point", l);
             set(&mut o, "position", Value::Point(ctm.transform_point3(from)), l);
@@ -473,11 +535,21 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let from = ps.point("from", Vec3::ZERO)?;
             let to = ps.point("to", Vec3::Z)?;
             let cone = ps.float("coneangle", 30.0)?;
-            let delta = ps.float("conedelta", 5.0)?;
-            if ps.has("power") {
-                return Err(ps.error_at("power", "a spot light's power is not implemented by neumann yet (use scale)"));
+            let delta = ps.float("conedeltaangle", 5.0)?;
+            if !(cone > 0.0 && cone <= 180.0 && delta.is_finite()) {
+                return Err(ps.error_at(
+                    "coneangle",
+                    format!("need 0 < coneangle ≤ 180 and a finite conedeltaangle, got {cone} and {delta}"),
+                ));
             }
-            let s = light_scale(ps)?;
+            let beam = (cone - delta).clamp(0.0, cone);
+            let mut s = light_scale(ps)?;
+            let power = ps.float("power", -1.0)?;
+            if power > 0.0 {
+                // pbrt-v4: the power of the smoothstep cone, 2π((1 − cos β) + (cos β − cos γ)/2).
+                let (end, start) = (cone.to_radians().cos(), beam.to_radians().cos());
+                s *= power / (2.0 * std::f32::consts::PI * ((1.0 - start) + 0.5 * (start - end)));
+            }
             let (wf, wt) = (ctm.transform_point3(from), ctm.transform_point3(to));
             let d = (wt - wf).normalize_or_zero();
             let up = if d.y.abs() > 0.9 { Vec3::X } else { Vec3::Y };
@@ -485,26 +557,21 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let mut o = obj("emitter", "spot", l);
             set(&mut o, "to_world", Value::Transform(t), l);
             set(&mut o, "intensity", scaled(spectrum("I")?, s), &ploc(ps, "I"));
-            if !(cone > 0.0 && cone <= 180.0 && delta.is_finite()) {
-                return Err(ps.error_at(
-                    "coneangle",
-                    format!("need 0 < coneangle ≤ 180 and a finite conedelta, got {cone} and {delta}"),
-                ));
-            }
             set(&mut o, "cutoff_angle", Value::Float(cone as f64), &ploc(ps, "coneangle"));
-            set(&mut o, "beam_width", Value::Float((cone - delta).clamp(0.0, cone) as f64), &ploc(ps, "conedelta"));
+            set(&mut o, "beam_width", Value::Float(beam as f64), &ploc(ps, "conedeltaangle"));
+            set(&mut o, "falloff", Value::String("smoothstep".into()), l);
             o
         }
         "distant" => {
             let from = ps.point("from", Vec3::ZERO)?;
             let to = ps.point("to", Vec3::Z)?;
-            if ps.has("illuminance") {
-                return Err(ps.error_at(
-                    "illuminance",
-                    "a distant light's illuminance is not implemented by neumann yet (use scale)",
-                ));
+            let mut s = light_scale(ps)?;
+            // pbrt-v4: the irradiance of a luminance-1 spectrum times the illuminance (RGB
+            // values are taken as given, so their luminance multiplies it).
+            let e = ps.float("illuminance", -1.0)?;
+            if e > 0.0 {
+                s *= e;
             }
-            let s = light_scale(ps)?;
             let d = ctm.transform_vector3(to - from).normalize_or_zero();
             if d == Vec3::ZERO {
                 return Err(ps.error_at("to", "from and to coincide"));
@@ -515,16 +582,30 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             o
         }
         "infinite" => {
-            if ps.has("filename") {
-                return Err(ps.error_at("filename", "image-based infinite lights (pbrt-v4's equal-area octahedral maps) are not implemented by neumann yet"));
+            if ps.has("portal") {
+                return Err(ps.error_at("portal", "portal infinite lights are not implemented by neumann"));
             }
-            if ps.has("illuminance") {
-                return Err(ps.error_at(
-                    "illuminance",
-                    "an infinite light's illuminance is not implemented by neumann yet (use scale)",
-                ));
+            let mut s = light_scale(ps)?;
+            let e = ps.float("illuminance", -1.0)?;
+            if let Some(file) = ps.string("filename")? {
+                if ps.has("L") {
+                    return Err(ps.error_at("L", "give either \"L\" or \"filename\" (as pbrt-v4 requires)"));
+                }
+                // pbrt-v4's equal-area octahedral square around the light's +z.
+                let mut o = obj("emitter", "envmap", l);
+                set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
+                set(&mut o, "mapping", Value::String("equal_area".into()), l);
+                set(&mut o, "scale", Value::Float(s as f64), &ploc(ps, "scale"));
+                if e > 0.0 {
+                    set(&mut o, "illuminance", Value::Float(e as f64), &ploc(ps, "illuminance"));
+                }
+                set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
+                return Ok(o);
             }
-            let s = light_scale(ps)?;
+            if e > 0.0 {
+                // pbrt-v4: a uniform sky of luminance 1 gives an illuminance of π.
+                s *= e / std::f32::consts::PI;
+            }
             let mut o = obj("emitter", "constant", l);
             set(&mut o, "radiance", scaled(spectrum("L")?, s), &ploc(ps, "L"));
             o
