@@ -614,7 +614,10 @@ mod tests {
             let t = ((theta.cos() - cutoff.cos()) / (beam.cos() - cutoff.cos())).clamp(0.0, 1.0);
             let expected = rho / std::f32::consts::PI * 8.0 * t * t * (3.0 - 2.0 * t) * theta.cos() / r2;
             let got = radiance_at(&pbrt_spot, x);
-            assert!((got - expected).abs() <= 1e-4 * expected.max(1e-3), "pbrt spot at {theta_deg}°: {got} vs {expected}");
+            assert!(
+                (got - expected).abs() <= 1e-4 * expected.max(1e-3),
+                "pbrt spot at {theta_deg}°: {got} vs {expected}"
+            );
         }
     }
 

@@ -488,7 +488,8 @@ mod tests {
             texture: None,
             falloff: crate::light::SpotFalloff::Linear,
         });
-        let to_world = crate::math::Transform::look_at(Vec3::new(-2.0, 3.0, 0.0), Vec3::new(-1.0, 0.0, 0.5), Vec3::Y).unwrap();
+        let to_world =
+            crate::math::Transform::look_at(Vec3::new(-2.0, 3.0, 0.0), Vec3::new(-1.0, 0.0, 0.5), Vec3::Y).unwrap();
         lights.push(Light::Projector(Box::new(crate::light::Projector::new(
             to_world,
             30.0,

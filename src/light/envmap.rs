@@ -105,8 +105,7 @@ impl EnvMap {
                 integral += (c.iter().sum::<f32>() * 0.25 * sin_mid) as f64;
             }
         }
-        let distribution = PiecewiseConstant2D::new(&func, w, h - 1)
-            .ok_or(EnvMapError::Black)?;
+        let distribution = PiecewiseConstant2D::new(&func, w, h - 1).ok_or(EnvMapError::Black)?;
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
         Ok(EnvMap {
@@ -165,7 +164,8 @@ impl EnvMap {
         let mut sum = 0.0f64;
         for y in 0..h {
             for x in 0..w {
-                let d = equal_area_square_to_sphere(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
+                let d =
+                    equal_area_square_to_sphere(Vec2::new((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32));
                 if d.z > 0.0 {
                     sum += (luminance(image.pixels[y * w + x]) * d.z) as f64;
                 }
@@ -384,7 +384,14 @@ mod tests {
         let to_world = Transform::rotate(Vec3::new(0.3, 0.2, 1.0), 70.0).unwrap();
         let env = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap();
         assert_eq!(env.layout(), Layout::EqualArea);
-        let out = chi2_2d(&SPHERE, [31, 61], 500_000, |r| env.sample(u2(r)).map(|s| s.0), |d| env.pdf(*d) as f64, &Chi2Config::default());
+        let out = chi2_2d(
+            &SPHERE,
+            [31, 61],
+            500_000,
+            |r| env.sample(u2(r)).map(|s| s.0),
+            |d| env.pdf(*d) as f64,
+            &Chi2Config::default(),
+        );
         assert!(out.passed(), "{out}");
         let mut rng = crate::sampling::Pcg32::new(1, 3);
         for _ in 0..1000 {
@@ -411,7 +418,10 @@ mod tests {
             .sum::<f64>()
             / n as f64;
         assert!((env.integral_luminance() as f64 / mc - 1.0).abs() < 0.03, "{} vs {mc}", env.integral_luminance());
-        assert!(matches!(EnvMap::new_equal_area(test_sky(16, 8), 1.0, Transform::IDENTITY), Err(EnvMapError::NotSquare(16, 8))));
+        assert!(matches!(
+            EnvMap::new_equal_area(test_sky(16, 8), 1.0, Transform::IDENTITY),
+            Err(EnvMapError::NotSquare(16, 8))
+        ));
         // pbrt's illuminance of a white map: half of π (see pbrt_illuminance).
         let white = Image { width: 64, height: 64, pixels: vec![Rgb::ONE; 64 * 64] };
         assert!((EnvMap::pbrt_illuminance(&white) - 0.5 * PI).abs() < 0.01, "{}", EnvMap::pbrt_illuminance(&white));

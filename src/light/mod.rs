@@ -526,11 +526,8 @@ mod tests {
             .unwrap(),
         );
         disk_geo.prepare_sampling();
-        let mut shapes = vec![
-            Geometry::Mesh(rect),
-            Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.3, 2.0), 0.7, false)),
-            disk_geo,
-        ];
+        let mut shapes =
+            vec![Geometry::Mesh(rect), Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.3, 2.0), 0.7, false)), disk_geo];
         for s in &mut shapes {
             assert!(s.prepare_sampling());
         }

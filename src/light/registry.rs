@@ -5,18 +5,24 @@
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
 use super::{EnvMap, Light, Projector, SpotFalloff};
-use crate::texture::{Texture, TextureSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::props::{Obj, Result};
+use crate::texture::{Texture, TextureSource};
 
 /// An emitter plugin's constructor (lights at infinity get the scene's bounds when it is built);
 /// textured parameters and images come from the loader ([`TextureSource`]).
 pub type EmitterPlugin = fn(&Obj, &mut dyn TextureSource) -> Result<Light>;
 
 /// Every emitter plugin that stands on its own, by its (Mitsuba) name.
-pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] =
-    &[("point", point), ("spot", spot), ("projector", projector), ("directional", directional), ("constant", constant), ("envmap", envmap)];
+pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] = &[
+    ("point", point),
+    ("spot", spot),
+    ("projector", projector),
+    ("directional", directional),
+    ("constant", constant),
+    ("envmap", envmap),
+];
 
 /// The constructor of the emitter plugin `name`.
 pub fn emitter_plugin(name: &str) -> Option<EmitterPlugin> {
@@ -71,7 +77,11 @@ fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 }
 
 /// Rejects a `mesh_attribute` texture where there is no mesh to read it from.
-fn without_mesh_attributes(o: &Obj, name: &str, t: Option<crate::texture::Texture>) -> Result<Option<crate::texture::Texture>> {
+fn without_mesh_attributes(
+    o: &Obj,
+    name: &str,
+    t: Option<crate::texture::Texture>,
+) -> Result<Option<crate::texture::Texture>> {
     match t {
         Some(t) if !t.mesh_attributes().is_empty() => {
             Err(o.error_at(name, format!("a mesh_attribute texture cannot be the '{name}' of a {} emitter", o.ty)))
@@ -113,18 +123,17 @@ fn uniform_emission(o: &Obj, name: &str, textures: &mut dyn TextureSource) -> Re
         Texture::Constant(c) => Ok(c),
         _ => Err(o.error_at(
             name,
-            format!("the {} emitter's '{name}' must be the same everywhere (as Mitsuba requires), not a varying texture", o.ty),
+            format!(
+                "the {} emitter's '{name}' must be the same everywhere (as Mitsuba requires), not a varying texture",
+                o.ty
+            ),
         )),
     }
 }
 
 /// Mitsuba's `constant`: `radiance` (1) from every direction.
 fn constant(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
-    Ok(Light::Constant {
-        radiance: uniform_emission(o, "radiance", textures)?,
-        center: Vec3::ZERO,
-        radius: 0.0,
-    })
+    Ok(Light::Constant { radiance: uniform_emission(o, "radiance", textures)?, center: Vec3::ZERO, radius: 0.0 })
 }
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
@@ -142,7 +151,9 @@ fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
             if let Some(e) = o.float_opt("illuminance")? {
                 let k = EnvMap::pbrt_illuminance(&image);
                 if !(e > 0.0 && e.is_finite() && k > 0.0) {
-                    return Err(o.error_at("illuminance", "needs a positive illuminance and a map lit above its horizon"));
+                    return Err(
+                        o.error_at("illuminance", "needs a positive illuminance and a map lit above its horizon")
+                    );
                 }
                 scale *= e / k;
             }

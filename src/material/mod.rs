@@ -11,8 +11,9 @@ mod conductor;
 mod conductor_presets;
 mod dielectric;
 mod diffuse;
-pub mod layered;
+mod diffusetransmission;
 pub mod fresnel;
+pub mod layered;
 pub mod microfacet;
 mod perturbed;
 mod plastic;
@@ -27,18 +28,19 @@ pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
+pub use diffusetransmission::DiffuseTransmission;
 pub use layered::Layered;
 pub use perturbed::{Perturbation, Perturbed};
+pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use pplastic::PPlastic;
 pub use principled::Principled;
 pub use principledthin::PrincipledThin;
-pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use registry::{bsdf_plugin, BsdfBuilder, BsdfPlugin, BSDF_PLUGINS};
 pub use roughdielectric::RoughDielectric;
 pub use roughplastic::RoughPlastic;
 
-use std::sync::Arc;
 use crate::math::{Rgb, Vec2, Vec3};
+use std::sync::Arc;
 
 /// Where on the surface a BSDF is evaluated (what textured parameters need).
 #[derive(Clone, Copy, Debug, Default)]
@@ -80,6 +82,8 @@ pub struct BsdfSample {
 pub enum Bsdf {
     /// Lambertian reflection `ρ / π`.
     Diffuse(Diffuse),
+    /// pbrt-v4's diffuse reflection and transmission, from both sides.
+    DiffuseTransmission(DiffuseTransmission),
     /// Smooth conductor (mirror with Fresnel reflectance).
     Conductor(Conductor),
     /// Microfacet conductor.
@@ -135,6 +139,7 @@ impl Bsdf {
     pub fn plugin_name(&self) -> &'static str {
         match self {
             Bsdf::Diffuse(_) => "diffuse",
+            Bsdf::DiffuseTransmission(_) => "diffusetransmission",
             Bsdf::Conductor(_) => "conductor",
             Bsdf::RoughConductor(_) => "roughconductor",
             Bsdf::Dielectric(_) => "dielectric",
@@ -168,6 +173,7 @@ impl Bsdf {
             | Bsdf::RoughDielectric(_)
             | Bsdf::ThinDielectric(_)
             | Bsdf::Mask { .. }
+            | Bsdf::DiffuseTransmission(_)
             | Bsdf::Null => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
@@ -190,6 +196,7 @@ impl Bsdf {
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
+            Bsdf::DiffuseTransmission(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(ctx, wo, wi),
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
@@ -220,6 +227,7 @@ impl Bsdf {
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
+            Bsdf::DiffuseTransmission(b) => b.pdf(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.pdf(ctx, wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
@@ -250,6 +258,7 @@ impl Bsdf {
     pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, u1: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::DiffuseTransmission(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Conductor(b) => b.sample(ctx, wo),
             Bsdf::RoughConductor(b) => b.sample(ctx, wo, u),
             Bsdf::Dielectric(b) => b.sample(ctx, wo, u1),
@@ -327,6 +336,7 @@ impl Bsdf {
     pub fn diffuse_reflectance(&self, ctx: &BsdfContext, wo: Vec3) -> Rgb {
         match self {
             Bsdf::Diffuse(b) => ctx.eval(&b.reflectance),
+            Bsdf::DiffuseTransmission(b) => ctx.eval(&b.reflectance),
             Bsdf::Plastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::RoughPlastic(b) => ctx.eval(&b.diffuse_reflectance),
             Bsdf::Principled(b) => ctx.eval(&b.base_color),
@@ -358,6 +368,7 @@ impl Bsdf {
     pub fn textures(&self) -> Vec<&crate::texture::Texture> {
         match self {
             Bsdf::Diffuse(b) => vec![&b.reflectance],
+            Bsdf::DiffuseTransmission(b) => vec![&b.reflectance, &b.transmittance],
             Bsdf::Conductor(b) => {
                 let mut v = vec![&b.specular_reflectance];
                 v.extend(ConductorIor::textures(&b.ior));
@@ -421,6 +432,7 @@ impl Bsdf {
     pub fn is_delta(&self) -> bool {
         match self {
             Bsdf::Diffuse(_)
+            | Bsdf::DiffuseTransmission(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::Plastic(_)

@@ -5,12 +5,12 @@
 //! The wrappers, which only combine other BSDFs (Mitsuba's `twosided`, `blendbsdf`, `mask`, and
 //! `null`), are built here.
 
-use std::sync::Arc;
 use super::Bsdf;
 use crate::math::Rgb;
 use crate::props::{Obj, Result};
 use crate::texture::TextureSource;
 use std::ops::RangeInclusive;
+use std::sync::Arc;
 
 /// What a BSDF plugin needs from the loader that holds the scene's objects: its texture
 /// parameters ([`TextureSource`]) and the BSDFs nested in it, built (and shared) by the loader.
@@ -29,6 +29,7 @@ pub type BsdfPlugin = fn(&Obj, &mut dyn BsdfBuilder) -> Result<Bsdf>;
 /// Every BSDF plugin by its (Mitsuba) name.
 pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("diffuse", super::Diffuse::from_props),
+    ("diffusetransmission", super::DiffuseTransmission::from_props),
     ("conductor", super::Conductor::from_props),
     ("roughconductor", super::RoughConductor::from_props),
     ("dielectric", super::Dielectric::from_props),

@@ -2,10 +2,10 @@
 //! sphere, so transmission is covered), the returned pdf and weight against `pdf` and `eval`,
 //! reciprocity, and energy conservation.
 
-use std::sync::Arc;
 use super::microfacet::{Microfacet, MicrofacetType, Roughness};
 use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
+use std::sync::Arc;
 
 const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None };
 
@@ -26,7 +26,10 @@ pub(super) fn assert_matches_mitsuba(
         let b = bsdf_of(k);
         let (wo, wi) = (Vec3::from_array(wo), Vec3::from_array(wi));
         let e = b.eval(&CTX, wo, wi);
-        assert!(close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]), "{k} {wo} {wi}: {e} vs {value:?}");
+        assert!(
+            close(e.x, value[0]) && close(e.y, value[1]) && close(e.z, value[2]),
+            "{k} {wo} {wi}: {e} vs {value:?}"
+        );
         let (p, expected) = (b.pdf(&CTX, wo, wi), expected_pdf(k, wo, pdf));
         assert!(close(p, expected), "{k} {wo} {wi}: pdf {p} vs {expected}");
     }
@@ -69,6 +72,13 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
 
 fn all_non_delta() -> Vec<(String, Bsdf)> {
     let mut v = vec![("diffuse".to_string(), Bsdf::Diffuse(Diffuse::new(Rgb::new(0.3, 0.6, 0.9))))];
+    v.push((
+        "diffusetransmission".into(),
+        Bsdf::DiffuseTransmission(DiffuseTransmission {
+            reflectance: Rgb::new(0.2, 0.5, 0.7).into(),
+            transmittance: Rgb::new(0.6, 0.3, 0.1).into(),
+        }),
+    ));
     v.extend(rough_conductors());
     for (md, eta) in [
         (Microfacet::new(MicrofacetType::Ggx, 0.3, 0.3), 1.5),
@@ -349,8 +359,9 @@ fn energy_is_conserved() {
             specular_reflectance: Rgb::ONE.into(),
         };
         let wo = Vec3::new(0.3, 0.0, 0.954).normalize();
-        let exact =
-            crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| white.eval(&CTX, wo, *wi).x as f64);
+        let exact = crate::testkit::integrate_pdf_2d(&crate::testkit::HEMISPHERE, [512, 64], |wi| {
+            white.eval(&CTX, wo, *wi).x as f64
+        });
         let mut rng = crate::sampling::Pcg32::new(4, k as u64);
         let n = 100_000;
         let est = crate::estimators::Estimate::from_values(

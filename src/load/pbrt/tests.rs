@@ -358,7 +358,13 @@ Shape "sphere" "float radius" 1
 #[test]
 fn lights_follow_pbrt_v4_normalisations() {
     use crate::light::{EnvMapLayout, SpotFalloff};
-    let lights = |text: &str| load(&format!("Camera \"perspective\"\nWorldBegin\n{text}")).unwrap_or_else(|e| panic!("{e}")).scene.lights().to_vec();
+    let lights = |text: &str| {
+        load(&format!("Camera \"perspective\"\nWorldBegin\n{text}"))
+            .unwrap_or_else(|e| panic!("{e}"))
+            .scene
+            .lights()
+            .to_vec()
+    };
     // Spot: `power` divides by the smoothstep cone's 2π((1 − cos β) + (cos β − cos γ)/2), so the
     // light's power is what was asked (times the RGB's luminance); pbrt's falloff shape.
     let l = lights("LightSource \"spot\" \"rgb I\" [1 1 1] \"float coneangle\" 40 \"float conedeltaangle\" 15 \"float power\" 100\n");
@@ -367,12 +373,18 @@ fn lights_follow_pbrt_v4_normalisations() {
     assert!((cutoff.to_degrees() - 40.0).abs() < 1e-4 && (beam.to_degrees() - 25.0).abs() < 1e-4);
     assert!((l[0].power(&[]) - 100.0).abs() < 0.01, "{}", l[0].power(&[]));
     // Point: power / 4π; a non-positive power is ignored, as in pbrt.
-    let l = lights("LightSource \"point\" \"rgb I\" [2 2 2] \"float power\" 10\nLightSource \"point\" \"float power\" -1\n");
+    let l = lights(
+        "LightSource \"point\" \"rgb I\" [2 2 2] \"float power\" 10\nLightSource \"point\" \"float power\" -1\n",
+    );
     assert!((l[0].power(&[]) - 20.0).abs() < 1e-3 && (l[1].power(&[]) - 4.0 * std::f32::consts::PI).abs() < 1e-3);
     // Distant: irradiance × illuminance; uniform infinite: × illuminance / π.
     let l = lights("LightSource \"distant\" \"rgb L\" [1 2 3] \"float illuminance\" 3\nLightSource \"infinite\" \"rgb L\" [1 1 1] \"float illuminance\" 2\n");
-    assert!(matches!(&l[0], Light::Directional { irradiance, .. } if (*irradiance - Rgb::new(3.0, 6.0, 9.0)).abs().max_element() < 1e-5));
-    assert!(matches!(&l[1], Light::Constant { radiance, .. } if (radiance.x - 2.0 / std::f32::consts::PI).abs() < 1e-5));
+    assert!(
+        matches!(&l[0], Light::Directional { irradiance, .. } if (*irradiance - Rgb::new(3.0, 6.0, 9.0)).abs().max_element() < 1e-5)
+    );
+    assert!(
+        matches!(&l[1], Light::Constant { radiance, .. } if (radiance.x - 2.0 / std::f32::consts::PI).abs() < 1e-5)
+    );
     // Image infinite light: the equal-area square around the light's +z, nearest texel.
     let dir = tmp("envmap");
     let n = 8u32;
@@ -398,4 +410,45 @@ fn lights_follow_pbrt_v4_normalisations() {
     assert!(e.contains("either \"L\" or \"filename\""), "{e}");
     let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"spot\" \"float conedelta\" 5\n");
     assert!(e.contains("conedelta"), "{e}");
+}
+
+#[test]
+fn alpha_cut_outs_and_normal_maps() {
+    let dir = tmp("alpha");
+    let n = 4u32;
+    crate::film::output::write_image(&dir.join("n.exr"), n, n, &[Rgb::new(0.5, 0.5, 1.0); 16], &Default::default())
+        .unwrap();
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nTexture \"a\" \"float\" \"constant\" \"float value\" 0.3\n\
+         Material \"diffuse\" \"string normalmap\" \"{}\"\n\
+         Shape \"sphere\" \"texture alpha\" \"a\"\nShape \"sphere\" \"float alpha\" 1\nShape \"sphere\" \"float alpha\" 0.5\n",
+        dir.join("n.exr").display()
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let b = |i: usize| &f.scene.bsdfs()[f.scene.shapes()[i].bsdf as usize];
+    let ctx = crate::material::BsdfContext::default();
+    let Bsdf::Mask { opacity, bsdf } = b(0) else { panic!("{:?}", b(0)) };
+    assert!((opacity.eval_scalar(crate::math::Vec2::ZERO, None) - 0.3).abs() < 1e-6);
+    assert!(matches!(&**bsdf, Bsdf::Perturbed(_)));
+    assert!(matches!(b(1), Bsdf::Perturbed(_)), "alpha 1 is no cut-out");
+    assert!(matches!(b(2), Bsdf::Mask { .. }));
+    // A flat normal map (0.5, 0.5, 1) leaves the diffuse BSDF as it is.
+    let wo = crate::math::Vec3::new(0.3, 0.1, 0.95).normalize();
+    let wi = crate::math::Vec3::new(-0.2, 0.4, 0.89).normalize();
+    let Bsdf::Perturbed(p) = b(1) else { unreachable!() };
+    let plain = p.bsdf.eval(&ctx, wo, wi);
+    assert!((plain.x - 0.5 / std::f32::consts::PI * wi.z).abs() < 1e-5, "{plain}");
+    let e =
+        err("Camera \"perspective\"\nWorldBegin\nAreaLightSource \"diffuse\"\nShape \"sphere\" \"float alpha\" 0.5\n");
+    assert!(e.contains("alpha"), "{e}");
+}
+
+#[test]
+fn diffuse_transmission_scales_both_albedos() {
+    let f = load("Camera \"perspective\"\nWorldBegin\nMaterial \"diffusetransmission\" \"rgb transmittance\" [0.4 0.2 0.1] \"float scale\" 2\nShape \"sphere\"\n")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let Bsdf::DiffuseTransmission(d) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!() };
+    let at = |t: &crate::texture::Texture| t.eval(crate::math::Vec2::ZERO);
+    assert_eq!(at(&d.reflectance), Rgb::splat(0.5));
+    assert_eq!(at(&d.transmittance), Rgb::new(0.8, 0.4, 0.2));
 }

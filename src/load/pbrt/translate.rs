@@ -13,12 +13,16 @@
 //!   `randomwalk` → `path`; `bdpt`, `mlt`, `sppm` → `path` with a warning; `maxdepth` bounces →
 //!   `max_depth` = `maxdepth` + 1 segments);
 //! - shapes `trianglemesh`, `plymesh` (also gzip-compressed), `bilinearmesh` (two triangles per
-//!   patch), `sphere`, `disk`, `cylinder` (whole ones);
+//!   patch), `sphere`, `disk`, `cylinder` (whole ones); `alpha` (a float or float texture) →
+//!   a `mask` of that opacity around the material (pbrt's stochastic alpha test in expectation);
 //! - materials `diffuse`, `conductor` (`eta`/`k` of pbrt's named metals, RGB or spectra, or
 //!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
-//!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`);
+//!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
+//!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`; reflective ones wrapped in
+//!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`;
 //! - textures `imagemap`, `checkerboard` (2D), `scale`, `constant`;
-//! - lights `point`, `spot`, `distant`, `infinite` (constant `L`), area `diffuse`.
+//! - lights `point`, `spot` (smoothstep falloff), `distant`, `infinite` (constant `L` or an
+//!   equal-area image), area `diffuse`, with pbrt-v4's `power` and `illuminance`.
 //!
 //! Anything else is an error naming it; parameters not read are errors too.
 
@@ -390,9 +394,35 @@ pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     if ps.has("displacement") {
         return Err(ps.error_at("displacement", "displacement is not implemented by neumann"));
     }
-    if ps.has("normalmap") {
-        return Err(ps.error_at("normalmap", "pbrt normal maps are not implemented by neumann yet"));
+    let bsdf = material_bsdf(p, ty, ps)?;
+    match ps.string("normalmap")? {
+        Some(file) if ty != "interface" && ty != "mix" => Ok(normal_mapped(bsdf, file, &ploc(ps, "normalmap"))),
+        Some(_) => Err(ps.error_at("normalmap", format!("a \"{ty}\" material takes no normal map"))),
+        None => Ok(bsdf),
     }
+}
+
+/// pbrt-v4's `normalmap`: tangent-space normals `2 rgb − 1` read linearly, bilinear, repeating,
+/// at (u, 1 − v), in the frame of ∂p/∂u and the shading normal: Mitsuba's `normalmap` without
+/// its invalid-normal flip and shadowing term, which pbrt does not apply.
+fn normal_mapped(bsdf: Obj, file: String, loc: &Loc) -> Obj {
+    let mut t = obj("texture", "bitmap", loc);
+    set(&mut t, "filename", Value::String(file), loc);
+    set(&mut t, "raw", Value::Bool(true), loc);
+    set(&mut t, "wrap_mode", Value::String("repeat".into()), loc);
+    use crate::math::Vec4;
+    let flip = Mat4::from_cols(Vec4::X, Vec4::new(0.0, -1.0, 0.0, 0.0), Vec4::Z, Vec4::new(0.0, 1.0, 0.0, 1.0));
+    set(&mut t, "to_uv", Value::Transform(Transform::from_matrix(flip).expect("invertible")), loc);
+    let mut n = obj("bsdf", "normalmap", loc);
+    set(&mut n, "normalmap", Value::Object(Rc::new(t)), loc);
+    set(&mut n, "flip_invalid_normals", Value::Bool(false), loc);
+    set(&mut n, "use_shadowing_function", Value::Bool(false), loc);
+    n.children.push(Rc::new(bsdf));
+    n
+}
+
+/// The BSDF of `Material` / `MakeNamedMaterial` type `ty` (its normal map aside).
+fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     let l = &ps.loc;
     Ok(match ty {
         "diffuse" => {
@@ -483,7 +513,26 @@ pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             layer_params(p, ps, &mut o)?;
             o
         }
-        "diffusetransmission" | "hair" | "measured" | "subsurface" => {
+        "diffusetransmission" => {
+            // pbrt-v4: both albedos times `scale`.
+            let scale = ps.float("scale", 1.0)?;
+            let mut o = obj("bsdf", "diffusetransmission", l);
+            for (name, default) in [("reflectance", 0.25), ("transmittance", 0.25)] {
+                let v = texturable(p, ps, name, false)?.unwrap_or(Value::Float(default));
+                let v = match v {
+                    Value::Object(t) if scale != 1.0 => {
+                        let mut s = obj("texture", "scale", l);
+                        set(&mut s, "tex", Value::Object(t), &ploc(ps, name));
+                        set(&mut s, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
+                        Value::Object(Rc::new(s))
+                    }
+                    v => scaled(v, scale),
+                };
+                set(&mut o, name, v, &ploc(ps, name));
+            }
+            o
+        }
+        "hair" | "measured" | "subsurface" => {
             return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
         }
         other => return Err(ps.error(format!("unknown material \"{other}\""))),
@@ -683,7 +732,22 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
             set(&mut o, side, Value::Object(m), &ps.loc);
         }
     }
-    o.children.push(p.current_material()?);
+    let material = p.current_material()?;
+    match texturable(p, ps, "alpha", true)? {
+        // pbrt-v4: a constant alpha of 1 is no cut-out.
+        None => o.children.push(material),
+        Some(Value::Float(a)) if a >= 1.0 => o.children.push(material),
+        Some(a) => {
+            if p.gs.area_light.is_some() {
+                return Err(ps.error_at("alpha", "alpha cut-outs of area lights are not implemented by neumann"));
+            }
+            // pbrt's stochastic alpha test, in expectation: a `mask` of opacity alpha.
+            let mut m = obj("bsdf", "mask", &ploc(ps, "alpha"));
+            set(&mut m, "opacity", a, &ploc(ps, "alpha"));
+            m.children.push(material);
+            o.children.push(Rc::new(m));
+        }
+    }
     if let Some(al) = p.gs.area_light.clone() {
         if al.bool("twosided", false)? {
             return Err(al.error_at("twosided", "two-sided area lights are not implemented by neumann yet"));
@@ -702,9 +766,6 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         let mut e = obj("emitter", "area", &al.loc);
         set(&mut e, "radiance", scaled(l, s), &ploc(&al, "L"));
         o.children.push(Rc::new(e));
-    }
-    if ps.has("alpha") {
-        return Err(ps.error_at("alpha", "alpha cut-outs on pbrt shapes are not implemented by neumann yet"));
     }
     Ok(o)
 }

@@ -334,7 +334,8 @@ impl Interface {
                     }
                     let denom = (wi.dot(wm) + wo.dot(wm) / etap).powi(2);
                     let pdf = visible_pdf(&mf, wo, wm) * wi.dot(wm).abs() / denom * pt / (pr + pt);
-                    let mut ft = (1.0 - r) * mf.d(wm) * g(&mf, wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
+                    let mut ft =
+                        (1.0 - r) * mf.d(wm) * g(&mf, wo, wi) * (wi.dot(wm) * wo.dot(wm) / (wi.z * wo.z * denom)).abs();
                     if mode == Mode::Radiance {
                         ft /= etap * etap;
                     }

@@ -145,7 +145,8 @@ impl Layered {
     /// The parameters at `ctx`.
     fn at(&self, ctx: &BsdfContext) -> Stack {
         let scalar = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref());
-        let ggx = |a: &[Texture; 2]| rough_or_smooth(Microfacet::new(MicrofacetType::Ggx, scalar(&a[0]), scalar(&a[1])));
+        let ggx =
+            |a: &[Texture; 2]| rough_or_smooth(Microfacet::new(MicrofacetType::Ggx, scalar(&a[0]), scalar(&a[1])));
         let top = Interface::Dielectric { eta: self.eta, mf: ggx(&self.alpha) };
         let bottom = match &self.base {
             Base::Diffuse { reflectance } => Interface::Diffuse { r: ctx.eval(reflectance).clamp(Rgb::ZERO, Rgb::ONE) },
@@ -380,7 +381,10 @@ impl Stack {
         let mut beta = bs.f * bs.wi.z.abs() / bs.pdf;
         let mut pdf = bs.pdf;
         let mut z = self.thickness;
-        let mut rng = Pcg32::new(hash(&[SEED, bits(wo)]), hash(&[uc.to_bits() as u64, u.x.to_bits() as u64, u.y.to_bits() as u64]));
+        let mut rng = Pcg32::new(
+            hash(&[SEED, bits(wo)]),
+            hash(&[uc.to_bits() as u64, u.x.to_bits() as u64, u.y.to_bits() as u64]),
+        );
         let r = &mut rng;
         for depth in 0..self.max_depth {
             let rr_beta = beta.max_element();
@@ -464,7 +468,8 @@ impl Stack {
                 sum += r_iface.pdf(-wos.wi, -wis.wi, Lobes::All);
                 continue;
             }
-            let Some(rs) = r_iface.sample(-wos.wi, uniform(r), Vec2::new(uniform(r), uniform(r)), mode, Lobes::All) else {
+            let Some(rs) = r_iface.sample(-wos.wi, uniform(r), Vec2::new(uniform(r), uniform(r)), mode, Lobes::All)
+            else {
                 continue;
             };
             if r_iface.is_specular() {

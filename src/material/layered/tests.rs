@@ -15,10 +15,10 @@
 
 use super::*;
 use crate::estimators::Estimate;
-use crate::material::fresnel::{fresnel_conductor, fresnel_dielectric};
 use crate::material::diffuse_fresnel_reflectance;
-use crate::sampling::{sample_uniform_hemisphere, Pcg32};
+use crate::material::fresnel::{fresnel_conductor, fresnel_dielectric};
 use crate::material::microfacet::MicrofacetType;
+use crate::sampling::{sample_uniform_hemisphere, Pcg32};
 use crate::testkit::u2;
 
 const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None };
@@ -64,7 +64,9 @@ fn dir(theta_deg: f32) -> Vec3 {
 /// The mean sampled weight (channel x) from `wo`, with its standard error.
 fn sampled_albedo(b: &Layered, wo: Vec3, n: usize, seed: u64) -> Estimate {
     let mut rng = Pcg32::new(seed, 1);
-    Estimate::from_values((0..n).map(|_| b.sample(&CTX, wo, rng.next_f32(), u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)))
+    Estimate::from_values(
+        (0..n).map(|_| b.sample(&CTX, wo, rng.next_f32(), u2(&mut rng)).map_or(0.0, |s| s.weight.x as f64)),
+    )
 }
 
 /// `∫ eval dω` (channel x) over the upper hemisphere by uniform sampling, with its error.
@@ -255,7 +257,10 @@ fn interfaces() -> Vec<(&'static str, Interface)> {
         ("rough dielectric", Interface::Dielectric { eta: 1.5, mf: ggx(0.3, 0.3) }),
         ("anisotropic dielectric", Interface::Dielectric { eta: 1.33, mf: ggx(0.1, 0.4) }),
         ("diffuse", Interface::Diffuse { r: Rgb::new(0.2, 0.5, 0.9) }),
-        ("rough conductor", Interface::Conductor { eta: Rgb::new(0.2, 0.4, 1.4), k: Rgb::new(3.9, 2.4, 1.8), mf: ggx(0.25, 0.25) }),
+        (
+            "rough conductor",
+            Interface::Conductor { eta: Rgb::new(0.2, 0.4, 1.4), k: Rgb::new(3.9, 2.4, 1.8), mf: ggx(0.25, 0.25) },
+        ),
     ]
 }
 
@@ -284,7 +289,11 @@ fn interfaces_sample_as_their_pdf_and_value_say() {
                     let Some(s) = i.sample(wo, rng.next_f32(), u2(&mut rng), Mode::Radiance, lobes) else { continue };
                     let (f, p) = (i.f(wo, s.wi, Mode::Radiance), i.pdf(wo, s.wi, lobes));
                     assert!((s.pdf - p).abs() <= 1e-3 * p.max(1e-2), "{name} {lobes:?}: pdf {} vs {p}", s.pdf);
-                    assert!((s.f - f).abs().max_element() <= 1e-3 * f.max_element().max(1e-2), "{name}: f {} vs {f}", s.f);
+                    assert!(
+                        (s.f - f).abs().max_element() <= 1e-3 * f.max_element().max(1e-2),
+                        "{name}: f {} vs {f}",
+                        s.f
+                    );
                     assert_eq!(s.reflection, s.wi.z * wo.z > 0.0);
                 }
             }
