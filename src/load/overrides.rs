@@ -13,7 +13,6 @@ use crate::choice::Choice;
 use crate::integrator::aov::AovKind;
 use crate::integrator::IntegratorKind;
 use crate::props::{Loc, Obj, Prop, SourceFile, Value};
-use std::cell::Cell;
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -52,7 +51,7 @@ impl Override {
     }
 
     fn prop(&self) -> Prop {
-        Prop { name: self.name.clone(), value: self.value.clone(), loc: self.loc(), used: Cell::new(false) }
+        Prop::new(&self.name, self.value.clone(), self.loc())
     }
 }
 
@@ -83,23 +82,15 @@ fn with_props(o: &Obj, set: &[&Override]) -> Obj {
         .props
         .iter()
         .filter(|p| !set.iter().any(|s| s.name == p.name))
-        .map(|p| Prop { name: p.name.clone(), value: p.value.clone(), loc: p.loc.clone(), used: Cell::new(false) })
+        .map(|p| Prop::new(&p.name, p.value.clone(), p.loc.clone()))
         .collect();
     props.extend(set.iter().map(|s| s.prop()));
-    Obj {
-        tag: o.tag.clone(),
-        ty: o.ty.clone(),
-        id: o.id.clone(),
-        loc: o.loc.clone(),
-        props,
-        children: o.children.clone(),
-        built: Cell::new(false),
-    }
+    Obj { id: o.id.clone(), props, children: o.children.clone(), ..Obj::new(&o.tag, &o.ty, o.loc.clone()) }
 }
 
 /// A new object `<tag type=ty>` at `loc` with `props` and `children`.
 fn object(tag: &str, ty: &str, loc: &Loc, props: Vec<Prop>, children: Vec<Rc<Obj>>) -> Obj {
-    Obj { tag: tag.into(), ty: ty.into(), id: None, loc: loc.clone(), props, children, built: Cell::new(false) }
+    Obj { props, children, ..Obj::new(tag, ty, loc.clone()) }
 }
 
 /// The integrator object `--integrator kind` makes of `file` (the file's integrator, if any):
@@ -127,12 +118,7 @@ fn switched_integrator(kind: IntegratorKind, source: &str, file: Option<&Obj>) -
             let mut props = Vec::new();
             if kind == IntegratorKind::Aov {
                 let all: Vec<String> = AovKind::CHOICES.iter().map(|c| format!("{0}:{0}", c.1)).collect();
-                props.push(Prop {
-                    name: "aovs".into(),
-                    value: Value::String(all.join(",")),
-                    loc: loc.clone(),
-                    used: Cell::new(false),
-                });
+                props.push(Prop::new("aovs", Value::String(all.join(",")), loc.clone()));
             }
             object("integrator", kind.name(), &loc, props, vec![path])
         }
@@ -164,7 +150,8 @@ pub fn apply(root: &Rc<Obj>, overrides: &Overrides) -> Rc<Obj> {
         }
     }
     if !had_integrator && (overrides.integrator.is_some() || !integrator_set.is_empty()) {
-        let (kind, source) = overrides.integrator.clone().unwrap_or((IntegratorKind::Path, integrator_set[0].source.clone()));
+        let (kind, source) =
+            overrides.integrator.clone().unwrap_or((IntegratorKind::Path, integrator_set[0].source.clone()));
         let base = switched_integrator(kind, &source, None);
         children.insert(0, Rc::new(set_integrator(&base, &integrator_set)));
     }

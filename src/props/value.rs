@@ -97,6 +97,35 @@ pub struct Obj {
     pub built: Cell<bool>,
 }
 
+impl Prop {
+    /// Property `name` = `value`, written at `loc`, not read yet.
+    pub fn new(name: &str, value: Value, loc: Loc) -> Prop {
+        Prop { name: name.into(), value, loc, used: Cell::new(false) }
+    }
+}
+
+impl Obj {
+    /// A new object `<tag type=ty>` at `loc`, without id, properties or children: how a
+    /// format that is not Mitsuba's (pbrt-v4, glTF, command-line overrides) makes the located
+    /// objects the plugin registry builds from.
+    pub fn new(tag: &str, ty: &str, loc: Loc) -> Obj {
+        Obj {
+            tag: tag.into(),
+            ty: ty.into(),
+            id: None,
+            loc,
+            props: Vec::new(),
+            children: Vec::new(),
+            built: Cell::new(false),
+        }
+    }
+
+    /// Adds property `name` = `value`, written at `loc`.
+    pub fn set(&mut self, name: &str, value: Value, loc: Loc) {
+        self.props.push(Prop::new(name, value, loc));
+    }
+}
+
 /// The element names that are plugin objects.
 pub const OBJECT_TAGS: &[&str] = &[
     "bsdf",

@@ -33,9 +33,8 @@ use crate::load::memory::MemoryFiles;
 use crate::load::overrides::Overrides;
 use crate::load::{FileResolver, SceneFile};
 use crate::math::{Mat4, Transform, Vec3};
-use crate::props::{Loc, Obj, Prop, SceneError, SourceFile, Value};
+use crate::props::{Loc, Obj, SceneError, SourceFile, Value};
 use gltf::Document;
-use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::Path;
 use std::rc::Rc;
@@ -273,15 +272,7 @@ impl<'a> Translator<'a> {
 
     /// A new plugin object located at the JSON `path`.
     fn obj(&self, tag: &str, ty: &str, path: &str) -> Obj {
-        Obj {
-            tag: tag.into(),
-            ty: ty.into(),
-            id: None,
-            loc: self.src.loc(path),
-            props: Vec::new(),
-            children: Vec::new(),
-            built: Cell::new(false),
-        }
+        Obj::new(tag, ty, self.src.loc(path))
     }
 
     /// The whole scene as a `<scene>` object.
@@ -332,7 +323,7 @@ impl<'a> Translator<'a> {
 
     /// Sets property `name` of `o`, located at the JSON `path`.
     fn set(&self, o: &mut Obj, name: &str, value: Value, path: &str) {
-        o.props.push(Prop { name: name.into(), value, loc: self.src.loc(path), used: Cell::new(false) });
+        o.set(name, value, self.src.loc(path));
     }
 
     /// Every node's world transform (a node reached twice, or a cycle, is an error).

@@ -734,7 +734,7 @@ fn upgrade_uv_transform(obj: &mut Obj) {
         Some(scale) => scale * translate,
         None => translate,
     };
-    obj.props.push(Prop { name: "to_uv".into(), value: Value::Transform(t), loc, used: Cell::new(false) });
+    obj.set("to_uv", Value::Transform(t), loc);
 }
 
 /// Adds a property, rejecting a second one of the same name.
@@ -742,7 +742,7 @@ fn push_prop(obj: &mut Obj, name: String, value: Value, loc: Loc) -> Result<()> 
     if let Some(p) = obj.props.iter().find(|p| p.name == name) {
         return Err(SceneError::at(&loc, format!("parameter '{name}' is given twice (first at {})", p.loc.position())));
     }
-    obj.props.push(Prop { name, value, loc, used: Cell::new(false) });
+    obj.props.push(Prop::new(&name, value, loc));
     Ok(())
 }
 

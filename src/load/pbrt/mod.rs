@@ -156,11 +156,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
                 return Err(f.error("the crop window is empty or outside the image"));
             }
         }
-        if f.float("iso", 100.0)? != 100.0 || f.float("exposuretime", 1.0)? != 1.0 {
-            return Err(
-                f.error_at("iso", "a film sensitivity other than ISO 100 × 1 s is not implemented by neumann yet")
-            );
-        }
+        // `iso` (with the camera's shutter interval) scales the lights: translate::imaging_ratio.
+        f.float("iso", 100.0)?;
         if f.float("whitebalance", 0.0)? != 0.0 {
             return Err(f.error_at("whitebalance", "white balancing is not implemented by neumann yet"));
         }

@@ -452,3 +452,28 @@ fn diffuse_transmission_scales_both_albedos() {
     assert_eq!(at(&d.reflectance), Rgb::splat(0.5));
     assert_eq!(at(&d.transmittance), Rgb::new(0.8, 0.4, 0.2));
 }
+
+#[test]
+fn iso_and_shutter_scale_the_image_as_pbrt_v4_sensors_do() {
+    // pbrt-v4's imaging ratio (shutterclose − shutteropen) × iso / 100 multiplies every light.
+    let f = load(
+        "Camera \"perspective\" \"float shutteropen\" 0.25 \"float shutterclose\" 0.75\nFilm \"rgb\" \"float iso\" 400\nWorldBegin\n\
+         LightSource \"point\" \"rgb I\" [1 1 1]\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 2 3]\nShape \"sphere\"\nAttributeEnd\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let lights = f.scene.lights();
+    assert!(matches!(&lights[0], Light::Point { intensity, .. } if *intensity == Rgb::splat(2.0)), "{:?}", lights[0]);
+    let area = lights.iter().find_map(|l| {
+        if let Light::Area { radiance, .. } = l {
+            Some(radiance.eval(crate::math::Vec2::ZERO))
+        } else {
+            None
+        }
+    });
+    assert_eq!(area, Some(Rgb::new(2.0, 4.0, 6.0)));
+    let e = err("Camera \"perspective\"\nFilm \"rgb\" \"float iso\" 0\nWorldBegin\nLightSource \"point\"\n");
+    assert!(e.contains("imaging ratio"), "{e}");
+    // pbrt-v4's film has no "exposuretime" (the camera's shutter gives it).
+    let e = err("Camera \"perspective\"\nFilm \"rgb\" \"float exposuretime\" 2\nWorldBegin\n");
+    assert!(e.contains("exposuretime"), "{e}");
+}

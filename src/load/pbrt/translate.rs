@@ -5,8 +5,8 @@
 //!   `orthographic`; pbrt's camera space has +x to the image's right, Mitsuba's to its left, so
 //!   the sensor's `to_world` is pbrt's world-from-camera times a mirror in x;
 //! - `Film` `rgb` / `gbuffer` (`xresolution`, `yresolution`, `cropwindow`, `pixelbounds`;
-//!   `filename` is the default output's name only; `iso`, `exposuretime`, `whitebalance` at
-//!   their defaults), `PixelFilter`s (`box`, `gaussian` → Gaussian of that σ, `triangle` →
+//!   `filename` is the default output's name only; `iso` and the camera's shutter interval
+//!   scale every light by pbrt's imaging ratio; `whitebalance` at its default), `PixelFilter`s (`box`, `gaussian` → Gaussian of that σ, `triangle` →
 //!   tent, `mitchell`, `lanczos`), `Sampler`s (`pixelsamples`; `zsobol`, `sobol`,
 //!   `paddedsobol`, `halton` → Owen-scrambled Sobol, `pmj02bn`, `stratified` → stratified,
 //!   `independent`), `Integrator`s (`path`, `volpath`, `lightpath` → `ptracer`, `simplepath`,
@@ -30,27 +30,18 @@ use super::params::{ParamSet, SpectrumParam};
 use super::parser::Parser;
 use crate::math::{Mat4, Rgb, Transform, Vec3};
 use crate::props::{Loc, Obj, Prop, SceneError, SpectrumValue, Value};
-use std::cell::Cell;
 use std::rc::Rc;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
 /// A new object at `loc`.
 pub(super) fn obj(tag: &str, ty: &str, loc: &Loc) -> Obj {
-    Obj {
-        tag: tag.into(),
-        ty: ty.into(),
-        id: None,
-        loc: loc.clone(),
-        props: Vec::new(),
-        children: Vec::new(),
-        built: Cell::new(false),
-    }
+    Obj::new(tag, ty, loc.clone())
 }
 
 /// Sets property `name`, located at `loc`.
 pub(super) fn set(o: &mut Obj, name: &str, value: Value, loc: &Loc) {
-    o.props.push(Prop { name: name.into(), value, loc: loc.clone(), used: Cell::new(false) });
+    o.set(name, value, loc.clone());
 }
 
 /// The location of parameter `name` (or of the directive).
@@ -539,13 +530,35 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     })
 }
 
-/// The scale of a light (`scale`, and `power` where given).
-fn light_scale(ps: &ParamSet) -> Result<f32> {
+/// A light's `scale` times the film's imaging ratio.
+fn light_scale(p: &Parser, ps: &ParamSet) -> Result<f32> {
     let s = ps.float("scale", 1.0)?;
     if s.is_nan() || s < 0.0 {
         return Err(ps.error_at("scale", "must be ≥ 0"));
     }
-    Ok(s)
+    Ok(s * imaging_ratio(p, ps)?)
+}
+
+/// pbrt-v4's imaging ratio, `exposure time × ISO / 100` (the exposure time being the camera's
+/// `shutterclose − shutteropen`): its sensor scales the image by it. Light transport is linear
+/// in the emission, so neumann scales every light instead (1 by default).
+fn imaging_ratio(p: &Parser, light: &ParamSet) -> Result<f32> {
+    let iso = match &p.film {
+        Some(f) => f.float("iso", 100.0)?,
+        None => 100.0,
+    };
+    let exposure = match &p.camera {
+        Some((c, _)) => c.float("shutterclose", 1.0)? - c.float("shutteropen", 0.0)?,
+        None => 1.0,
+    };
+    let ratio = exposure * iso / 100.0;
+    if !(ratio.is_finite() && ratio > 0.0) {
+        let at = p.film.as_ref().filter(|f| f.has("iso")).or(p.camera.as_ref().map(|c| &c.0)).unwrap_or(light);
+        return Err(at.error(format!(
+            "the imaging ratio (shutterclose − shutteropen) × iso / 100 must be positive, got {ratio}"
+        )));
+    }
+    Ok(ratio)
 }
 
 fn scaled(v: Value, s: f32) -> Value {
@@ -569,7 +582,7 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     Ok(match ty {
         "point" => {
             let from = ps.point("from", Vec3::ZERO)?;
-            let mut s = light_scale(ps)?;
+            let mut s = light_scale(p, ps)?;
             // pbrt-v4 applies a power only where it is positive.
             let power = ps.float("power", -1.0)?;
             if power > 0.0 {
@@ -592,7 +605,7 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                 ));
             }
             let beam = (cone - delta).clamp(0.0, cone);
-            let mut s = light_scale(ps)?;
+            let mut s = light_scale(p, ps)?;
             let power = ps.float("power", -1.0)?;
             if power > 0.0 {
                 // pbrt-v4: the power of the smoothstep cone, 2π((1 − cos β) + (cos β − cos γ)/2).
@@ -614,7 +627,7 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
         "distant" => {
             let from = ps.point("from", Vec3::ZERO)?;
             let to = ps.point("to", Vec3::Z)?;
-            let mut s = light_scale(ps)?;
+            let mut s = light_scale(p, ps)?;
             // pbrt-v4: the irradiance of a luminance-1 spectrum times the illuminance (RGB
             // values are taken as given, so their luminance multiplies it).
             let e = ps.float("illuminance", -1.0)?;
@@ -634,7 +647,7 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             if ps.has("portal") {
                 return Err(ps.error_at("portal", "portal infinite lights are not implemented by neumann"));
             }
-            let mut s = light_scale(ps)?;
+            let mut s = light_scale(p, ps)?;
             let e = ps.float("illuminance", -1.0)?;
             if let Some(file) = ps.string("filename")? {
                 if ps.has("L") {
@@ -758,7 +771,7 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         if al.has("filename") {
             return Err(al.error_at("filename", "image area lights are not implemented by neumann yet"));
         }
-        let s = light_scale(&al)?;
+        let s = light_scale(p, &al)?;
         let l = match al.spectrum("L")? {
             Some(x) => spectrum_value(&al, "L", x, true)?,
             None => Value::Float(1.0),
@@ -857,25 +870,12 @@ pub fn placed(o: &Obj, instance: &Mat4) -> Obj {
             }
             (_, v) => v.clone(),
         };
-        props.push(Prop { name: p.name.clone(), value, loc: p.loc.clone(), used: Cell::new(false) });
+        props.push(Prop::new(&p.name, value, p.loc.clone()));
     }
     if !had {
         if let Some(t) = Transform::from_matrix(*instance) {
-            props.push(Prop {
-                name: "to_world".into(),
-                value: Value::Transform(t),
-                loc: o.loc.clone(),
-                used: Cell::new(false),
-            });
+            props.push(Prop::new("to_world", Value::Transform(t), o.loc.clone()));
         }
     }
-    Obj {
-        tag: o.tag.clone(),
-        ty: o.ty.clone(),
-        id: None,
-        loc: o.loc.clone(),
-        props,
-        children: o.children.clone(),
-        built: Cell::new(false),
-    }
+    Obj { props, children: o.children.clone(), ..Obj::new(&o.tag, &o.ty, o.loc.clone()) }
 }
