@@ -185,7 +185,7 @@ pub enum RadiosityError {
     #[error("radiosity needs constant emission: an area emitter's radiance is a texture")]
     TexturedEmission,
     /// A light other than an area emitter.
-    #[error("radiosity handles area emitters only; the scene has a {0} light")]
+    #[error("radiosity handles one-sided area emitters only; the scene has a {0} light")]
     Light(&'static str),
     /// A shape's reflectance varies over its surface.
     #[error("{0}: radiosity needs constant reflectances (this one is textured)")]
@@ -225,13 +225,14 @@ impl Radiosity {
         if scene.lights().iter().any(|l| matches!(l, Light::Area { radiance, .. } if !matches!(radiance, crate::texture::Texture::Constant(_)))) {
             return Err(RadiosityError::TexturedEmission);
         }
-        if let Some(l) = scene.lights().iter().find(|l| !matches!(l, Light::Area { .. })) {
+        if let Some(l) = scene.lights().iter().find(|l| !matches!(l, Light::Area { two_sided: false, .. })) {
             return Err(RadiosityError::Light(match l {
                 Light::Point { .. } => "point",
                 Light::Spot { .. } => "spot",
                 Light::Directional { .. } => "directional",
                 Light::Projector(_) => "projector",
                 Light::Constant { .. } => "constant environment",
+                Light::Area { .. } => "two-sided area",
                 _ => "environment map",
             }));
         }

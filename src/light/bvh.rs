@@ -48,10 +48,12 @@ impl LightBounds {
             return None;
         }
         match light {
-            Light::Area { shape, .. } => {
+            Light::Area { shape, two_sided, .. } => {
                 let g = &shapes[*shape as usize];
                 let cone = g.normal_cone();
-                Some(LightBounds { bounds: g.bounds(), phi, w: cone.w, cos_theta_o: cone.cos_theta, cos_theta_e: 0.0 })
+                // A two-sided emitter's normals point both ways: the whole sphere of directions.
+                let cos_theta_o = if *two_sided { -1.0 } else { cone.cos_theta };
+                Some(LightBounds { bounds: g.bounds(), phi, w: cone.w, cos_theta_o, cos_theta_e: 0.0 })
             }
             Light::Point { position, .. } => Some(LightBounds {
                 bounds: Bounds3::from_point(*position),
@@ -465,7 +467,7 @@ mod tests {
                 m.prepare_normals();
             }
             shapes.push(g);
-            lights.push(Light::Area { shape: k, radiance: radiance.into() });
+            lights.push(Light::Area { shape: k, radiance: radiance.into(), two_sided: k == 1 });
         }
         lights.push(Light::Point { position: Vec3::new(1.0, 2.0, -1.0), intensity: Rgb::splat(3.0) });
         lights.push(Light::Point { position: Vec3::new(-3.0, 0.5, 2.0), intensity: Rgb::new(0.1, 0.5, 0.2) });
@@ -594,7 +596,7 @@ mod tests {
         let mut quad = TriangleMesh::rectangle(); // faces +z
         quad.prepare_normals();
         let shapes = [Geometry::Mesh(quad)];
-        let lights = [Light::Area { shape: 0, radiance: Rgb::ONE.into() }];
+        let lights = [Light::Area { shape: 0, radiance: Rgb::ONE.into(), two_sided: false }];
         let bvh = LightBvh::new(&lights, &shapes);
         // Behind it, outside its bounding sphere (radius √2), nothing can arrive: the bound
         // says so. (A lone light is still chosen there: its pmf is one everywhere.)

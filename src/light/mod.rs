@@ -24,13 +24,16 @@ use crate::texture::Texture;
 /// An emitter.
 #[derive(Clone, Debug)]
 pub enum Light {
-    /// Mitsuba's `area` emitter: radiance leaving the front side of a shape, constant or a
-    /// texture over the shape's (u, v). Parameters: `radiance` (W m⁻² sr⁻¹ per channel).
+    /// Mitsuba's `area` emitter: radiance leaving the front side of a shape (both sides if
+    /// `two_sided`, pbrt-v4's `twosided`), constant or a texture over the shape's (u, v).
+    /// Parameters: `radiance` (W m⁻² sr⁻¹ per channel).
     Area {
         /// Index of the emitting shape.
         shape: u32,
         /// Emitted radiance.
         radiance: Texture,
+        /// Whether the back emits too.
+        two_sided: bool,
     },
     /// Mitsuba's `constant` emitter: uniform radiance arriving from every direction at
     /// infinity. Parameters: `radiance` (W m⁻² sr⁻¹ per channel). `center` / `radius` bound the
@@ -191,7 +194,10 @@ impl Light {
     /// `π A L` for a one-sided Lambertian area emitter of area `A`, `4π I` for a point light.
     pub fn power(&self, shapes: &[Geometry]) -> f32 {
         match self {
-            Light::Area { shape, radiance } => PI * shapes[*shape as usize].area() * luminance(radiance.mean()),
+            Light::Area { shape, radiance, two_sided } => {
+                let sides = if *two_sided { 2.0 } else { 1.0 };
+                sides * PI * shapes[*shape as usize].area() * luminance(radiance.mean())
+            }
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
@@ -272,7 +278,7 @@ impl Light {
     #[inline]
     pub fn sample_li(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
         match self {
-            Light::Area { shape, radiance } => {
+            Light::Area { shape, radiance, two_sided } => {
                 let shape = &shapes[*shape as usize];
                 let (s, wi, li) = match radiance {
                     Texture::Constant(c) => {
@@ -284,7 +290,7 @@ impl Light {
                         (s, wi, t.eval(uv))
                     }
                 };
-                if s.ns.dot(wi) >= 0.0 {
+                if !*two_sided && s.ns.dot(wi) >= 0.0 {
                     return None; // one-sided: the back does not emit
                 }
                 Some(LightSample { wi, li, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
@@ -401,16 +407,22 @@ impl Light {
             (center + frame.to_world(Vec3::new(q.x, q.y, -2.0 * radius)), PI * radius * radius)
         };
         let s = match self {
-            Light::Area { shape, radiance } => {
+            Light::Area { shape, radiance, two_sided } => {
                 let (ps, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
                 let le = radiance.eval(uv);
+                // Two-sided: a side with probability ½ (u_dir.x reused), weight doubled.
+                let (u_dir, side, sides) = match two_sided {
+                    true if u_dir.x < 0.5 => (Vec2::new(2.0 * u_dir.x, u_dir.y), 1.0, 2.0),
+                    true => (Vec2::new((2.0 * u_dir.x - 1.0).min(crate::math::ONE_MINUS_EPSILON), u_dir.y), -1.0, 2.0),
+                    false => (u_dir, 1.0, 1.0),
+                };
                 let local = sample_cosine_hemisphere_malley(u_dir);
                 if local.pdf <= 0.0 || ps.pdf <= 0.0 {
                     return None;
                 }
-                let d = crate::math::Frame::from_z(ps.ns).to_world(local.value);
-                // Le cos θ / (p_A · cos θ / π) = π Le / p_A.
-                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: le * (PI / ps.pdf) }
+                let d = crate::math::Frame::from_z(ps.ns * side).to_world(local.value);
+                // Le cos θ / (p_A · p_side · cos θ / π) = sides · π Le / p_A.
+                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: le * (sides * PI / ps.pdf) }
             }
             Light::Point { position, intensity } => {
                 let d = sample_uniform_sphere(u_dir);
@@ -462,7 +474,7 @@ impl Light {
     /// thin-lens camera can be connected to.
     pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
         match self {
-            Light::Area { shape, radiance } => {
+            Light::Area { shape, radiance, .. } => {
                 let (s, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
                 (s.pdf > 0.0).then(|| EmissionPosition {
                     p: s.p,
@@ -480,10 +492,12 @@ impl Light {
     }
 
     /// What a light emits from `pos` toward the unit direction `d` (world): radiance for area
-    /// lights (front side only), intensity (W sr⁻¹) for point and spot lights.
+    /// lights (front side only unless two-sided), intensity (W sr⁻¹) for point and spot lights.
     pub fn emitted_toward(&self, pos: &EmissionPosition, d: Vec3) -> Rgb {
         match self {
-            Light::Area { radiance, .. } if pos.ns.dot(d) > 0.0 => radiance.eval(pos.uv),
+            Light::Area { radiance, two_sided, .. } if pos.ns.dot(d) > 0.0 || (*two_sided && pos.ns.dot(d) < 0.0) => {
+                radiance.eval(pos.uv)
+            }
             Light::Point { intensity, .. } => *intensity,
             Light::Spot { frame, intensity, cutoff, beam, texture, falloff, .. } => {
                 *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture, *falloff)
@@ -498,7 +512,9 @@ impl Light {
     #[inline]
     pub fn le(&self, ns: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
         match self {
-            Light::Area { radiance, .. } if ns.dot(wo) > 0.0 => radiance.eval(uv),
+            Light::Area { radiance, two_sided, .. } if ns.dot(wo) > 0.0 || (*two_sided && ns.dot(wo) < 0.0) => {
+                radiance.eval(uv)
+            }
             _ => Rgb::ZERO,
         }
     }
@@ -533,7 +549,7 @@ mod tests {
         }
         let p_ref = Vec3::new(0.0, 0.0, 0.0);
         for k in 0..shapes.len() {
-            let light = Light::Area { shape: k as u32, radiance: Rgb::ONE.into() };
+            let light = Light::Area { shape: k as u32, radiance: Rgb::ONE.into(), two_sided: false };
             // pdf over directions: find the hit on this shape along w (brute force, one shape).
             let pdf = |w: &Vec3| -> f64 {
                 let ray = crate::math::Ray::new(p_ref, *w);
@@ -588,7 +604,7 @@ mod tests {
         let shapes = [g];
         let (c0, c1) = (Rgb::new(4.0, 1.0, 0.5), Rgb::new(0.5, 1.0, 4.0));
         let texture = Texture::checkerboard(c0, c1, crate::math::Mat3::from_scale(Vec2::new(1.0, 0.5)));
-        let light = Light::Area { shape: 0, radiance: texture };
+        let light = Light::Area { shape: 0, radiance: texture, two_sided: false };
         let mut rng = crate::sampling::Pcg32::new(4, 4);
         let mut seen = [false; 2];
         for _ in 0..200 {
@@ -648,7 +664,12 @@ mod tests {
                 * std::f64::consts::PI
         };
         let lights = [
-            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into() }, PI as f64 * 4.0 * 0.5 * 2.0),
+            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into(), two_sided: false }, PI as f64 * 4.0 * 0.5 * 2.0),
+            // pbrt-v4's two-sided emitter: twice the flux, half of it from the back.
+            (
+                Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into(), two_sided: true },
+                2.0 * PI as f64 * 4.0 * 0.5 * 2.0,
+            ),
             (Light::Point { position: Vec3::ONE, intensity: Rgb::new(1.0, 2.0, 3.0) }, 4.0 * PI as f64),
             (
                 Light::Spot {
@@ -680,11 +701,16 @@ mod tests {
             let mut rng = Pcg32::new(4, k as u64);
             let n = 200_000;
             let mut sum = [0.0f64; 3];
+            let mut back = 0usize;
             for _ in 0..n {
                 let s = light.sample_le(&shapes, u2(&mut rng), u2(&mut rng)).expect("emits");
                 assert!((s.d.length() - 1.0).abs() < 1e-4, "light {k}: unit direction");
                 match light {
-                    Light::Area { .. } => assert!(s.d.dot(s.n) > 0.0, "area light emits from its front"),
+                    Light::Area { two_sided: false, .. } => assert!(s.d.dot(s.n) > 0.0, "area light emits from its front"),
+                    Light::Area { .. } => {
+                        back += usize::from(s.d.dot(s.n) < 0.0);
+                        assert!(s.d.dot(s.n) != 0.0);
+                    }
                     Light::Directional { direction, .. } => assert!((s.d - *direction).length() < 1e-5),
                     Light::Constant { .. } => {
                         assert!((s.p - center).length() > radius, "origin outside the bounding sphere");
@@ -696,6 +722,10 @@ mod tests {
                 for (c, total) in sum.iter_mut().enumerate() {
                     *total += s.weight[c] as f64;
                 }
+            }
+            if matches!(light, Light::Area { two_sided: true, .. }) {
+                let f = back as f64 / n as f64;
+                assert!((f - 0.5).abs() < 0.01, "two-sided: {f} of the rays leave the back");
             }
             for (c, total) in sum.iter().enumerate() {
                 let (mean, want) = (total / n as f64, flux_per_unit * (c + 1) as f64);

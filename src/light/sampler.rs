@@ -137,10 +137,10 @@ mod tests {
             assert!(s.prepare_sampling());
         }
         let lights = vec![
-            Light::Area { shape: 0, radiance: Rgb::splat(2.0).into() },
-            Light::Area { shape: 1, radiance: Rgb::new(1.0, 0.5, 0.2).into() },
-            Light::Area { shape: 2, radiance: Rgb::splat(300.0).into() },
-            Light::Area { shape: 3, radiance: Rgb::splat(1.0).into() },
+            Light::Area { shape: 0, radiance: Rgb::splat(2.0).into(), two_sided: false },
+            Light::Area { shape: 1, radiance: Rgb::new(1.0, 0.5, 0.2).into(), two_sided: false },
+            Light::Area { shape: 2, radiance: Rgb::splat(300.0).into(), two_sided: true },
+            Light::Area { shape: 3, radiance: Rgb::splat(1.0).into(), two_sided: false },
             Light::Constant { radiance: Rgb::splat(0.3), center: p, radius: 10.0 },
         ];
         (lights, shapes)

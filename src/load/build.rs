@@ -287,8 +287,28 @@ impl Builder {
                 e.built.set(true);
                 e.check_children(&[])?;
                 read_sampling_weight(e)?;
-                let radiance = area_radiance_from_props(e, self)?;
-                let power = std::f32::consts::PI * geometry.area() * radiance.mean().max_element();
+                let mut radiance = area_radiance_from_props(e, self)?;
+                let two_sided = e.bool("two_sided", false)?;
+                let sides = if two_sided { 2.0 } else { 1.0 };
+                if let Some(p) = e.float_opt("power")? {
+                    // pbrt-v4's `power`: radiance × power / (π · area · sides).
+                    let k = std::f32::consts::PI * geometry.area() * sides;
+                    match &mut radiance {
+                        Texture::Constant(c) if p > 0.0 && p.is_finite() && k > 0.0 => *c *= p / k,
+                        Texture::Constant(_) => {
+                            return Err(e.error_at(
+                                "power",
+                                format!("needs a positive power and shape area, got {p} and {}", geometry.area()),
+                            ))
+                        }
+                        _ => {
+                            return Err(
+                                e.error_at("power", "a power with a textured radiance is not implemented by neumann")
+                            )
+                        }
+                    }
+                }
+                let power = std::f32::consts::PI * sides * geometry.area() * radiance.mean().max_element();
                 if !power.is_finite() {
                     return Err(e.error(format!(
                         "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
@@ -296,7 +316,7 @@ impl Builder {
                         radiance.mean()
                     )));
                 }
-                Some(radiance)
+                Some((radiance, two_sided))
             }
             Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
         };
@@ -332,10 +352,11 @@ impl Builder {
                 )));
             }
         }
-        if emission.as_ref().is_some_and(|t| !t.mesh_attributes().is_empty()) {
+        if emission.as_ref().is_some_and(|(t, _)| !t.mesh_attributes().is_empty()) {
             return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
         }
-        let index = self.sb.add_shape_textured(geometry, bsdf, emission);
+        let two_sided = emission.as_ref().is_some_and(|e| e.1);
+        let index = self.sb.add_shape_textured(geometry, bsdf, emission.map(|e| e.0), two_sided);
         self.sb.set_shape_media(index, interior, exterior);
         let id = o.id.as_deref().map_or(String::new(), |id| format!(" '{id}'"));
         self.sb.set_shape_label(index, format!("the {} shape{id}", o.ty), Some(o.loc.clone()));
@@ -414,7 +435,8 @@ impl Builder {
         // The BSDFs an evaluation may visit: each nested one as often as it is named (a blend of
         // two references to one BSDF evaluates it twice). Bounded, so that a chain of blends
         // naming the previous one twice cannot make every shading point cost 2⁴⁰ evaluations.
-        let size = 1 + o.nested("bsdf").iter().map(|c| self.bsdf_sizes.get(&Rc::as_ptr(c)).copied().unwrap_or(1)).sum::<u64>();
+        let size =
+            1 + o.nested("bsdf").iter().map(|c| self.bsdf_sizes.get(&Rc::as_ptr(c)).copied().unwrap_or(1)).sum::<u64>();
         if size > MAX_BSDF_EVALUATIONS {
             return Err(o.error(format!(
                 "this BSDF nests {size} BSDF evaluations (shared BSDFs count once per use), more than {MAX_BSDF_EVALUATIONS}"
@@ -430,13 +452,22 @@ impl Builder {
             Bsdf::Conductor(c) => vec![("specular_reflectance", &c.specular_reflectance)],
             Bsdf::RoughConductor(c) => vec![("specular_reflectance", &c.specular_reflectance)],
             Bsdf::Dielectric(d) => {
-                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+                vec![
+                    ("specular_reflectance", &d.specular_reflectance),
+                    ("specular_transmittance", &d.specular_transmittance),
+                ]
             }
             Bsdf::ThinDielectric(d) => {
-                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+                vec![
+                    ("specular_reflectance", &d.specular_reflectance),
+                    ("specular_transmittance", &d.specular_transmittance),
+                ]
             }
             Bsdf::RoughDielectric(d) => {
-                vec![("specular_reflectance", &d.specular_reflectance), ("specular_transmittance", &d.specular_transmittance)]
+                vec![
+                    ("specular_reflectance", &d.specular_reflectance),
+                    ("specular_transmittance", &d.specular_transmittance),
+                ]
             }
             _ => Vec::new(),
         };

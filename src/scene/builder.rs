@@ -10,8 +10,8 @@ use crate::geometry::Geometry;
 use crate::light::{Light, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
 use crate::math::{Rgb, Vec3};
-use crate::texture::Texture;
 use crate::sampling::AliasTable;
+use crate::texture::Texture;
 
 /// Collects the parts of a scene.
 #[derive(Debug, Default)]
@@ -59,15 +59,21 @@ impl SceneBuilder {
     /// Adds a shape with BSDF `bsdf`; with `Some(radiance)` it is also an area emitter (front
     /// side). Returns the shape index.
     pub fn add_shape(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Rgb>) -> u32 {
-        self.add_shape_textured(geometry, bsdf, emission.map(Texture::Constant))
+        self.add_shape_textured(geometry, bsdf, emission.map(Texture::Constant), false)
     }
 
     /// [`SceneBuilder::add_shape`] with an emitted radiance that may be a texture over the
-    /// shape's (u, v).
-    pub fn add_shape_textured(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Texture>) -> u32 {
+    /// shape's (u, v), emitting from both sides if `two_sided`.
+    pub fn add_shape_textured(
+        &mut self,
+        geometry: Geometry,
+        bsdf: u32,
+        emission: Option<Texture>,
+        two_sided: bool,
+    ) -> u32 {
         let index = self.shapes.len() as u32;
         let light = emission.map(|radiance| {
-            self.lights.push(Light::Area { shape: index, radiance });
+            self.lights.push(Light::Area { shape: index, radiance, two_sided });
             self.lights.len() as u32 - 1
         });
         self.shapes.push(Shape { bsdf, light, interior: None, exterior: None });

@@ -442,6 +442,10 @@ impl Translator<'_> {
             let mut o = self.obj("emitter", "area", &epath);
             let radiance = self.product(e, etex, false, &epath);
             self.set(&mut o, "radiance", radiance, &epath);
+            if m.double_sided() {
+                // A double-sided material emits from both faces (the glTF specification).
+                self.set(&mut o, "two_sided", Value::Bool(true), &format!("{path}.doubleSided"));
+            }
             self.has_emission = true;
             Some(Rc::new(o))
         } else {

@@ -477,3 +477,32 @@ fn iso_and_shutter_scale_the_image_as_pbrt_v4_sensors_do() {
     let e = err("Camera \"perspective\"\nFilm \"rgb\" \"float exposuretime\" 2\nWorldBegin\n");
     assert!(e.contains("exposuretime"), "{e}");
 }
+
+#[test]
+fn two_sided_area_lights_and_their_power() {
+    let f = load(
+        "Camera \"perspective\"\nWorldBegin\nAttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 2 3] \"bool twosided\" true \"float power\" 10\n\
+         Shape \"disk\" \"float radius\" 1\nAttributeEnd\nAreaLightSource \"diffuse\" \"float power\" 0\nShape \"disk\"\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let Light::Area { radiance, two_sided, .. } = &f.scene.lights()[0] else { panic!() };
+    let pi = std::f32::consts::PI;
+    // radiance × power / (π · area · 2): the emitted power is 10 × luminance(L).
+    let want = Rgb::new(1.0, 2.0, 3.0) * (10.0 / (pi * pi * 2.0));
+    assert!(*two_sided && (radiance.eval(crate::math::Vec2::ZERO) - want).abs().max_element() < 1e-4);
+    let phi = f.scene.lights()[0].power(f.scene.geometries());
+    assert!((phi / (10.0 * crate::math::luminance(Rgb::new(1.0, 2.0, 3.0))) - 1.0).abs() < 1e-3, "{phi}");
+    // A power of 0 is ignored (pbrt's default is −1: unset); one-sided by default.
+    assert!(
+        matches!(&f.scene.lights()[1], Light::Area { two_sided: false, radiance, .. } if radiance.eval(crate::math::Vec2::ZERO) == Rgb::ONE)
+    );
+    // Seen from behind, the two-sided disk emits what it emits in front.
+    let l = &f.scene.lights()[0];
+    let (up, down) = (
+        l.le(crate::math::Vec3::Z, crate::math::Vec3::Z, crate::math::Vec2::ZERO),
+        l.le(crate::math::Vec3::Z, -crate::math::Vec3::Z, crate::math::Vec2::ZERO),
+    );
+    assert_eq!(up, down);
+    let s = l.sample_li(f.scene.geometries(), crate::math::Vec3::new(0.1, 0.2, -2.0), crate::math::Vec2::new(0.3, 0.6));
+    assert!(s.is_some_and(|s| s.li == want), "lit from the back");
+}

@@ -762,12 +762,6 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         }
     }
     if let Some(al) = p.gs.area_light.clone() {
-        if al.bool("twosided", false)? {
-            return Err(al.error_at("twosided", "two-sided area lights are not implemented by neumann yet"));
-        }
-        if al.has("power") {
-            return Err(al.error_at("power", "an area light's power is not implemented by neumann yet (use scale)"));
-        }
         if al.has("filename") {
             return Err(al.error_at("filename", "image area lights are not implemented by neumann yet"));
         }
@@ -778,6 +772,14 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         };
         let mut e = obj("emitter", "area", &al.loc);
         set(&mut e, "radiance", scaled(l, s), &ploc(&al, "L"));
+        if al.bool("twosided", false)? {
+            set(&mut e, "two_sided", Value::Bool(true), &ploc(&al, "twosided"));
+        }
+        // pbrt-v4: radiance × power / (π · area · sides), where the power is positive.
+        let power = al.float("power", -1.0)?;
+        if power > 0.0 {
+            set(&mut e, "power", Value::Float(power as f64), &ploc(&al, "power"));
+        }
         o.children.push(Rc::new(e));
     }
     Ok(o)
