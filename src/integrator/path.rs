@@ -578,25 +578,18 @@ mod tests {
         assert!((radiance_at(&sun, 0.0) - expected).abs() < 1e-5 * expected, "directional");
 
         let (cutoff, beam) = (30f32.to_radians(), 20f32.to_radians());
-        let spot = build(Light::Spot {
+        let spot_of = |falloff| Light::Spot {
             position: Vec3::new(0.0, 2.0, 0.0),
             frame: Frame::from_z(-Vec3::Y),
             intensity: Rgb::splat(8.0),
             cutoff,
             beam,
             texture: None,
-            falloff: crate::light::SpotFalloff::Linear,
-        });
+            falloff,
+        };
+        let spot = build(spot_of(crate::light::SpotFalloff::Linear));
         // pbrt-v4's spot: smoothstep in cos θ between the cutoff's and the beam's cosines.
-        let pbrt_spot = build(Light::Spot {
-            position: Vec3::new(0.0, 2.0, 0.0),
-            frame: Frame::from_z(-Vec3::Y),
-            intensity: Rgb::splat(8.0),
-            cutoff,
-            beam,
-            texture: None,
-            falloff: crate::light::SpotFalloff::SmoothStep,
-        });
+        let pbrt_spot = build(spot_of(crate::light::SpotFalloff::SmoothStep));
         for theta_deg in [0.0f32, 10.0, 25.0, 35.0] {
             let theta = theta_deg.to_radians();
             let x = 2.0 * theta.tan();

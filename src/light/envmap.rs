@@ -355,10 +355,9 @@ mod tests {
         assert!(rel < 0.03, "power estimate {} vs Monte Carlo {mc}", env.integral_luminance());
     }
 
-    #[test]
-    fn sampling_matches_pdf_and_eval() {
-        let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
-        let env = EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap();
+    /// χ² of `sample` against `pdf` over the sphere, and each sample's pdf and radiance
+    /// against `pdf` and `eval`.
+    fn assert_samples_match_pdf_and_eval(env: &EnvMap, seed: u64) {
         let out = chi2_2d(
             &SPHERE,
             [31, 61],
@@ -368,12 +367,19 @@ mod tests {
             &Chi2Config::default(),
         );
         assert!(out.passed(), "{out}");
-        let mut rng = crate::sampling::Pcg32::new(1, 2);
+        let mut rng = crate::sampling::Pcg32::new(1, seed);
         for _ in 0..1000 {
             let (d, l, pdf) = env.sample(u2(&mut rng)).unwrap();
             assert!((pdf - env.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", env.pdf(d));
             assert!((l - env.eval(d)).abs().max_element() <= 1e-3 * l.max_element().max(1.0));
         }
+    }
+
+    #[test]
+    fn sampling_matches_pdf_and_eval() {
+        let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
+        let env = EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap();
+        assert_samples_match_pdf_and_eval(&env, 2);
         // Between two black rows the radiance is zero: never sampled, zero pdf.
         let (band, _) = EnvMap::direction(Vec2::new(0.3, 4.5 / 7.0));
         assert_eq!(env.pdf(to_world.apply_vector(band)), 0.0);
@@ -384,21 +390,7 @@ mod tests {
         let to_world = Transform::rotate(Vec3::new(0.3, 0.2, 1.0), 70.0).unwrap();
         let env = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap();
         assert_eq!(env.layout(), Layout::EqualArea);
-        let out = chi2_2d(
-            &SPHERE,
-            [31, 61],
-            500_000,
-            |r| env.sample(u2(r)).map(|s| s.0),
-            |d| env.pdf(*d) as f64,
-            &Chi2Config::default(),
-        );
-        assert!(out.passed(), "{out}");
-        let mut rng = crate::sampling::Pcg32::new(1, 3);
-        for _ in 0..1000 {
-            let (d, l, pdf) = env.sample(u2(&mut rng)).unwrap();
-            assert!((pdf - env.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", env.pdf(d));
-            assert!((l - env.eval(d)).abs().max_element() <= 1e-3 * l.max_element().max(1.0));
-        }
+        assert_samples_match_pdf_and_eval(&env, 3);
         // Texel (x, y) holds the direction of the square's point ((x + ½)/W, (y + ½)/H) in
         // the light's frame (+z at the centre): pbrt-v4's layout.
         let img = test_sky(16, 16);
