@@ -73,20 +73,29 @@ pub enum EnvMapError {
     Black,
 }
 
+/// The checks both layouts make of an image and scale: not empty, square where `square`, a
+/// finite non-negative scale and finite non-negative pixels.
+fn checked(image: Arc<Image>, scale: f32, square: bool) -> Result<Arc<Image>, EnvMapError> {
+    if image.width == 0 || image.height == 0 {
+        return Err(EnvMapError::Empty);
+    }
+    if square && image.width != image.height {
+        return Err(EnvMapError::NotSquare(image.width, image.height));
+    }
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(EnvMapError::Scale(scale));
+    }
+    if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
+        return Err(EnvMapError::Pixel(i));
+    }
+    Ok(image)
+}
+
 impl EnvMap {
     /// An environment from `image` (owned or shared), radiance multiplied by `scale`, rotated by
     /// `to_world`.
     pub fn new(image: impl Into<Arc<Image>>, scale: f32, to_world: Transform) -> Result<EnvMap, EnvMapError> {
-        let image: Arc<Image> = image.into();
-        if image.width == 0 || image.height == 0 {
-            return Err(EnvMapError::Empty);
-        }
-        if !(scale.is_finite() && scale >= 0.0) {
-            return Err(EnvMapError::Scale(scale));
-        }
-        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
-            return Err(EnvMapError::Pixel(i));
-        }
+        let image = checked(image.into(), scale, false)?;
         if image.height < 2 {
             return Err(EnvMapError::TooLow);
         }
@@ -108,15 +117,27 @@ impl EnvMap {
         let distribution = PiecewiseConstant2D::new(&func, w, h - 1).ok_or(EnvMapError::Black)?;
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
-        Ok(EnvMap {
-            layout: Layout::LatLong,
+        Ok(EnvMap::assemble(Layout::LatLong, image, distribution, integral, scale, to_world))
+    }
+
+    /// The map from its parts.
+    fn assemble(
+        layout: Layout,
+        image: Arc<Image>,
+        distribution: PiecewiseConstant2D,
+        integral: f32,
+        scale: f32,
+        to_world: Transform,
+    ) -> EnvMap {
+        EnvMap {
+            layout,
             image,
             distribution: Arc::new(distribution),
             integral,
             scale,
             to_world,
             to_local: to_world.inverse(),
-        })
+        }
     }
 
     /// pbrt-v4's equal-area environment: a square `image` (see the module notes), radiance
@@ -126,33 +147,13 @@ impl EnvMap {
         scale: f32,
         to_world: Transform,
     ) -> Result<EnvMap, EnvMapError> {
-        let image: Arc<Image> = image.into();
-        if image.width == 0 || image.height == 0 {
-            return Err(EnvMapError::Empty);
-        }
-        if image.width != image.height {
-            return Err(EnvMapError::NotSquare(image.width, image.height));
-        }
-        if !(scale.is_finite() && scale >= 0.0) {
-            return Err(EnvMapError::Scale(scale));
-        }
-        if let Some(i) = image.pixels.iter().position(|p| !p.is_finite() || p.min_element() < 0.0) {
-            return Err(EnvMapError::Pixel(i));
-        }
+        let image = checked(image.into(), scale, true)?;
         let (w, h) = (image.width as usize, image.height as usize);
         let func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
         let distribution = PiecewiseConstant2D::new(&func, w, h).ok_or(EnvMapError::Black)?;
         let sum: f64 = image.pixels.iter().map(|&p| luminance(p) as f64).sum();
         let integral = (sum * 4.0 * PI as f64 / (w * h) as f64) as f32;
-        Ok(EnvMap {
-            layout: Layout::EqualArea,
-            image,
-            distribution: Arc::new(distribution),
-            integral,
-            scale,
-            to_world,
-            to_local: to_world.inverse(),
-        })
+        Ok(EnvMap::assemble(Layout::EqualArea, image, distribution, integral, scale, to_world))
     }
 
     /// pbrt-v4's illuminance of an equal-area map at a point facing its +z, which its

@@ -196,10 +196,7 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             let t = Transform::from_matrix(m).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
             set(&mut o, "to_uv", Value::Transform(t), &ps.loc);
             if scale != 1.0 {
-                let mut s = obj("texture", "scale", &ps.loc);
-                set(&mut s, "tex", Value::Object(Rc::new(o)), &ps.loc);
-                set(&mut s, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
-                s
+                scale_texture(Value::Object(Rc::new(o)), scale, &ps.loc, &ploc(ps, "scale"))
             } else {
                 o
             }
@@ -511,12 +508,12 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             for (name, default) in [("reflectance", 0.25), ("transmittance", 0.25)] {
                 let v = texturable(p, ps, name, false)?.unwrap_or(Value::Float(default));
                 let v = match v {
-                    Value::Object(t) if scale != 1.0 => {
-                        let mut s = obj("texture", "scale", l);
-                        set(&mut s, "tex", Value::Object(t), &ploc(ps, name));
-                        set(&mut s, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
-                        Value::Object(Rc::new(s))
-                    }
+                    Value::Object(t) if scale != 1.0 => Value::Object(Rc::new(scale_texture(
+                        Value::Object(t),
+                        scale,
+                        &ploc(ps, name),
+                        &ploc(ps, "scale"),
+                    ))),
                     v => scaled(v, scale),
                 };
                 set(&mut o, name, v, &ploc(ps, name));
@@ -559,6 +556,14 @@ fn imaging_ratio(p: &Parser, light: &ParamSet) -> Result<f32> {
         )));
     }
     Ok(ratio)
+}
+
+/// A `scale` texture: `tex` (written at `at`) times `scale` (written at `scale_at`).
+fn scale_texture(tex: Value, scale: f32, at: &Loc, scale_at: &Loc) -> Obj {
+    let mut s = obj("texture", "scale", at);
+    set(&mut s, "tex", tex, at);
+    set(&mut s, "scale", Value::Float(scale as f64), scale_at);
+    s
 }
 
 fn scaled(v: Value, s: f32) -> Value {
