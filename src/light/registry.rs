@@ -32,7 +32,19 @@ pub fn emitter_plugin(name: &str) -> Option<EmitterPlugin> {
 /// Mitsuba's `area` emitter: `radiance` (W m⁻² sr⁻¹, an emission spectrum, default 1), a
 /// colour or a texture over the shape's (u, v).
 pub fn area_radiance_from_props(o: &Obj, textures: &mut dyn TextureSource) -> Result<crate::texture::Texture> {
-    textures.texture_of(o, "radiance", Rgb::ONE, SpectrumKind::Illuminant)
+    let t = textures.texture_of(o, "radiance", Rgb::ONE, SpectrumKind::Illuminant)?;
+    if t.uses_position() {
+        return Err(o.error_at("radiance", not_by_position("radiance")));
+    }
+    Ok(t)
+}
+
+/// The error for a texture that varies with position (pbrt-v4's projections, 3D patterns,
+/// `directionmix`) as an emitter's parameter: emitters look textures up by uv.
+fn not_by_position(name: &str) -> String {
+    format!(
+        "a texture that varies with position or normal (a spherical, cylindrical or planar mapping, a 3D pattern,          directionmix) is not implemented as the '{name}' of an emitter: emitters look their textures up by uv"
+    )
 }
 
 /// Mitsuba's `point`: `position` or `to_world` (not both), `intensity` (W sr⁻¹, 1).
@@ -86,6 +98,7 @@ fn without_mesh_attributes(
         Some(t) if !t.mesh_attributes().is_empty() => {
             Err(o.error_at(name, format!("a mesh_attribute texture cannot be the '{name}' of a {} emitter", o.ty)))
         }
+        Some(t) if t.uses_position() => Err(o.error_at(name, format!("{} (a {} emitter)", not_by_position(name), o.ty))),
         t => Ok(t),
     }
 }

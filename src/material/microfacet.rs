@@ -251,7 +251,7 @@ impl Roughness {
         match &self.textures {
             None => self.distribution,
             Some(t) => {
-                let alpha = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref());
+                let alpha = |t: &Texture| ctx.scalar(t);
                 Microfacet::new(self.distribution.kind, alpha(&t[0]), alpha(&t[1]))
             }
         }

@@ -57,7 +57,21 @@ impl BsdfContext<'_> {
     /// The texture `t` here.
     #[inline]
     pub fn eval(&self, t: &crate::texture::Texture) -> Rgb {
-        t.eval_at(self.uv, self.mesh.as_ref())
+        t.eval_at(&self.point())
+    }
+
+    /// The texture `t` here as a scalar ([`crate::texture::Texture::eval_scalar`]).
+    #[inline]
+    pub fn scalar(&self, t: &crate::texture::Texture) -> f32 {
+        t.eval_scalar(&self.point())
+    }
+
+    /// Where textures are looked up: the uv, and the hit's position and geometric normal where
+    /// there is a hit.
+    #[inline]
+    pub fn point(&self) -> crate::texture::TexPoint<'_> {
+        let (p, n) = self.si.map_or((Vec3::ZERO, Vec3::Z), |si| (si.p, si.ng));
+        crate::texture::TexPoint { uv: self.uv, p, n, mesh: self.mesh.as_ref() }
     }
 }
 
@@ -462,7 +476,7 @@ impl Bsdf {
 /// A blend weight or opacity in [0, 1] from a texture (its luminance).
 #[inline]
 fn blend_weight(t: &crate::texture::Texture, ctx: &BsdfContext) -> f32 {
-    t.eval_scalar(ctx.uv, ctx.mesh.as_ref()).clamp(0.0, 1.0)
+    ctx.scalar(t).clamp(0.0, 1.0)
 }
 
 #[cfg(test)]

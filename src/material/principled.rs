@@ -167,7 +167,7 @@ pub(super) fn ggx_alpha(roughness: f32, anisotropic: Option<f32>) -> (f32, f32) 
 /// A scalar parameter that may be off (0 then).
 #[inline]
 pub(super) fn scalar(t: &Option<Texture>, ctx: &BsdfContext) -> f32 {
-    t.as_ref().map_or(0.0, |t| t.eval_scalar(ctx.uv, ctx.mesh.as_ref()))
+    t.as_ref().map_or(0.0, |t| ctx.scalar(t))
 }
 
 /// Disney's diffuse lobe without the `base/π` factor: `(1 − F_i/2)(1 − F_o/2)` plus the
@@ -218,7 +218,7 @@ pub(super) fn optional_parameter(o: &Obj, b: &mut dyn BsdfBuilder, name: &str) -
 impl Principled {
     fn params(&self, ctx: &BsdfContext) -> Params {
         let s = |t: &Option<Texture>| scalar(t, ctx);
-        let roughness = self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref());
+        let roughness = ctx.scalar(&self.roughness);
         let alpha = ggx_alpha(roughness, self.anisotropic.as_ref().map(|_| s(&self.anisotropic)));
         let (metallic, spec_trans) = (s(&self.metallic), s(&self.spec_trans));
         Params {
@@ -233,7 +233,7 @@ impl Principled {
     }
 
     fn clearcoat_distribution(&self, ctx: &BsdfContext) -> Gtr1 {
-        Gtr1 { alpha: lerp(0.1, 0.001, self.clearcoat_gloss.eval_scalar(ctx.uv, ctx.mesh.as_ref())) }
+        Gtr1 { alpha: lerp(0.1, 0.001, ctx.scalar(&self.clearcoat_gloss)) }
     }
 
     /// The lobe probabilities (diffuse, clearcoat, specular transmission, specular reflection)

@@ -69,11 +69,11 @@ impl PrincipledThin {
     fn params(&self, ctx: &BsdfContext) -> Params {
         Params {
             base: ctx.eval(&self.base_color),
-            roughness: self.roughness.eval_scalar(ctx.uv, ctx.mesh.as_ref()),
+            roughness: ctx.scalar(&self.roughness),
             anisotropic: self.anisotropic.as_ref().map(|_| scalar(&self.anisotropic, ctx)),
             spec_trans: scalar(&self.spec_trans, ctx),
             diff_trans: scalar(&self.diff_trans, ctx) / 2.0,
-            eta: self.eta.eval_scalar(ctx.uv, ctx.mesh.as_ref()),
+            eta: ctx.scalar(&self.eta),
         }
     }
 

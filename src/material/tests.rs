@@ -442,7 +442,7 @@ fn textured_parameters_act_as_their_local_value() {
             }),
             Box::new(|uv| {
                 Bsdf::RoughDielectric(RoughDielectric {
-                    roughness: ggx(alpha.eval_scalar(uv, None)).into(),
+                    roughness: ggx(alpha.eval_scalar(&crate::texture::TexPoint::at_uv(uv))).into(),
                     eta: 1.5,
                     specular_reflectance: refl.eval(uv).into(),
                     specular_transmittance: trans.eval(uv).into(),
@@ -501,7 +501,7 @@ fn textured_parameters_act_as_their_local_value() {
             }),
             Box::new(|uv| {
                 Bsdf::RoughConductor(RoughConductor {
-                    roughness: ggx(alpha.eval_scalar(uv, None)).into(),
+                    roughness: ggx(alpha.eval_scalar(&crate::texture::TexPoint::at_uv(uv))).into(),
                     ior: Some(ConductorIor::constant(eta.eval(uv), k.eval(uv))),
                     specular_reflectance: refl.eval(uv).into(),
                 })

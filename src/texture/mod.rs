@@ -1,9 +1,13 @@
-//! Textures: spatially varying parameters of materials, looked up by surface uv.
+//! Textures: spatially varying parameters of materials, looked up at a surface point (its uv,
+//! and for pbrt-v4's projections and 3D patterns its position and normal: [`TexPoint`]).
 //!
 //! Mitsuba 3's plugins: `bitmap` (an image; bilinear or nearest filtering; repeat, mirror or
 //! clamp wrapping; sRGB-decoded unless `raw`), `checkerboard` (`color0`, `color1`),
 //! `rawconstant` and constant values; pbrt-v4's `scale` (the product of two textures) and
-//! neumann's `threshold` (a step of a texture's value), which glTF's materials need. Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
+//! neumann's `threshold` (a step of a texture's value), which glTF's materials need; pbrt-v4's
+//! `mix`, `directionmix`, `bilerp`, `dots`, 3D checkerboard, `fbm`, `wrinkled`, `windy`, `marble`
+//! and its spherical, cylindrical and planar mappings ([`procedural`], on Perlin's [`noise`]).
+//! Every texture takes an optional `to_uv` 2D affine transform of the uv coordinates.
 //! Image convention (Mitsuba 3's, checked against it): uv (0, 0) is the *top-left* corner of the
 //! image (its first row) and v grows downward to the last row at v = 1. Mitsuba's OBJ loader flips
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
@@ -14,6 +18,32 @@ use crate::math::spectrum::SpectrumKind;
 use crate::math::{Mat3, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use std::sync::Arc;
+
+pub mod noise;
+pub mod procedural;
+
+pub use procedural::{Procedural, Projection};
+
+/// Where a texture is looked up.
+#[derive(Clone, Copy, Debug)]
+pub struct TexPoint<'a> {
+    /// Surface texture coordinates.
+    pub uv: Vec2,
+    /// Position (world space), for projections and 3D patterns.
+    pub p: Vec3,
+    /// Unit geometric normal (world space), for `directionmix`.
+    pub n: Vec3,
+    /// The mesh point, for `mesh_attribute` textures (None off meshes with attributes).
+    pub mesh: Option<&'a MeshPoint<'a>>,
+}
+
+impl TexPoint<'_> {
+    /// A lookup by texture coordinates alone (position at the origin, normal +z): right for
+    /// every texture that does not [`Texture::uses_position`].
+    pub fn at_uv(uv: Vec2) -> TexPoint<'static> {
+        TexPoint { uv, p: Vec3::ZERO, n: Vec3::Z, mesh: None }
+    }
+}
 
 /// How lookups between texel centres are filtered.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -98,6 +128,35 @@ pub enum Texture {
         /// uv transform.
         to_uv: Mat3,
     },
+    /// A texture looked up at the (s, t) a projection computes from the point, as its uv
+    /// (pbrt-v4's 2D mappings; the uv mapping of 2D patterns).
+    Projected {
+        /// The mapping.
+        projection: Projection,
+        /// The texture.
+        texture: Box<Texture>,
+    },
+    /// pbrt-v4's `mix`: `(1 − a) tex[0] + a tex[1]`, `a` the luminance of `amount`'s value
+    /// (its colour lookup, so that a checkerboard amount keeps its colour order).
+    Mix {
+        /// The blend amount.
+        amount: Box<Texture>,
+        /// The two textures.
+        tex: Box<[Texture; 2]>,
+    },
+    /// pbrt-v4's `directionmix`: `a tex[0] + (1 − a) tex[1]`, `a = |n · dir|` with `n` the
+    /// geometric normal.
+    DirectionMix {
+        /// Unit direction (world space).
+        dir: Vec3,
+        /// The two textures.
+        tex: Box<[Texture; 2]>,
+    },
+    /// A procedural pattern (2D ones at the uv, 3D ones at the position).
+    Procedural(Procedural),
+    /// The square root of a texture's value per channel (of its scalar as a scalar; negative
+    /// values give 0): pbrt-v4's roughness remapping α = √roughness of a textured roughness.
+    Sqrt(Box<Texture>),
 }
 
 impl Texture {
@@ -175,34 +234,66 @@ impl Bitmap {
 
 impl Texture {
     /// The value at surface coordinates `uv` (0 for a `mesh_attribute`, which needs a mesh
-    /// point: [`Texture::eval_at`]).
+    /// point, and the origin's value for textures that [`Texture::uses_position`]: those need
+    /// [`Texture::eval_at`]).
     #[inline]
     pub fn eval(&self, uv: Vec2) -> Rgb {
-        self.eval_at(uv, None)
+        self.eval_at(&TexPoint::at_uv(uv))
     }
 
-    /// The value at surface coordinates `uv` of the mesh point `mesh` (if on a mesh with
-    /// attributes).
-    #[inline]
-    pub fn eval_at(&self, uv: Vec2, mesh: Option<&MeshPoint>) -> Rgb {
+    /// The value at the surface point `at`.
+    pub fn eval_at(&self, at: &TexPoint) -> Rgb {
+        let uv = at.uv;
         match self {
             Texture::MeshAttribute { name, scale } => {
-                mesh.and_then(|m| m.attribute(name)).map_or(Rgb::ZERO, |v| v * *scale)
+                at.mesh.and_then(|m| m.attribute(name)).map_or(Rgb::ZERO, |v| v * *scale)
             }
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
-            Texture::Scale(t) => t[0].eval_at(uv, mesh) * t[1].eval_at(uv, mesh),
-            Texture::AttributeUv { attribute, texture } => texture.eval_at(attribute_uv(attribute, uv, mesh), mesh),
+            Texture::Scale(t) => t[0].eval_at(at) * t[1].eval_at(at),
+            Texture::AttributeUv { attribute, texture } => {
+                texture.eval_at(&TexPoint { uv: attribute_uv(attribute, uv, at.mesh), ..*at })
+            }
             Texture::Threshold { texture, threshold } => {
-                Rgb::splat(if texture.eval_scalar(uv, mesh) >= *threshold { 1.0 } else { 0.0 })
+                Rgb::splat(if texture.eval_scalar(at) >= *threshold { 1.0 } else { 0.0 })
             }
             Texture::Checkerboard { color0, color1, to_uv } => {
                 if Texture::checker_cell0(to_uv, uv) {
-                    color0.eval_at(uv, mesh)
+                    color0.eval_at(at)
                 } else {
-                    color1.eval_at(uv, mesh)
+                    color1.eval_at(at)
                 }
             }
+            Texture::Projected { projection, texture } => {
+                texture.eval_at(&TexPoint { uv: projection.st(uv, at.p), ..*at })
+            }
+            Texture::Mix { amount, tex } => {
+                let a = crate::math::luminance(amount.eval_at(at));
+                Self::blend(a, tex, |t| t.eval_at(at))
+            }
+            Texture::DirectionMix { dir, tex } => {
+                let a = at.n.dot(*dir).abs().min(1.0);
+                Self::blend(1.0 - a, tex, |t| t.eval_at(at))
+            }
+            Texture::Procedural(p) => p.eval(uv, at.p),
+            Texture::Sqrt(t) => t.eval_at(at).max(Rgb::ZERO).powf(0.5),
+        }
+    }
+
+    /// `(1 − a) f(tex[0]) + a f(tex[1])`, looking up only the textures with non-zero weight
+    /// (as pbrt-v4 does).
+    #[inline]
+    fn blend<T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>>(
+        a: f32,
+        tex: &[Texture; 2],
+        f: impl Fn(&Texture) -> T,
+    ) -> T {
+        if a == 0.0 {
+            f(&tex[0]) * 1.0
+        } else if a == 1.0 {
+            f(&tex[1]) * 1.0
+        } else {
+            f(&tex[0]) * (1.0 - a) + f(&tex[1]) * a
         }
     }
 
@@ -211,18 +302,48 @@ impl Texture {
     /// swaps the two colours relative to its colour lookup (`color1` where the fractional parts
     /// of u and v lie on the same side of ½), and so does this one, so that scenes render as
     /// there.
-    #[inline]
-    pub fn eval_scalar(&self, uv: Vec2, mesh: Option<&MeshPoint>) -> f32 {
+    pub fn eval_scalar(&self, at: &TexPoint) -> f32 {
         match self {
             Texture::Checkerboard { color0, color1, to_uv } => {
-                if Texture::checker_cell0(to_uv, uv) {
-                    color1.eval_scalar(uv, mesh)
+                if Texture::checker_cell0(to_uv, at.uv) {
+                    color1.eval_scalar(at)
                 } else {
-                    color0.eval_scalar(uv, mesh)
+                    color0.eval_scalar(at)
                 }
             }
-            Texture::AttributeUv { attribute, texture } => texture.eval_scalar(attribute_uv(attribute, uv, mesh), mesh),
-            t => crate::math::luminance(t.eval_at(uv, mesh)),
+            Texture::AttributeUv { attribute, texture } => {
+                texture.eval_scalar(&TexPoint { uv: attribute_uv(attribute, at.uv, at.mesh), ..*at })
+            }
+            Texture::Projected { projection, texture } => {
+                texture.eval_scalar(&TexPoint { uv: projection.st(at.uv, at.p), ..*at })
+            }
+            Texture::Mix { amount, tex } => {
+                let a = crate::math::luminance(amount.eval_at(at));
+                Self::blend(a, tex, |t| t.eval_scalar(at))
+            }
+            Texture::DirectionMix { dir, tex } => {
+                let a = at.n.dot(*dir).abs().min(1.0);
+                Self::blend(1.0 - a, tex, |t| t.eval_scalar(at))
+            }
+            Texture::Sqrt(t) => t.eval_scalar(at).max(0.0).sqrt(),
+            t => crate::math::luminance(t.eval_at(at)),
+        }
+    }
+
+    /// Whether the value depends on the point's position or normal (pbrt-v4's projections, 3D
+    /// patterns, `directionmix`), so that a lookup by uv alone ([`Texture::eval`]) is not
+    /// enough.
+    pub fn uses_position(&self) -> bool {
+        match self {
+            Texture::Constant(_) | Texture::Bitmap { .. } | Texture::MeshAttribute { .. } => false,
+            Texture::AttributeUv { texture, .. } | Texture::Threshold { texture, .. } => texture.uses_position(),
+            Texture::Sqrt(t) => t.uses_position(),
+            Texture::Scale(t) => t[0].uses_position() || t[1].uses_position(),
+            Texture::Checkerboard { color0, color1, .. } => color0.uses_position() || color1.uses_position(),
+            Texture::Projected { projection, texture } => projection.uses_position() || texture.uses_position(),
+            Texture::Mix { amount, tex } => amount.uses_position() || tex[0].uses_position() || tex[1].uses_position(),
+            Texture::DirectionMix { .. } => true,
+            Texture::Procedural(p) => p.uses_position(),
         }
     }
 
@@ -263,6 +384,15 @@ impl Texture {
             }
             // Unknown without the mesh: an estimate for sampling weights only.
             Texture::MeshAttribute { scale, .. } => Rgb::splat(0.5 * scale),
+            // Estimates for sampling weights: the pattern's own average, equal weights.
+            Texture::Projected { texture, .. } => texture.mean(),
+            Texture::Mix { amount, tex } => {
+                let a = crate::math::luminance(amount.mean()).clamp(0.0, 1.0);
+                tex[0].mean() * (1.0 - a) + tex[1].mean() * a
+            }
+            Texture::DirectionMix { tex, .. } => 0.5 * (tex[0].mean() + tex[1].mean()),
+            Texture::Procedural(p) => p.mean(),
+            Texture::Sqrt(t) => t.mean().max(Rgb::ZERO).powf(0.5),
         }
     }
 
@@ -274,7 +404,11 @@ impl Texture {
             Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.iter().all(|c| ok(*c)),
             Texture::Checkerboard { color0, color1, .. } => color0.is_reflectance() && color1.is_reflectance(),
             Texture::MeshAttribute { .. } | Texture::Threshold { .. } => true,
-            Texture::AttributeUv { texture, .. } => texture.is_reflectance(),
+            Texture::AttributeUv { texture, .. } | Texture::Projected { texture, .. } => texture.is_reflectance(),
+            Texture::Mix { amount, tex } => amount.is_reflectance() && tex[0].is_reflectance() && tex[1].is_reflectance(),
+            Texture::DirectionMix { tex, .. } => tex[0].is_reflectance() && tex[1].is_reflectance(),
+            Texture::Procedural(p) => p.is_reflectance(),
+            Texture::Sqrt(t) => t.is_reflectance(),
             Texture::Scale(t) => {
                 let bound = |t: &Texture| match t {
                     Texture::Constant(c) => c.max_element(),
@@ -340,6 +474,16 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("mesh_attribute", mesh_attribute_from_props),
         ("scale", scale_from_props),
         ("threshold", threshold_from_props),
+        ("sqrt", sqrt_from_props),
+        ("mix", procedural::mix_from_props),
+        ("directionmix", procedural::directionmix_from_props),
+        ("bilerp", procedural::bilerp_from_props),
+        ("dots", procedural::dots_from_props),
+        ("checkerboard3d", procedural::checkerboard3d_from_props),
+        ("fbm", procedural::fbm_from_props),
+        ("wrinkled", procedural::wrinkled_from_props),
+        ("windy", procedural::windy_from_props),
+        ("marble", procedural::marble_from_props),
     ];
 
 /// The constructor of the texture plugin `name`.
@@ -359,8 +503,9 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 
 /// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
 /// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`; neumann's
-/// `wrap_mode_u` / `wrap_mode_v` (one axis each) and `uv_attribute` (look up at the texture
-/// coordinates of that per-vertex mesh attribute).
+/// `wrap_mode_u` / `wrap_mode_v` (one axis each), `uv_attribute` (look up at the texture
+/// coordinates of that per-vertex mesh attribute) and `mapping` (pbrt-v4's 2D mappings,
+/// [`procedural::projection_from_props`]).
 fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Texture> {
     let raw = o.bool("raw", false)?;
     // Mitsuba's `accel` (hardware texture lookups on GPUs) changes no value.
@@ -390,7 +535,7 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
     let texture = Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? };
     // neumann's `uv_attribute`: texture coordinates from a mesh attribute (glTF's TEXCOORD_1…).
     Ok(match o.string_opt("uv_attribute")? {
-        None => texture,
+        None => procedural::projected(o, texture)?,
         Some(attribute) if attribute.starts_with("vertex_") => Texture::AttributeUv { attribute, texture: Box::new(texture) },
         Some(a) => return Err(o.error_at("uv_attribute", format!("a uv attribute is per vertex ('vertex_…'), got '{a}'"))),
     })
@@ -420,11 +565,33 @@ fn threshold_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Textur
     Ok(Texture::Threshold { texture, threshold })
 }
 
-/// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`.
+/// neumann's `sqrt`: the square root of `tex` (required) per channel, negative values giving 0
+/// (pbrt-v4's `remaproughness` of a roughness texture: α = √roughness).
+fn sqrt_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    if !o.has("tex") {
+        return Err(o.error("a sqrt texture needs its 'tex'"));
+    }
+    Ok(match b.texture_of(o, "tex", Rgb::ONE, SpectrumKind::Unbounded)? {
+        Texture::Constant(c) => Texture::Constant(c.max(Rgb::ZERO).powf(0.5)),
+        t => Texture::Sqrt(Box::new(t)),
+    })
+}
+
+/// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`; and
+/// neumann's `mapping` (pbrt-v4's 2D mappings, [`procedural::projection_from_props`]).
 fn checkerboard_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
     let color0 = b.texture(o, "color0", Rgb::splat(0.4))?;
     let color1 = b.texture(o, "color1", Rgb::splat(0.2))?;
-    Ok(Texture::checkerboard(color0, color1, to_uv_from_props(o)?))
+    let to_uv = to_uv_from_props(o)?;
+    Ok(match procedural::projection_from_props(o)? {
+        None => Texture::checkerboard(color0, color1, to_uv),
+        // Under a projection the cells follow (s, t) while the colours keep the surface's uv.
+        Some(projection) => {
+            let cells = Texture::checkerboard(Rgb::ZERO, Rgb::ONE, to_uv);
+            let amount = Box::new(Texture::Projected { projection, texture: Box::new(cells) });
+            Texture::Mix { amount, tex: Box::new([color0, color1]) }
+        }
+    })
 }
 
 /// Mitsuba's `mesh_attribute`: `name` (required: `vertex_…` or `face_…`, e.g. `vertex_color`
@@ -452,7 +619,19 @@ impl Texture {
                 v.extend(t[1].mesh_attributes());
                 v
             }
-            Texture::Threshold { texture, .. } => texture.mesh_attributes(),
+            Texture::Threshold { texture, .. } | Texture::Projected { texture, .. } => texture.mesh_attributes(),
+            Texture::Sqrt(t) => t.mesh_attributes(),
+            Texture::Mix { amount, tex } => {
+                let mut v = amount.mesh_attributes();
+                v.extend(tex[0].mesh_attributes());
+                v.extend(tex[1].mesh_attributes());
+                v
+            }
+            Texture::DirectionMix { tex, .. } => {
+                let mut v = tex[0].mesh_attributes();
+                v.extend(tex[1].mesh_attributes());
+                v
+            }
             Texture::AttributeUv { attribute, texture } => {
                 let mut v = texture.mesh_attributes();
                 v.push(attribute.as_str());
@@ -539,8 +718,8 @@ mod tests {
         assert_eq!(t.mean(), Rgb::splat(0.5));
         assert!(t.is_reflectance());
         // As a scalar (Mitsuba's eval_1) the colours are swapped, as Mitsuba 3.9.1 has them.
-        assert_eq!(t.eval_scalar(Vec2::new(0.1, 0.1), None), 0.0);
-        assert_eq!(t.eval_scalar(Vec2::new(0.3, 0.1), None), 1.0);
+        assert_eq!(t.eval_scalar(&TexPoint::at_uv(Vec2::new(0.1, 0.1))), 0.0);
+        assert_eq!(t.eval_scalar(&TexPoint::at_uv(Vec2::new(0.3, 0.1))), 1.0);
         assert!(!Texture::Constant(Rgb::splat(1.5)).is_reflectance());
     }
 
@@ -553,10 +732,10 @@ mod tests {
         // Outer color1 cell (u in [0.25, 0.5), v in [0, 0.25)): the inner board at the same uv.
         for uv in [Vec2::new(0.3, 0.01), Vec2::new(0.37, 0.01), Vec2::new(0.3, 0.07)] {
             assert_eq!(t.eval(uv), inner.eval(uv), "{uv}");
-            assert_eq!(t.eval_scalar(uv, None), 0.5, "{uv}: scalar lookups swap the outer colours");
+            assert_eq!(t.eval_scalar(&TexPoint::at_uv(uv)), 0.5, "{uv}: scalar lookups swap the outer colours");
         }
         assert_eq!(t.eval(Vec2::new(0.1, 0.1)), Rgb::splat(0.5));
-        assert_eq!(t.eval_scalar(Vec2::new(0.1, 0.1), None), inner.eval_scalar(Vec2::new(0.1, 0.1), None));
+        assert_eq!(t.eval_scalar(&TexPoint::at_uv(Vec2::new(0.1, 0.1))), inner.eval_scalar(&TexPoint::at_uv(Vec2::new(0.1, 0.1))));
         assert_eq!(t.mean(), 0.5 * (Rgb::splat(0.5) + inner.mean()));
     }
 }

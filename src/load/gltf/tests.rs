@@ -9,7 +9,7 @@ use crate::load::test_support::{assert_renders_like, mean, render};
 use crate::material::Bsdf;
 use crate::math::Vec2;
 use crate::math::{Rgb, Vec3};
-use crate::texture::Texture;
+use crate::texture::{TexPoint, Texture};
 use serde_json::{json, Value as J};
 use std::path::PathBuf;
 
@@ -487,12 +487,12 @@ fn metallic_roughness_materials_and_their_textures() {
     let c = p.base_color.eval(Vec2::new(0.2, 0.5));
     assert!((c - Rgb::new(0.0, 0.0, 0.5)).abs().max_element() < 0.01, "{c}");
     // Metallic from blue (1.0 × 0.5), roughness from green (128/255 × 0.8), raw.
-    let metallic = p.metallic.as_ref().unwrap().eval_scalar(Vec2::splat(0.5), None);
-    let roughness = p.roughness.eval_scalar(Vec2::splat(0.5), None);
+    let metallic = p.metallic.as_ref().unwrap().eval_scalar(&TexPoint::at_uv(Vec2::splat(0.5)));
+    let roughness = p.roughness.eval_scalar(&TexPoint::at_uv(Vec2::splat(0.5)));
     assert!((metallic - 0.5).abs() < 1e-3 && (roughness - 0.8 * 128.0 / 255.0).abs() < 1e-3, "{metallic} {roughness}");
     // The mask: alpha 1 on the left texel, 0.2 < 0.5 on the right (through the transform).
     let Bsdf::Mask { opacity, .. } = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { unreachable!() };
-    assert_eq!(opacity.eval_scalar(Vec2::new(0.2, 0.5), None), 0.0);
+    assert_eq!(opacity.eval_scalar(&TexPoint::at_uv(Vec2::new(0.2, 0.5))), 0.0);
     let Texture::Threshold { texture, .. } = opacity else { panic!("{opacity:?}") };
     assert!(matches!(**texture, Texture::Bitmap { .. } | Texture::Scale(_)));
     // Emission: factor × strength on the front.
@@ -525,11 +525,11 @@ fn transmission_volume_and_the_other_lobes() {
     assert_eq!(names, ["principled"], "a transmissive material is not wrapped in twosided");
     let Bsdf::Principled(p) = inner else { unreachable!() };
     assert!((p.eta - 1.33).abs() < 1e-6);
-    let at = |t: &Option<Texture>| t.as_ref().map(|t| t.eval_scalar(Vec2::ZERO, None));
+    let at = |t: &Option<Texture>| t.as_ref().map(|t| t.eval_scalar(&TexPoint::at_uv(Vec2::ZERO)));
     let near = |v: Option<f32>, x: f32| v.is_some_and(|v| (v - x).abs() < 1e-5);
     assert!(near(at(&p.spec_trans), 0.9) && near(at(&p.clearcoat), 0.7) && near(at(&p.sheen), 0.6));
     assert!(p.metallic.is_none());
-    let gloss = p.clearcoat_gloss.eval_scalar(Vec2::ZERO, None);
+    let gloss = p.clearcoat_gloss.eval_scalar(&TexPoint::at_uv(Vec2::ZERO));
     assert!((0.1 + (0.001 - 0.1) * gloss - 0.01).abs() < 1e-4, "coat α = 0.1²: gloss {gloss}");
     // The volume: σ = −ln(colour) / distance, rendered by the volumetric path tracer.
     assert_eq!(f.integrator.kind(), crate::integrator::IntegratorKind::Volpath);
@@ -788,7 +788,7 @@ fn textures_on_a_second_texture_coordinate_set() {
     assert_eq!(radiance.eval(m.uvs[0]), Rgb::ONE);
     let (_, inner) = layers(&f);
     let Bsdf::Principled(pr) = inner else { unreachable!() };
-    assert_eq!(pr.base_color.eval_at(m.uvs[0], Some(&point)), Rgb::ZERO);
+    assert_eq!(pr.base_color.eval_at(&TexPoint { mesh: Some(&point), ..TexPoint::at_uv(m.uvs[0]) }), Rgb::ZERO);
 }
 
 /// A textured floor (nearest-filtered checker, repeated 3 × by KHR_texture_transform), a

@@ -1313,3 +1313,18 @@ fn reflectance_above_one_is_warned_about() {
     .unwrap();
     assert!(f.warnings.len() == 1 && f.warnings[0].contains("specular_transmittance"), "{:?}", f.warnings);
 }
+
+/// Emitters look their textures up by uv: a texture that varies with position (a 3D pattern, a
+/// projection) as an emitter's parameter is an error, never a lookup at the wrong point.
+#[test]
+fn emitters_refuse_textures_that_vary_with_position() {
+    let area = r#"<shape type="sphere"><emitter type="area"><texture type="fbm" name="radiance"/></emitter></shape>"#;
+    let e = err(&scene(area));
+    assert!(e.contains("varies with position"), "{e}");
+    let spot = r#"<emitter type="spot"><texture type="bilerp" name="texture"><string name="mapping" value="spherical"/></texture></emitter>"#;
+    let e = err(&scene(spot));
+    assert!(e.contains("varies with position") && e.contains("spot"), "{e}");
+    // A 2D pattern over uv is fine.
+    let uv = r#"<shape type="rectangle"><emitter type="area"><texture type="bilerp" name="radiance"/></emitter></shape>"#;
+    load(&scene(uv)).unwrap_or_else(|e| panic!("{e}"));
+}

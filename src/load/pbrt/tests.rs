@@ -428,7 +428,7 @@ fn alpha_cut_outs_and_normal_maps() {
     let b = |i: usize| &f.scene.bsdfs()[f.scene.shapes()[i].bsdf as usize];
     let ctx = crate::material::BsdfContext::default();
     let Bsdf::Mask { opacity, bsdf } = b(0) else { panic!("{:?}", b(0)) };
-    assert!((opacity.eval_scalar(crate::math::Vec2::ZERO, None) - 0.3).abs() < 1e-6);
+    assert!((opacity.eval_scalar(&crate::texture::TexPoint::at_uv(crate::math::Vec2::ZERO)) - 0.3).abs() < 1e-6);
     assert!(matches!(&**bsdf, Bsdf::Perturbed(_)));
     assert!(matches!(b(1), Bsdf::Perturbed(_)), "alpha 1 is no cut-out");
     assert!(matches!(b(2), Bsdf::Mask { .. }));
@@ -505,4 +505,91 @@ fn two_sided_area_lights_and_their_power() {
     assert_eq!(up, down);
     let s = l.sample_li(f.scene.geometries(), crate::math::Vec3::new(0.1, 0.2, -2.0), crate::math::Vec2::new(0.3, 0.6));
     assert!(s.is_some_and(|s| s.li == want), "lit from the back");
+}
+
+/// The reflectance texture of shape `i`'s (two-sided) diffuse BSDF.
+fn diffuse_texture(f: &SceneFile, i: usize) -> &crate::texture::Texture {
+    let mut b = &f.scene.bsdfs()[f.scene.shapes()[i].bsdf as usize];
+    if let Bsdf::TwoSided([front, _]) = b {
+        b = front;
+    }
+    let Bsdf::Diffuse(d) = b else { panic!("{b:?}") };
+    &d.reflectance
+}
+
+/// pbrt-v4's procedural textures and mappings, each looked up where its closed form is known.
+#[test]
+fn procedural_textures_and_mappings() {
+    use crate::math::{Vec2, Vec3};
+    use crate::texture::{noise, TexPoint};
+    let text = "Camera \"perspective\"\nWorldBegin\n\
+        Texture \"n\" \"float\" \"fbm\" \"integer octaves\" 3\n\
+        Texture \"c3\" \"float\" \"checkerboard\" \"integer dimension\" 3 \"float tex1\" 0.25 \"float tex2\" 0.75\n\
+        Texture \"m\" \"spectrum\" \"mix\" \"texture amount\" \"c3\" \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n\
+        AttributeBegin\nTranslate 0 0 2\n\
+        Texture \"dm\" \"spectrum\" \"directionmix\" \"vector3 dir\" [0 0 1] \"rgb tex1\" [1 1 1] \"rgb tex2\" [0 0 0]\n\
+        Texture \"sph\" \"spectrum\" \"bilerp\" \"string mapping\" \"spherical\" \"rgb v00\" [0 0 0] \"rgb v01\" [0 0 0] \"rgb v10\" [1 1 1] \"rgb v11\" [1 1 1]\n\
+        AttributeEnd\n\
+        Texture \"pl\" \"float\" \"bilerp\" \"string mapping\" \"planar\" \"vector3 v1\" [0 0 1] \"vector3 v2\" [1 0 0] \"float udelta\" 0.5\n\
+        Texture \"ck\" \"spectrum\" \"checkerboard\" \"float uscale\" 2 \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 1 0]\n\
+        Texture \"mb\" \"spectrum\" \"marble\" \"float variation\" 0\n\
+        Material \"diffuse\" \"texture reflectance\" \"m\"\nShape \"sphere\"\n\
+        Material \"diffuse\" \"texture reflectance\" \"dm\"\nShape \"sphere\"\n\
+        Material \"diffuse\" \"texture reflectance\" \"sph\"\nShape \"sphere\"\n\
+        Material \"diffuse\" \"texture reflectance\" \"ck\"\nShape \"sphere\"\n\
+        Material \"diffuse\" \"texture reflectance\" \"mb\"\nShape \"sphere\"\n\
+        Texture \"w\" \"float\" \"wrinkled\"\nTexture \"wi\" \"float\" \"windy\"\n\
+        Texture \"d\" \"float\" \"dots\" \"float inside\" 1 \"float outside\" 0\n\
+        Material \"conductor\" \"texture roughness\" \"w\"\nShape \"sphere\"\n\
+        Material \"conductor\" \"texture roughness\" \"wi\"\nShape \"sphere\"\n\
+        Material \"conductor\" \"texture roughness\" \"d\"\nShape \"sphere\"\n\
+        Material \"conductor\" \"texture roughness\" \"pl\"\nShape \"sphere\"\n\
+        Material \"conductor\" \"texture roughness\" \"n\"\nShape \"sphere\"\n";
+    let f = load(text).unwrap_or_else(|e| panic!("{e}"));
+    let at = |p: Vec3, n: Vec3, uv: Vec2| TexPoint { uv, p, n, mesh: None };
+    // 3D checkerboard: tex1 (0.25) where ⌊x⌋+⌊y⌋+⌊z⌋ is even; the mix blends red to blue by it.
+    let m = diffuse_texture(&f, 0);
+    assert_eq!(m.eval_at(&at(Vec3::splat(0.5), Vec3::Z, Vec2::ZERO)), Rgb::new(0.75, 0.0, 0.25));
+    assert_eq!(m.eval_at(&at(Vec3::new(1.5, 0.5, 0.5), Vec3::Z, Vec2::ZERO)), Rgb::new(0.25, 0.0, 0.75));
+    // directionmix: |n · z| of tex1 (white).
+    let dm = diffuse_texture(&f, 1);
+    let n = Vec3::new(0.6, 0.0, 0.8);
+    assert!((dm.eval_at(&at(Vec3::ZERO, n, Vec2::ZERO)) - Rgb::splat(0.8)).abs().max_element() < 1e-6);
+    // Spherical mapping about (0, 0, 2): s = θ/π, and the bilerp is s itself.
+    let sph = diffuse_texture(&f, 2);
+    let p = Vec3::new(1.0, 0.0, 2.0);
+    assert!((sph.eval_at(&at(p, Vec3::Z, Vec2::ZERO)) - Rgb::splat(0.5)).abs().max_element() < 1e-6);
+    assert!((sph.eval_at(&at(Vec3::new(0.0, 0.0, 1.0), Vec3::Z, Vec2::ZERO)) - Rgb::ONE).abs().max_element() < 1e-6);
+    // 2D checkerboard with uscale 2: tex1 where ⌊2u⌋ + ⌊v⌋ is even.
+    let ck = diffuse_texture(&f, 3);
+    assert_eq!(ck.eval_at(&at(Vec3::ZERO, Vec3::Z, Vec2::new(0.1, 0.1))), Rgb::X);
+    assert_eq!(ck.eval_at(&at(Vec3::ZERO, Vec3::Z, Vec2::new(0.6, 0.1))), Rgb::Y);
+    assert_eq!(ck.eval_at(&at(Vec3::ZERO, Vec3::Z, Vec2::new(0.6, 1.1))), Rgb::X);
+    // Marble without variation: bands in y.
+    let mb = diffuse_texture(&f, 4);
+    let y = 0.3;
+    let expected = crate::texture::procedural::marble_colour(0.5 + 0.5 * f32::sin(y));
+    assert!((mb.eval_at(&at(Vec3::new(5.0, y, -2.0), Vec3::Z, Vec2::ZERO)) - expected).abs().max_element() < 1e-6);
+    // Float textures as roughness reach the conductors; check their values through the shapes'
+    // textures by construction.
+    let q = Vec3::new(0.3, 0.7, -0.4);
+    let w = noise::turbulence(q, 0.5, 8);
+    let fb = noise::fbm(q, 0.5, 3);
+    let found: Vec<_> = f.scene.bsdfs().iter().map(|b| format!("{b:?}")).collect();
+    assert!(found.iter().any(|s| s.contains("Wrinkled")) && found.iter().any(|s| s.contains("Windy")));
+    assert!(found.iter().any(|s| s.contains("PolkaDots")) && found.iter().any(|s| s.contains("Planar")));
+    assert!(w > 0.0 && fb.abs() < 2.0);
+    // Errors: classes pbrt does not have, unknown mappings, ptex.
+    for (bad, what) in [
+        ("Texture \"x\" \"spectrum\" \"fbm\"", "float texture"),
+        ("Texture \"x\" \"float\" \"marble\"", "spectrum texture"),
+        ("Texture \"x\" \"float\" \"dots\" \"string mapping\" \"cubic\"", "unknown texture mapping"),
+        ("Texture \"x\" \"float\" \"ptex\" \"string filename\" \"a.ptx\"", "ptex"),
+        ("Texture \"x\" \"float\" \"fbm\" \"integer octaves\" 0", "octaves"),
+        ("Texture \"x\" \"float\" \"wrinkled\" \"string mapping\" \"uv\"", "mapping"),
+    ] {
+        let use_it = "Material \"conductor\" \"texture roughness\" \"x\"";
+        let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{bad}\n{use_it}\nShape \"sphere\"\n"));
+        assert!(e.contains(what), "{bad}: {e}");
+    }
 }

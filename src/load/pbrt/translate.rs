@@ -20,7 +20,9 @@
 //!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
 //!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`; reflective ones wrapped in
 //!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`;
-//! - textures `imagemap`, `checkerboard` (2D), `scale`, `constant`;
+//! - textures `imagemap`, `checkerboard` (2D and 3D), `scale`, `constant`, `mix`,
+//!   `directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`, over pbrt's uv,
+//!   spherical, cylindrical and planar mappings;
 //! - lights `point`, `spot` (smoothstep falloff), `distant`, `infinite` (constant `L` or an
 //!   equal-area image), area `diffuse`, with pbrt-v4's `power` and `illuminance`.
 //!
@@ -28,7 +30,7 @@
 
 use super::params::{ParamSet, SpectrumParam};
 use super::parser::Parser;
-use crate::math::{Mat4, Rgb, Transform, Vec3};
+use crate::math::{Mat3, Mat4, Rgb, Transform, Vec3};
 use crate::props::{Loc, Obj, Prop, SceneError, SpectrumValue, Value};
 use std::rc::Rc;
 
@@ -140,25 +142,96 @@ fn texturable(p: &Parser, ps: &ParamSet, name: &str, float: bool) -> Result<Opti
     }
 }
 
-/// `Texture`: `imagemap`, `checkerboard`, `scale`, `constant`.
+/// pbrt-v4's 2D texture mapping of `ps` on `o`: `uv` (`uscale`, `vscale`, `udelta`,
+/// `vdelta`: s = su u + du, t = sv v + dv), `spherical`, `cylindrical` or `planar` (`v1`, `v2`,
+/// `udelta`, `vdelta`) about the texture's space (the current transform). `after` maps (s, t)
+/// on to the lookup coordinates of `o` (an image's t axis points up; a checkerboard cell is
+/// half of Mitsuba's).
+fn mapping_2d(p: &Parser, ps: &ParamSet, o: &mut Obj, after: Mat3) -> Result<()> {
+    let mapping = ps.string("mapping")?.unwrap_or_else(|| "uv".into());
+    let st = match mapping.as_str() {
+        "uv" => {
+            let (su, sv) = (ps.float("uscale", 1.0)?, ps.float("vscale", 1.0)?);
+            let (du, dv) = (ps.float("udelta", 0.0)?, ps.float("vdelta", 0.0)?);
+            Mat3::from_cols(Vec3::new(su, 0.0, 0.0), Vec3::new(0.0, sv, 0.0), Vec3::new(du, dv, 1.0))
+        }
+        "spherical" | "cylindrical" | "planar" => {
+            set(o, "mapping", Value::String(mapping.clone()), &ploc(ps, "mapping"));
+            set(o, "to_world", Value::Transform(transform(p.gs.ctm, ps)?), &ps.loc);
+            if mapping == "planar" {
+                set(o, "v1", Value::Vector(ps.point("v1", Vec3::X)?), &ploc(ps, "v1"));
+                set(o, "v2", Value::Vector(ps.point("v2", Vec3::Y)?), &ploc(ps, "v2"));
+                set(o, "udelta", Value::Float(ps.float("udelta", 0.0)? as f64), &ploc(ps, "udelta"));
+                set(o, "vdelta", Value::Float(ps.float("vdelta", 0.0)? as f64), &ploc(ps, "vdelta"));
+            }
+            Mat3::IDENTITY
+        }
+        other => {
+            return Err(ps.error_at(
+                "mapping",
+                format!("unknown texture mapping \"{other}\" (uv, spherical, cylindrical, planar)"),
+            ))
+        }
+    };
+    let m = after * st;
+    use crate::math::Vec4;
+    let m4 = Mat4::from_cols(
+        Vec4::new(m.x_axis.x, m.x_axis.y, 0.0, 0.0),
+        Vec4::new(m.y_axis.x, m.y_axis.y, 0.0, 0.0),
+        Vec4::Z,
+        Vec4::new(m.z_axis.x, m.z_axis.y, 0.0, 1.0),
+    );
+    let t = Transform::from_matrix(m4).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
+    if !t.is_identity() {
+        set(o, "to_uv", Value::Transform(t), &ps.loc);
+    }
+    Ok(())
+}
+
+/// A texture whose class is one of pbrt's float textures only (`fbm`, `wrinkled`, `windy`) or
+/// spectrum textures only (`marble`).
+fn only_class(ps: &ParamSet, ty: &str, class: &str, expected: &str) -> Result<()> {
+    if class != expected {
+        return Err(ps.error(format!("pbrt-v4's \"{ty}\" texture is a {expected} texture, not a {class} one")));
+    }
+    Ok(())
+}
+
+/// A texture of texture space (the current transform): `to_world` on `o`.
+fn texture_space(p: &Parser, ps: &ParamSet, o: &mut Obj) -> Result<()> {
+    set(o, "to_world", Value::Transform(transform(p.gs.ctm, ps)?), &ps.loc);
+    Ok(())
+}
+
+/// A noise texture's `octaves` (8) and `roughness` (0.5) on `o`.
+fn octave_params(ps: &ParamSet, o: &mut Obj) -> Result<()> {
+    set(o, "octaves", Value::Integer(ps.int("octaves", 8)?), &ploc(ps, "octaves"));
+    set(o, "roughness", Value::Float(ps.float("roughness", 0.5)? as f64), &ploc(ps, "roughness"));
+    Ok(())
+}
+
+/// Sets `o`'s texturable `name` from pbrt's `from` (if given).
+fn pass_texturable(p: &Parser, ps: &ParamSet, o: &mut Obj, from: &str, name: &str, float: bool) -> Result<()> {
+    if let Some(v) = texturable(p, ps, from, float)? {
+        set(o, name, v, &ploc(ps, from));
+    }
+    Ok(())
+}
+
+/// `Texture`: `imagemap`, `checkerboard` (2D and 3D), `scale`, `constant`, `mix`,
+/// `directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`.
 pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<Obj> {
     let float = class == "float";
-    // pbrt's (u, v) mapping: s = su u + du, t = sv v + dv.
-    let mapping = ps.string("mapping")?.unwrap_or_else(|| "uv".into());
-    if mapping != "uv" {
-        return Err(ps.error_at(
-            "mapping",
-            format!("texture mapping \"{mapping}\" is not implemented by neumann (only \"uv\")"),
-        ));
-    }
-    let (su, sv) = (ps.float("uscale", 1.0)?, ps.float("vscale", 1.0)?);
-    let (du, dv) = (ps.float("udelta", 0.0)?, ps.float("vdelta", 0.0)?);
+    // pbrt looks images up with t pointing up (1 − t down the rows).
+    let flip_t = Mat3::from_cols(Vec3::X, -Vec3::Y, Vec3::new(0.0, 1.0, 1.0));
     let o = match ty {
         "imagemap" => {
             let mut o = obj("texture", "bitmap", &ps.loc);
             let file = ps.string("filename")?.ok_or_else(|| ps.error("an imagemap needs its \"string filename\""))?;
+            // pbrt-v4 decodes PNG files as sRGB and every other file as linear by default.
+            let png = file.to_ascii_lowercase().ends_with(".png");
             set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
-            let encoding = ps.string("encoding")?.unwrap_or_else(|| "sRGB".into());
+            let encoding = ps.string("encoding")?.unwrap_or_else(|| if png { "sRGB" } else { "linear" }.into());
             match encoding.as_str() {
                 "sRGB" => {}
                 "linear" => set(&mut o, "raw", Value::Bool(true), &ploc(ps, "encoding")),
@@ -173,6 +246,8 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
                 Some("point") => set(&mut o, "filter_type", Value::String("nearest".into()), &ploc(ps, "filter")),
                 Some(other) => return Err(ps.error_at("filter", format!("unknown filter \"{other}\""))),
             }
+            // pbrt's anisotropic filtering width: neumann filters by sampling the pixel.
+            ps.float("maxanisotropy", 8.0)?;
             let wrap = match ps.string("wrap")?.as_deref() {
                 None | Some("repeat") => "repeat",
                 Some("clamp") => "clamp",
@@ -185,16 +260,7 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
                 return Err(ps.error_at("invert", "inverted image textures are not implemented by neumann"));
             }
             let scale = ps.float("scale", 1.0)?;
-            // pbrt looks images up with t pointing up (1 − t down the rows).
-            use crate::math::Vec4;
-            let m = Mat4::from_cols(
-                Vec4::new(su, 0.0, 0.0, 0.0),
-                Vec4::new(0.0, -sv, 0.0, 0.0),
-                Vec4::Z,
-                Vec4::new(du, 1.0 - dv, 0.0, 1.0),
-            );
-            let t = Transform::from_matrix(m).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
-            set(&mut o, "to_uv", Value::Transform(t), &ps.loc);
+            mapping_2d(p, ps, &mut o, flip_t)?;
             if scale != 1.0 {
                 scale_texture(Value::Object(Rc::new(o)), scale, &ps.loc, &ploc(ps, "scale"))
             } else {
@@ -202,46 +268,42 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             }
         }
         "checkerboard" => {
-            if ps.int("dimension", 2)? != 2 {
-                return Err(ps.error_at("dimension", "3D checkerboards are not implemented by neumann"));
+            let mut o = obj("texture", "mix", &ps.loc);
+            pass_texturable(p, ps, &mut o, "tex1", "tex1", float)?;
+            if !ps.has("tex1") {
+                set(&mut o, "tex1", Value::Float(1.0), &ps.loc);
             }
-            let mut o = obj("texture", "checkerboard", &ps.loc);
-            let t1 = texturable(p, ps, "tex1", float)?.unwrap_or(Value::Float(1.0));
-            let t2 = texturable(p, ps, "tex2", float)?.unwrap_or(Value::Float(0.0));
-            set(&mut o, "color0", t1, &ploc(ps, "tex1"));
-            set(&mut o, "color1", t2, &ploc(ps, "tex2"));
-            // pbrt: tex1 where ⌊s⌋ + ⌊t⌋ is even; Mitsuba's: color0 where the fractional parts of
-            // (u, v) lie on the same side of ½ — the same cells at half the frequency.
-            let m = Mat4::from_cols_array(&[
-                su / 2.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                sv / 2.0,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                1.0,
-                0.0,
-                du / 2.0,
-                dv / 2.0,
-                0.0,
-                1.0,
-            ]);
-            let t = Transform::from_matrix(m).ok_or_else(|| ps.error("uscale and vscale must not be zero"))?;
-            set(&mut o, "to_uv", Value::Transform(t), &ps.loc);
+            pass_texturable(p, ps, &mut o, "tex2", "tex2", float)?;
+            if !ps.has("tex2") {
+                set(&mut o, "tex2", Value::Float(0.0), &ps.loc);
+            }
+            let cells = match ps.int("dimension", 2)? {
+                2 => {
+                    // pbrt: tex1 where ⌊s⌋ + ⌊t⌋ is even. Mitsuba's checkerboard has color0
+                    // where the fractional parts of its (u, v) lie on the same side of ½: the
+                    // same cells at half the frequency; its colour lookup gives the amount.
+                    let mut c = obj("texture", "checkerboard", &ps.loc);
+                    set(&mut c, "color0", Value::Float(0.0), &ps.loc);
+                    set(&mut c, "color1", Value::Float(1.0), &ps.loc);
+                    mapping_2d(p, ps, &mut c, Mat3::from_scale(crate::math::Vec2::splat(0.5)))?;
+                    c
+                }
+                3 => {
+                    let mut c = obj("texture", "checkerboard3d", &ps.loc);
+                    set(&mut c, "tex1", Value::Float(0.0), &ps.loc);
+                    set(&mut c, "tex2", Value::Float(1.0), &ps.loc);
+                    texture_space(p, ps, &mut c)?;
+                    c
+                }
+                d => return Err(ps.error_at("dimension", format!("a checkerboard has dimension 2 or 3, not {d}"))),
+            };
+            set(&mut o, "amount", Value::Object(Rc::new(cells)), &ps.loc);
             o
         }
         "scale" => {
             let mut o = obj("texture", "scale", &ps.loc);
-            if let Some(v) = texturable(p, ps, "tex", float)? {
-                set(&mut o, "tex", v, &ploc(ps, "tex"));
-            }
-            if let Some(v) = texturable(p, ps, "scale", true)? {
-                set(&mut o, "scale", v, &ploc(ps, "scale"));
-            }
+            pass_texturable(p, ps, &mut o, "tex", "tex", float)?;
+            pass_texturable(p, ps, &mut o, "scale", "scale", true)?;
             o
         }
         "constant" => {
@@ -250,8 +312,64 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             set(&mut o, "tex", v, &ploc(ps, "value"));
             o
         }
-        "mix" | "directionmix" | "bilerp" | "dots" | "fbm" | "wrinkled" | "windy" | "marble" | "ptex" => {
-            return Err(ps.error(format!("the \"{ty}\" texture is not implemented by neumann yet")))
+        "mix" => {
+            let mut o = obj("texture", "mix", &ps.loc);
+            pass_texturable(p, ps, &mut o, "tex1", "tex1", float)?;
+            pass_texturable(p, ps, &mut o, "tex2", "tex2", float)?;
+            pass_texturable(p, ps, &mut o, "amount", "amount", true)?;
+            o
+        }
+        "directionmix" => {
+            let mut o = obj("texture", "directionmix", &ps.loc);
+            pass_texturable(p, ps, &mut o, "tex1", "tex1", float)?;
+            pass_texturable(p, ps, &mut o, "tex2", "tex2", float)?;
+            set(&mut o, "dir", Value::Vector(ps.point("dir", Vec3::Y)?), &ploc(ps, "dir"));
+            texture_space(p, ps, &mut o)?;
+            o
+        }
+        "bilerp" => {
+            let mut o = obj("texture", "bilerp", &ps.loc);
+            for (name, default) in [("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0)] {
+                let v = if float {
+                    Value::Float(ps.float(name, default)? as f64)
+                } else {
+                    match ps.spectrum(name)? {
+                        Some(s) => spectrum_value(ps, name, s, false)?,
+                        None => Value::Float(default as f64),
+                    }
+                };
+                set(&mut o, name, v, &ploc(ps, name));
+            }
+            mapping_2d(p, ps, &mut o, Mat3::IDENTITY)?;
+            o
+        }
+        "dots" => {
+            let mut o = obj("texture", "dots", &ps.loc);
+            pass_texturable(p, ps, &mut o, "inside", "inside", float)?;
+            pass_texturable(p, ps, &mut o, "outside", "outside", float)?;
+            mapping_2d(p, ps, &mut o, Mat3::IDENTITY)?;
+            o
+        }
+        "fbm" | "wrinkled" | "windy" => {
+            only_class(ps, ty, class, "float")?;
+            let mut o = obj("texture", ty, &ps.loc);
+            if ty != "windy" {
+                octave_params(ps, &mut o)?;
+            }
+            texture_space(p, ps, &mut o)?;
+            o
+        }
+        "marble" => {
+            only_class(ps, ty, class, "spectrum")?;
+            let mut o = obj("texture", "marble", &ps.loc);
+            octave_params(ps, &mut o)?;
+            set(&mut o, "scale", Value::Float(ps.float("scale", 1.0)? as f64), &ploc(ps, "scale"));
+            set(&mut o, "variation", Value::Float(ps.float("variation", 0.2)? as f64), &ploc(ps, "variation"));
+            texture_space(p, ps, &mut o)?;
+            o
+        }
+        "ptex" => {
+            return Err(ps.error("ptex textures (per-face images of Disney's Ptex format) are not implemented by neumann"))
         }
         other => return Err(ps.error(format!("unknown texture class \"{other}\""))),
     };
@@ -270,7 +388,11 @@ fn roughness_pair(p: &Parser, ps: &ParamSet, prefix: &str) -> Result<(Value, Val
         match x {
             Value::Float(f) => Ok(Value::Float(if remap { f.max(0.0).sqrt() } else { f })),
             t if !remap => Ok(t),
-            _ => Err(ps.error_at(&name("roughness"), "a roughness texture with remaproughness true is not implemented by neumann (give α directly with remaproughness false)")),
+            t => {
+                let mut o = obj("texture", "sqrt", &ps.loc);
+                set(&mut o, "tex", t, &ps.loc);
+                Ok(Value::Object(Rc::new(o)))
+            }
         }
     };
     Ok((alpha(u)?, alpha(v)?))

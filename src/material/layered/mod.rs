@@ -144,7 +144,7 @@ fn mirror(w: Vec3) -> Vec3 {
 impl Layered {
     /// The parameters at `ctx`.
     fn at(&self, ctx: &BsdfContext) -> Stack {
-        let scalar = |t: &Texture| t.eval_scalar(ctx.uv, ctx.mesh.as_ref());
+        let scalar = |t: &Texture| ctx.scalar(t);
         let ggx =
             |a: &[Texture; 2]| rough_or_smooth(Microfacet::new(MicrofacetType::Ggx, scalar(&a[0]), scalar(&a[1])));
         let top = Interface::Dielectric { eta: self.eta, mf: ggx(&self.alpha) };
