@@ -593,3 +593,40 @@ fn procedural_textures_and_mappings() {
         assert!(e.contains(what), "{bad}: {e}");
     }
 }
+
+/// pbrt-v4's image area lights (the image at (u, 1 − v), times `scale`) and its normalisation of
+/// sampled emission spectra to luminance 1 (only `scale` sets the brightness).
+#[test]
+fn image_area_lights_and_sampled_emission_spectra() {
+    use crate::math::Vec2;
+    let dir = tmp("arealight");
+    // 2 × 2: top row red, green; bottom row blue, white.
+    let px = [Rgb::X, Rgb::Y, Rgb::Z, Rgb::ONE];
+    crate::film::output::write_image(&dir.join("l.exr"), 2, 2, &px, &Default::default()).unwrap();
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+         AreaLightSource \"diffuse\" \"string filename\" \"{}\" \"float scale\" 3\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"point2 uv\" [0 0 1 0 0 1 1 1]\nAttributeEnd\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"spectrum L\" [400 2 500 2 600 2 700 2] \"float scale\" 5\n\
+         Shape \"sphere\"\nAttributeEnd\n",
+        dir.join("l.exr").display()
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let radiance = |i: usize| match &f.scene.lights()[i] {
+        Light::Area { radiance, .. } => radiance.clone(),
+        l => panic!("{l:?}"),
+    };
+    let image = radiance(0);
+    // Texel centres: (u, v) = (¼, ¼) is the image's bottom-left texel (t points up).
+    let at = |u: f32, v: f32| image.eval(Vec2::new(u, v));
+    assert!((at(0.25, 0.25) - 3.0 * Rgb::Z).abs().max_element() < 1e-5, "{}", at(0.25, 0.25));
+    assert!((at(0.75, 0.75) - 3.0 * Rgb::Y).abs().max_element() < 1e-5, "{}", at(0.75, 0.75));
+    assert!((at(0.99, 0.01) - 3.0 * Rgb::ONE).abs().max_element() < 1e-5, "clamped, not wrapped");
+    // A flat spectrum of value 2 is illuminant E at luminance 1 (a little warmer than sRGB's
+    // D65 white), times the scale.
+    let flat = radiance(1).eval(Vec2::ZERO);
+    assert!((crate::math::luminance(flat) - 5.0).abs() < 1e-3, "{flat}");
+    assert!(flat.x > flat.y && flat.y > flat.z && flat.x / flat.z < 1.4, "{flat}");
+    let e = err(&text.replace("\"float scale\" 3", "\"rgb L\" [1 1 1]"));
+    assert!(e.contains("either \"L\" or \"filename\""), "{e}");
+}

@@ -91,6 +91,7 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
     Ok(match s {
         SpectrumParam::Rgb(c) => Value::Rgb(c),
         SpectrumParam::Constant(v) => Value::Float(v as f64),
+        SpectrumParam::Samples(v) if illuminant => Value::Rgb(unit_luminance(&v)),
         SpectrumParam::Samples(v) => Value::Spectrum(SpectrumValue::Samples(v)),
         SpectrumParam::Named(n) if illuminant && n == "stdillum-D65" => Value::Float(1.0),
         SpectrumParam::Named(n) => {
@@ -115,7 +116,14 @@ pub fn blackbody_rgb(kelvin: f32) -> Rgb {
             (nm as f32, (b * 1e-13) as f32)
         })
         .collect();
-    let rgb = crate::math::spectrum::spectrum_to_rgb(&samples, crate::math::spectrum::SpectrumKind::Illuminant);
+    unit_luminance(&samples)
+}
+
+/// The linear sRGB colour of an emission spectrum (wavelength nm, value) at luminance 1: pbrt-v4
+/// divides a light's spectrum by its luminance, so only its colour matters (its `scale`,
+/// `power` or `illuminance` sets the brightness).
+fn unit_luminance(samples: &[(f32, f32)]) -> Rgb {
+    let rgb = crate::math::spectrum::spectrum_to_rgb(samples, crate::math::spectrum::SpectrumKind::Illuminant);
     rgb / crate::math::luminance(rgb).max(1e-30)
 }
 
@@ -688,10 +696,16 @@ fn scale_texture(tex: Value, scale: f32, at: &Loc, scale_at: &Loc) -> Obj {
     s
 }
 
+/// A colour value (RGB, a number or a spectrum) times `s`; other values (textures, which the
+/// callers wrap in a `scale` texture) unchanged.
 fn scaled(v: Value, s: f32) -> Value {
     match v {
         Value::Rgb(c) => Value::Rgb(c * s),
         Value::Float(f) => Value::Float(f * s as f64),
+        Value::Spectrum(SpectrumValue::Samples(v)) => {
+            Value::Spectrum(SpectrumValue::Samples(v.into_iter().map(|(l, x)| (l, x * s)).collect()))
+        }
+        Value::Spectrum(SpectrumValue::Constant(c)) => Value::Spectrum(SpectrumValue::Constant(c * s)),
         other => other,
     }
 }
@@ -889,16 +903,34 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         }
     }
     if let Some(al) = p.gs.area_light.clone() {
-        if al.has("filename") {
-            return Err(al.error_at("filename", "image area lights are not implemented by neumann yet"));
-        }
         let s = light_scale(p, &al)?;
-        let l = match al.spectrum("L")? {
-            Some(x) => spectrum_value(&al, "L", x, true)?,
-            None => Value::Float(1.0),
+        let radiance = match al.string("filename")? {
+            // pbrt-v4's image area light: the image's RGB (bilinear, clamped) at (u, 1 − v).
+            Some(file) => {
+                if al.has("L") {
+                    return Err(al.error_at("L", "give either \"L\" or \"filename\" (an image), not both"));
+                }
+                let at = ploc(&al, "filename");
+                let mut b = obj("texture", "bitmap", &at);
+                set(&mut b, "filename", Value::String(file), &at);
+                set(&mut b, "wrap_mode", Value::String("clamp".into()), &at);
+                let flip = Mat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0]);
+                set(&mut b, "to_uv", Value::Transform(transform(flip, &al)?), &at);
+                match s {
+                    1.0 => Value::Object(Rc::new(b)),
+                    s => Value::Object(Rc::new(scale_texture(Value::Object(Rc::new(b)), s, &at, &ploc(&al, "scale")))),
+                }
+            }
+            None => {
+                let l = match al.spectrum("L")? {
+                    Some(x) => spectrum_value(&al, "L", x, true)?,
+                    None => Value::Float(1.0),
+                };
+                scaled(l, s)
+            }
         };
         let mut e = obj("emitter", "area", &al.loc);
-        set(&mut e, "radiance", scaled(l, s), &ploc(&al, "L"));
+        set(&mut e, "radiance", radiance, &ploc(&al, "L"));
         if al.bool("twosided", false)? {
             set(&mut e, "two_sided", Value::Bool(true), &ploc(&al, "twosided"));
         }
