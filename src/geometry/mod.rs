@@ -1,4 +1,5 @@
-//! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids; rectangles and cubes as meshes), their
+//! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids; rectangles and cubes as meshes;
+//! Loop subdivision surfaces as meshes), their
 //! ray intersection with floating-point error bounds, and area / solid-angle sampling.
 //!
 //! All geometry is stored in world space (transforms are applied when a shape is built), so
@@ -12,6 +13,7 @@ mod registry;
 pub mod sdfgrid;
 pub mod shape;
 pub mod sphere;
+pub mod subdivision;
 pub mod triangle;
 pub mod triangle4;
 

@@ -1,6 +1,7 @@
 //! pbrt-v4's meshes: `trianglemesh` (`indices`, `P`, `N`, `uv`; the indices may be left out
 //! for a single triangle) and `bilinearmesh` (each patch of four vertices split into two
 //! triangles: exact for planar patches), and PLY files (gzip-compressed too: `.ply.gz`).
+//! `loopsubdiv` control meshes are subdivided here (`geometry::subdivision`).
 //! pbrt's uv (0, 0) is an image's bottom-left; neumann's bitmaps flip it where they look images
 //! up (the texture's `to_uv`), so the mesh's uv stay as written.
 
@@ -74,6 +75,39 @@ pub fn from_params(ps: &ParamSet, bilinear: bool) -> Result<TriangleMesh> {
         index.chunks(3).map(|t| [t[0], t[1], t[2]]).collect()
     };
     TriangleMesh::new(positions, normals, uvs, indices).map_err(|e| ps.error(e.to_string()))
+}
+
+/// pbrt-v4's `loopsubdiv`: the control mesh `P`, `indices` subdivided `levels` (3) times and
+/// pushed to the limit surface, with the limit normals (no uv, as in pbrt).
+pub fn loop_subdivision(ps: &ParamSet) -> Result<TriangleMesh> {
+    let levels = ps.int("levels", 3)?;
+    if !(0..=12).contains(&levels) {
+        return Err(ps.error_at("levels", format!("\"levels\" must be 0–12, got {levels}")));
+    }
+    let p = ps.floats("P", &["point3", "point"])?.ok_or_else(|| ps.error("needs its control points \"point3 P\""))?;
+    if p.len() % 3 != 0 || p.is_empty() {
+        return Err(ps.error_at("P", format!("\"P\" needs a multiple of 3 numbers, has {}", p.len())));
+    }
+    let positions: Vec<Vec3> = p.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+    let idx = ps.floats("indices", &["integer"])?.ok_or_else(|| ps.error("needs its \"integer indices\""))?;
+    if idx.is_empty() || !idx.len().is_multiple_of(3) {
+        return Err(ps.error_at("indices", format!("\"indices\" needs a multiple of 3 values, has {}", idx.len())));
+    }
+    let n = positions.len();
+    let mut indices = Vec::with_capacity(idx.len() / 3);
+    for t in idx.chunks(3) {
+        let mut tri = [0u32; 3];
+        for (k, &i) in t.iter().enumerate() {
+            if !(i >= 0.0 && i.fract() == 0.0 && (i as usize) < n) {
+                return Err(ps.error_at("indices", format!("index {i} is out of range: the mesh has {n} vertices")));
+            }
+            tri[k] = i as u32;
+        }
+        indices.push(tri);
+    }
+    let s = crate::geometry::subdivision::loop_subdivide(&positions, &indices, levels as u32)
+        .map_err(|e| ps.error(format!("Loop subdivision: {e}")))?;
+    TriangleMesh::new(s.positions, s.normals, Vec::new(), s.indices).map_err(|e| ps.error(e.to_string()))
 }
 
 /// A PLY file (`.ply` or gzip-compressed `.ply.gz`), normals and uv as stored.

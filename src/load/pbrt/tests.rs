@@ -630,3 +630,26 @@ fn image_area_lights_and_sampled_emission_spectra() {
     let e = err(&text.replace("\"float scale\" 3", "\"rgb L\" [1 1 1]"));
     assert!(e.contains("either \"L\" or \"filename\""), "{e}");
 }
+
+/// `loopsubdiv`: the control mesh subdivided `levels` times onto its limit surface, with the
+/// limit normals; malformed control meshes are located errors.
+#[test]
+fn loop_subdivision_surfaces() {
+    let octahedron = "\"point3 P\" [1 0 0 -1 0 0 0 1 0 0 -1 0 0 0 1 0 0 -1] \
+        \"integer indices\" [0 2 4 2 1 4 1 3 4 3 0 4 2 0 5 1 2 5 3 1 5 0 3 5]";
+    let text = format!("Camera \"perspective\"\nWorldBegin\nTranslate 0 0 5\nShape \"loopsubdiv\" \"integer levels\" 2 {octahedron}\n");
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!() };
+    assert_eq!(m.indices.len(), 8 * 16);
+    assert_eq!(m.normals.len(), m.positions.len());
+    let centre = crate::math::Vec3::new(0.0, 0.0, 5.0);
+    assert!(m.positions.iter().all(|p| (p.distance(centre) - 0.6).abs() < 0.2), "on the limit surface around z = 5");
+    // pbrt-v4's default is 3 levels.
+    let f = load(&text.replace("\"integer levels\" 2 ", "")).unwrap();
+    let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!() };
+    assert_eq!(m.indices.len(), 8 * 64);
+    let e = err(&text.replace("0 2 4 2 1 4", "0 4 2 2 1 4"));
+    assert!(e.contains("Loop subdivision") && e.contains("oriented") && e.contains("test.pbrt:4"), "{e}");
+    let e = err(&text.replace("\"integer levels\" 2", "\"integer levels\" 40"));
+    assert!(e.contains("levels"), "{e}");
+}

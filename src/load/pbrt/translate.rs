@@ -988,8 +988,11 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
             set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
             o
         }
-        "trianglemesh" | "bilinearmesh" => {
-            let mesh = super::mesh::from_params(ps, ty == "bilinearmesh")?;
+        "trianglemesh" | "bilinearmesh" | "loopsubdiv" => {
+            let mesh = match ty {
+                "loopsubdiv" => super::mesh::loop_subdivision(ps)?,
+                _ => super::mesh::from_params(ps, ty == "bilinearmesh")?,
+            };
             let name = format!("#pbrt-mesh-{}", p.mesh_count);
             p.mesh_count += 1;
             p.memory.meshes.insert(name.clone(), mesh);
@@ -1011,7 +1014,7 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
             set(&mut o, "filename", Value::String(name), &ploc(ps, "filename"));
             o
         }
-        "loopsubdiv" | "curve" | "cone" | "paraboloid" | "hyperboloid" => {
+        "curve" | "cone" | "paraboloid" | "hyperboloid" => {
             return Err(ps.error(format!("the \"{ty}\" shape is not implemented by neumann yet")))
         }
         other => return Err(ps.error(format!("unknown shape \"{other}\""))),
