@@ -25,6 +25,7 @@ pub mod filter;
 pub mod metrics;
 pub mod output;
 pub mod part;
+pub mod sensor;
 pub mod state;
 pub mod tev;
 
@@ -554,12 +555,21 @@ pub struct FilmSettings {
     pub alpha: bool,
     /// Reconstruction filter.
     pub filter: Filter,
+    /// What each sample becomes before the film (white balance, clamp).
+    pub transform: sensor::SampleTransform,
 }
 
 impl Default for FilmSettings {
     /// Mitsuba's defaults: 768 × 576, RGB, Gaussian filter (σ = 0.5).
     fn default() -> Self {
-        FilmSettings { width: 768, height: 576, window: None, alpha: false, filter: Filter::Gaussian { stddev: 0.5 } }
+        FilmSettings {
+            width: 768,
+            height: 576,
+            window: None,
+            alpha: false,
+            filter: Filter::Gaussian { stddev: 0.5 },
+            transform: sensor::SampleTransform::default(),
+        }
     }
 }
 
@@ -568,7 +578,9 @@ impl FilmSettings {
     /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
     /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
     /// `sample_border` and `banner` are read (they cannot change the image: the output format
-    /// follows the output file's extension).
+    /// follows the output file's extension); neumann's `white_balance` (K, 0: none; pbrt-v4's
+    /// `whitebalance`, see [`sensor`]) and `max_component` (∞: pbrt-v4's
+    /// `maxcomponentvalue`).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
         f.built.set(true);
         f.check_children(&["rfilter"])?;
@@ -614,7 +626,11 @@ impl FilmSettings {
             Some(r) => Filter::from_props(r)?,
             None => FilmSettings::default().filter,
         };
-        Ok(FilmSettings { width, height, window, alpha, filter })
+        let kelvin = f.float_checked("white_balance", 0.0, |k| k == 0.0 || (1000.0..=40000.0).contains(&k), "0 (none) or a temperature of 1000–40000 K")?;
+        let matrix = (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin));
+        let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
+        let transform = sensor::SampleTransform { matrix, max_component };
+        Ok(FilmSettings { width, height, window, alpha, filter, transform })
     }
 }
 

@@ -48,6 +48,7 @@ struct SensorSettings {
     filter: Filter,
     window: Option<[u32; 4]>,
     alpha: bool,
+    transform: crate::film::sensor::SampleTransform,
 }
 
 /// Builds the scene from the parsed root object.
@@ -149,7 +150,7 @@ impl Builder {
             )));
         }
         let sensor = sensor.ok_or_else(|| SceneError::at(&root.loc, "the scene has no <sensor> (camera)"))?;
-        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha } = self.sensor(&sensor)?;
+        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, transform } = self.sensor(&sensor)?;
         self.sb.set_camera(camera);
         let mut scene =
             self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
@@ -171,6 +172,7 @@ impl Builder {
             filter,
             window,
             alpha,
+            transform,
             time_limit: self.time_limit,
             warnings,
         })
@@ -228,9 +230,9 @@ impl Builder {
             None => SamplerSettings::default(),
         };
         let camera = Camera::from_props(o, film.width, film.height)?;
-        let FilmSettings { filter, window, alpha, .. } = film;
+        let FilmSettings { filter, window, alpha, transform, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
-        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha })
+        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, transform })
     }
 
     // ---------------------------------------------------------------- shapes

@@ -50,6 +50,8 @@ pub struct SceneFile {
     pub window: Option<[u32; 4]>,
     /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
     pub alpha: bool,
+    /// What each sample becomes before the film (white balance, clamp): the film's.
+    pub transform: crate::film::sensor::SampleTransform,
     /// The longest the render may take (Mitsuba's integrator `timeout`): it stops there or at
     /// `spp`, whichever comes first, with whole passes.
     pub time_limit: Option<std::time::Duration>,

@@ -6,7 +6,7 @@ use crate::math::Rgb;
 
 /// The image of `file` at `spp` samples per pixel and `seed`, with the file's filter.
 pub fn render(file: &SceneFile, spp: u32, seed: u64) -> Vec<Rgb> {
-    let settings = crate::render::RenderSettings { spp, seed, filter: file.filter.clone(), ..Default::default() };
+    let settings = crate::render::RenderSettings { spp, seed, filter: file.filter.clone(), transform: file.transform, ..Default::default() };
     let never = std::sync::atomic::AtomicBool::new(false);
     crate::render::render_integrator(&file.scene, &file.integrator, &settings, &never).unwrap().film.image()
 }

@@ -164,22 +164,34 @@ fn xyz_to_srgb(xyz: Vec3) -> Rgb {
     m * xyz
 }
 
-/// Reduces a spectrum given as (wavelength in nm, value) pairs to linear sRGB. The pairs must be
-/// sorted by strictly increasing wavelength (the XML loader checks this and says where).
-pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Rgb {
+/// CIE XYZ of a spectrum (wavelength nm, value) against the colour-matching functions, each
+/// sample weighted by D65 where `under_d65` (a reflectance seen in sRGB's white), normalised by
+/// `∫ ȳ` of the same weight (so that a flat spectrum of 1 has Y = 1).
+fn integrate_xyz(samples: &[(f32, f32)], under_d65: bool) -> Vec3 {
     let (mut xyz, mut norm) = (Vec3::ZERO, 0.0f64);
     // Trapezoid rule on a 0.5 nm grid (the table and the spectrum are piecewise linear).
     let steps = (2.0 * (LAMBDA_MAX - LAMBDA_MIN)) as usize;
     for i in 0..=steps {
         let lambda = LAMBDA_MIN + 0.5 * i as f32;
         let [x, y, z, d65] = cie_at(lambda);
-        let w =
-            if kind == SpectrumKind::Illuminant { 1.0 } else { d65 } * if i == 0 || i == steps { 0.5 } else { 1.0 };
+        let w = if under_d65 { d65 } else { 1.0 } * if i == 0 || i == steps { 0.5 } else { 1.0 };
         let s = interpolate(samples, lambda);
         xyz += Vec3::new(x, y, z) * (s * w);
         norm += (y * w) as f64;
     }
-    let rgb = xyz_to_srgb(xyz / norm as f32).max(Rgb::ZERO);
+    xyz / norm as f32
+}
+
+/// CIE XYZ of an emission spectrum (wavelength nm, value), normalised so that a flat spectrum
+/// of 1 has Y = 1 (its chromaticity is what colour work needs).
+pub fn spectrum_to_xyz(samples: &[(f32, f32)]) -> Vec3 {
+    integrate_xyz(samples, false)
+}
+
+/// Reduces a spectrum given as (wavelength in nm, value) pairs to linear sRGB. The pairs must be
+/// sorted by strictly increasing wavelength (the XML loader checks this and says where).
+pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Rgb {
+    let rgb = xyz_to_srgb(integrate_xyz(samples, kind != SpectrumKind::Illuminant)).max(Rgb::ZERO);
     match kind {
         SpectrumKind::Reflectance => rgb.min(Rgb::ONE),
         SpectrumKind::Unbounded | SpectrumKind::Illuminant => rgb,

@@ -70,6 +70,8 @@ pub struct RenderSettings {
     pub noise_threshold: Option<f32>,
     /// Samples every pixel takes before adaptive sampling may stop it.
     pub min_spp: u32,
+    /// What each radiance sample becomes before the film (the film's white balance and clamp).
+    pub transform: crate::film::sensor::SampleTransform,
 }
 
 impl Default for RenderSettings {
@@ -90,6 +92,7 @@ impl Default for RenderSettings {
             tile_of: None,
             noise_threshold: None,
             min_spp: 16,
+            transform: Default::default(),
         }
     }
 }
@@ -339,7 +342,13 @@ pub fn render_from(
                     aovs.fill(0.0);
                     let s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
                     let alpha = settings.alpha.then_some(s.alpha);
-                    let sample = FilmSample { l: s.l, alpha, terms: &sample_terms, aovs: &aovs, half: i % 2 == 1 };
+                    let l = if settings.transform.is_identity() {
+                        s.l
+                    } else {
+                        sample_terms.iter_mut().for_each(|t| *t = settings.transform.apply_linear(*t));
+                        settings.transform.apply(s.l)
+                    };
+                    let sample = FilmSample { l, alpha, terms: &sample_terms, aovs: &aovs, half: i % 2 == 1 };
                     tile.put([x, y], u_film, &settings.filter, sample);
                 }
             }

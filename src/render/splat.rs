@@ -117,7 +117,7 @@ pub fn render_light_paths_with(
         for _ in 0..n {
             tracer.trace(scene, &mut rng, &mut |film, value| {
                 if value.is_finite() {
-                    splatter.splat(film, value, &mut out);
+                    splatter.splat(film, settings.transform.apply(value), &mut out);
                 } else {
                     dropped += 1;
                 }
@@ -135,7 +135,7 @@ pub fn render_light_paths_with(
                 let le: Rgb =
                     scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(ray.d)).sum();
                 if le.is_finite() {
-                    splatter.splat(film_pos, le, &mut out);
+                    splatter.splat(film_pos, settings.transform.apply(le), &mut out);
                 } else {
                     dropped += 1;
                 }

@@ -391,6 +391,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         progress: !a.quiet,
         filter: job.file.filter.clone(),
         alpha: job.file.alpha,
+        transform: job.file.transform,
         terms: term_count,
         sample_range: split.as_ref().and_then(|s| s.part_of).map(|(i, n)| PartInfo::split(job.file.spp, i, n)),
         window: split.as_ref().and_then(|s| s.tile).or(job.file.window),

@@ -118,6 +118,7 @@ pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u
         sampler: file.sampler,
         filter: file.filter.clone(),
         window: file.window,
+        transform: file.transform,
         ..Default::default()
     };
     let out = render_integrator(&file.scene, &file.integrator, &settings, &AtomicBool::new(false))

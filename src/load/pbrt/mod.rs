@@ -131,6 +131,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     // Film.
     let (mut width, mut height) = (1280i64, 720i64);
     let mut crop: Option<[i64; 4]> = None;
+    // pbrt-v4's sensor steps: white balance (K) and the sample clamp.
+    let (mut white_balance, mut max_component) = (0.0f32, f32::INFINITY);
     if let Some(f) = p.film.take() {
         let fty = plugin_type(&f);
         if fty != "rgb" && fty != "gbuffer" {
@@ -158,8 +160,9 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         }
         // `iso` (with the camera's shutter interval) scales the lights: translate::imaging_ratio.
         f.float("iso", 100.0)?;
-        if f.float("whitebalance", 0.0)? != 0.0 {
-            return Err(f.error_at("whitebalance", "white balancing is not implemented by neumann yet"));
+        white_balance = f.float("whitebalance", 0.0)?;
+        if white_balance != 0.0 && !(1000.0..=40000.0).contains(&white_balance) {
+            return Err(f.error_at("whitebalance", format!("a white balance of {white_balance} K: expected 1000–40000 K (or 0: none)")));
         }
         if let Some(s) = f.string("sensor")? {
             if s != "cie1931" {
@@ -167,17 +170,14 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             }
         }
         // The output's name and storage cannot change the image: neumann's -o decides.
-        for name in ["filename", "savefp16", "diagonal", "maxcomponentvalue", "writefp16"] {
+        for name in ["filename", "savefp16", "diagonal", "writefp16"] {
             if let Some(q) = f.params.iter().find(|q| q.name == name) {
                 q.used.set(true);
             }
         }
-        if f.has("maxcomponentvalue") {
-            // Read above; clamping would bias, so only the default (infinite) is accepted.
-            let v = f.params.iter().find(|q| q.name == "maxcomponentvalue").map(|q| q.values.clone());
-            if v != Some(vec![params::PVal::Num(f64::INFINITY)]) {
-                return Err(f.error_at("maxcomponentvalue", "clamping sample values is not implemented by neumann"));
-            }
+        max_component = f.float("maxcomponentvalue", f32::INFINITY)?;
+        if max_component <= 0.0 {
+            return Err(f.error_at("maxcomponentvalue", "\"maxcomponentvalue\" must be positive"));
         }
         f.check_unused()?;
     }
@@ -251,6 +251,12 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let mut film = obj("film", "hdrfilm", loc);
     set(&mut film, "width", Value::Integer(width), loc);
     set(&mut film, "height", Value::Integer(height), loc);
+    if white_balance != 0.0 {
+        set(&mut film, "white_balance", Value::Float(white_balance as f64), loc);
+    }
+    if max_component.is_finite() {
+        set(&mut film, "max_component", Value::Float(max_component as f64), loc);
+    }
     if let Some([x0, x1, y0, y1]) = crop {
         set(&mut film, "crop_offset_x", Value::Integer(x0), loc);
         set(&mut film, "crop_offset_y", Value::Integer(y0), loc);

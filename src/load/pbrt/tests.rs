@@ -653,3 +653,25 @@ fn loop_subdivision_surfaces() {
     let e = err(&text.replace("\"integer levels\" 2", "\"integer levels\" 40"));
     assert!(e.contains("levels"), "{e}");
 }
+
+/// pbrt-v4's film `whitebalance` (from the white of that temperature to sRGB's D65) and
+/// `maxcomponentvalue` (samples clamped to it), applied to every sample.
+#[test]
+fn white_balance_and_sample_clamp() {
+    use crate::film::sensor::SampleTransform;
+    let scene = |film: &str| {
+        format!("Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 {film}\nCamera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n")
+    };
+    let f = load(&scene("\"float whitebalance\" 3000")).unwrap_or_else(|e| panic!("{e}"));
+    let expected = SampleTransform::white_balance(3000.0) * Rgb::ONE;
+    assert!(expected.x < 0.9 * expected.z, "a warm white balanced to D65 turns a neutral sky blue: {expected}");
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        assert!((px - expected).abs().max_element() < 1e-4, "{px} vs {expected}");
+    }
+    let f = load(&scene("\"float maxcomponentvalue\" 0.25")).unwrap();
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        assert!((px - Rgb::splat(0.25)).abs().max_element() < 1e-5, "{px}");
+    }
+    let e = err(&scene("\"float whitebalance\" 50"));
+    assert!(e.contains("1000–40000 K"), "{e}");
+}
