@@ -1,4 +1,6 @@
-//! Cameras: Mitsuba's `perspective` (pinhole) and `thinlens`.
+//! Cameras: Mitsuba's `perspective` (pinhole), `thinlens` and `orthographic`; neumann's
+//! `spherical` (pbrt-v4's: every direction around a point, in an equirectangular or an
+//! equal-area image).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
@@ -36,6 +38,23 @@ pub enum Projection {
     /// Parallel rays along +z from the near-clip plane; the film spans x ∈ [-1, 1] and
     /// y ∈ [-1/aspect, 1/aspect] of camera space (Mitsuba's `orthographic`; `to_world` scales it).
     Orthographic,
+    /// Rays in every direction from the centre (pbrt-v4's `spherical`), laid out on the film
+    /// by a [`SphericalMapping`] of its (u, v) = (x / width, y / height).
+    Spherical(SphericalMapping),
+}
+
+/// How a spherical camera lays the sphere of directions out on the film. With (u, v) the film
+/// position over its size (v down the image), θ, φ and the equal-area square are pbrt-v4's,
+/// about the camera's +y (up) axis: the direction is `(−sin θ cos φ, cos θ, sin θ sin φ)` in
+/// camera space (+x left, +y up, +z ahead): the image's centre (u = ½, φ = π) looks along
+/// camera +x, to the left of the view direction, and u = ¼ straight ahead, as in pbrt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SphericalMapping {
+    /// θ = π v from up, φ = 2π u: latitude–longitude.
+    Equirectangular,
+    /// pbrt-v4's equal-area octahedral square (Clarberg), its z axis turned to camera +y: every
+    /// pixel covers the same solid angle.
+    EqualArea,
 }
 
 /// A perspective camera, optionally with a thin lens, or an orthographic one.
@@ -158,6 +177,13 @@ impl Camera {
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
         // +x is left and +y is up in camera space; film x grows right and y grows down.
         let xy = film * self.plane_scale + self.tan_half;
+        if let Projection::Spherical(mapping) = self.projection {
+            let uv = Vec2::new(film.x / self.width as f32, film.y / self.height as f32);
+            let d = spherical_direction(mapping, uv);
+            let d = self.to_world.apply_vector(d).normalize();
+            let o = self.to_world.apply_point(Vec3::ZERO);
+            return Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip);
+        }
         if self.projection == Projection::Orthographic {
             // Mitsuba: the origin on the near plane, through to_world (which may scale it);
             // the direction is to_world's +z, normalized; the ray spans far − near.
@@ -213,7 +239,7 @@ impl Camera {
     /// on the plane at unit distance; the camera ray's solid angle is `dω = cos³θ dA_film`, and
     /// from the scene point's side `dω = |cos θ_y| dA_y / r²`.
     pub fn sample_wi(&self, p: Vec3, u_lens: Vec2) -> Option<CameraSample> {
-        if self.projection == Projection::Orthographic {
+        if self.projection != Projection::Perspective {
             // A parallel projection has no point to connect to (Mitsuba's orthographic sensor
             // cannot be sampled by direction either); the light tracer refuses it up front.
             return None;
@@ -254,8 +280,26 @@ impl Camera {
     }
 }
 
+/// The camera-space direction of film position `uv` (over the film's size) of a spherical
+/// camera (see [`SphericalMapping`]).
+pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
+    // pbrt-v4's direction about its z axis, then its y and z swapped (z up → y up), then its
+    // camera's +x (right) turned to neumann's (+x left).
+    let d = match mapping {
+        SphericalMapping::Equirectangular => {
+            let (theta, phi) = (std::f32::consts::PI * uv.y, 2.0 * std::f32::consts::PI * uv.x);
+            Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+        }
+        SphericalMapping::EqualArea => {
+            let wrap = |x: f32| x.clamp(0.0, 1.0);
+            crate::sampling::equal_area::equal_area_square_to_sphere(Vec2::new(wrap(uv.x), wrap(uv.y)))
+        }
+    };
+    Vec3::new(-d.x, d.z, d.y)
+}
+
 /// Camera plugins by their (Mitsuba) names.
-pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic"];
+pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic", "spherical"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -277,6 +321,17 @@ impl Camera {
         }
         let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
         let focus = o.float_checked("focus_distance", far, |d| d > 0.0 && d.is_finite(), "positive")?;
+        if o.ty == "spherical" {
+            let mapping = match o.choice("mapping", &["equirectangular", "equal_area"])?.as_str() {
+                "equirectangular" => SphericalMapping::Equirectangular,
+                _ => SphericalMapping::EqualArea,
+            };
+            let camera = Camera::perspective(to_world, 90.0, FovAxis::X, width, height)
+                .map_err(|e| o.error(e.to_string()))?
+                .with_clip(near, far)
+                .map_err(|e| o.error_at("near_clip", e.to_string()))?;
+            return Ok(Camera { projection: Projection::Spherical(mapping), ..camera });
+        }
         if o.ty == "orthographic" {
             let camera = Camera::orthographic(to_world, width, height).map_err(|e| o.error(e.to_string()))?;
             return camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()));
@@ -300,6 +355,39 @@ mod tests {
     fn cam(axis: FovAxis, w: u32, h: u32) -> Camera {
         let t = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
         Camera::perspective(t, 90.0, axis, w, h).unwrap()
+    }
+
+    /// The spherical camera's layouts: the equirectangular one at known points, the equal-area
+    /// one covering the sphere evenly (pixel centres uniform in cos θ about every axis).
+    #[test]
+    fn spherical_camera_directions() {
+        let t = Transform::translate(Vec3::new(1.0, 2.0, 3.0));
+        let base = Camera::perspective(t, 90.0, FovAxis::X, 64, 32).unwrap();
+        let eq = Camera { projection: Projection::Spherical(SphericalMapping::Equirectangular), ..base.clone() };
+        let dir = |c: &Camera, x: f32, y: f32| c.generate_ray(Vec2::new(x, y), Vec2::ZERO);
+        let r = dir(&eq, 16.0, 16.0);
+        assert!((r.d - Vec3::Z).length() < 1e-5, "u = ¼ looks ahead: {}", r.d);
+        assert!((r.o - Vec3::new(1.0, 2.0, 3.0 + 0.01)).length() < 1e-5, "from the near clip: {}", r.o);
+        assert!((dir(&eq, 32.0, 16.0).d - Vec3::X).length() < 1e-5, "u = ½: camera +x (left)");
+        assert!((dir(&eq, 10.0, 0.0).d - Vec3::Y).length() < 1e-5, "top row: up");
+        assert!((dir(&eq, 10.0, 32.0).d + Vec3::Y).length() < 1e-5, "bottom row: down");
+        let ea = Camera { projection: Projection::Spherical(SphericalMapping::EqualArea), ..base.with_resolution(64, 64).unwrap() };
+        let mut bins = [[0u32; 8]; 3];
+        // Roberts' R2 points over the film (a grid would put whole rows on the octahedron's
+        // edges, which map to the great circles between the bins).
+        let n = 256;
+        let (a1, a2) = (0.754_877_7f64, 0.569_840_3f64);
+        for i in 0..n * n {
+            let (u, v) = (((i as f64 + 0.5) * a1).fract(), ((i as f64 + 0.5) * a2).fract());
+            let d = dir(&ea, u as f32 * 64.0, v as f32 * 64.0).d;
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            for (axis, b) in bins.iter_mut().enumerate() {
+                b[(((d[axis] + 1.0) * 4.0) as usize).min(7)] += 1;
+            }
+        }
+        for b in bins {
+            assert!(b.iter().all(|&c| (c as f32 / (n * n / 8) as f32 - 1.0).abs() < 0.02), "{b:?}");
+        }
     }
 
     #[test]

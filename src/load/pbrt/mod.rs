@@ -214,8 +214,22 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             }
             cam.float("focaldistance", 1e6)?;
         }
-        "realistic" | "spherical" => {
-            return Err(cam.error(format!("the \"{ty}\" camera is not implemented by neumann yet")))
+        "spherical" => {
+            s.ty = "spherical".into();
+            let mapping = match cam.string("mapping")?.as_deref() {
+                None | Some("equalarea") => "equal_area",
+                Some("equirectangular") => "equirectangular",
+                Some(other) => {
+                    return Err(cam.error_at(
+                        "mapping",
+                        format!("unknown spherical mapping \"{other}\" (equalarea, equirectangular)"),
+                    ))
+                }
+            };
+            set(&mut s, "mapping", Value::String(mapping.into()), &loc_of(&cam, "mapping"));
+        }
+        "realistic" => {
+            return Err(cam.error("the \"realistic\" camera (lens systems) is not implemented by neumann yet"))
         }
         other => return Err(cam.error(format!("unknown camera \"{other}\""))),
     }

@@ -675,3 +675,24 @@ fn white_balance_and_sample_clamp() {
     let e = err(&scene("\"float whitebalance\" 50"));
     assert!(e.contains("1000–40000 K"), "{e}");
 }
+
+/// pbrt-v4's spherical camera (equal-area by default, or equirectangular) sees a uniform sky as
+/// a uniform image; a pbrt direction (camera +x, to the right in pbrt's camera space) lands where
+/// pbrt puts it.
+#[test]
+fn spherical_camera() {
+    let text = "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nCamera \"spherical\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n";
+    let f = load(text).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(f.scene.camera().projection(), crate::camera::Projection::Spherical(crate::camera::SphericalMapping::EqualArea));
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        assert!((px - Rgb::splat(0.5)).abs().max_element() < 1e-5, "{px}");
+    }
+    let f = load(&text.replace("\"spherical\"", "\"spherical\" \"string mapping\" \"equirectangular\"")).unwrap();
+    let cam = f.scene.camera();
+    // pbrt: u = 0 (φ = 0) at mid-height is its camera's +x; its default camera looks down +z
+    // from the origin with +x to the right, the same axes as world here.
+    let r = cam.generate_ray(crate::math::Vec2::new(0.0, 8.0), crate::math::Vec2::ZERO);
+    assert!((r.d - crate::math::Vec3::X).length() < 1e-5, "{}", r.d);
+    let e = err(&text.replace("\"spherical\"", "\"spherical\" \"string mapping\" \"cube\""));
+    assert!(e.contains("equalarea, equirectangular"), "{e}");
+}
