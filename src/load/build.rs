@@ -578,7 +578,11 @@ impl ImageSource for Builder {
 
 impl VolumeSource for Builder {
     fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<Arc<GridVolume>> {
-        let path = self.resolver.resolve(&o.string(name)?);
+        let file = o.string(name)?;
+        if let Some(v) = self.memory.volumes.get(&file) {
+            return Ok(v.clone());
+        }
+        let path = self.resolver.resolve(&file);
         if let Some(v) = self.volumes.get(&path) {
             return Ok(v.clone());
         }

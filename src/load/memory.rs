@@ -53,6 +53,8 @@ pub struct MemoryFiles {
     pub meshes: HashMap<String, TriangleMesh>,
     /// Images (a bitmap's `filename`: the name, or `name#r`, `#g`, `#b`, `#a` for one channel).
     pub images: HashMap<String, EncodedImage>,
+    /// Grid volumes (a `gridvolume`'s `filename`: pbrt-v4's grid media, written inline).
+    pub volumes: HashMap<String, std::sync::Arc<crate::image::GridVolume>>,
 }
 
 impl MemoryFiles {

@@ -36,14 +36,19 @@ pub enum GridWrap {
     Repeat,
     /// The grid mirrored at its faces.
     Mirror,
+    /// Zero outside the grid's texels (pbrt-v4's grids: the half texel along each face fades
+    /// toward zero under trilinear filtering).
+    Zero,
 }
 
 impl GridWrap {
-    /// Index `i` mapped into `0..n`.
+    /// Index `i` mapped into `0..n` (`None`: outside, reading zero).
     #[inline]
-    fn apply(self, i: i64, n: usize) -> usize {
+    fn apply(self, i: i64, n: usize) -> Option<usize> {
         let n = n as i64;
-        (match self {
+        Some(match self {
+            GridWrap::Zero if !(0..n).contains(&i) => return None,
+            GridWrap::Zero => i,
             GridWrap::Clamp => i.clamp(0, n - 1),
             GridWrap::Repeat => i.rem_euclid(n),
             GridWrap::Mirror => {
@@ -54,7 +59,7 @@ impl GridWrap {
                     m
                 }
             }
-        }) as usize
+        } as usize)
     }
 }
 
@@ -67,9 +72,11 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The texel at integer coordinates `i` (already inside the grid).
+    /// The texel at integer coordinates `i` (zero where outside the grid).
     #[inline]
-    fn texel(&self, i: [usize; 3]) -> Rgb {
+    fn texel(&self, i: [Option<usize>; 3]) -> Rgb {
+        let [Some(x), Some(y), Some(z)] = i else { return Rgb::ZERO };
+        let i = [x, y, z];
         let g = &*self.data;
         let k = ((i[2] * g.res[1] + i[1]) * g.res[0] + i[0]) * g.channels;
         if g.channels == 1 {
@@ -230,7 +237,8 @@ impl Volume {
     /// Mitsuba's volume plugins:
     /// - `constvolume`: `value` (1; a float, rgb or spectrum), `to_world`;
     /// - `gridvolume`: `filename` (a `.vol` file of 1 or 3 channels), `filter_type`
-    ///   (`trilinear`, or `nearest`), `wrap_mode` (`clamp`, `repeat` or `mirror`), `to_world`,
+    ///   (`trilinear`, or `nearest`), `wrap_mode` (`clamp`, `repeat` or `mirror`; neumann's
+    ///   `zero`: nothing outside the texels, as pbrt-v4's grids), `to_world`,
     ///   `use_grid_bbox` (false: the file's bounding box is ignored; true: it places the grid
     ///   before `to_world`), `max_value` (an upper bound of the values; neumann takes the larger
     ///   of it and the data's maximum, so that tracking stays unbiased), `raw` and `accel` (no
@@ -245,9 +253,10 @@ impl Volume {
                     "nearest" => GridFilter::Nearest,
                     _ => GridFilter::Trilinear,
                 };
-                let wrap = match o.choice("wrap_mode", &["clamp", "repeat", "mirror"])?.as_str() {
+                let wrap = match o.choice("wrap_mode", &["clamp", "repeat", "mirror", "zero"])?.as_str() {
                     "repeat" => GridWrap::Repeat,
                     "mirror" => GridWrap::Mirror,
+                    "zero" => GridWrap::Zero,
                     _ => GridWrap::Clamp,
                 };
                 o.bool("raw", false)?;

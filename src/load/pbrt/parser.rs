@@ -501,7 +501,7 @@ impl Parser {
             "MakeNamedMedium" => {
                 let medium = c.string("the medium's name")?;
                 let ps = c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?;
-                let obj = translate::medium(&ps)?;
+                let obj = translate::medium(self, &ps)?;
                 ps.check_unused()?;
                 self.media.insert(medium, Rc::new(obj));
             }

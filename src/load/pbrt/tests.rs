@@ -256,8 +256,8 @@ AttributeEnd
     let shape = &f.scene.shapes()[0];
     assert_eq!((shape.interior, shape.exterior), (Some(0), None));
     assert_eq!(f.scene.camera_medium(), Some(0));
-    let e = err("MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\"\n");
-    assert!(e.contains("\"uniformgrid\" medium is not implemented"), "{e}");
+    let e = err("MakeNamedMedium \"smoke\" \"string type\" \"nanovdb\"\n");
+    assert!(e.contains("\"nanovdb\" medium is not implemented"), "{e}");
     let e = err("MediumInterface \"nope\"\n");
     assert!(e.contains("no medium named \"nope\""), "{e}");
 }
@@ -695,4 +695,50 @@ fn spherical_camera() {
     assert!((r.d - crate::math::Vec3::X).length() < 1e-5, "{}", r.d);
     let e = err(&text.replace("\"spherical\"", "\"spherical\" \"string mapping\" \"cube\""));
     assert!(e.contains("equalarea, equirectangular"), "{e}");
+}
+
+/// pbrt-v4's grid media: values at texel centres of the box p0–p1 in the medium's space, read
+/// trilinearly and fading to zero in the outer half texel (pbrt's `SampledGrid`); a grid of
+/// constant density inside a sphere renders as the homogeneous medium of the same
+/// coefficients.
+#[test]
+fn grid_media() {
+    use crate::math::Vec3;
+    use crate::medium::Coefficients;
+    let scene = |medium: &str| {
+        format!(
+            "{medium}\nFilm \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 48\nCamera \"perspective\" \"float fov\" 30\n\
+             WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n\
+             AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nTranslate 0 0 3\nShape \"sphere\"\nAttributeEnd\n"
+        )
+    };
+    let coefficients = "\"rgb sigma_a\" [0.2 0.4 0.6] \"rgb sigma_s\" [1 0.8 0.5] \"float scale\" 1.5 \"float g\" 0.3";
+    let grid = format!(
+        "AttributeBegin\nTranslate 0 0 3\nMakeNamedMedium \"m\" \"string type\" \"uniformgrid\" {coefficients} \
+         \"integer nx\" 4 \"integer ny\" 4 \"integer nz\" 4 \"point3 p0\" [-2 -2 -2] \"point3 p1\" [2 2 2] \"float density\" [{}]\nAttributeEnd",
+        vec!["1"; 64].join(" ")
+    );
+    let homogeneous = format!("MakeNamedMedium \"m\" \"string type\" \"homogeneous\" {coefficients}");
+    let (g, h) = (load(&scene(&grid)).unwrap_or_else(|e| panic!("{e}")), load(&scene(&homogeneous)).unwrap());
+    assert_renders_like(&g, &h);
+    // Lookups: a 2 × 1 × 1 rgbgrid over [0, 2] × [0, 1]²: texel centres at x = ½ and 1½.
+    let text = "MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" \"integer nx\" 2 \"point3 p1\" [2 1 1] \
+        \"rgb sigma_a\" [1 1 1 0 0 0] \"rgb sigma_s\" [1 2 3 4 4 4] \"float scale\" 2\n\
+        Camera \"perspective\"\nWorldBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\n";
+    let f = load(text).unwrap_or_else(|e| panic!("{e}"));
+    let Coefficients::Heterogeneous(m) = &f.scene.media()[0].coefficients else { panic!() };
+    let st = |x: f32| m.sigma_t.eval(Vec3::new(x, 0.5, 0.5)) * m.scale;
+    assert!((st(0.5) - 2.0 * Rgb::new(2.0, 3.0, 4.0)).abs().max_element() < 1e-5, "{}", st(0.5));
+    assert!((st(1.0) - 2.0 * Rgb::new(3.0, 3.5, 4.0)).abs().max_element() < 1e-5, "{}", st(1.0));
+    assert!((st(1.75) - 2.0 * Rgb::splat(4.0) * 0.75).abs().max_element() < 1e-5, "fades out: {}", st(1.75));
+    let albedo = m.albedo.eval(Vec3::new(0.5, 0.5, 0.5));
+    assert!((albedo - Rgb::new(0.5, 2.0 / 3.0, 0.75)).abs().max_element() < 1e-5, "{albedo}");
+    for (from, to, what) in [
+        ("\"integer nx\" 4", "\"integer nx\" 5", "has 64 values for a 5×4×4 grid"),
+        ("\"float scale\" 1.5", "\"rgb Le\" [1 1 1]", "emissive"),
+        ("\"point3 p1\" [2 2 2]", "\"point3 p1\" [-2 2 2]", "is empty"),
+    ] {
+        let e = err(&scene(&grid.replace(from, to)));
+        assert!(e.contains(what), "{to}: {e}");
+    }
 }

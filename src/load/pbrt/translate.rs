@@ -823,11 +823,138 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
 /// `MakeNamedMedium`: `homogeneous` (`sigma_a`, `sigma_s` in mm⁻¹… per scene unit, pbrt's
 /// defaults, `scale`, `g` → Henyey–Greenstein) as Mitsuba's `homogeneous` (σₜ = σₐ + σₛ, albedo
 /// σₛ/σₜ).
-pub fn medium(ps: &ParamSet) -> Result<Obj> {
+pub fn medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
-    if ty != "homogeneous" {
-        return Err(ps.error_at("type", format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous)")));
+    match ty.as_str() {
+        "homogeneous" => homogeneous_medium(ps),
+        "uniformgrid" | "rgbgrid" => grid_medium(p, ps, ty == "rgbgrid"),
+        "nanovdb" | "cloud" => Err(ps.error_at(
+            "type",
+            format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous, uniformgrid, rgbgrid)"),
+        )),
+        other => Err(ps.error_at(
+            "type",
+            format!("unknown medium \"{other}\" (homogeneous, uniformgrid, rgbgrid, nanovdb, cloud)"),
+        )),
     }
+}
+
+/// pbrt-v4's phase function parameter `g` on the medium `o` (Henyey–Greenstein; none at 0).
+fn phase_g(ps: &ParamSet, o: &mut Obj) -> Result<()> {
+    let g = ps.float("g", 0.0)?;
+    if !(g > -1.0 && g < 1.0) {
+        return Err(ps.error_at("g", format!("g must lie in (-1, 1), got {g}")));
+    }
+    if g != 0.0 {
+        let mut phase = obj("phase", "hg", &ploc(ps, "g"));
+        set(&mut phase, "g", Value::Float(g as f64), &ploc(ps, "g"));
+        o.children.push(Rc::new(phase));
+    }
+    Ok(())
+}
+
+/// pbrt-v4's `uniformgrid` (a `density` grid times `sigma_a`, `sigma_s` (1 each) and `scale`)
+/// and `rgbgrid` (`sigma_a` and `sigma_s` grids of RGB values, 1 where absent, times `scale`)
+/// over the box `p0`–`p1` of the medium's space (the current transform), `nx` × `ny` × `nz`
+/// values (x fastest) read trilinearly at texel centres and zero beyond them, as pbrt's
+/// `SampledGrid` does → Mitsuba's `heterogeneous` with a σₜ grid and a constant or gridded
+/// albedo (neumann's grid `wrap_mode` `zero`).
+fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
+    let dim = |name: &str| -> Result<usize> {
+        let v = ps.int(name, 1)?;
+        if !(1..=1 << 14).contains(&v) {
+            return Err(ps.error_at(name, format!("\"{name}\" must be 1–16384, got {v}")));
+        }
+        Ok(v as usize)
+    };
+    let res = [dim("nx")?, dim("ny")?, dim("nz")?];
+    let n = res[0] * res[1] * res[2];
+    if n > 1 << 27 {
+        return Err(ps.error(format!("a grid of {}×{}×{} values is too large", res[0], res[1], res[2])));
+    }
+    for emission in ["Le", "temperature"] {
+        if ps.has(emission) {
+            return Err(ps.error_at(emission, "emissive grid media are not implemented by neumann"));
+        }
+    }
+    for unused_without_emission in ["Lescale", "temperaturecutoff", "temperaturescale"] {
+        ps.float(unused_without_emission, 1.0)?;
+    }
+    let (p0, p1) = (ps.point("p0", Vec3::ZERO)?, ps.point("p1", Vec3::ONE)?);
+    if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
+        return Err(ps.error_at("p1", format!("the grid's box p0 {p0} – p1 {p1} is empty")));
+    }
+    let scale = ps.float("scale", 1.0)?;
+    if scale < 0.0 {
+        return Err(ps.error_at("scale", "scale must be ≥ 0"));
+    }
+    let values = |name: &str, per: usize, ty: &[&str]| -> Result<Option<Vec<f32>>> {
+        match ps.floats(name, ty)? {
+            None => Ok(None),
+            Some(v) if v.len() == n * per => {
+                if v.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                    return Err(ps.error_at(name, format!("\"{name}\" values must be finite and ≥ 0")));
+                }
+                Ok(Some(v.into_iter().map(|x| x as f32).collect()))
+            }
+            Some(v) => Err(ps.error_at(
+                name,
+                format!("\"{name}\" has {} values for a {}×{}×{} grid ({} expected)", v.len(), res[0], res[1], res[2], n * per),
+            )),
+        }
+    };
+    let (sigma_t, albedo): (Vec<f32>, std::result::Result<Rgb, Vec<f32>>) = if rgb_grid {
+        let sa = values("sigma_a", 3, &["rgb"])?.unwrap_or_else(|| vec![1.0; 3 * n]);
+        let ss = values("sigma_s", 3, &["rgb"])?.unwrap_or_else(|| vec![1.0; 3 * n]);
+        let st: Vec<f32> = sa.iter().zip(&ss).map(|(a, s)| a + s).collect();
+        let al: Vec<f32> = st.iter().zip(&ss).map(|(t, s)| if *t > 0.0 { s / t } else { 0.0 }).collect();
+        (st, Err(al))
+    } else {
+        let density = values("density", 1, &["float"])?.ok_or_else(|| ps.error("a uniformgrid needs its \"float density\""))?;
+        let coefficient = |name: &str| -> Result<Rgb> {
+            match ps.spectrum(name)? {
+                None => Ok(Rgb::ONE),
+                Some(SpectrumParam::Rgb(c)) if c.min_element() >= 0.0 => Ok(c),
+                Some(SpectrumParam::Constant(v)) if v >= 0.0 => Ok(Rgb::splat(v)),
+                Some(_) => Err(ps.error_at(name, "give a non-negative rgb or constant")),
+            }
+        };
+        let (sa, ss) = (coefficient("sigma_a")?, coefficient("sigma_s")?);
+        let st = sa + ss;
+        let st_grid = density.iter().flat_map(|d| (st * *d).to_array()).collect();
+        let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
+        (st_grid, Ok(albedo))
+    };
+    let box_to_medium = Mat4::from_translation(p0) * Mat4::from_scale(p1 - p0);
+    let to_world = transform(p.gs.ctm * box_to_medium, ps)?;
+    let volume = |data: Vec<f32>, p: &mut Parser| -> Obj {
+        let name = format!("#pbrt-grid-{}", p.mesh_count);
+        p.mesh_count += 1;
+        let grid = crate::image::GridVolume { res, channels: 3, bbox: [[0.0; 3], [1.0; 3]], data };
+        p.memory.volumes.insert(name.clone(), std::sync::Arc::new(grid));
+        let mut v = obj("volume", "gridvolume", &ps.loc);
+        set(&mut v, "filename", Value::String(name), &ps.loc);
+        set(&mut v, "wrap_mode", Value::String("zero".into()), &ps.loc);
+        set(&mut v, "to_world", Value::Transform(to_world), &ps.loc);
+        v
+    };
+    let mut o = obj("medium", "heterogeneous", &ps.loc);
+    let st = volume(sigma_t, p);
+    set(&mut o, "sigma_t", Value::Object(Rc::new(st)), &ps.loc);
+    match albedo {
+        Ok(c) => set(&mut o, "albedo", Value::Rgb(c), &ploc(ps, "sigma_s")),
+        Err(grid) => {
+            let a = volume(grid, p);
+            set(&mut o, "albedo", Value::Object(Rc::new(a)), &ploc(ps, "sigma_s"));
+        }
+    }
+    set(&mut o, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
+    phase_g(ps, &mut o)?;
+    Ok(o)
+}
+
+/// pbrt-v4's `homogeneous` medium.
+fn homogeneous_medium(ps: &ParamSet) -> Result<Obj> {
     if ps.has("preset") {
         return Err(ps.error_at("preset", "named scattering presets are not implemented by neumann yet"));
     }
@@ -848,10 +975,6 @@ pub fn medium(ps: &ParamSet) -> Result<Obj> {
         }
     }
     ps.float("Lescale", 1.0)?;
-    let g = ps.float("g", 0.0)?;
-    if !(g > -1.0 && g < 1.0) {
-        return Err(ps.error_at("g", format!("g must lie in (-1, 1), got {g}")));
-    }
     let sigma_t = sigma_a + sigma_s;
     if sigma_a.min_element() < 0.0 || sigma_s.min_element() < 0.0 || !sigma_t.is_finite() || scale < 0.0 {
         return Err(ps.error("sigma_a, sigma_s and scale must be finite and ≥ 0"));
@@ -864,11 +987,7 @@ pub fn medium(ps: &ParamSet) -> Result<Obj> {
     set(&mut o, "sigma_t", Value::Rgb(unit), &ploc(ps, "sigma_a"));
     set(&mut o, "scale", Value::Float((peak * scale) as f64), &ploc(ps, "scale"));
     set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
-    if g != 0.0 {
-        let mut phase = obj("phase", "hg", &ploc(ps, "g"));
-        set(&mut phase, "g", Value::Float(g as f64), &ploc(ps, "g"));
-        o.children.push(Rc::new(phase));
-    }
+    phase_g(ps, &mut o)?;
     Ok(o)
 }
 
