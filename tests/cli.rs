@@ -574,12 +574,14 @@ fn gltf_scenes_render_and_choose_their_camera() {
 /// pbrt-v4 files render from the command line.
 #[test]
 fn pbrt_scenes_render() {
-    let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/pbrt_demo.pbrt");
     let out = temp("pbrt.png");
-    let r = neumann().arg("render").arg(&scene).args(["--res", "24x16", "--spp", "2", "--quiet", "-o"]).arg(&out).output().unwrap();
-    let stdout = String::from_utf8_lossy(&r.stdout);
-    assert!(r.status.success(), "{stdout} {}", String::from_utf8_lossy(&r.stderr));
-    assert!(stdout.contains("at 24x16") && stdout.contains("2 spp"), "{stdout}");
+    for name in ["pbrt_demo", "pbrt_procedural"] {
+        let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.pbrt"));
+        let r = neumann().arg("render").arg(&scene).args(["--res", "24x16", "--spp", "2", "--quiet", "-o"]).arg(&out).output().unwrap();
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        assert!(r.status.success(), "{name}: {stdout} {}", String::from_utf8_lossy(&r.stderr));
+        assert!(stdout.contains("at 24x16") && stdout.contains("2 spp"), "{stdout}");
+    }
     let bad = temp("bad.pbrt");
     std::fs::write(&bad, "WorldBegin\nShape \"sphere\" \"float radius\" [ 1 ] \"float raduis\" [ 2 ]\n").unwrap();
     let r = neumann().arg("render").arg(&bad).args(["--quiet", "-o"]).arg(&out).output().unwrap();
