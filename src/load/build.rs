@@ -303,10 +303,21 @@ impl Builder {
                                 format!("needs a positive power and shape area, got {p} and {}", geometry.area()),
                             ))
                         }
+                        // An image (pbrt-v4's image area lights): normalised by the luminance of
+                        // its texel average, as pbrt's k_e.
+                        t if p > 0.0 && p.is_finite() && k > 0.0 && t.mean_is_exact() => {
+                            let lum = crate::math::luminance(t.mean());
+                            if !(lum > 0.0) {
+                                return Err(e.error_at("power", "the radiance image is black: no power can be given to it"));
+                            }
+                            let factor = Texture::Constant(Rgb::splat(p / (k * lum)));
+                            *t = Texture::Scale(Box::new([t.clone(), factor]));
+                        }
                         _ => {
-                            return Err(
-                                e.error_at("power", "a power with a textured radiance is not implemented by neumann")
-                            )
+                            return Err(e.error_at(
+                                "power",
+                                "a power needs a positive number, a shape with area, and a constant or image radiance",
+                            ))
                         }
                     }
                 }

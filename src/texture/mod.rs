@@ -396,6 +396,19 @@ impl Texture {
         }
     }
 
+    /// Whether [`Texture::mean`] is the exact average over the texture's domain (a constant, an
+    /// image, or one of them scaled by a constant), not an estimate.
+    pub fn mean_is_exact(&self) -> bool {
+        match self {
+            Texture::Constant(_) | Texture::Bitmap { .. } => true,
+            Texture::Scale(t) => match &**t {
+                [Texture::Constant(_), o] | [o, Texture::Constant(_)] => o.mean_is_exact(),
+                _ => false,
+            },
+            _ => false,
+        }
+    }
+
     /// Whether every value lies in [0, 1] (valid as a reflectance).
     pub fn is_reflectance(&self) -> bool {
         let ok = |c: Rgb| c.min_element() >= 0.0 && c.max_element() <= 1.0;

@@ -629,6 +629,13 @@ fn image_area_lights_and_sampled_emission_spectra() {
     assert!(flat.x > flat.y && flat.y > flat.z && flat.x / flat.z < 1.4, "{flat}");
     let e = err(&text.replace("\"float scale\" 3", "\"rgb L\" [1 1 1]"));
     assert!(e.contains("either \"L\" or \"filename\""), "{e}");
+    // `power` with an image: pbrt's k_e, the luminance of the texel average × π × area.
+    let f = load(&text.replace("\"float scale\" 3", "\"float power\" 10")).unwrap_or_else(|e| panic!("{e}"));
+    let Light::Area { radiance, .. } = &f.scene.lights()[0] else { panic!() };
+    let phi = std::f32::consts::PI * crate::math::luminance(radiance.mean());
+    assert!((phi - 10.0).abs() < 1e-4, "{phi}");
+    let ratio = radiance.eval(Vec2::new(0.25, 0.25)).z / radiance.eval(Vec2::new(0.75, 0.25)).z;
+    assert!((ratio - 1.0).abs() < 1e-5, "the image keeps its contrast: blue and white texels {ratio}");
 }
 
 /// `loopsubdiv`: the control mesh subdivided `levels` times onto its limit surface, with the
