@@ -231,6 +231,7 @@ impl Radiosity {
                 Light::Spot { .. } => "spot",
                 Light::Directional { .. } => "directional",
                 Light::Projector(_) => "projector",
+                Light::Goniometric(_) => "goniometric",
                 Light::Constant { .. } => "constant environment",
                 Light::Area { .. } => "two-sided area",
                 _ => "environment map",

@@ -75,6 +75,14 @@ impl LightBounds {
                 // Nothing beyond the image's frustum (pbrt-v4's projection light bound).
                 Some(LightBounds { bounds: Bounds3::from_point(p.position()), phi, w, cos_theta_o, cos_theta_e: 1.0 })
             }
+            // Bounded as an isotropic point, as pbrt-v4 bounds it.
+            Light::Goniometric(g) => Some(LightBounds {
+                bounds: Bounds3::from_point(g.position()),
+                phi,
+                w: Vec3::Z,
+                cos_theta_o: -1.0,
+                cos_theta_e: 0.0,
+            }),
             Light::Constant { .. } | Light::EnvMap { .. } | Light::Directional { .. } => None,
         }
     }

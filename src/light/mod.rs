@@ -7,12 +7,14 @@
 
 mod bvh;
 mod envmap;
+mod goniometric;
 mod projector;
 mod registry;
 mod sampler;
 
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
+pub use goniometric::{Goniometric, GoniometricError};
 pub use projector::Projector;
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
@@ -90,6 +92,8 @@ pub enum Light {
     },
     /// Mitsuba's `projector` emitter (see [`Projector`]).
     Projector(Box<Projector>),
+    /// pbrt-v4's goniometric light (see [`Goniometric`]).
+    Goniometric(Box<Goniometric>),
     /// Mitsuba's `point` emitter: an isotropic point source. Parameters: `position`,
     /// `intensity` (W sr⁻¹ per channel).
     Point {
@@ -211,12 +215,20 @@ impl Light {
                 2.0 * PI * (1.0 - 0.5 * (cutoff.cos() + beam.cos())) * luminance(*intensity) * tex
             }
             Light::Projector(p) => p.power(),
+            Light::Goniometric(g) => g.power(),
         }
     }
 
     /// Whether the light is a delta distribution (cannot be hit by rays).
     pub fn is_delta(&self) -> bool {
-        matches!(self, Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } | Light::Projector(_))
+        matches!(
+            self,
+            Light::Point { .. }
+                | Light::Spot { .. }
+                | Light::Directional { .. }
+                | Light::Projector(_)
+                | Light::Goniometric(_)
+        )
     }
 
     /// A spot light's emission toward the unit direction `w_local` of its frame: the falloff,
@@ -349,6 +361,7 @@ impl Light {
                 })
             }
             Light::Projector(p) => p.sample_li(p_ref),
+            Light::Goniometric(g) => g.sample_li(p_ref),
             Light::Point { position, intensity } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
@@ -375,7 +388,11 @@ impl Light {
     pub fn pdf_li(&self, shapes: &[Geometry], p_ref: Vec3, p: Vec3, ng: Vec3) -> f32 {
         match self {
             Light::Area { shape, .. } => shapes[*shape as usize].pdf_solid_angle(p_ref, p, ng),
-            Light::Point { .. } | Light::Spot { .. } | Light::Directional { .. } | Light::Projector(_) => 0.0,
+            Light::Point { .. }
+            | Light::Spot { .. }
+            | Light::Directional { .. }
+            | Light::Projector(_)
+            | Light::Goniometric(_) => 0.0,
             Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction((p - p_ref).normalize_or_zero()),
         }
     }
@@ -444,6 +461,7 @@ impl Light {
                 EmissionSample { p: *position, p_error: Vec3::ZERO, n: Vec3::ZERO, d: frame.to_world(d.value), weight }
             }
             Light::Projector(p) => p.sample_le(u_dir)?,
+            Light::Goniometric(g) => g.sample_le(u_dir)?,
             Light::Directional { direction, irradiance, center, radius } => {
                 let (p, area) = parallel(*direction, *center, *radius);
                 EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: *direction, weight: *irradiance * area }
@@ -487,6 +505,7 @@ impl Light {
             }
             Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition::point(*position)),
             Light::Projector(p) => Some(EmissionPosition::point(p.position())),
+            Light::Goniometric(g) => Some(EmissionPosition::point(g.position())),
             _ => None,
         }
     }
@@ -503,6 +522,7 @@ impl Light {
                 *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture, *falloff)
             }
             Light::Projector(p) => p.intensity_toward(d),
+            Light::Goniometric(g) => g.intensity_toward(d),
             _ => Rgb::ZERO,
         }
     }

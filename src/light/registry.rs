@@ -4,7 +4,7 @@
 //! Mitsuba's `area` emitter is not here: it is a property of the shape that emits, whose loader
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
-use super::{EnvMap, Light, Projector, SpotFalloff};
+use super::{EnvMap, Goniometric, Light, Projector, SpotFalloff};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::props::{Obj, Result};
@@ -19,6 +19,7 @@ pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] = &[
     ("point", point),
     ("spot", spot),
     ("projector", projector),
+    ("goniometric", goniometric),
     ("directional", directional),
     ("constant", constant),
     ("envmap", envmap),
@@ -101,6 +102,26 @@ fn without_mesh_attributes(
         Some(t) if t.uses_position() => Err(o.error_at(name, format!("{} (a {} emitter)", not_by_position(name), o.ty))),
         t => Ok(t),
     }
+}
+
+/// neumann's `goniometric` (pbrt-v4's; see [`Goniometric`]): `filename` (a square equal-area
+/// image, required; sRGB-decoded if 8-bit), `intensity` (1, W sr⁻¹ where the diagram is 1),
+/// `scale` (1), `power` (pbrt-v4's: the intensity scaled by power / (4π × the diagram's mean),
+/// on top of `scale`), `to_world`.
+fn goniometric(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
+    let image = textures.image(o, "filename", false)?;
+    let intensity = o.rgb("intensity", Rgb::ONE, SpectrumKind::Illuminant)?;
+    let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
+    let to_world = o.transform("to_world")?;
+    let mut g = Goniometric::new(to_world, &image, intensity * scale).map_err(|e| o.error_at("filename", e.to_string()))?;
+    if let Some(power) = o.float_opt("power")? {
+        let k = g.power() / crate::math::luminance(intensity * scale).max(f32::MIN_POSITIVE);
+        if !(power > 0.0 && power.is_finite() && k > 0.0) {
+            return Err(o.error_at("power", format!("needs a positive power and a diagram that is not black, got {power}")));
+        }
+        g = Goniometric::new(to_world, &image, intensity * scale * (power / k)).map_err(|e| o.error_at("filename", e.to_string()))?;
+    }
+    Ok(Light::Goniometric(Box::new(g)))
 }
 
 /// Mitsuba's `projector` (see [`Projector`]): `irradiance` (a texture, required), `scale`,

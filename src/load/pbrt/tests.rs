@@ -749,3 +749,33 @@ fn grid_media() {
         assert!(e.contains(what), "{to}: {e}");
     }
 }
+
+/// pbrt-v4's goniometric light: the diagram (RGB averaged) in the light's frame with y and z
+/// swapped, times `I` and `scale`; `power` over 4π × the diagram's mean.
+#[test]
+fn goniometric_lights() {
+    use crate::math::{Vec2, Vec3};
+    let dir = tmp("gonio");
+    // 2 × 2 equal-area square: texel (0, 0) bright.
+    let px = [Rgb::new(3.0, 6.0, 9.0), Rgb::splat(1.0), Rgb::splat(1.0), Rgb::splat(1.0)];
+    crate::film::output::write_image(&dir.join("g.exr"), 2, 2, &px, &Default::default()).unwrap();
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nTranslate 0 0 5\n\
+         LightSource \"goniometric\" \"string filename\" \"{}\" \"rgb I\" [1 0.5 0.25] \"float scale\" 2\nShape \"sphere\"\n",
+        dir.join("g.exr").display()
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let Light::Goniometric(g) = &f.scene.lights()[0] else { panic!("{:?}", f.scene.lights()[0]) };
+    assert!((g.position() - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-6);
+    // The centre of texel (0, 0) of the square, back in the light's frame (y and z swapped).
+    let s = crate::sampling::equal_area::equal_area_square_to_sphere(Vec2::splat(0.25));
+    let d = Vec3::new(s.x, s.z, s.y);
+    let expected = Rgb::new(1.0, 0.5, 0.25) * 2.0 * 6.0;
+    assert!((g.intensity_toward(d) - expected).abs().max_element() < 1e-4, "{}", g.intensity_toward(d));
+    let f = load(&text.replace("\"float scale\" 2", "\"float power\" 100")).unwrap();
+    let Light::Goniometric(g) = &f.scene.lights()[0] else { panic!() };
+    let lum = crate::math::luminance(Rgb::new(1.0, 0.5, 0.25));
+    assert!((g.power() / lum - 100.0).abs() < 1e-2, "{}", g.power());
+    let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"goniometric\"\n");
+    assert!(e.contains("filename"), "{e}");
+}

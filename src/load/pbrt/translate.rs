@@ -813,9 +813,23 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             set(&mut o, "radiance", scaled(spectrum("L")?, s), &ploc(ps, "L"));
             o
         }
-        "goniometric" | "projection" => {
-            return Err(ps.error(format!("the \"{ty}\" light is not implemented by neumann yet")))
+        "goniometric" => {
+            // pbrt-v4: the diagram in the light's frame with y and z swapped (neumann's
+            // goniometric has the same layout), `power` over 4π × the diagram's mean.
+            let s = light_scale(p, ps)?;
+            let file = ps.string("filename")?.ok_or_else(|| ps.error("a goniometric light needs its \"string filename\""))?;
+            let mut o = obj("emitter", "goniometric", l);
+            set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
+            set(&mut o, "intensity", spectrum("I")?, &ploc(ps, "I"));
+            set(&mut o, "scale", Value::Float(s as f64), &ploc(ps, "scale"));
+            let power = ps.float("power", -1.0)?;
+            if power > 0.0 {
+                set(&mut o, "power", Value::Float(power as f64), &ploc(ps, "power"));
+            }
+            set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
+            o
         }
+        "projection" => return Err(ps.error("the \"projection\" light is not implemented by neumann yet")),
         other => return Err(ps.error(format!("unknown light \"{other}\""))),
     })
 }
