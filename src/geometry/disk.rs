@@ -14,6 +14,8 @@ pub struct Disk {
     to_object: Transform,
     n: Vec3,
     area: f32,
+    /// pbrt-v4's (u, v) = (φ/2π, 1 − r) instead of Mitsuba's (r, φ/2π).
+    pbrt_uv: bool,
 }
 
 impl Disk {
@@ -31,7 +33,12 @@ impl Disk {
         if flip {
             n = -n;
         }
-        Some(Disk { to_world, to_object: to_world.inverse(), n, area })
+        Some(Disk { to_world, to_object: to_world.inverse(), n, area, pbrt_uv: false })
+    }
+
+    /// The same disk with pbrt-v4's parameterization: (u, v) = (φ/2π, 1 − r).
+    pub fn with_pbrt_uv(self) -> Disk {
+        Disk { pbrt_uv: true, ..self }
     }
 
     /// Surface area.
@@ -60,7 +67,8 @@ impl Disk {
         (x * x + y * y <= 1.0).then_some((t, Vec2::new(x, y)))
     }
 
-    /// World point, error bound and normal of the local point `q`; `uv = (r, φ / 2π)`.
+    /// World point, error bound and normal of the local point `q`; `uv = (r, φ / 2π)` (pbrt's:
+    /// `(φ / 2π, 1 − r)`).
     #[inline]
     pub fn surface(&self, q: Vec2) -> (SurfacePoint, Vec2) {
         let local = Vec3::new(q.x, q.y, 0.0);
@@ -72,18 +80,28 @@ impl Disk {
         if phi < 0.0 {
             phi += 2.0 * PI;
         }
-        (SurfacePoint { p, n: self.n, p_error }, Vec2::new(q.length(), phi / (2.0 * PI)))
+        let uv = if self.pbrt_uv {
+            Vec2::new(phi / (2.0 * PI), 1.0 - q.length())
+        } else {
+            Vec2::new(q.length(), phi / (2.0 * PI))
+        };
+        (SurfacePoint { p, n: self.n, p_error }, uv)
     }
 
     /// `(∂p/∂u, ∂p/∂v)` at the local point `q` for `uv = (r, φ / 2π)`, as Mitsuba gives them:
-    /// the radial direction (local +x at the centre) and `2π (−y, x, 0)`, turned to world space.
+    /// the radial direction (local +x at the centre) and `2π (−y, x, 0)`, turned to world space
+    /// (pbrt's parameterization: `2π (−y, x, 0)` and minus the radial direction).
     #[inline]
     pub fn dpduv(&self, q: Vec2) -> (Vec3, Vec3) {
         let r = q.length();
         let radial = if r > 0.0 { q / r } else { Vec2::X };
-        let dpdu = self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0));
-        let dpdv = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI));
-        (dpdu, dpdv)
+        let dr = self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0));
+        let dphi = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI));
+        if self.pbrt_uv {
+            (dphi, -dr)
+        } else {
+            (dr, dphi)
+        }
     }
 
     /// Uniform point on the disk (concentric map); pdf `1 / area` per unit area.

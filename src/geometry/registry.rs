@@ -98,16 +98,26 @@ fn cube(_: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Re
     Ok(Geometry::Mesh(mesh))
 }
 
-/// Mitsuba's `disk`: the unit disk in the z = 0 plane, facing +z.
+/// Whether the analytic shape `o` asks for pbrt-v4's (u, v) (neumann's `parameterization`:
+/// `mitsuba`, the default, or `pbrt`).
+fn pbrt_uv(o: &Obj) -> Result<bool> {
+    Ok(o.choice("parameterization", &["mitsuba", "pbrt"])? == "pbrt")
+}
+
+/// Mitsuba's `disk`: the unit disk in the z = 0 plane, facing +z; (u, v) = (r, φ/2π), or
+/// pbrt-v4's (φ/2π, 1 − r) with `parameterization` `pbrt`.
 fn disk(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
-    Ok(Geometry::Disk(
-        Disk::new(*to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?,
-    ))
+    let d = Disk::new(*to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?;
+    Ok(Geometry::Disk(if pbrt_uv(o)? { d.with_pbrt_uv() } else { d }))
 }
 
 /// Mitsuba's `sphere`: `center` (origin), `radius` (1), and a `to_world` that may only
-/// translate, rotate and scale uniformly.
+/// translate, rotate and scale uniformly; (u, v) = (φ/2π, θ/π), or pbrt-v4's (φ/2π, 1 − θ/π)
+/// with `parameterization` `pbrt` (θ from the object's −z instead of +z).
 fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    // pbrt's v runs from the −z pole: the object's z axis reversed (a reflection the sphere's
+    // surface and normals do not see).
+    let to_world = &(if pbrt_uv(o)? { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
     let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
     let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");

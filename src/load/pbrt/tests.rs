@@ -779,3 +779,20 @@ fn goniometric_lights() {
     let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"goniometric\"\n");
     assert!(e.contains("filename"), "{e}");
 }
+
+/// pbrt-v4's (u, v) on its quadrics: a sphere's v runs from the −z pole (1 − θ/π), a disk's
+/// u is φ/2π and its v 1 − r; so an image texture lands where pbrt puts it.
+#[test]
+fn quadrics_have_pbrts_uv() {
+    use crate::math::{Ray, Vec3};
+    let f = load("Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float radius\" 2\nTranslate 10 0 0\nShape \"disk\" \"float radius\" 2\n").unwrap();
+    // Down onto the sphere's +z pole from above, then at the equator along +x.
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).unwrap();
+    assert!((si.uv.y - 1.0).abs() < 1e-4, "+z pole: v = 1 − θ/π = 1, got {}", si.uv);
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, -5.0, 0.3), Vec3::Y)).unwrap();
+    // φ = 3π/2 (−y), θ a little under π/2.
+    assert!((si.uv.x - 0.75).abs() < 1e-3 && si.uv.y > 0.5, "{}", si.uv);
+    let si = f.scene.intersect(&Ray::new(Vec3::new(10.0, 1.0, 5.0), -Vec3::Z)).unwrap();
+    // r = 1 of 2 at φ = π/2: (u, v) = (¼, ½).
+    assert!((si.uv - crate::math::Vec2::new(0.25, 0.5)).length() < 1e-4, "{}", si.uv);
+}

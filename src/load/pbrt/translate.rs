@@ -1094,6 +1094,7 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
             }
             let mut o = shape_obj(p, "sphere", ps, Some(transform(ctm, ps)?))?;
             set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
+            set(&mut o, "parameterization", Value::String("pbrt".into()), &ps.loc);
             o
         }
         "disk" => {
@@ -1107,7 +1108,9 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
                 return Err(ps.error("partial disks (innerradius, phimax) are not implemented by neumann yet"));
             }
             let m = ctm * Mat4::from_translation(Vec3::new(0.0, 0.0, h)) * Mat4::from_scale(Vec3::new(r, r, 1.0));
-            shape_obj(p, "disk", ps, Some(transform(m, ps)?))?
+            let mut o = shape_obj(p, "disk", ps, Some(transform(m, ps)?))?;
+            set(&mut o, "parameterization", Value::String("pbrt".into()), &ps.loc);
+            o
         }
         "cylinder" => {
             let (r, zmin, zmax, phimax) =
