@@ -307,7 +307,7 @@ impl Builder {
                         // its texel average, as pbrt's k_e.
                         t if p > 0.0 && p.is_finite() && k > 0.0 && t.mean_is_exact() => {
                             let lum = crate::math::luminance(t.mean());
-                            if !(lum > 0.0) {
+                            if lum.is_nan() || lum <= 0.0 {
                                 return Err(e.error_at("power", "the radiance image is black: no power can be given to it"));
                             }
                             let factor = Texture::Constant(Rgb::splat(p / (k * lum)));
