@@ -516,14 +516,30 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 
 /// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
 /// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`; neumann's
-/// `wrap_mode_u` / `wrap_mode_v` (one axis each), `uv_attribute` (look up at the texture
+/// `wrap_mode_u` / `wrap_mode_v` (one axis each), `gamma` (8-bit images decoded as v^gamma, not
+/// sRGB: pbrt-v4's "gamma G" encoding), `uv_attribute` (look up at the texture
 /// coordinates of that per-vertex mesh attribute) and `mapping` (pbrt-v4's 2D mappings,
 /// [`procedural::projection_from_props`]).
 fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Texture> {
     let raw = o.bool("raw", false)?;
     // Mitsuba's `accel` (hardware texture lookups on GPUs) changes no value.
     o.bool("accel", true)?;
-    let image = images.image(o, "filename", raw)?;
+    // neumann's `gamma`: 8-bit images decoded as v^gamma instead of sRGB (pbrt-v4's "gamma G"
+    // encoding); float images (EXR, HDR, PFM) are linear whatever it says, as in pbrt.
+    let gamma = o.float_opt("gamma")?;
+    if let Some(g) = gamma {
+        if !(g > 0.0 && g.is_finite()) || raw {
+            return Err(o.error_at("gamma", format!("'gamma' must be positive and without 'raw', got {g}")));
+        }
+    }
+    let mut image = images.image(o, "filename", raw || gamma.is_some())?;
+    if let Some(g) = gamma {
+        let name = o.string("filename")?.to_ascii_lowercase();
+        if ![".exr", ".hdr", ".pfm"].iter().any(|e| name.ends_with(e)) {
+            let pixels = image.pixels.iter().map(|c| c.max(Rgb::ZERO).powf(g)).collect();
+            image = Arc::new(Image { width: image.width, height: image.height, pixels });
+        }
+    }
     let filter = match o.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
         "bilinear" => Filter::Bilinear,
         _ => Filter::Nearest,

@@ -796,3 +796,34 @@ fn quadrics_have_pbrts_uv() {
     // r = 1 of 2 at φ = π/2: (u, v) = (¼, ½).
     assert!((si.uv - crate::math::Vec2::new(0.25, 0.5)).length() < 1e-4, "{}", si.uv);
 }
+
+/// pbrt-v4's image encodings: PNG files sRGB by default, every other file linear, and
+/// "gamma G" (8-bit values to the power G).
+#[test]
+fn image_texture_encodings() {
+    use crate::math::Vec2;
+    let dir = tmp("encoding");
+    let path = dir.join("t.png");
+    crate::film::output::write_image(&path, 1, 1, &[Rgb::new(0.2, 0.5, 0.8)], &Default::default()).unwrap();
+    let raw = crate::load::image::load_image(&path, true).unwrap().pixels[0];
+    let reflectance = |encoding: &str| {
+        let text = format!(
+            "Camera \"perspective\"\nWorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" {encoding}\n\
+             Material \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n",
+            path.display()
+        );
+        let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        diffuse_texture(&f, 0).eval(Vec2::splat(0.5))
+    };
+    let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() < 1e-5;
+    assert!(close(reflectance("\"string encoding\" \"linear\""), raw));
+    assert!(close(reflectance("\"string encoding\" \"gamma 2.2\""), raw.powf(2.2)));
+    let srgb = reflectance("");
+    // sRGB-decoded: the written colour within 8-bit quantisation.
+    assert!((srgb - Rgb::new(0.2, 0.5, 0.8)).abs().max_element() < 4e-3, "{srgb}");
+    let e = err(&format!(
+        "Camera \"perspective\"\nWorldBegin\nTexture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{}\" \"string encoding\" \"gamma -1\"\n",
+        path.display()
+    ));
+    assert!(e.contains("gamma G"), "{e}");
+}

@@ -240,13 +240,18 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             let png = file.to_ascii_lowercase().ends_with(".png");
             set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
             let encoding = ps.string("encoding")?.unwrap_or_else(|| if png { "sRGB" } else { "linear" }.into());
-            match encoding.as_str() {
-                "sRGB" => {}
-                "linear" => set(&mut o, "raw", Value::Bool(true), &ploc(ps, "encoding")),
-                other => {
-                    return Err(
-                        ps.error_at("encoding", format!("encoding \"{other}\" is not implemented (sRGB or linear)"))
-                    )
+            let gamma = encoding.strip_prefix("gamma ").and_then(|g| g.trim().parse::<f32>().ok());
+            match (encoding.as_str(), gamma) {
+                ("sRGB", _) => {}
+                ("linear", _) => set(&mut o, "raw", Value::Bool(true), &ploc(ps, "encoding")),
+                (_, Some(g)) if g > 0.0 && g.is_finite() => {
+                    set(&mut o, "gamma", Value::Float(g as f64), &ploc(ps, "encoding"))
+                }
+                (other, _) => {
+                    return Err(ps.error_at(
+                        "encoding",
+                        format!("unknown encoding \"{other}\" (sRGB, linear or \"gamma G\" with G > 0)"),
+                    ))
                 }
             }
             match ps.string("filter")?.as_deref() {
