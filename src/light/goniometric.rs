@@ -82,15 +82,7 @@ impl Goniometric {
         }
         let wi = d / dist2.sqrt();
         let li = self.intensity_toward(-wi) / dist2;
-        (li.max_element() > 0.0 && li.is_finite()).then_some(LightSample {
-            wi,
-            li,
-            pdf: 1.0,
-            p: self.position,
-            n: Vec3::ZERO,
-            p_error: Vec3::ZERO,
-            delta: true,
-        })
+        (li.max_element() > 0.0 && li.is_finite()).then(|| LightSample::from_point(self.position, wi, li))
     }
 
     /// A ray leaving the light: its direction uniform over the sphere, weight `4π I(d)` (whose

@@ -133,6 +133,14 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+impl LightSample {
+    /// Light from a point source at `p` arriving along `-wi` (unit, toward `p`) as `li`: a
+    /// delta sample (pdf 1, no normal, exact position).
+    pub fn from_point(p: Vec3, wi: Vec3, li: Rgb) -> LightSample {
+        LightSample { wi, li, pdf: 1.0, p, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: true }
+    }
+}
+
 /// A ray of light leaving an emitter, sampled for light tracing ([`Light::sample_le`]).
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {

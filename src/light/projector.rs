@@ -91,15 +91,7 @@ impl Projector {
         let wi = d / dist;
         let cos = -self.axis.dot(wi);
         let li = self.irradiance.eval(uv) * (PI * self.scale / (local.z * local.z * cos));
-        (cos > 0.0 && li.is_finite()).then_some(LightSample {
-            wi,
-            li,
-            pdf: 1.0,
-            p: self.position,
-            n: Vec3::ZERO,
-            p_error: Vec3::ZERO,
-            delta: true,
-        })
+        (cos > 0.0 && li.is_finite()).then(|| LightSample::from_point(self.position, wi, li))
     }
 
     /// Intensity (W sr⁻¹) toward the unit world direction `d`.
