@@ -267,16 +267,22 @@ impl Texture {
             Texture::Projected { projection, texture } => {
                 texture.eval_at(&TexPoint { uv: projection.st(uv, at.p), ..*at })
             }
-            Texture::Mix { amount, tex } => {
-                let a = crate::math::luminance(amount.eval_at(at));
-                Self::blend(a, tex, |t| t.eval_at(at))
-            }
-            Texture::DirectionMix { dir, tex } => {
-                let a = at.n.dot(*dir).abs().min(1.0);
-                Self::blend(1.0 - a, tex, |t| t.eval_at(at))
+            Texture::Mix { tex, .. } | Texture::DirectionMix { tex, .. } => {
+                Self::blend(self.mix_weight(at), tex, |t| t.eval_at(at))
             }
             Texture::Procedural(p) => p.eval(uv, at.p),
             Texture::Sqrt(t) => t.eval_at(at).max(Rgb::ZERO).powf(0.5),
+        }
+    }
+
+    /// The weight of `tex[1]` of a `Mix` (the luminance of its amount) or a `DirectionMix`
+    /// (1 − |n · dir|) at `at`; 0 for other textures.
+    #[inline]
+    fn mix_weight(&self, at: &TexPoint) -> f32 {
+        match self {
+            Texture::Mix { amount, .. } => crate::math::luminance(amount.eval_at(at)),
+            Texture::DirectionMix { dir, .. } => 1.0 - at.n.dot(*dir).abs().min(1.0),
+            _ => 0.0,
         }
     }
 
@@ -317,13 +323,8 @@ impl Texture {
             Texture::Projected { projection, texture } => {
                 texture.eval_scalar(&TexPoint { uv: projection.st(at.uv, at.p), ..*at })
             }
-            Texture::Mix { amount, tex } => {
-                let a = crate::math::luminance(amount.eval_at(at));
-                Self::blend(a, tex, |t| t.eval_scalar(at))
-            }
-            Texture::DirectionMix { dir, tex } => {
-                let a = at.n.dot(*dir).abs().min(1.0);
-                Self::blend(1.0 - a, tex, |t| t.eval_scalar(at))
+            Texture::Mix { tex, .. } | Texture::DirectionMix { tex, .. } => {
+                Self::blend(self.mix_weight(at), tex, |t| t.eval_scalar(at))
             }
             Texture::Sqrt(t) => t.eval_scalar(at).max(0.0).sqrt(),
             t => crate::math::luminance(t.eval_at(at)),
