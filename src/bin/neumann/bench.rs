@@ -38,6 +38,10 @@ pub struct BenchArgs {
     /// Cornell box samples per pixel.
     #[arg(long, default_value_t = 64)]
     pub cbox_spp: u32,
+    /// Also write the mesh (`mesh.bin`) and the incoherent rays (`rays.bin`) to this folder, for
+    /// timing another ray tracer on identical data (`tools/embree/`; formats in `write_export`).
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<PathBuf>,
 }
 
 /// A UV sphere with `≈ n` triangles, radially displaced so that rays see real structure.
@@ -132,6 +136,10 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
             Ray::new(o, sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value)
         })
         .collect();
+    if let Some(dir) = &args.export {
+        write_export(dir, &scene, &incoherent)?;
+        say!("wrote {} and {}", dir.join("mesh.bin").display(), dir.join("rays.bin").display());
+    }
     say!("{:<28} {:>12} {:>12}   hit rate", "rays (Mrays/s)", "1 thread", format!("{all} threads"));
     // Closest-hit as ray-tracing kernels time it (Embree's rtcIntersect1): distance, primitive
     // and barycentrics; and with the surface interaction the renderer then computes.
@@ -161,6 +169,37 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
             out.samples_per_second() / 1e6,
             r = args.cbox_res
         );
+    }
+    Ok(())
+}
+
+/// Writes the benchmark's mesh and incoherent rays as little-endian binary files in `dir`:
+/// `mesh.bin` = u32 vertex count V, u32 triangle count T, V × 3 f32 positions, T × 3 u32
+/// indices; `rays.bin` = u32 ray count N, N × (3 f32 origin, 3 f32 unit direction), each ray
+/// spanning (0, ∞).
+fn write_export(dir: &std::path::Path, scene: &Scene, rays: &[Ray]) -> Result<(), String> {
+    let Some(Geometry::Mesh(mesh)) = scene.geometries().first() else {
+        return Err("bench --export: the benchmark scene has no mesh".into());
+    };
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut m = Vec::with_capacity(8 + 12 * mesh.positions.len() + 12 * mesh.indices.len());
+    m.extend((mesh.positions.len() as u32).to_le_bytes());
+    m.extend((mesh.indices.len() as u32).to_le_bytes());
+    for p in &mesh.positions {
+        m.extend([p.x, p.y, p.z].iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for t in &mesh.indices {
+        m.extend(t.iter().flat_map(|i| i.to_le_bytes()));
+    }
+    let mut r = Vec::with_capacity(4 + 24 * rays.len());
+    r.extend((rays.len() as u32).to_le_bytes());
+    for ray in rays {
+        let (o, d) = (ray.o, ray.d);
+        r.extend([o.x, o.y, o.z, d.x, d.y, d.z].iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for (name, bytes) in [("mesh.bin", m), ("rays.bin", r)] {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     Ok(())
 }

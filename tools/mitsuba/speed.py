@@ -1,0 +1,73 @@
+"""Times neumann and Mitsuba 3 (llvm_ad_rgb) side by side on the same scene files, in one run.
+
+Each scene is rendered by both as whole processes (scene loading, Mitsuba's kernel compilation
+from its on-disk cache after one untimed warm-up render, the render, writing the image), at the
+same resolution, samples per pixel and maximum depth; the best of RUNS wall-clock times is kept
+for each. Prints samples/s and neumann's ratio to Mitsuba (> 1: neumann is faster).
+
+Run from the repository root after `cargo build --release`, with Mitsuba in a venv outside the
+repository (libLLVM from the system: Debian 12's libllvm14/15 crash in Dr.Jit's AVX-512 code
+generation; `apt-get install libllvm19` and point DRJIT_LIBLLVM_PATH at it):
+    python3 -m venv ~/mitsuba-venv && ~/mitsuba-venv/bin/pip install mitsuba==3.9.1 numpy
+    DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
+        ~/mitsuba-venv/bin/python tools/mitsuba/speed.py [--res N] [--runs K] [scene ...]
+Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every validation scene
+(tools/mitsuba/references.py) at its test sample count and --res (default 256)."""
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+
+MITSUBA_ONE = """
+import sys, mitsuba as mi
+mi.set_variant('llvm_ad_rgb')
+mi.set_log_level(mi.LogLevel.Warn)
+params = dict(a.split('=', 1) for a in sys.argv[3:])
+scene = mi.load_file(sys.argv[1], **params)
+mi.Bitmap(mi.render(scene, spp=int(params['spp']))).write(sys.argv[2])
+"""
+
+
+def timed(cmd):
+    start = time.time()
+    subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    return time.time() - start
+
+
+def main():
+    args = sys.argv[1:]
+    res, runs = 256, 2
+    while args and args[0] in ("--res", "--runs"):
+        if args[0] == "--res":
+            res = int(args[1])
+        else:
+            runs = int(args[1])
+        args = args[2:]
+    from references import SCENES
+
+    jobs = [("cbox", 512, 64, {"max_depth": "8"})]
+    jobs += [(name, res, spec[1], dict(spec[2])) for name, spec in SCENES.items()]
+    if args:
+        jobs = [j for j in jobs if j[0] in args]
+    neumann = os.path.join("target", "release", "neumann")
+    print(f"{'scene':<18} {'res':>5} {'spp':>5}  {'neumann M/s':>11}  {'Mitsuba M/s':>11}  ratio")
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "out.exr")
+        for name, r, spp, extra in jobs:
+            params = dict(res=str(r), spp=str(spp), **extra)
+            scene = f"scenes/{name}.xml"
+            n_cmd = [neumann, "render", scene, "-o", out] + [f"-D{k}={v}" for k, v in params.items()]
+            m_cmd = [sys.executable, "-c", MITSUBA_ONE, scene, out] + [f"{k}={v}" for k, v in params.items()]
+            timed(m_cmd)  # warm-up: fills Dr.Jit's kernel cache
+            t_n = min(timed(n_cmd) for _ in range(runs))
+            t_m = min(timed(m_cmd) for _ in range(runs))
+            samples = r * r * spp
+            print(f"{name:<18} {r:>5} {spp:>5}  {samples / t_n / 1e6:>11.3f}  {samples / t_m / 1e6:>11.3f}  {t_m / t_n:.2f}",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()
