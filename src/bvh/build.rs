@@ -1,9 +1,9 @@
 //! Binned SAH construction (Wald 2007, "On fast Construction of SAH-based Bounding Volume
 //! Hierarchies"): at each node, primitive centroids are binned along each axis and the split
 //! minimizing the surface area heuristic is taken; subtrees are built in parallel with rayon.
-//! O(n log n) overall. The binary tree is then collapsed into 4-wide nodes.
+//! O(n log n) overall. The binary tree is then collapsed into 8-wide nodes.
 
-use super::{Bvh, Node4};
+use super::{Bvh, Node8, WIDTH};
 use crate::math::{Bounds3, Vec3};
 
 /// Build settings.
@@ -66,7 +66,15 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     let bounds = match &root {
         BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
     };
-    Bvh { nodes, order: items.iter().map(|it| it.index).collect(), bounds }
+    Bvh { nodes, order: items.iter().map(|it| it.index).collect(), bounds, avx: avx_detected() }
+}
+
+/// Whether this CPU runs the AVX slab test.
+fn avx_detected() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return is_x86_feature_detected!("avx");
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 fn leaf(items: &[Item], offset: usize, bounds: Bounds3) -> (BuildNode, usize) {
@@ -204,15 +212,15 @@ fn partition(items: &mut [Item], pred: impl Fn(&Item) -> bool) -> usize {
     first
 }
 
-/// Collapses the binary tree below `node` into 4-wide nodes (Wald et al. 2008, "Getting rid of
+/// Collapses the binary tree below `node` into 8-wide nodes (Wald et al. 2008, "Getting rid of
 /// packets"): each wide node takes its binary node's two children and repeatedly opens the
-/// interior child of largest surface area until it holds four. Returns the wide node's index.
-fn collapse(node: &BuildNode, out: &mut Vec<Node4>) -> u32 {
+/// interior child of largest surface area until it holds eight. Returns the wide node's index.
+fn collapse(node: &BuildNode, out: &mut Vec<Node8>) -> u32 {
     let mut children: Vec<&BuildNode> = match node {
         BuildNode::Interior { children, .. } => vec![&children[0], &children[1]],
         leaf @ BuildNode::Leaf { .. } => vec![leaf],
     };
-    while children.len() < 4 {
+    while children.len() < WIDTH {
         let best = children
             .iter()
             .enumerate()
@@ -226,7 +234,7 @@ fn collapse(node: &BuildNode, out: &mut Vec<Node4>) -> u32 {
         }
     }
     let index = out.len() as u32;
-    out.push(Node4::empty());
+    out.push(Node8::empty());
     for (slot, child) in children.into_iter().enumerate() {
         match child {
             BuildNode::Leaf { bounds, first, count } => out[index as usize].set(slot, bounds, *first, *count),

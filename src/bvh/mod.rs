@@ -1,5 +1,6 @@
-//! Bounding volume hierarchy: binned SAH build (parallel), collapsed into 4-wide nodes tested
-//! with one SIMD slab test per node; closest-hit and any-hit traversal.
+//! Bounding volume hierarchy: binned SAH build (parallel), collapsed into 8-wide nodes tested
+//! with one SIMD slab test per node (AVX when the CPU has it, chosen at run time; two 4-wide
+//! SSE halves otherwise); closest-hit and any-hit traversal.
 //!
 //! The BVH knows only primitive bounds; the caller intersects primitives in leaves through a
 //! closure, so one BVH serves triangles, spheres and disks alike (and, later, instances). After
@@ -7,40 +8,34 @@
 //! primitive data in that order so a leaf's primitives are contiguous in memory.
 
 mod build;
+mod slab;
 
-use crate::math::float::gamma;
 use crate::math::{Bounds3, Ray, Vec3};
-use glam::Vec4;
+use slab::{Slab4x2, SlabTest};
 
 pub use build::BuildOptions;
 
-/// A 4-wide node (128 bytes, cache-line aligned): the bounds of up to four children in
+/// Children per node.
+pub const WIDTH: usize = 8;
+
+/// An 8-wide node (256 bytes, four cache lines): the bounds of up to eight children in
 /// structure-of-arrays form (`bounds[0..3]` = lower corners' x, y, z, `bounds[3..6]` = upper
-/// corners' x, y, z, one lane per child), so one SIMD slab test checks all four; and per child either a leaf
-/// (`count > 0` primitives from `child`) or an interior node (`count == 0`, node index `child`).
-/// Unused slots have `child == u32::MAX` and an empty box (min +∞, max -∞) that no ray hits.
+/// corners' x, y, z, one lane per child), so one SIMD slab test checks all eight; and per child
+/// either a leaf (`count > 0` primitives from `child`) or an interior node (`count == 0`, node
+/// index `child`). Unused slots have `child == u32::MAX` and an empty box (min +∞, max -∞)
+/// that no ray hits.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-pub struct Node4 {
-    bounds: [Vec4; 6],
-    child: [u32; 4],
-    count: [u32; 4],
+pub struct Node8 {
+    bounds: [[f32; WIDTH]; 6],
+    child: [u32; WIDTH],
+    count: [u32; WIDTH],
 }
 
-impl Node4 {
-    pub(crate) fn empty() -> Node4 {
-        Node4 {
-            bounds: [
-                Vec4::INFINITY,
-                Vec4::INFINITY,
-                Vec4::INFINITY,
-                Vec4::NEG_INFINITY,
-                Vec4::NEG_INFINITY,
-                Vec4::NEG_INFINITY,
-            ],
-            child: [u32::MAX; 4],
-            count: [0; 4],
-        }
+impl Node8 {
+    pub(crate) fn empty() -> Node8 {
+        let (inf, neg) = ([f32::INFINITY; WIDTH], [f32::NEG_INFINITY; WIDTH]);
+        Node8 { bounds: [inf, inf, inf, neg, neg, neg], child: [u32::MAX; WIDTH], count: [0; WIDTH] }
     }
 
     pub(crate) fn set(&mut self, slot: usize, b: &Bounds3, child: u32, count: u32) {
@@ -65,9 +60,11 @@ impl Node4 {
 /// A bounding volume hierarchy over primitives given by their bounds.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     order: Vec<u32>,
     bounds: Bounds3,
+    /// Whether this CPU runs the AVX slab test (detected at build time).
+    avx: bool,
 }
 
 /// Statistics of a built BVH.
@@ -110,7 +107,7 @@ impl Bvh {
     /// counts, so take statistics before.
     pub fn remap_leaves(&mut self, mut f: impl FnMut(u32, u32) -> (u32, u32)) {
         for node in &mut self.nodes {
-            for slot in 0..4 {
+            for slot in 0..WIDTH {
                 if node.valid(slot) && node.count[slot] > 0 {
                     let (child, count) = f(node.child[slot], node.count[slot]);
                     assert!(count > 0, "a leaf's count must stay non-zero");
@@ -132,7 +129,7 @@ impl Bvh {
         while let Some((i, depth)) = stack.pop() {
             let n = &self.nodes[i];
             s.max_depth = s.max_depth.max(depth);
-            for slot in (0..4).filter(|&k| n.valid(k)) {
+            for slot in (0..WIDTH).filter(|&k| n.valid(k)) {
                 let rel = n.child_bounds(slot).surface_area() / root_area;
                 if n.count[slot] > 0 {
                     s.leaves += 1;
@@ -154,24 +151,48 @@ impl Bvh {
     /// Postponed children are not prefetched (unlike [`Bvh::any_hit`]): many are culled by a
     /// closer hit before their turn, and prefetching them measured slower.
     #[inline]
-    pub fn closest_hit(&self, ray: &Ray, mut t_max: f32, mut leaf: impl FnMut(u32, u32, &mut f32)) {
+    pub fn closest_hit(&self, ray: &Ray, t_max: f32, leaf: impl FnMut(u32, u32, &mut f32)) {
+        self.closest_hit_visit(ray, t_max, ClosestLeafFn(leaf))
+    }
+
+    /// [`Bvh::closest_hit`] with the leaf work as a [`ClosestLeaf`] (whose `visit` the
+    /// traversal inlines when it is `#[inline(always)]`).
+    #[inline]
+    pub fn closest_hit_visit(&self, ray: &Ray, t_max: f32, leaf: impl ClosestLeaf) {
         if self.nodes.is_empty() || !traceable(ray, t_max) {
             return;
         }
-        let r = SlabRay::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` is set only where the CPU has AVX.
+            return unsafe { self.closest_hit_avx(ray, t_max, leaf) };
+        }
+        self.closest_hit_with(&Slab4x2::new(ray), t_max, leaf)
+    }
+
+    /// [`Bvh::closest_hit`] compiled for AVX (the slab test, and the caller's leaf code inlined
+    /// into it). Safety: the CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn closest_hit_avx(&self, ray: &Ray, t_max: f32, leaf: impl ClosestLeaf) {
+        self.closest_hit_with(&slab::Slab8::new(ray), t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn closest_hit_with(&self, r: &impl SlabTest, mut t_max: f32, mut leaf: impl ClosestLeaf) {
         // Postponed children: (node or leaf, count, entry distance). Binary depth ≤ 60 bounds the
-        // wide depth by 60, with at most three postponed children per level.
-        let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); 192];
+        // wide depth by 60, with at most seven postponed children per level.
+        let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); 7 * 60 + 1];
         let mut sp = 0usize;
         let (mut child, mut count) = (0u32, 0u32);
         loop {
             if count > 0 {
-                leaf(child, count, &mut t_max);
+                leaf.visit(child, count, &mut t_max);
             } else {
                 // Interior children index `nodes` (built together), and unused slots (index
                 // u32::MAX) are never entered by a traceable ray; indexing checks it anyway.
                 let node = &self.nodes[child as usize];
-                let (mut mask, t_near) = r.test4(node, t_max);
+                let (mut mask, t_near) = r.test(node, t_max);
                 if mask != 0 {
                     let a = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -188,7 +209,7 @@ impl Bvh {
                         (child, count) = (node.child[near], node.count[near]);
                         continue;
                     }
-                    // Three or four: push all, sort them farthest first, continue with the nearest.
+                    // Three or more: push all, sort them farthest first, continue with the nearest.
                     let base = sp;
                     for slot in [a, b] {
                         stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
@@ -242,14 +263,38 @@ impl Bvh {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut leaf: impl FnMut(u32, u32, f32) -> bool,
+        leaf: impl FnMut(u32, u32, f32) -> bool,
         prefetch_leaf: impl Fn(u32, u32),
     ) -> bool {
+        self.any_hit_visit(ray, t_max, AnyLeafFns(leaf, prefetch_leaf))
+    }
+
+    /// [`Bvh::any_hit`] with the leaf work as an [`AnyLeaf`] (whose methods the traversal
+    /// inlines when they are `#[inline(always)]`).
+    #[inline]
+    pub fn any_hit_visit(&self, ray: &Ray, t_max: f32, leaf: impl AnyLeaf) -> bool {
         if self.nodes.is_empty() || !traceable(ray, t_max) {
             return false;
         }
-        let r = SlabRay::new(ray);
-        let mut stack = [std::mem::MaybeUninit::<(u32, u32)>::uninit(); 256];
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` is set only where the CPU has AVX.
+            return unsafe { self.any_hit_avx(ray, t_max, leaf) };
+        }
+        self.any_hit_with(&Slab4x2::new(ray), t_max, leaf)
+    }
+
+    /// [`Bvh::any_hit_visit`] compiled for AVX. Safety: the CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn any_hit_avx(&self, ray: &Ray, t_max: f32, leaf: impl AnyLeaf) -> bool {
+        self.any_hit_with(&slab::Slab8::new(ray), t_max, leaf)
+    }
+
+    #[inline(always)]
+    fn any_hit_with(&self, r: &impl SlabTest, t_max: f32, mut leaf: impl AnyLeaf) -> bool {
+        // At most seven children wait per level of the (≤ 60 deep) tree, plus the root.
+        let mut stack = [std::mem::MaybeUninit::<(u32, u32)>::uninit(); 7 * 60 + 1];
         stack[0].write((0, 0));
         let mut sp = 1usize;
         while sp > 0 {
@@ -257,18 +302,18 @@ impl Bvh {
             // SAFETY: slot `sp` was written before `sp` was incremented past it.
             let (child, count) = unsafe { stack[sp].assume_init() };
             if count > 0 {
-                if leaf(child, count, t_max) {
+                if leaf.hit(child, count, t_max) {
                     return true;
                 }
                 continue;
             }
             // As in `closest_hit`: checked, never out of range for a traceable ray.
             let node = &self.nodes[child as usize];
-            let (mut mask, _) = r.test4(node, t_max);
+            let (mut mask, _) = r.test(node, t_max);
             while mask != 0 {
                 let slot = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                self.prefetch_child(node, slot, &prefetch_leaf);
+                self.prefetch_child(node, slot, &leaf);
                 stack[sp].write((node.child[slot], node.count[slot]));
                 sp += 1;
             }
@@ -276,14 +321,57 @@ impl Bvh {
         false
     }
 
-    /// Prefetches child `slot` of `node`: both cache lines of an interior node, or the leaf's data.
+    /// Prefetches child `slot` of `node`: the cache lines of an interior node, or the leaf's data.
     #[inline(always)]
-    fn prefetch_child(&self, node: &Node4, slot: usize, prefetch_leaf: &impl Fn(u32, u32)) {
+    fn prefetch_child(&self, node: &Node8, slot: usize, leaf: &impl AnyLeaf) {
         if node.count[slot] == 0 {
-            prefetch(self.nodes.as_ptr().wrapping_add(node.child[slot] as usize), size_of::<Node4>());
+            prefetch(self.nodes.as_ptr().wrapping_add(node.child[slot] as usize), size_of::<Node8>());
         } else {
-            prefetch_leaf(node.child[slot], node.count[slot]);
+            leaf.prefetch(node.child[slot], node.count[slot]);
         }
+    }
+}
+
+/// The leaf work of [`Bvh::closest_hit`]: intersect the leaf's primitives `first .. first +
+/// count` (in [`Bvh::order`] positions, or as [`Bvh::remap_leaves`] re-encoded them) and lower
+/// `t_max` to the closest hit found. A renderer's own type marks `visit` `#[inline(always)]`
+/// so that both compiled traversals (AVX and portable) inline it; a closure, compiled once for
+/// both, stays a call.
+pub trait ClosestLeaf {
+    /// Intersects one leaf's primitives within `(0, t_max)`.
+    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32);
+}
+
+/// A closure as a [`ClosestLeaf`].
+pub struct ClosestLeafFn<F>(pub F);
+
+impl<F: FnMut(u32, u32, &mut f32)> ClosestLeaf for ClosestLeafFn<F> {
+    #[inline(always)]
+    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32) {
+        (self.0)(first, count, t_max)
+    }
+}
+
+/// The leaf work of [`Bvh::any_hit_visit`]: whether one of a leaf's primitives is hit within
+/// `(0, t_max)`, and a cache hint for a leaf that waits on the stack.
+pub trait AnyLeaf {
+    /// Whether a primitive of the leaf `first .. first + count` is hit within `(0, t_max)`.
+    fn hit(&mut self, first: u32, count: u32, t_max: f32) -> bool;
+    /// Asks the cache for the leaf's data ahead of its visit (a hint).
+    fn prefetch(&self, first: u32, count: u32);
+}
+
+/// Two closures as an [`AnyLeaf`]: the hit test and the prefetch.
+pub struct AnyLeafFns<F, P>(pub F, pub P);
+
+impl<F: FnMut(u32, u32, f32) -> bool, P: Fn(u32, u32)> AnyLeaf for AnyLeafFns<F, P> {
+    #[inline(always)]
+    fn hit(&mut self, first: u32, count: u32, t_max: f32) -> bool {
+        (self.0)(first, count, t_max)
+    }
+    #[inline(always)]
+    fn prefetch(&self, first: u32, count: u32) {
+        (self.1)(first, count)
     }
 }
 
@@ -316,44 +404,6 @@ pub fn prefetch<T>(p: *const T, bytes: usize) {
 /// A traversal stack entry: node index (or first primitive), primitive count (0 for a node),
 /// entry distance.
 type Entry = (u32, u32, f32);
-
-/// A ray prepared for 4-wide SIMD slab tests: origin and reciprocal direction splatted per axis,
-/// and per axis the index in [`Node4::bounds`] of the near and the far plane.
-struct SlabRay {
-    o: [Vec4; 3],
-    inv_d: [Vec4; 3],
-    near: [usize; 3],
-    far: [usize; 3],
-}
-
-impl SlabRay {
-    #[inline(always)]
-    fn new(ray: &Ray) -> SlabRay {
-        let inv = ray.d.recip();
-        // Bit a set: the ray goes down axis a, so it enters through the upper plane.
-        let neg = inv.cmplt(Vec3::ZERO).bitmask() as usize;
-        SlabRay {
-            o: [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)],
-            inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
-            near: [3 * (neg & 1), 1 + 3 * (neg >> 1 & 1), 2 + 3 * (neg >> 2)],
-            far: [3 - 3 * (neg & 1), 4 - 3 * (neg >> 1 & 1), 5 - 3 * (neg >> 2)],
-        }
-    }
-
-    /// Slab test of the four children within `(0, t_max)`: bit mask of the hit (valid) children
-    /// and their entry distances. The far distance is enlarged by `1 + 2γ₃` so that round-off
-    /// never culls a box the ray enters.
-    #[inline(always)]
-    fn test4(&self, node: &Node4, t_max: f32) -> (u32, [f32; 4]) {
-        let b = &node.bounds;
-        let tn = |a: usize| (b[self.near[a]] - self.o[a]) * self.inv_d[a];
-        let tf = |a: usize| (b[self.far[a]] - self.o[a]) * self.inv_d[a];
-        let t_near = tn(0).max(tn(1)).max(tn(2)).max(Vec4::ZERO);
-        let t_far = (tf(0).min(tf(1)).min(tf(2)) * (1.0 + 2.0 * gamma(3))).min(Vec4::splat(t_max));
-        // Unused slots hold empty boxes (min +∞, max -∞), which no ray enters.
-        (t_near.cmple(t_far).bitmask(), t_near.to_array())
-    }
-}
 
 #[cfg(test)]
 mod tests {
@@ -413,7 +463,15 @@ mod tests {
         let tris = random_triangles(5000, 1);
         let bounds: Vec<Bounds3> =
             tris.iter().map(|t| Bounds3::from_point(t[0]).union_point(t[1]).union_point(t[2])).collect();
-        let bvh = Bvh::build(&bounds, &BuildOptions::default());
+        let built = Bvh::build(&bounds, &BuildOptions::default());
+        // Both traversals: the portable one, and the AVX one where the CPU has it.
+        let portable = Bvh { avx: false, ..built.clone() };
+        for bvh in [portable, built] {
+            check_against_brute_force(&bvh, &tris);
+        }
+    }
+
+    fn check_against_brute_force(bvh: &Bvh, tris: &[[Vec3; 3]]) {
         let ordered: Vec<[Vec3; 3]> = bvh.order().iter().map(|&i| tris[i as usize]).collect();
         let mut sorted = bvh.order().to_vec();
         sorted.sort_unstable();
