@@ -117,6 +117,11 @@ impl Bvh {
         }
     }
 
+    /// Bytes the nodes and the leaf order take.
+    pub fn memory_bytes(&self) -> usize {
+        self.nodes.len() * size_of::<Node8>() + self.order.len() * size_of::<u32>()
+    }
+
     /// Node count, leaf count, depth and SAH cost.
     pub fn stats(&self) -> BvhStats {
         let mut s = BvhStats { nodes: self.nodes.len(), ..Default::default() };

@@ -234,6 +234,15 @@ impl Scene {
         &self.bvh
     }
 
+    /// Bytes the ray-tracing structure takes: the BVH's nodes and order, and the leaves'
+    /// primitive data (triangle blocks, mixed primitives, primitive references).
+    pub fn accel_memory_bytes(&self) -> usize {
+        self.bvh.memory_bytes()
+            + self.blocks.len() * size_of::<Triangle4>()
+            + self.prims.len() * size_of::<LeafPrim>()
+            + self.refs.len() * size_of::<PrimRef>()
+    }
+
     /// Number of primitives (triangles, spheres, disks).
     pub fn primitive_count(&self) -> usize {
         self.refs.len()

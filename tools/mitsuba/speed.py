@@ -12,7 +12,7 @@ generation; `apt-get install libllvm19` and point DRJIT_LIBLLVM_PATH at it):
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
         ~/mitsuba-venv/bin/python tools/mitsuba/speed.py [--res N] [--runs K] [scene ...]
 Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every validation scene
-(tools/mitsuba/references.py) at its test sample count and --res (default 256)."""
+(tools/mitsuba/references.py) at the settings `neumann validate` uses (--res, default 128)."""
 import os
 import subprocess
 import sys
@@ -39,7 +39,7 @@ def timed(cmd):
 
 def main():
     args = sys.argv[1:]
-    res, runs = 256, 2
+    res, runs = 128, 2
     while args and args[0] in ("--res", "--runs"):
         if args[0] == "--res":
             res = int(args[1])

@@ -120,7 +120,13 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         );
     }
 
+    let triangles = mesh.len();
     let scene = mesh_scene(mesh)?;
+    say!(
+        "ray-tracing structure (nodes, triangle blocks, references): {:.1} MiB, {:.0} bytes per triangle",
+        scene.accel_memory_bytes() as f64 / (1 << 20) as f64,
+        scene.accel_memory_bytes() as f64 / triangles as f64
+    );
     let b = scene.bvh().bounds();
     let (center, radius) = b.bounding_sphere();
     let mut rng = Pcg32::new(1, 1);
