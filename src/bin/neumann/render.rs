@@ -108,9 +108,10 @@ pub struct RenderArgs {
     /// contact sheet of the terms and their sum side by side.
     #[arg(long, value_name = "DIR")]
     bounces_out: Option<PathBuf>,
-    /// Adaptive sampling (Cycles' noise threshold): a pixel stops taking samples once its
-    /// relative error estimate, from a separate half of its samples, is below T (and its
-    /// neighbours' too), after --min-spp samples; --spp (or --time) bounds the render. E.g. 0.01.
+    /// Adaptive sampling with Cycles' noise threshold T (Cycles' default 0.01): a pixel stops
+    /// taking samples once its relative error estimate, from a separate half of its samples, is
+    /// below 5·T as in Cycles (and its neighbours' too), after --min-spp samples; --spp (or
+    /// --time) bounds the render.
     #[arg(long, value_name = "T")]
     noise_threshold: Option<f32>,
     /// With --noise-threshold: the image averages the even-numbered samples only, which the
@@ -119,7 +120,8 @@ pub struct RenderArgs {
     /// biased toward the pixels' typical values).
     #[arg(long)]
     unbiased_adaptive: bool,
-    /// Samples every pixel takes before adaptive sampling may stop it (default 16).
+    /// Samples every pixel takes before adaptive sampling may stop it (at least 4); default or
+    /// 0: Cycles' automatic count, max(4, ⌈16 / T^0.3⌉) (T = 0.01: 64).
     #[arg(long, value_name = "N")]
     min_spp: Option<u32>,
     /// Show the render live in the tev image viewer listening at HOST:PORT (tev's default:
@@ -377,12 +379,13 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     } else if a.min_spp.is_some() || a.unbiased_adaptive {
         return Err(usage("--min-spp and --unbiased-adaptive apply to adaptive sampling: give --noise-threshold too".into()));
     }
-    if a.min_spp == Some(0) {
-        return Err(usage("--min-spp must be at least 1".into()));
-    }
     let settings = RenderSettings {
         noise_threshold: a.noise_threshold,
-        min_spp: a.min_spp.unwrap_or(16),
+        min_spp: match (a.min_spp, a.noise_threshold) {
+            (Some(n), _) if n > 0 => n.max(4),
+            (_, Some(t)) => neumann::render::auto_min_spp(t),
+            _ => 16,
+        },
         spp: if a.time.is_some() && a.spp.is_none() { u32::MAX } else { job.file.spp },
         time_budget,
         seed: job.file.seed,
