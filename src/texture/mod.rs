@@ -157,6 +157,9 @@ pub enum Texture {
     /// The square root of a texture's value per channel (of its scalar as a scalar; negative
     /// values give 0): pbrt-v4's roughness remapping α = √roughness of a textured roughness.
     Sqrt(Box<Texture>),
+    /// One minus a texture's value per channel, negative results giving 0 (of its scalar as a
+    /// scalar): pbrt-v4's `invert` of image textures, `max(0, 1 − scale · v)`.
+    Invert(Box<Texture>),
 }
 
 impl Texture {
@@ -272,6 +275,7 @@ impl Texture {
             }
             Texture::Procedural(p) => p.eval(uv, at.p),
             Texture::Sqrt(t) => t.eval_at(at).max(Rgb::ZERO).powf(0.5),
+            Texture::Invert(t) => (Rgb::ONE - t.eval_at(at)).max(Rgb::ZERO),
         }
     }
 
@@ -327,6 +331,7 @@ impl Texture {
                 Self::blend(self.mix_weight(at), tex, |t| t.eval_scalar(at))
             }
             Texture::Sqrt(t) => t.eval_scalar(at).max(0.0).sqrt(),
+            Texture::Invert(t) => (1.0 - t.eval_scalar(at)).max(0.0),
             t => crate::math::luminance(t.eval_at(at)),
         }
     }
@@ -338,7 +343,7 @@ impl Texture {
         match self {
             Texture::Constant(_) | Texture::Bitmap { .. } | Texture::MeshAttribute { .. } => false,
             Texture::AttributeUv { texture, .. } | Texture::Threshold { texture, .. } => texture.uses_position(),
-            Texture::Sqrt(t) => t.uses_position(),
+            Texture::Sqrt(t) | Texture::Invert(t) => t.uses_position(),
             Texture::Scale(t) => t[0].uses_position() || t[1].uses_position(),
             Texture::Checkerboard { color0, color1, .. } => color0.uses_position() || color1.uses_position(),
             Texture::Projected { projection, texture } => projection.uses_position() || texture.uses_position(),
@@ -394,6 +399,8 @@ impl Texture {
             Texture::DirectionMix { tex, .. } => 0.5 * (tex[0].mean() + tex[1].mean()),
             Texture::Procedural(p) => p.mean(),
             Texture::Sqrt(t) => t.mean().max(Rgb::ZERO).powf(0.5),
+            // Exact where the texture stays within [0, 1] (no clamping).
+            Texture::Invert(t) => (Rgb::ONE - t.mean()).max(Rgb::ZERO),
         }
     }
 
@@ -422,7 +429,7 @@ impl Texture {
             Texture::Mix { amount, tex } => amount.is_reflectance() && tex[0].is_reflectance() && tex[1].is_reflectance(),
             Texture::DirectionMix { tex, .. } => tex[0].is_reflectance() && tex[1].is_reflectance(),
             Texture::Procedural(p) => p.is_reflectance(),
-            Texture::Sqrt(t) => t.is_reflectance(),
+            Texture::Sqrt(t) | Texture::Invert(t) => t.is_reflectance(),
             Texture::Scale(t) => {
                 let bound = |t: &Texture| match t {
                     Texture::Constant(c) => c.max_element(),
@@ -489,6 +496,7 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("scale", scale_from_props),
         ("threshold", threshold_from_props),
         ("sqrt", sqrt_from_props),
+        ("invert", invert_from_props),
         ("mix", procedural::mix_from_props),
         ("directionmix", procedural::directionmix_from_props),
         ("bilerp", procedural::bilerp_from_props),
@@ -607,6 +615,18 @@ fn sqrt_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
     })
 }
 
+/// neumann's `invert`: one minus `tex` (required) per channel, negative results giving 0
+/// (pbrt-v4's `invert` of image textures).
+fn invert_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    if !o.has("tex") {
+        return Err(o.error("an invert texture needs its 'tex'"));
+    }
+    Ok(match b.texture_of(o, "tex", Rgb::ONE, SpectrumKind::Unbounded)? {
+        Texture::Constant(c) => Texture::Constant((Rgb::ONE - c).max(Rgb::ZERO)),
+        t => Texture::Invert(Box::new(t)),
+    })
+}
+
 /// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`; and
 /// neumann's `mapping` (pbrt-v4's 2D mappings, [`procedural::projection_from_props`]).
 fn checkerboard_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
@@ -650,7 +670,7 @@ impl Texture {
                 v
             }
             Texture::Threshold { texture, .. } | Texture::Projected { texture, .. } => texture.mesh_attributes(),
-            Texture::Sqrt(t) => t.mesh_attributes(),
+            Texture::Sqrt(t) | Texture::Invert(t) => t.mesh_attributes(),
             Texture::Mix { amount, tex } => {
                 let mut v = amount.mesh_attributes();
                 v.extend(tex[0].mesh_attributes());

@@ -818,6 +818,10 @@ fn image_texture_encodings() {
     let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() < 1e-5;
     assert!(close(reflectance("\"string encoding\" \"linear\""), raw));
     assert!(close(reflectance("\"string encoding\" \"gamma 2.2\""), raw.powf(2.2)));
+    // invert: max(0, 1 − scale · v) per channel, the scale applied first.
+    assert!(close(reflectance("\"string encoding\" \"linear\" \"bool invert\" true"), Rgb::ONE - raw));
+    let scaled = reflectance("\"string encoding\" \"linear\" \"bool invert\" true \"float scale\" 1.5");
+    assert!(close(scaled, (Rgb::ONE - raw * 1.5).max(Rgb::ZERO)) && scaled.z == 0.0, "{scaled}");
     let srgb = reflectance("");
     // sRGB-decoded: the written colour within 8-bit quantisation.
     assert!((srgb - Rgb::new(0.2, 0.5, 0.8)).abs().max_element() < 4e-3, "{srgb}");

@@ -269,15 +269,21 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
                 Some(other) => return Err(ps.error_at("wrap", format!("unknown wrap \"{other}\""))),
             };
             set(&mut o, "wrap_mode", Value::String(wrap.into()), &ps.loc);
-            if ps.bool("invert", false)? {
-                return Err(ps.error_at("invert", "inverted image textures are not implemented by neumann"));
-            }
+            let invert = ps.bool("invert", false)?;
             let scale = ps.float("scale", 1.0)?;
             mapping_2d(p, ps, &mut o, flip_t)?;
-            if scale != 1.0 {
+            let scaled = if scale != 1.0 {
                 scale_texture(Value::Object(Rc::new(o)), scale, &ps.loc, &ploc(ps, "scale"))
             } else {
                 o
+            };
+            // pbrt-v4: max(0, 1 − scale · v).
+            if invert {
+                let mut inv = obj("texture", "invert", &ps.loc);
+                set(&mut inv, "tex", Value::Object(Rc::new(scaled)), &ploc(ps, "invert"));
+                inv
+            } else {
+                scaled
             }
         }
         "checkerboard" => {
