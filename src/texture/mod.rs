@@ -63,6 +63,8 @@ pub enum Wrap {
     Mirror,
     /// Repeat the edge texels.
     Clamp,
+    /// Black (0) outside the image (pbrt-v4's `black` wrap; neumann's `wrap_mode` `black`).
+    Black,
 }
 
 /// An image texture.
@@ -193,19 +195,19 @@ impl Bitmap {
     fn texel(&self, x: i64, y: i64) -> Rgb {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
         let wrap = |i: i64, n: i64, axis: usize| match self.wrap[axis] {
-            Wrap::Repeat => i.rem_euclid(n),
-            Wrap::Clamp => i.clamp(0, n - 1),
+            Wrap::Repeat => Some(i.rem_euclid(n)),
+            Wrap::Clamp => Some(i.clamp(0, n - 1)),
             Wrap::Mirror => {
                 let m = i.rem_euclid(2 * n);
-                if m < n {
-                    m
-                } else {
-                    2 * n - 1 - m
-                }
+                Some(if m < n { m } else { 2 * n - 1 - m })
             }
+            Wrap::Black => (0..n).contains(&i).then_some(i),
         };
         // Row 0 of the image is its top: v = 0.
-        self.image.get(wrap(x, w, 0), wrap(y, h, 1))
+        match (wrap(x, w, 0), wrap(y, h, 1)) {
+            (Some(i), Some(j)) => self.image.get(i, j),
+            _ => Rgb::ZERO,
+        }
     }
 
     /// The bilinear cell holding `uv`: the texel whose centre is its lower corner, and `uv`'s
@@ -553,21 +555,21 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
         "bilinear" => Filter::Bilinear,
         _ => Filter::Nearest,
     };
-    let wrap = match o.choice("wrap_mode", &["repeat", "mirror", "clamp"])?.as_str() {
+    let wrap_of = |choice: String| match choice.as_str() {
         "repeat" => Wrap::Repeat,
         "mirror" => Wrap::Mirror,
+        "black" => Wrap::Black,
         _ => Wrap::Clamp,
     };
+    // Mitsuba's three wrap modes and neumann's `black` (pbrt-v4's).
+    const WRAPS: [&str; 4] = ["repeat", "mirror", "clamp", "black"];
+    let wrap = wrap_of(o.choice("wrap_mode", &WRAPS)?);
     // neumann's `wrap_mode_u` / `wrap_mode_v` set one axis each (glTF samplers do).
     let axis = |name: &str| -> PropResult<Wrap> {
         if !o.has(name) {
             return Ok(wrap);
         }
-        Ok(match o.choice(name, &["repeat", "mirror", "clamp"])?.as_str() {
-            "repeat" => Wrap::Repeat,
-            "mirror" => Wrap::Mirror,
-            _ => Wrap::Clamp,
-        })
+        Ok(wrap_of(o.choice(name, &WRAPS)?))
     };
     let wrap = [axis("wrap_mode_u")?, axis("wrap_mode_v")?];
     let texture = Texture::Bitmap { bitmap: Bitmap { image, filter, wrap }, to_uv: to_uv_from_props(o)? };
@@ -756,6 +758,12 @@ mod tests {
         assert!((mid - Rgb::new(0.5, 0.5, 0.5)).abs().max_element() < 1e-6, "{mid}");
         let mirror = Bitmap { image: image(), filter: Filter::Nearest, wrap: [Wrap::Mirror; 2] };
         assert_eq!(mirror.eval(Vec2::new(1.25, 0.25)), Rgb::Y, "mirrored copy");
+        // pbrt's black wrap: texels outside the image are 0, so the border fades bilinearly.
+        let black = Bitmap { image: image(), filter: Filter::Bilinear, wrap: [Wrap::Black, Wrap::Repeat] };
+        assert_eq!(black.eval(Vec2::new(0.25, 0.25)), Rgb::X, "inside");
+        assert_eq!(black.eval(Vec2::new(1.25, 0.25)), Rgb::ZERO, "outside along u");
+        assert_eq!(black.eval(Vec2::new(0.0, 0.25)), Rgb::X * 0.5, "half the edge texel");
+        assert_eq!(black.eval(Vec2::new(0.25, 1.25)), Rgb::X, "v still repeats");
     }
 
     #[test]

@@ -265,7 +265,7 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
                 None | Some("repeat") => "repeat",
                 Some("clamp") => "clamp",
                 Some("octahedralsphere") => "repeat",
-                Some("black") => return Err(ps.error_at("wrap", "wrap \"black\" is not implemented by neumann")),
+                Some("black") => "black",
                 Some(other) => return Err(ps.error_at("wrap", format!("unknown wrap \"{other}\""))),
             };
             set(&mut o, "wrap_mode", Value::String(wrap.into()), &ps.loc);
