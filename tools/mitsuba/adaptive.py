@@ -8,6 +8,7 @@ early is credited), adaptive ÷ uniform, seeds averaged. Prints one table row pe
 Run from the repository root after `cargo build --release` (Mitsuba's Python package reads the
 references' EXR files):
     ~/mitsuba-venv/bin/python tools/mitsuba/adaptive.py [--threshold T] [--seconds S] [scene ...]"""
+import argparse
 import os
 import re
 import subprocess
@@ -39,14 +40,12 @@ def render(scene, res, seconds, seed, extra, out):
 
 
 def main():
-    args = sys.argv[1:]
-    threshold, seconds = 0.01, 3.0
-    while args and args[0] in ("--threshold", "--seconds"):
-        if args[0] == "--threshold":
-            threshold = float(args[1])
-        else:
-            seconds = float(args[1])
-        args = args[2:]
+    parser = argparse.ArgumentParser(description="adaptive against uniform sampling at equal time")
+    parser.add_argument("--threshold", type=float, default=0.01, help="noise threshold T (Cycles' meaning)")
+    parser.add_argument("--seconds", type=float, default=3.0, help="time budget of every render")
+    parser.add_argument("scenes", nargs="*", help="scene names (default: all)")
+    opts = parser.parse_args()
+    threshold, seconds, args = opts.threshold, opts.seconds, opts.scenes
     from references import SCENES, relmse
 
     names = args or sorted(SCENES)

@@ -13,6 +13,7 @@ generation; `apt-get install libllvm19` and point DRJIT_LIBLLVM_PATH at it):
         ~/mitsuba-venv/bin/python tools/mitsuba/speed.py [--res N] [--runs K] [scene ...]
 Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every validation scene
 (tools/mitsuba/references.py) at the settings `neumann validate` uses (--res, default 128)."""
+import argparse
 import os
 import subprocess
 import sys
@@ -38,14 +39,12 @@ def timed(cmd):
 
 
 def main():
-    args = sys.argv[1:]
-    res, runs = 128, 2
-    while args and args[0] in ("--res", "--runs"):
-        if args[0] == "--res":
-            res = int(args[1])
-        else:
-            runs = int(args[1])
-        args = args[2:]
+    parser = argparse.ArgumentParser(description="neumann and Mitsuba llvm_ad_rgb side by side")
+    parser.add_argument("--res", type=int, default=128, help="film size of the validation scenes")
+    parser.add_argument("--runs", type=int, default=2, help="timed runs of each renderer (the best counts)")
+    parser.add_argument("scenes", nargs="*", help="scene names (default: all)")
+    opts = parser.parse_args()
+    res, runs, args = opts.res, opts.runs, opts.scenes
     from references import SCENES
 
     jobs = [("cbox", 512, 64, {"max_depth": "8"})]
