@@ -2,7 +2,8 @@
 //! `{x² + y² = 1, 0 ≤ z ≤ 1}` under a transform that scales x and y uniformly (radius r), z by
 //! the length L, and may rotate and translate. Normals point outward (inward with
 //! `flip_normals`). Area `2π r L`; area sampling is uniform in `(φ, z)`, which is uniform in
-//! area because the transform is a similarity across the axis.
+//! area because the transform is a similarity across the axis. A partial cylinder (pbrt-v4's
+//! `phimax`) keeps the azimuths `φ = atan2(y, x) ∈ [0, φ_max]` of the local frame.
 
 use super::sphere::SurfacePoint;
 use crate::math::float::gamma;
@@ -15,6 +16,8 @@ pub struct Cylinder {
     to_object: Transform,
     flip: bool,
     area: f32,
+    /// Largest azimuth kept, radians in `(0, 2π]`.
+    phi_max: f32,
 }
 
 impl Cylinder {
@@ -46,7 +49,21 @@ impl Cylinder {
             return None;
         }
         let area = 2.0 * PI * r * ez.length();
-        (area > 0.0 && area.is_finite()).then(|| Cylinder { to_world: t, to_object: t.inverse(), flip, area })
+        (area > 0.0 && area.is_finite()).then(|| Cylinder {
+            to_world: t,
+            to_object: t.inverse(),
+            flip,
+            area,
+            phi_max: 2.0 * PI,
+        })
+    }
+
+    /// The same cylinder keeping the azimuths up to `phi_max` radians (pbrt-v4's `phimax`; the
+    /// local frame's x axis is the first vector of [`crate::math::Frame::from_z`] of the axis,
+    /// which is +x for an axis along +z). `None` if nothing is left.
+    pub fn partial(self, phi_max: f32) -> Option<Cylinder> {
+        let phi_max = phi_max.min(2.0 * PI);
+        (phi_max > 0.0).then(|| Cylinder { phi_max, area: self.area * phi_max / (2.0 * PI), ..self })
     }
 
     /// Surface area.
@@ -89,14 +106,17 @@ impl Cylinder {
             let z = r.o.z + t * r.d.z;
             if (0.0..=1.0).contains(&z) {
                 let (x, y) = ((ox + t as f64 * dx) as f32, (oy + t as f64 * dy) as f32);
+                if self.phi_max < 2.0 * PI && azimuth(x, y) > self.phi_max {
+                    continue;
+                }
                 return Some((t, Vec3::new(x, y, z)));
             }
         }
         None
     }
 
-    /// World point (reprojected onto the surface), error bound, normal and `uv = (φ/2π, z)` of a
-    /// local point.
+    /// World point (reprojected onto the surface), error bound, normal and `uv = (φ/φ_max, z)`
+    /// of a local point (`φ_max` = 2π but for a partial cylinder).
     #[inline]
     pub fn surface(&self, local: Vec3) -> (SurfacePoint, Vec2) {
         let rho = (local.x * local.x + local.y * local.y).sqrt().max(f32::MIN_POSITIVE);
@@ -111,25 +131,39 @@ impl Cylinder {
         if self.flip {
             n = -n;
         }
-        let mut phi = q.y.atan2(q.x);
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
-        (SurfacePoint { p, n, p_error }, Vec2::new(phi / (2.0 * PI), q.z))
+        (SurfacePoint { p, n, p_error }, Vec2::new(azimuth(q.x, q.y) / self.phi_max, q.z))
     }
 
-    /// `(∂p/∂u, ∂p/∂v)` at the local point `local` for `uv = (φ / 2π, z)`, as Mitsuba gives
-    /// them: `2π (−y, x, 0)` around the axis and the axis itself, turned to world space.
+    /// `(∂p/∂u, ∂p/∂v)` at the local point `local` for `uv = (φ / φ_max, z)`, as Mitsuba gives
+    /// them: `φ_max (−y, x, 0)` around the axis and the axis itself, turned to world space.
     #[inline]
     pub fn dpduv(&self, local: Vec3) -> (Vec3, Vec3) {
-        let dpdu = self.to_world.apply_vector(Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI));
+        let dpdu = self.to_world.apply_vector(Vec3::new(-local.y, local.x, 0.0) * self.phi_max);
         (dpdu, self.to_world.apply_vector(Vec3::Z))
     }
 
     /// Uniform point on the surface; pdf `1 / area` per unit area.
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
-        let (s, c) = crate::math::sin_cos_2pi(u.x);
-        (self.surface(Vec3::new(c, s, u.y)).0, 1.0 / self.area)
+        (self.surface(self.sample_local(u)).0, 1.0 / self.area)
+    }
+
+    /// The local point of `u`, uniform in area: `φ = u₀ φ_max`, `z = u₁`.
+    #[inline]
+    pub fn sample_local(&self, u: Vec2) -> Vec3 {
+        let (s, c) =
+            if self.phi_max < 2.0 * PI { (u.x * self.phi_max).sin_cos() } else { crate::math::sin_cos_2pi(u.x) };
+        Vec3::new(c, s, u.y)
+    }
+}
+
+/// `atan2(y, x)` in `[0, 2π)`.
+#[inline]
+fn azimuth(x: f32, y: f32) -> f32 {
+    let phi = y.atan2(x);
+    if phi < 0.0 {
+        phi + 2.0 * PI
+    } else {
+        phi
     }
 }
 
@@ -165,6 +199,20 @@ mod tests {
         // Non-uniform scale across the axis is refused; flip turns the normal inward.
         assert!(Cylinder::new(Vec3::ZERO, Vec3::Z, 1.0, Transform::scale(Vec3::new(1.0, 2.0, 1.0)).unwrap(), false)
             .is_none());
+        // pbrt-v4's phimax: along +z, φ = 0 is +x; a quarter tube keeps only x, y ≥ 0.
+        let quarter =
+            Cylinder::new(Vec3::ZERO, Vec3::Z, 1.0, Transform::IDENTITY, false).unwrap().partial(PI / 2.0).unwrap();
+        let down =
+            |x: f32, y: f32| Ray::new(Vec3::new(x, y, 0.5) * 3.0 - Vec3::new(0.0, 0.0, 1.0), -Vec3::new(x, y, 0.0));
+        assert!(quarter.intersect(&down(0.6, 0.8), f32::INFINITY).is_some());
+        // From (−0.6, 0.8)·3 toward the axis: the near wall (φ ≈ 127°) is cut, the far one too.
+        assert!(quarter.intersect(&down(-0.6, 0.8), f32::INFINITY).is_none());
+        // From (0.6, −0.8)·3: near wall cut (φ ≈ 307°), far wall at φ ≈ 127°: cut.
+        assert!(quarter.intersect(&down(0.6, -0.8), f32::INFINITY).is_none());
+        // From (−0.6, −0.8)·3: the far wall is at φ ≈ 53°, kept.
+        let (_, q) = quarter.intersect(&down(-0.6, -0.8), f32::INFINITY).unwrap();
+        assert!((q.x - 0.6).abs() < 1e-4 && (q.y - 0.8).abs() < 1e-4, "{q}");
+        assert!((quarter.surface(q).1.x - 0.8f32.atan2(0.6) / (PI / 2.0)).abs() < 1e-5);
         let flipped = Cylinder::new(Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0), 0.5, Transform::IDENTITY, true);
         assert!((flipped.unwrap().surface(local).0.n + Vec3::Z).length() < 1e-5);
     }
@@ -188,6 +236,22 @@ mod tests {
             },
             |_| 1.0,
             &Chi2Config::default(),
+        );
+        assert!(out.passed(), "{out}");
+        // pbrt-v4's partial cylinder: (u, v) still uniform over [0, 1]², points at φ ≤ φ_max.
+        let part = c.partial(2.0).unwrap();
+        assert!((part.area() - c.area() * 2.0 / (2.0 * PI)).abs() < 1e-4 * c.area());
+        let out = chi2_2d(
+            &Rect::UNIT,
+            [20, 20],
+            200_000,
+            |r| {
+                let local = part.to_object.apply_point(part.sample_area(u2(r)).0.p);
+                assert!(azimuth(local.x, local.y) <= 2.0 + 1e-4);
+                Some(part.surface(local).1)
+            },
+            |_| 1.0,
+            &Chi2Config::default().with_seed(1),
         );
         assert!(out.passed(), "{out}");
         // Area of the transformed tube: 2π (0.6·1.7) (|p1 - p0|·1.7).

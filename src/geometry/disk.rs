@@ -1,5 +1,6 @@
 //! Disks: the unit disk in the local xy plane (normal +z), placed by a transform (Mitsuba's
-//! `disk` shape). Analytic intersection and uniform area sampling.
+//! `disk` shape), optionally partial (pbrt-v4's `innerradius` and `phimax`: an annulus, a
+//! sector). Analytic intersection and uniform area sampling.
 
 use super::sphere::SurfacePoint;
 use crate::math::float::gamma;
@@ -16,6 +17,10 @@ pub struct Disk {
     area: f32,
     /// pbrt-v4's (u, v) = (φ/2π, 1 − r) instead of Mitsuba's (r, φ/2π).
     pbrt_uv: bool,
+    /// Radius of the hole (local units, `[0, 1)`).
+    inner: f32,
+    /// Largest azimuth `φ = atan2(y, x) ∈ [0, 2π)` kept, radians in `(0, 2π]`.
+    phi_max: f32,
 }
 
 impl Disk {
@@ -33,7 +38,25 @@ impl Disk {
         if flip {
             n = -n;
         }
-        Some(Disk { to_world, to_object: to_world.inverse(), n, area, pbrt_uv: false })
+        Some(Disk { to_world, to_object: to_world.inverse(), n, area, pbrt_uv: false, inner: 0.0, phi_max: 2.0 * PI })
+    }
+
+    /// The same disk without the points closer to the centre than `inner` (local units, the
+    /// disk's radius being 1) or at an azimuth beyond `phi_max` (radians): pbrt-v4's partial
+    /// disk. `None` if nothing is left.
+    pub fn partial(self, inner: f32, phi_max: f32) -> Option<Disk> {
+        let phi_max = phi_max.min(2.0 * PI);
+        if !((0.0..1.0).contains(&inner) && phi_max > 0.0) {
+            return None;
+        }
+        let area = self.area * (1.0 - inner * inner) * phi_max / (2.0 * PI);
+        Some(Disk { inner, phi_max, area, ..self })
+    }
+
+    /// Whether pbrt-v4's `innerradius` or `phimax` cut part of the disk away.
+    #[inline]
+    fn is_partial(&self) -> bool {
+        self.inner > 0.0 || self.phi_max < 2.0 * PI
     }
 
     /// The same disk with pbrt-v4's parameterization: (u, v) = (φ/2π, 1 − r).
@@ -64,11 +87,18 @@ impl Disk {
         }
         let x = r.o.x + t * r.d.x;
         let y = r.o.y + t * r.d.y;
-        (x * x + y * y <= 1.0).then_some((t, Vec2::new(x, y)))
+        let r2 = x * x + y * y;
+        if r2 > 1.0 {
+            return None;
+        }
+        if self.is_partial() && (r2 < self.inner * self.inner || azimuth(Vec2::new(x, y)) > self.phi_max) {
+            return None;
+        }
+        Some((t, Vec2::new(x, y)))
     }
 
     /// World point, error bound and normal of the local point `q`; `uv = (r, φ / 2π)` (pbrt's:
-    /// `(φ / 2π, 1 − r)`).
+    /// `(φ / φ_max, (1 − r) / (1 − r_inner))`, which is `(φ / 2π, 1 − r)` for a whole disk).
     #[inline]
     pub fn surface(&self, q: Vec2) -> (SurfacePoint, Vec2) {
         let local = Vec3::new(q.x, q.y, 0.0);
@@ -76,12 +106,9 @@ impl Disk {
         let m = self.to_world.matrix();
         let abs_lin = m.x_axis.truncate().abs() * local.x.abs() + m.y_axis.truncate().abs() * local.y.abs();
         let p_error = gamma(6) * (abs_lin + m.w_axis.truncate().abs());
-        let mut phi = q.y.atan2(q.x);
-        if phi < 0.0 {
-            phi += 2.0 * PI;
-        }
+        let phi = azimuth(q);
         let uv = if self.pbrt_uv {
-            Vec2::new(phi / (2.0 * PI), 1.0 - q.length())
+            Vec2::new(phi / self.phi_max, (1.0 - q.length()) / (1.0 - self.inner))
         } else {
             Vec2::new(q.length(), phi / (2.0 * PI))
         };
@@ -90,24 +117,48 @@ impl Disk {
 
     /// `(∂p/∂u, ∂p/∂v)` at the local point `q` for `uv = (r, φ / 2π)`, as Mitsuba gives them:
     /// the radial direction (local +x at the centre) and `2π (−y, x, 0)`, turned to world space
-    /// (pbrt's parameterization: `2π (−y, x, 0)` and minus the radial direction).
+    /// (pbrt's parameterization: `φ_max (−y, x, 0)` and `−(1 − r_inner)` times the radial
+    /// direction).
     #[inline]
     pub fn dpduv(&self, q: Vec2) -> (Vec3, Vec3) {
         let r = q.length();
         let radial = if r > 0.0 { q / r } else { Vec2::X };
         let dr = self.to_world.apply_vector(Vec3::new(radial.x, radial.y, 0.0));
-        let dphi = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI));
         if self.pbrt_uv {
-            (dphi, -dr)
+            let dphi = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * self.phi_max);
+            (dphi, -(1.0 - self.inner) * dr)
         } else {
+            let dphi = self.to_world.apply_vector(Vec3::new(-q.y, q.x, 0.0) * (2.0 * PI));
             (dr, dphi)
         }
     }
 
     /// Uniform point on the disk (concentric map); pdf `1 / area` per unit area.
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
-        let q = sample_uniform_disk_concentric(u).value;
-        (self.surface(q).0, 1.0 / self.area)
+        (self.surface(self.sample_local(u)).0, 1.0 / self.area)
+    }
+
+    /// A local point uniform in area: the concentric map for a whole disk; for a partial one
+    /// `r = √(r_inner² + u₀ (1 − r_inner²))`, `φ = u₁ φ_max`.
+    #[inline]
+    pub fn sample_local(&self, u: Vec2) -> Vec2 {
+        if !self.is_partial() {
+            return sample_uniform_disk_concentric(u).value;
+        }
+        let r = (self.inner * self.inner + u.x * (1.0 - self.inner * self.inner)).sqrt();
+        let (s, c) = (u.y * self.phi_max).sin_cos();
+        Vec2::new(r * c, r * s)
+    }
+}
+
+/// `atan2(y, x)` in `[0, 2π)`.
+#[inline]
+fn azimuth(q: Vec2) -> f32 {
+    let phi = q.y.atan2(q.x);
+    if phi < 0.0 {
+        phi + 2.0 * PI
+    } else {
+        phi
     }
 }
 

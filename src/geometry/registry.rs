@@ -4,6 +4,7 @@
 //! ([`MeshSource`]). What a shape is made of (BSDF, emitter, media) and instancing are the
 //! loader's business.
 
+use super::sphere::SphereClip;
 use super::{Cylinder, Disk, Geometry, SdfGrid, Sphere, TriangleMesh};
 use crate::image::VolumeSource;
 use crate::math::{Transform, Vec3};
@@ -104,41 +105,60 @@ fn pbrt_uv(o: &Obj) -> Result<bool> {
     Ok(o.choice("parameterization", &["mitsuba", "pbrt"])? == "pbrt")
 }
 
+/// `phimax` (degrees in (0, 360], default 360) of a partial analytic shape (pbrt-v4's), in
+/// radians.
+fn phi_max(o: &Obj) -> Result<f32> {
+    Ok(o.float_checked("phimax", 360.0, |p| p > 0.0 && p <= 360.0, "in (0, 360] degrees")?.to_radians())
+}
+
 /// Mitsuba's `disk`: the unit disk in the z = 0 plane, facing +z; (u, v) = (r, φ/2π), or
-/// pbrt-v4's (φ/2π, 1 − r) with `parameterization` `pbrt`.
+/// pbrt-v4's (φ/2π, 1 − r) with `parameterization` `pbrt`. neumann's `innerradius` (a hole of
+/// that radius, the disk's being 1) and `phimax` (degrees) make pbrt-v4's partial disk.
 fn disk(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
     let d = Disk::new(*to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?;
+    let inner = o.float_checked("innerradius", 0.0, |r| (0.0..1.0).contains(&r), "in [0, 1) (the disk's radius is 1)")?;
+    let d = d.partial(inner, phi_max(o)?).expect("checked above");
     Ok(Geometry::Disk(if pbrt_uv(o)? { d.with_pbrt_uv() } else { d }))
 }
 
 /// Mitsuba's `sphere`: `center` (origin), `radius` (1), and a `to_world` that may only
 /// translate, rotate and scale uniformly; (u, v) = (φ/2π, θ/π), or pbrt-v4's (φ/2π, 1 − θ/π)
-/// with `parameterization` `pbrt` (θ from the object's −z instead of +z).
+/// with `parameterization` `pbrt` (θ from the object's −z instead of +z). neumann's `zmin`,
+/// `zmax` (object units, along the object's z from the centre) and `phimax` (degrees) make
+/// pbrt-v4's partial sphere, with pbrt's (u, v) stretched over what is left.
 fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
     // pbrt's v runs from the −z pole: the object's z axis reversed (a reflection the sphere's
     // surface and normals do not see).
-    let to_world = &(if pbrt_uv(o)? { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
+    let pbrt = pbrt_uv(o)?;
+    let to_world = &(if pbrt { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
     let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
+    let (zmin, zmax) = (o.float("zmin", -radius)?, o.float("zmax", radius)?);
+    let clip = SphereClip::from_pbrt(radius, zmin, zmax, phi_max(o)?.to_degrees())
+        .ok_or_else(|| o.error_at("zmin", "zmin and zmax leave nothing of the sphere"))?;
+    // In the reflected frame of pbrt's (u, v), z is the object's −z.
+    let clip = if pbrt { SphereClip { z_min: -clip.z_max, z_max: -clip.z_min, ..clip } } else { clip };
     let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
     let (c, r) = similarity(&t)
         .ok_or_else(|| o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly"))?;
     let axes = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)].map(|a| a / r);
     let rotation = crate::math::Mat3::from_cols(axes[0], axes[1], axes[2]);
-    Ok(Geometry::Sphere(Sphere { rotation, ..Sphere::new(c, r, flip) }))
+    Ok(Geometry::Sphere(Sphere { rotation, clip, ..Sphere::new(c, r, flip) }))
 }
 
-/// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open.
+/// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open. neumann's
+/// `phimax` (degrees) makes pbrt-v4's partial cylinder.
 fn cylinder(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
     let p0 = o.point_opt("p0")?.unwrap_or(Vec3::ZERO);
     let p1 = o.point_opt("p1")?.unwrap_or(Vec3::Z);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
-    Ok(Geometry::Cylinder(Cylinder::new(p0, p1, radius, *to_world, flip).ok_or_else(|| {
+    let c = Cylinder::new(p0, p1, radius, *to_world, flip).ok_or_else(|| {
         o.error_at(
             "to_world",
             "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
         )
-    })?))
+    })?;
+    Ok(Geometry::Cylinder(c.partial(phi_max(o)?).expect("phimax checked positive")))
 }
 
 /// Mitsuba's `sdfgrid`: `filename` (a one-channel `.vol` grid volume over the unit cube of

@@ -137,13 +137,11 @@ impl Geometry {
                 (sp, sp.n, pdf, s.uv_of_direction((sp.p - s.center) / s.radius))
             }
             Geometry::Disk(d) => {
-                let q = crate::sampling::sample_uniform_disk_concentric(u).value;
-                let (sp, uv) = d.surface(q);
+                let (sp, uv) = d.surface(d.sample_local(u));
                 (sp, sp.n, 1.0 / d.area(), uv)
             }
             Geometry::Cylinder(c) => {
-                let (sin, cos) = crate::math::sin_cos_2pi(u.x);
-                let (sp, uv) = c.surface(Vec3::new(cos, sin, u.y));
+                let (sp, uv) = c.surface(c.sample_local(u));
                 (sp, sp.n, 1.0 / c.area(), uv)
             }
             Geometry::SdfGrid(_) => return None,

@@ -1,5 +1,5 @@
 //! Spheres: analytic intersection (pbrt-v4's robust discriminant) and sampling of the cone
-//! they subtend from a reference point.
+//! they subtend from a reference point; partial spheres (pbrt-v4's `zmin`, `zmax`, `phimax`).
 
 use crate::math::float::gamma;
 use crate::math::{safe_sqrt, spherical_direction, Frame, Mat3, Ray, Vec2, Vec3, INV_4PI, PI};
@@ -18,6 +18,58 @@ pub struct Sphere {
     /// The object's axes in world space (columns; orthonormal, a reflection allowed): `to_world`'s
     /// rotation, which orients the (u, v) parameterization as Mitsuba's does.
     pub rotation: Mat3,
+    /// The part of the sphere that exists ([`SphereClip::FULL`]: all of it).
+    pub clip: SphereClip,
+}
+
+/// A partial sphere, in the object's frame (`rotation`) of the unit sphere: the points with
+/// `z_min ≤ z ≤ z_max` and azimuth `φ = atan2(y, x) ∈ [0, 2π)` at most `phi_max` (pbrt-v4's
+/// `zmin`, `zmax` divided by the radius and `phimax` in radians).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereClip {
+    /// Lowest z, in `[-1, 1)`.
+    pub z_min: f32,
+    /// Highest z, in `(z_min, 1]`.
+    pub z_max: f32,
+    /// Largest azimuth, radians in `(0, 2π]`.
+    pub phi_max: f32,
+}
+
+impl SphereClip {
+    /// The whole sphere.
+    pub const FULL: SphereClip = SphereClip { z_min: -1.0, z_max: 1.0, phi_max: 2.0 * PI };
+
+    /// The clip of pbrt-v4's sphere parameters (object units, `phimax` in degrees), clamped as
+    /// pbrt clamps them; `None` if nothing is left.
+    pub fn from_pbrt(radius: f32, zmin: f32, zmax: f32, phimax_degrees: f32) -> Option<SphereClip> {
+        let z_min = (zmin.min(zmax) / radius).clamp(-1.0, 1.0);
+        let z_max = (zmin.max(zmax) / radius).clamp(-1.0, 1.0);
+        let phi_max = phimax_degrees.clamp(0.0, 360.0).to_radians();
+        (z_max > z_min && phi_max > 0.0).then_some(SphereClip { z_min, z_max, phi_max })
+    }
+
+    /// Whether anything is cut away.
+    #[inline]
+    pub fn is_partial(&self) -> bool {
+        *self != SphereClip::FULL
+    }
+
+    /// Whether the unit-sphere point `local` (object frame) is kept.
+    #[inline]
+    fn contains(&self, local: Vec3) -> bool {
+        local.z >= self.z_min && local.z <= self.z_max && (self.phi_max >= 2.0 * PI || azimuth(local) <= self.phi_max)
+    }
+}
+
+/// `atan2(y, x)` in `[0, 2π)`.
+#[inline]
+fn azimuth(v: Vec3) -> f32 {
+    let phi = v.y.atan2(v.x);
+    if phi < 0.0 {
+        phi + 2.0 * PI
+    } else {
+        phi
+    }
 }
 
 /// A hit on a sphere: ray parameter.
@@ -41,12 +93,12 @@ pub struct SurfacePoint {
 impl Sphere {
     /// A sphere with its parameterization aligned with the world axes.
     pub fn new(center: Vec3, radius: f32, flip: bool) -> Sphere {
-        Sphere { center, radius, flip, rotation: Mat3::IDENTITY }
+        Sphere { center, radius, flip, rotation: Mat3::IDENTITY, clip: SphereClip::FULL }
     }
 
-    /// Surface area `4π r²`.
+    /// Surface area: `4π r²`, of a partial sphere `φ_max r² (z_max − z_min)` (Archimedes).
     pub fn area(&self) -> f32 {
-        4.0 * PI * self.radius * self.radius
+        self.clip.phi_max * self.radius * self.radius * (self.clip.z_max - self.clip.z_min)
     }
 
     /// Closest intersection in `(0, t_max)`.
@@ -72,13 +124,27 @@ impl Sphere {
         if t0 >= t_max || t1 <= 0.0 {
             return None;
         }
+        if self.clip.is_partial() {
+            // The nearer root may lie on the part cut away: then the farther one may be kept.
+            return [t0, t1]
+                .into_iter()
+                .find(|&t| t > 0.0 && t < t_max && self.keeps(ray.at(t)))
+                .map(|t| SphereHit { t });
+        }
         let t = if t0 > 0.0 { t0 } else { t1 };
         (t < t_max).then_some(SphereHit { t })
     }
 
+    /// Whether the world point `p` (on the sphere) lies on the part that exists.
+    #[inline]
+    fn keeps(&self, p: Vec3) -> bool {
+        self.clip.contains(self.rotation.transpose() * ((p - self.center) / self.radius))
+    }
+
     /// Reprojects the hit at `ray.at(t)` onto the sphere: point, error bound, outward-or-flipped
     /// unit normal, and (u, v) = (φ / 2π, θ / π) of the outward direction in the object's frame
-    /// (Mitsuba's parameterization, turned with `to_world`).
+    /// (Mitsuba's parameterization, turned with `to_world`; see [`Sphere::uv_of_direction`] for
+    /// partial spheres).
     #[inline]
     pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
         let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
@@ -86,11 +152,24 @@ impl Sphere {
     }
 
     /// (u, v) = (φ / 2π, θ / π) of the point in unit direction `v` from the centre (world),
-    /// in the object's frame.
+    /// in the object's frame. A partial sphere stretches them over what exists, as pbrt-v4 does:
+    /// `u = φ / φ_max`, `v = (θ − θ(z_max)) / (θ(z_min) − θ(z_max))`.
     #[inline]
     pub fn uv_of_direction(&self, v: Vec3) -> Vec2 {
         let local = self.rotation.transpose() * v;
-        Vec2::new(crate::math::spherical_phi(local) / (2.0 * PI), crate::math::spherical_theta(local) / PI)
+        let (phi, theta) = (crate::math::spherical_phi(local), crate::math::spherical_theta(local));
+        if !self.clip.is_partial() {
+            return Vec2::new(phi / (2.0 * PI), theta / PI);
+        }
+        let (top, span) = self.theta_range();
+        Vec2::new(phi / self.clip.phi_max, (theta - top) / span)
+    }
+
+    /// `θ(z_max)` and `θ(z_min) − θ(z_max)`: the polar angles the (partial) sphere spans.
+    #[inline]
+    fn theta_range(&self) -> (f32, f32) {
+        let top = self.clip.z_max.clamp(-1.0, 1.0).acos();
+        (top, self.clip.z_min.clamp(-1.0, 1.0).acos() - top)
     }
 
     /// `(∂p/∂u, ∂p/∂v)` at the surface point `p` for `uv = (φ / 2π, θ / π)`, as Mitsuba gives
@@ -99,13 +178,15 @@ impl Sphere {
     #[inline]
     pub fn dpduv(&self, p: Vec3, with_v: bool) -> (Vec3, Vec3) {
         let local = self.rotation.transpose() * (p - self.center);
+        // ∂φ/∂u and ∂θ/∂v: 2π and π for the whole sphere.
+        let (du, dv) = if self.clip.is_partial() { (self.clip.phi_max, self.theta_range().1) } else { (2.0 * PI, PI) };
         if !with_v {
-            return (self.rotation * (Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI)), Vec3::ZERO);
+            return (self.rotation * (Vec3::new(-local.y, local.x, 0.0) * du), Vec3::ZERO);
         }
         let rd = local.x.hypot(local.y);
         let (cos_phi, sin_phi) = if rd > 0.0 { (local.x / rd, local.y / rd) } else { (1.0, 0.0) };
-        let dpdu = Vec3::new(-local.y, local.x, 0.0) * (2.0 * PI);
-        let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rd) * PI;
+        let dpdu = Vec3::new(-local.y, local.x, 0.0) * du;
+        let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rd) * dv;
         (self.rotation * dpdu, self.rotation * dpdv)
     }
 
@@ -119,8 +200,18 @@ impl Sphere {
         }
     }
 
-    /// Uniform point on the surface; pdf `1 / (4π r²)` per unit area.
+    /// Uniform point on the surface; pdf `1 / (4π r²)` per unit area (`1 / area` for a partial
+    /// sphere: z uniform in `[z_min, z_max]` and φ in `[0, φ_max]`, uniform in area by
+    /// Archimedes' theorem).
     pub fn sample_area(&self, u: Vec2) -> (SurfacePoint, f32) {
+        if self.clip.is_partial() {
+            let c = self.clip;
+            let z = c.z_min + u.x * (c.z_max - c.z_min);
+            let r = safe_sqrt(1.0 - z * z);
+            let (s, co) = (u.y * c.phi_max).sin_cos();
+            let v = self.rotation * Vec3::new(r * co, r * s, z);
+            return (self.point(v), 1.0 / self.area());
+        }
         let v = sample_uniform_sphere(u).value;
         (self.point(v), INV_4PI / (self.radius * self.radius))
     }
@@ -128,11 +219,12 @@ impl Sphere {
     /// A point on the sphere seen from `p_ref`, sampled uniformly in the cone of directions the
     /// sphere subtends (pbrt-v4 §6.2.4), with pdf `1 / (2π (1 - cos θ_max))` per unit solid
     /// angle at `p_ref`. From inside the sphere, falls back to uniform area sampling and returns
-    /// the area pdf converted to solid angle. `None` if the conversion is degenerate.
+    /// the area pdf converted to solid angle, as does a partial sphere (whose cone holds
+    /// directions to the part cut away). `None` if the conversion is degenerate.
     pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<(SurfacePoint, f32)> {
         let dc2 = (p_ref - self.center).length_squared();
         let r2 = self.radius * self.radius;
-        if dc2 <= r2 * (1.0 + 1e-4) {
+        if dc2 <= r2 * (1.0 + 1e-4) || self.clip.is_partial() {
             let (sp, pdf_a) = self.sample_area(u);
             let d = sp.p - p_ref;
             let cos = sp.n.dot(-d.normalize_or_zero()).abs();
@@ -167,7 +259,7 @@ impl Sphere {
     pub fn pdf_solid_angle(&self, p_ref: Vec3, p: Vec3, n: Vec3) -> f32 {
         let dc2 = (p_ref - self.center).length_squared();
         let r2 = self.radius * self.radius;
-        if dc2 <= r2 * (1.0 + 1e-4) {
+        if dc2 <= r2 * (1.0 + 1e-4) || self.clip.is_partial() {
             let d = p - p_ref;
             let cos = n.dot(d.normalize_or_zero()).abs();
             return crate::sampling::area_to_solid_angle(1.0 / self.area(), d.length_squared(), cos);
@@ -198,6 +290,87 @@ mod tests {
         assert!(uv.y < 1e-3, "{uv}");
         let (_, uv0) = Sphere::new(Vec3::ZERO, 2.0, false).surface(&ray, t);
         assert!((uv0.y - 0.5).abs() < 1e-5 && (uv0.x - 0.75).abs() < 1e-5, "{uv0}");
+    }
+
+    /// pbrt-v4's partial sphere: the nearer crossing on the part cut away lets the ray through
+    /// to the farther one; area `φ_max r² (z_max − z_min)`; (u, v) spans [0, 1]² over what is
+    /// left; area samples stay on it.
+    #[test]
+    fn partial_sphere_intersection_area_and_uv() {
+        // Radius 2, z in [-1, 1.5] (object units), φ up to 270°.
+        let clip = SphereClip::from_pbrt(2.0, -1.0, 1.5, 270.0).unwrap();
+        let s = Sphere { clip, ..Sphere::new(Vec3::ZERO, 2.0, false) };
+        let phi_max = 1.5 * PI;
+        assert!((s.area() - phi_max * 4.0 * (0.75 + 0.5)).abs() < 1e-4, "{}", s.area());
+        // From above, along −z: the cap z > 1.5 is gone, so the ray meets the inside of the
+        // bottom... which is cut too (z < −1): it misses. Off-axis at x = 1.5 it hits the
+        // side at z = +√(4 − 2.25) ≈ 1.32 (kept: below 1.5).
+        assert!(s.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z), f32::INFINITY).is_none());
+        let t = s.intersect(&Ray::new(Vec3::new(1.5, 0.0, 5.0), -Vec3::Z), f32::INFINITY).unwrap().t;
+        assert!((t - (5.0 - 1.75f32.sqrt())).abs() < 1e-4, "{t}");
+        // Along +y at x = 0.5 the ray enters at φ ≈ 285° (cut: beyond 270°) and leaves at
+        // φ ≈ 75° (kept); from the other side the nearer crossing is that kept one.
+        for (y0, dir) in [(-5.0, Vec3::Y), (5.0, -Vec3::Y)] {
+            let ray = Ray::new(Vec3::new(0.5, y0, 0.0), dir);
+            let t = s.intersect(&ray, f32::INFINITY).unwrap().t;
+            assert!((ray.at(t).y - 3.75f32.sqrt()).abs() < 1e-4, "{}", ray.at(t));
+        }
+        let mut rng = crate::sampling::Pcg32::new(3, 9);
+        let (mut lo, mut hi) = (Vec2::splat(1.0), Vec2::splat(0.0));
+        for _ in 0..20_000 {
+            let (sp, pdf) = s.sample_area(u2(&mut rng));
+            let local = sp.p / 2.0;
+            let phi = azimuth(local);
+            let kept_phi = phi <= clip.phi_max + 1e-4 || phi >= 2.0 * PI - 1e-4;
+            assert!(local.z >= clip.z_min - 1e-5 && local.z <= clip.z_max + 1e-5 && kept_phi, "{local}");
+            assert!((pdf - 1.0 / s.area()).abs() < 1e-7);
+            let uv = s.uv_of_direction(local);
+            lo = lo.min(uv);
+            hi = hi.max(uv);
+        }
+        assert!(lo.min_element() > -1e-4 && hi.max_element() < 1.0 + 1e-4, "{lo} {hi}");
+        assert!(lo.max_element() < 0.01 && hi.min_element() > 0.99, "{lo} {hi}");
+    }
+
+    /// Directions toward a partial sphere (sampled by area, converted) follow
+    /// `pdf_solid_angle` summed over the kept crossings of each direction (χ² over the sphere of
+    /// directions), from outside and from inside; so the pdf integrates to one.
+    #[test]
+    fn partial_sphere_sampling_chi2() {
+        use crate::testkit::SPHERE;
+        let rot = Mat3::from_rotation_x(0.4) * Mat3::from_rotation_z(0.3);
+        let clip = SphereClip::from_pbrt(1.0, -0.6, 0.8, 250.0).unwrap();
+        // Placed off the poles of the direction sphere's (z, φ) cells, whose slivers there a
+        // cut edge could hide from the quadrature.
+        let s = Sphere { rotation: rot, clip, ..Sphere::new(Vec3::new(2.5, 0.3, 0.2), 1.0, false) };
+        for (k, p_ref) in [Vec3::ZERO, Vec3::new(2.4, 0.3, 0.3)].into_iter().enumerate() {
+            let pdf = |w: &Vec3| -> f64 {
+                // Both crossings of the whole sphere along w, each counted where it is kept.
+                let oc = (p_ref - s.center).as_dvec3();
+                let wd = w.as_dvec3();
+                let (b, c) = (oc.dot(wd), oc.length_squared() - 1.0);
+                let disc = b * b - c;
+                if disc < 0.0 {
+                    return 0.0;
+                }
+                [-b - disc.sqrt(), -b + disc.sqrt()]
+                    .into_iter()
+                    .filter(|&t| t > 0.0)
+                    .map(|t| (p_ref.as_dvec3() + t * wd).as_vec3())
+                    .filter(|&p| s.keeps(p))
+                    .map(|p| s.pdf_solid_angle(p_ref, p, (p - s.center).normalize()) as f64)
+                    .sum()
+            };
+            let out = chi2_2d(
+                &SPHERE,
+                [41, 81],
+                400_000,
+                |r| s.sample_solid_angle(p_ref, u2(r)).map(|(sp, _)| (sp.p - p_ref).normalize()),
+                pdf,
+                &Chi2Config::default().with_seed(k as u64),
+            );
+            assert!(out.passed(), "reference point {k}: {out}");
+        }
     }
 
     #[test]

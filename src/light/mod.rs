@@ -570,8 +570,23 @@ mod tests {
             .unwrap(),
         );
         disk_geo.prepare_sampling();
-        let mut shapes =
-            vec![Geometry::Mesh(rect), Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.3, 2.0), 0.7, false)), disk_geo];
+        // pbrt-v4's partial disk: an annulus sector (hole of radius 0.3, 200°), facing the
+        // origin from +x (off the poles of the direction cells, whose slivers there a cut edge
+        // could hide from the quadrature).
+        let annulus = Geometry::Disk(
+            crate::geometry::Disk::new(
+                Transform::translate(Vec3::new(1.6, 0.1, 0.3)) * Transform::rotate(Vec3::Y, -100.0).unwrap(),
+                false,
+            )
+            .and_then(|d| d.partial(0.3, 200f32.to_radians()))
+            .unwrap(),
+        );
+        let mut shapes = vec![
+            Geometry::Mesh(rect),
+            Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.3, 2.0), 0.7, false)),
+            disk_geo,
+            annulus,
+        ];
         for s in &mut shapes {
             assert!(s.prepare_sampling());
         }
@@ -692,7 +707,10 @@ mod tests {
                 * std::f64::consts::PI
         };
         let lights = [
-            (Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into(), two_sided: false }, PI as f64 * 4.0 * 0.5 * 2.0),
+            (
+                Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into(), two_sided: false },
+                PI as f64 * 4.0 * 0.5 * 2.0,
+            ),
             // pbrt-v4's two-sided emitter: twice the flux, half of it from the back.
             (
                 Light::Area { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into(), two_sided: true },
@@ -734,7 +752,9 @@ mod tests {
                 let s = light.sample_le(&shapes, u2(&mut rng), u2(&mut rng)).expect("emits");
                 assert!((s.d.length() - 1.0).abs() < 1e-4, "light {k}: unit direction");
                 match light {
-                    Light::Area { two_sided: false, .. } => assert!(s.d.dot(s.n) > 0.0, "area light emits from its front"),
+                    Light::Area { two_sided: false, .. } => {
+                        assert!(s.d.dot(s.n) > 0.0, "area light emits from its front")
+                    }
                     Light::Area { .. } => {
                         back += usize::from(s.d.dot(s.n) < 0.0);
                         assert!(s.d.dot(s.n) != 0.0);

@@ -153,6 +153,61 @@ Shape "cylinder" "float zmin" 0 "float zmax" 2
     assert!(m.flip_normals);
 }
 
+/// pbrt-v4's partial quadrics: `zmin`/`zmax`/`phimax` spheres, `innerradius`/`phimax` disks,
+/// `phimax` cylinders: pbrt's areas, what a ray meets (the nearer crossing on the part cut away
+/// lets it through), and pbrt's (u, v) stretched over what is left.
+#[test]
+fn partial_spheres_disks_and_cylinders() {
+    use crate::math::{Ray, Vec3};
+    use std::f32::consts::PI;
+    let f = load(
+        r#"Camera "perspective"
+WorldBegin
+Shape "sphere" "float radius" 2 "float zmin" -1 "float zmax" 0.8 "float phimax" 180
+Translate 10 0 0
+Shape "disk" "float radius" 2 "float innerradius" 1 "float phimax" 90
+Translate 10 0 0
+Shape "cylinder" "float radius" 1 "float zmin" 1 "float zmax" -1 "float phimax" 90
+"#,
+    )
+    .unwrap();
+    let g = f.scene.geometries();
+    // pbrt: φmax r (zmax − zmin), φmax (r² − r_i²) / 2, φmax r (zmax − zmin).
+    for (k, area) in [(0, PI * 2.0 * 1.8), (1, PI / 2.0 * 0.5 * 3.0), (2, PI / 2.0 * 2.0)] {
+        assert!((g[k].area() - area).abs() < 1e-4 * area, "shape {k}: {} vs {area}", g[k].area());
+    }
+    let hit = |o: Vec3, d: Vec3| f.scene.intersect(&Ray::new(o, d));
+    let close = |a: f32, b: f32| (a - b).abs() < 2e-4;
+    // Sphere, from above at (1, 0.5): both crossings (z = ±1.66) are cut by zmax and zmin.
+    assert!(hit(Vec3::new(1.0, 0.5, 5.0), -Vec3::Z).is_none());
+    // At (1.9, 0.1) the upper crossing, z = 0.62, is kept: pbrt's u = φ/φmax,
+    // v = (θ − θ(zmin)) / (θ(zmax) − θ(zmin)).
+    let si = hit(Vec3::new(1.9, 0.1, 5.0), -Vec3::Z).unwrap();
+    let z = (4.0f32 - 1.9 * 1.9 - 0.1 * 0.1).sqrt();
+    let (t0, t1) = ((-1.0f32 / 2.0).acos(), (0.8f32 / 2.0).acos());
+    assert!(close(si.p.z, z) && close(si.uv.x, 0.1f32.atan2(1.9) / PI), "{} {}", si.p, si.uv);
+    assert!(close(si.uv.y, ((z / 2.0).acos() - t0) / (t1 - t0)), "{}", si.uv);
+    // Along +y at x = 1: the crossing at y < 0 (φ > 180°) is cut, the one at y > 0 kept.
+    let si = hit(Vec3::new(1.0, -5.0, 0.0), Vec3::Y).unwrap();
+    assert!(close(si.p.y, 3f32.sqrt()), "{}", si.p);
+    // Disk (x offset 10): the hole (r < 1) and the quadrants beyond 90° let rays through.
+    assert!(hit(Vec3::new(10.5, 0.5, 5.0), -Vec3::Z).is_none());
+    assert!(hit(Vec3::new(8.5, 0.5, 5.0), -Vec3::Z).is_none());
+    let si = hit(Vec3::new(11.2, 0.9, 5.0), -Vec3::Z).unwrap();
+    let r = (1.2f32 * 1.2 + 0.9 * 0.9).sqrt();
+    // pbrt: u = φ/φmax, v = (r_max − r) / (r_max − r_i).
+    assert!(close(si.uv.x, 0.9f32.atan2(1.2) / (PI / 2.0)) && close(si.uv.y, (2.0 - r) / 1.0), "{}", si.uv);
+    // Cylinder (x offset 20, zmin and zmax swapped as pbrt allows): only the first quadrant.
+    assert!(hit(Vec3::new(20.0 - 5.0, -0.5, 0.3), Vec3::X).is_none());
+    let si = hit(Vec3::new(20.0 - 5.0, 0.6, 0.3), Vec3::X).unwrap();
+    assert!(close(si.p.x, 20.8), "{}", si.p);
+    // pbrt: u = φ/φmax, v = (z − zmin) / (zmax − zmin).
+    assert!(close(si.uv.x, 0.6f32.atan2(0.8) / (PI / 2.0)) && close(si.uv.y, 0.65), "{}", si.uv);
+    // Nothing left: a located error.
+    let e = err("Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float zmin\" 0.5 \"float zmax\" 0.5\n");
+    assert!(e.contains("test.pbrt:3") && e.contains("leave nothing"), "{e}");
+}
+
 #[test]
 fn errors_name_the_place_and_what_was_expected() {
     let head = "Camera \"perspective\"\nWorldBegin\n";

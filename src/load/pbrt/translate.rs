@@ -1100,11 +1100,16 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
         "sphere" => {
             let r = ps.float("radius", 1.0)?;
             let (zmin, zmax, phimax) = (ps.float("zmin", -r)?, ps.float("zmax", r)?, ps.float("phimax", 360.0)?);
-            if zmin > -r || zmax < r || phimax < 360.0 {
-                return Err(ps.error("partial spheres (zmin, zmax, phimax) are not implemented by neumann yet"));
+            if crate::geometry::SphereClip::from_pbrt(r, zmin, zmax, phimax).is_none() {
+                return Err(ps.error("zmin, zmax and phimax leave nothing of the sphere"));
             }
             let mut o = shape_obj(p, "sphere", ps, Some(transform(ctm, ps)?))?;
             set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
+            // pbrt clamps zmin and zmax to the sphere and phimax to [0, 360].
+            let (lo, hi) = (zmin.min(zmax).clamp(-r, r), zmin.max(zmax).clamp(-r, r));
+            set(&mut o, "zmin", Value::Float(lo as f64), &ploc(ps, "zmin"));
+            set(&mut o, "zmax", Value::Float(hi as f64), &ploc(ps, "zmax"));
+            set(&mut o, "phimax", Value::Float(phimax.clamp(0.0, 360.0) as f64), &ploc(ps, "phimax"));
             set(&mut o, "parameterization", Value::String("pbrt".into()), &ps.loc);
             o
         }
@@ -1115,23 +1120,31 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
                 ps.float("innerradius", 0.0)?,
                 ps.float("phimax", 360.0)?,
             );
-            if ri > 0.0 || phimax < 360.0 {
-                return Err(ps.error("partial disks (innerradius, phimax) are not implemented by neumann yet"));
+            if !(r > 0.0 && ri >= 0.0 && ri < r) {
+                return Err(ps.error_at("innerradius", "a disk needs 0 ≤ innerradius < radius"));
+            }
+            if phimax <= 0.0 || phimax.is_nan() {
+                return Err(ps.error_at("phimax", "phimax leaves nothing of the disk"));
             }
             let m = ctm * Mat4::from_translation(Vec3::new(0.0, 0.0, h)) * Mat4::from_scale(Vec3::new(r, r, 1.0));
             let mut o = shape_obj(p, "disk", ps, Some(transform(m, ps)?))?;
             set(&mut o, "parameterization", Value::String("pbrt".into()), &ps.loc);
+            set(&mut o, "innerradius", Value::Float((ri / r) as f64), &ploc(ps, "innerradius"));
+            set(&mut o, "phimax", Value::Float(phimax.min(360.0) as f64), &ploc(ps, "phimax"));
             o
         }
         "cylinder" => {
             let (r, zmin, zmax, phimax) =
                 (ps.float("radius", 1.0)?, ps.float("zmin", -1.0)?, ps.float("zmax", 1.0)?, ps.float("phimax", 360.0)?);
-            if phimax < 360.0 {
-                return Err(ps.error_at("phimax", "partial cylinders are not implemented by neumann yet"));
+            if phimax <= 0.0 || phimax.is_nan() {
+                return Err(ps.error_at("phimax", "phimax leaves nothing of the cylinder"));
             }
+            // pbrt orders zmin and zmax; an axis along +z keeps the local x axis (φ = 0) at +x.
+            let (zmin, zmax) = (zmin.min(zmax), zmin.max(zmax));
             let mut o = shape_obj(p, "cylinder", ps, Some(transform(ctm, ps)?))?;
             set(&mut o, "p0", Value::Point(Vec3::new(0.0, 0.0, zmin)), &ploc(ps, "zmin"));
             set(&mut o, "p1", Value::Point(Vec3::new(0.0, 0.0, zmax)), &ploc(ps, "zmax"));
+            set(&mut o, "phimax", Value::Float(phimax.min(360.0) as f64), &ploc(ps, "phimax"));
             set(&mut o, "radius", Value::Float(r as f64), &ploc(ps, "radius"));
             o
         }
