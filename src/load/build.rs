@@ -321,6 +321,21 @@ impl Builder {
                         }
                     }
                 }
+                // neumann's `opacity` (pbrt-v4's alpha on an area light): no emission where the
+                // shape is cut out, after `power` (which pbrt computes without the alpha).
+                if e.has("opacity") {
+                    let opacity = crate::texture::TextureSource::texture(self, e, "opacity", Rgb::ONE)?;
+                    if opacity.uses_position() {
+                        return Err(e.error_at(
+                            "opacity",
+                            "a texture that varies with position or normal is not implemented as an emitter's opacity: emitters look their textures up by uv",
+                        ));
+                    }
+                    radiance = match (radiance, opacity) {
+                        (Texture::Constant(a), Texture::Constant(b)) => Texture::Constant(a * b),
+                        (l, a) => Texture::Scale(Box::new([l, a])),
+                    };
+                }
                 let power = std::f32::consts::PI * sides * geometry.area() * radiance.mean().max_element();
                 if !power.is_finite() {
                     return Err(e.error(format!(

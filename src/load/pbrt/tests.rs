@@ -493,9 +493,34 @@ fn alpha_cut_outs_and_normal_maps() {
     let Bsdf::Perturbed(p) = b(1) else { unreachable!() };
     let plain = p.bsdf.eval(&ctx, wo, wi);
     assert!((plain.x - 0.5 / std::f32::consts::PI * wi.z).abs() < 1e-5, "{plain}");
-    let e =
-        err("Camera \"perspective\"\nWorldBegin\nAreaLightSource \"diffuse\"\nShape \"sphere\" \"float alpha\" 0.5\n");
-    assert!(e.contains("alpha"), "{e}");
+}
+
+/// pbrt-v4's alpha on an area light: the shape is cut out (a `mask` of that opacity) and emits
+/// nothing where it is cut out — its radiance times the alpha texture, after `power` (which
+/// pbrt computes without the alpha).
+#[test]
+fn alpha_cuts_area_lights_out() {
+    let f = load(
+        "Camera \"perspective\"\nWorldBegin\n\
+         Texture \"holes\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 1 \"float tex1\" 1 \"float tex2\" 0\n\
+         AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 2 3] \"float power\" 10\n\
+         Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"texture alpha\" \"holes\"\nAttributeEnd\n\
+         AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\nShape \"sphere\" \"float alpha\" 0.25\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let b = |i: usize| &f.scene.bsdfs()[f.scene.shapes()[i].bsdf as usize];
+    assert!(matches!(b(0), Bsdf::Mask { .. }) && matches!(b(1), Bsdf::Mask { .. }));
+    let radiance = |i: usize, u: f32| {
+        let Light::Area { radiance, .. } = &f.scene.lights()[i] else { panic!("{:?}", f.scene.lights()[i]) };
+        radiance.eval(crate::math::Vec2::new(u, 0.5))
+    };
+    // The quad: L × power 10 / (π · area 1), then the checkerboard (u < ½ opaque, u > ½ cut
+    // out).
+    let k = 10.0 / std::f32::consts::PI;
+    assert!((radiance(0, 0.25) - Rgb::new(1.0, 2.0, 3.0) * k).abs().max_element() < 1e-4, "{}", radiance(0, 0.25));
+    assert_eq!(radiance(0, 0.75), Rgb::ZERO);
+    // A constant alpha scales the emission: 4 × 0.25.
+    assert!((radiance(1, 0.3) - Rgb::ONE).abs().max_element() < 1e-6, "{}", radiance(1, 0.3));
 }
 
 #[test]

@@ -13,8 +13,9 @@
 //!   `randomwalk` → `path`; `bdpt`, `mlt`, `sppm` → `path` with a warning; `maxdepth` bounces →
 //!   `max_depth` = `maxdepth` + 1 segments);
 //! - shapes `trianglemesh`, `plymesh` (also gzip-compressed), `bilinearmesh` (two triangles per
-//!   patch), `sphere`, `disk`, `cylinder` (whole ones); `alpha` (a float or float texture) →
-//!   a `mask` of that opacity around the material (pbrt's stochastic alpha test in expectation);
+//!   patch), `sphere`, `disk`, `cylinder` (partial ones too); `alpha` (a float or float
+//!   texture) → a `mask` of that opacity around the material (pbrt's stochastic alpha test in
+//!   expectation) and, on an area light, the emitter's `opacity`;
 //! - materials `diffuse`, `conductor` (`eta`/`k` of pbrt's named metals, RGB or spectra, or
 //!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
 //!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
@@ -1031,19 +1032,19 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         }
     }
     let material = p.current_material()?;
+    let mut cut_out = None;
     match texturable(p, ps, "alpha", true)? {
         // pbrt-v4: a constant alpha of 1 is no cut-out.
         None => o.children.push(material),
         Some(Value::Float(a)) if a >= 1.0 => o.children.push(material),
         Some(a) => {
-            if p.gs.area_light.is_some() {
-                return Err(ps.error_at("alpha", "alpha cut-outs of area lights are not implemented by neumann"));
-            }
-            // pbrt's stochastic alpha test, in expectation: a `mask` of opacity alpha.
+            // pbrt's stochastic alpha test, in expectation: a `mask` of opacity alpha; an area
+            // light emits nothing where it is cut out (the emitter's `opacity`).
             let mut m = obj("bsdf", "mask", &ploc(ps, "alpha"));
-            set(&mut m, "opacity", a, &ploc(ps, "alpha"));
+            set(&mut m, "opacity", a.clone(), &ploc(ps, "alpha"));
             m.children.push(material);
             o.children.push(Rc::new(m));
+            cut_out = Some(a);
         }
     }
     if let Some(al) = p.gs.area_light.clone() {
@@ -1082,6 +1083,9 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
         let power = al.float("power", -1.0)?;
         if power > 0.0 {
             set(&mut e, "power", Value::Float(power as f64), &ploc(&al, "power"));
+        }
+        if let Some(a) = cut_out {
+            set(&mut e, "opacity", a, &ploc(ps, "alpha"));
         }
         o.children.push(Rc::new(e));
     }
