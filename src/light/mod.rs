@@ -15,7 +15,7 @@ mod sampler;
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
 pub use goniometric::{Goniometric, GoniometricError};
-pub use projector::Projector;
+pub use projector::{Projector, ProjectorEmission};
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
 

@@ -860,6 +860,42 @@ fn goniometric_lights() {
     assert!(e.contains("filename"), "{e}");
 }
 
+/// pbrt-v4's projection light: the image as intensity (scale · texel, W sr⁻¹, nearest texel)
+/// along the light's +z, `fov` across the shorter side, the image's s axis along +x and its
+/// rows from +y down; `power` normalises it as pbrt does (texel centres weighted by cos³θ).
+#[test]
+fn projection_lights() {
+    use crate::math::Vec3;
+    let dir = tmp("projection");
+    // 2 × 2: top row red, green; bottom row blue, white.
+    let px = [Rgb::new(1.0, 0.0, 0.0), Rgb::new(0.0, 1.0, 0.0), Rgb::new(0.0, 0.0, 1.0), Rgb::ONE];
+    crate::film::output::write_image(&dir.join("slide.exr"), 2, 2, &px, &Default::default()).unwrap();
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nTranslate 0 0 -1\n\
+         LightSource \"projection\" \"string filename\" \"{}\" \"float scale\" 2 \"float fov\" 90\nShape \"sphere\"\n",
+        dir.join("slide.exr").display()
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let Light::Projector(p) = &f.scene.lights()[0] else { panic!("{:?}", f.scene.lights()[0]) };
+    // Points on the plane 3 in front of the light (z = 2): up and right sees the top right
+    // texel, down and left the bottom left one; light = scale · texel / distance².
+    let li = |x: f32, y: f32| p.sample_li(Vec3::new(x, y, 2.0)).map(|s| s.li);
+    let d2 = 1.0 + 1.0 + 9.0;
+    assert!((li(1.0, 1.0).unwrap() - Rgb::new(0.0, 2.0, 0.0) / d2).abs().max_element() < 1e-6, "{:?}", li(1.0, 1.0));
+    assert!((li(-1.0, -1.0).unwrap() - Rgb::new(0.0, 0.0, 2.0) / d2).abs().max_element() < 1e-6, "{:?}", li(-1.0, -1.0));
+    assert!((li(-1.0, 1.0).unwrap() - Rgb::new(2.0, 0.0, 0.0) / d2).abs().max_element() < 1e-6);
+    assert!(li(3.5, 0.0).is_none(), "outside the 90° frustum");
+    let f = load(&text.replace("\"float scale\" 2", "\"float power\" 10")).unwrap();
+    let Light::Projector(p) = &f.scene.lights()[0] else { panic!() };
+    // pbrt's scale: power / (A · mean over texel centres of luminance · cos³θ), A = 4 (the
+    // image's extent at unit distance), the texel centres at cos θ = 1/√1.5, mean luminance ½.
+    let scale = 10.0 / (4.0 * 0.5 * 1.5f32.powf(-1.5));
+    let g = p.sample_li(Vec3::new(1.0, 1.0, 2.0)).unwrap().li.y;
+    assert!((g - scale / d2).abs() < 1e-4 * scale, "{g} vs {}", scale / d2);
+    let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"projection\"\n");
+    assert!(e.contains("filename"), "{e}");
+}
+
 /// pbrt-v4's (u, v) on its quadrics: a sphere's v runs from the −z pole (1 − θ/π), a disk's
 /// u is φ/2π and its v 1 − r; so an image texture lands where pbrt puts it.
 #[test]

@@ -25,7 +25,8 @@
 //!   `directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`, over pbrt's uv,
 //!   spherical, cylindrical and planar mappings;
 //! - lights `point`, `spot` (smoothstep falloff), `distant`, `infinite` (constant `L` or an
-//!   equal-area image), area `diffuse`, with pbrt-v4's `power` and `illuminance`.
+//!   equal-area image), `goniometric`, `projection` (→ a `projector` of intensity), area
+//!   `diffuse`, with pbrt-v4's `power` and `illuminance`.
 //!
 //! Anything else is an error naming it; parameters not read are errors too.
 
@@ -841,7 +842,32 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
             o
         }
-        "projection" => return Err(ps.error("the \"projection\" light is not implemented by neumann yet")),
+        "projection" => {
+            // pbrt-v4: a pinhole projecting the image as intensity (scale · texel, W sr⁻¹) along
+            // the light's +z, `fov` (90°) across the image's shorter side, the nearest texel, the
+            // image's s axis along the light's +x and t down its +y → neumann's projector with
+            // `emission` `intensity` (whose u runs along −x: mirrored).
+            let s = light_scale(p, ps)?;
+            let file = ps.string("filename")?.ok_or_else(|| ps.error("a projection light needs its \"string filename\""))?;
+            let at = ploc(ps, "filename");
+            let mut b = obj("texture", "bitmap", &at);
+            set(&mut b, "filename", Value::String(file), &at);
+            set(&mut b, "filter_type", Value::String("nearest".into()), &at);
+            let mirror = Mat4::from_cols_array(&[-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+            set(&mut b, "to_uv", Value::Transform(transform(mirror, ps)?), &at);
+            let mut o = obj("emitter", "projector", l);
+            set(&mut o, "irradiance", Value::Object(Rc::new(b)), &at);
+            set(&mut o, "emission", Value::String("intensity".into()), l);
+            set(&mut o, "scale", Value::Float(s as f64), &ploc(ps, "scale"));
+            set(&mut o, "fov", Value::Float(ps.float("fov", 90.0)? as f64), &ploc(ps, "fov"));
+            set(&mut o, "fov_axis", Value::String("smaller".into()), l);
+            let power = ps.float("power", -1.0)?;
+            if power > 0.0 {
+                set(&mut o, "power", Value::Float(power as f64), &ploc(ps, "power"));
+            }
+            set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
+            o
+        }
         other => return Err(ps.error(format!("unknown light \"{other}\""))),
     })
 }
