@@ -101,7 +101,10 @@ impl Projector {
                     ProjectorEmission::Irradiance => p.power(),
                 };
                 if !(power > 0.0 && power.is_finite() && unit > 0.0 && unit.is_finite()) {
-                    return Err(o.error_at("power", format!("needs a positive power and an image that is not black, got {power}")));
+                    return Err(o.error_at(
+                        "power",
+                        format!("needs a positive power and an image that is not black, got {power}"),
+                    ));
                 }
                 Ok(Projector { scale: scale * power / unit, ..p })
             }

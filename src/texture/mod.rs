@@ -65,6 +65,11 @@ pub enum Wrap {
     Clamp,
     /// Black (0) outside the image (pbrt-v4's `black` wrap; neumann's `wrap_mode` `black`).
     Black,
+    /// pbrt-v4's `octahedralsphere`, for images in the equal-area octahedral layout: a texel
+    /// beyond an edge is the one the sphere puts there (mirrored across that edge and across
+    /// the middle of the other axis). Both axes together; neumann's `wrap_mode`
+    /// `octahedral_sphere`.
+    OctahedralSphere,
 }
 
 /// An image texture.
@@ -194,6 +199,9 @@ impl From<Rgb> for Texture {
 impl Bitmap {
     fn texel(&self, x: i64, y: i64) -> Rgb {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
+        if self.wrap[0] == Wrap::OctahedralSphere || self.wrap[1] == Wrap::OctahedralSphere {
+            return self.octahedral_texel(x, y);
+        }
         let wrap = |i: i64, n: i64, axis: usize| match self.wrap[axis] {
             Wrap::Repeat => Some(i.rem_euclid(n)),
             Wrap::Clamp => Some(i.clamp(0, n - 1)),
@@ -202,12 +210,32 @@ impl Bitmap {
                 Some(if m < n { m } else { 2 * n - 1 - m })
             }
             Wrap::Black => (0..n).contains(&i).then_some(i),
+            Wrap::OctahedralSphere => unreachable!("handled for both axes above"),
         };
         // Row 0 of the image is its top: v = 0.
         match (wrap(x, w, 0), wrap(y, h, 1)) {
             (Some(i), Some(j)) => self.image.get(i, j),
             _ => Rgb::ZERO,
         }
+    }
+
+    /// Texel `(x, y)` with pbrt-v4's octahedral-sphere wrap (its `RemapPixelCoords`): beyond
+    /// the left or right edge, mirrored across it and across the middle row; beyond the top or
+    /// bottom, mirrored across it and across the middle column.
+    fn octahedral_texel(&self, mut x: i64, mut y: i64) -> Rgb {
+        let (w, h) = (self.image.width as i64, self.image.height as i64);
+        if x < 0 {
+            (x, y) = (-x, h - 1 - y);
+        } else if x >= w {
+            (x, y) = (2 * w - 1 - x, h - 1 - y);
+        }
+        if y < 0 {
+            (x, y) = (w - 1 - x, -y);
+        } else if y >= h {
+            (x, y) = (w - 1 - x, 2 * h - 1 - y);
+        }
+        // Far outside (not a bilinear neighbour) or a one-texel axis: the nearest texel.
+        self.image.get(x.clamp(0, w - 1), y.clamp(0, h - 1))
     }
 
     /// The bilinear cell holding `uv`: the texel whose centre is its lower corner, and `uv`'s
@@ -559,11 +587,19 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
         "repeat" => Wrap::Repeat,
         "mirror" => Wrap::Mirror,
         "black" => Wrap::Black,
+        "octahedral_sphere" => Wrap::OctahedralSphere,
         _ => Wrap::Clamp,
     };
-    // Mitsuba's three wrap modes and neumann's `black` (pbrt-v4's).
-    const WRAPS: [&str; 4] = ["repeat", "mirror", "clamp", "black"];
+    // Mitsuba's three wrap modes and neumann's `black` and `octahedral_sphere` (pbrt-v4's).
+    const WRAPS: [&str; 5] = ["repeat", "mirror", "clamp", "black", "octahedral_sphere"];
     let wrap = wrap_of(o.choice("wrap_mode", &WRAPS)?);
+    if wrap != Wrap::OctahedralSphere
+        && ["wrap_mode_u", "wrap_mode_v"]
+            .iter()
+            .any(|n| o.string_opt(n).ok().flatten().as_deref() == Some("octahedral_sphere"))
+    {
+        return Err(o.error_at("wrap_mode", "the octahedral_sphere wrap joins both axes: give it as wrap_mode"));
+    }
     // neumann's `wrap_mode_u` / `wrap_mode_v` set one axis each (glTF samplers do).
     let axis = |name: &str| -> PropResult<Wrap> {
         if !o.has(name) {
@@ -764,6 +800,15 @@ mod tests {
         assert_eq!(black.eval(Vec2::new(1.25, 0.25)), Rgb::ZERO, "outside along u");
         assert_eq!(black.eval(Vec2::new(0.0, 0.25)), Rgb::X * 0.5, "half the edge texel");
         assert_eq!(black.eval(Vec2::new(0.25, 1.25)), Rgb::X, "v still repeats");
+        // pbrt's octahedral sphere: beyond the right edge, the texel mirrored across it and
+        // across the middle row (pbrt maps column 2 to column 1 and row 0 to row 1); beyond the
+        // bottom, mirrored across it and across the middle column.
+        let octa = Bitmap { image: image(), filter: Filter::Nearest, wrap: [Wrap::OctahedralSphere; 2] };
+        assert_eq!(octa.eval(Vec2::new(1.25, 0.25)), Rgb::ONE, "(2, 0) → (1, 1)");
+        assert_eq!(octa.eval(Vec2::new(0.25, 1.25)), Rgb::ONE, "(0, 2) → (1, 1)");
+        assert_eq!(octa.eval(Vec2::new(-0.25, 0.25)), Rgb::ONE, "(−1, 0) → (1, 1)");
+        assert_eq!(octa.eval(Vec2::new(0.75, -0.25)), Rgb::Z, "(1, −1) → (0, 1)");
+        assert_eq!(octa.eval(Vec2::new(0.75, 0.25)), Rgb::Y, "inside");
     }
 
     #[test]

@@ -266,7 +266,7 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             let wrap = match ps.string("wrap")?.as_deref() {
                 None | Some("repeat") => "repeat",
                 Some("clamp") => "clamp",
-                Some("octahedralsphere") => "repeat",
+                Some("octahedralsphere") => "octahedral_sphere",
                 Some("black") => "black",
                 Some(other) => return Err(ps.error_at("wrap", format!("unknown wrap \"{other}\""))),
             };
