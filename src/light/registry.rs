@@ -172,14 +172,38 @@ fn constant(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
 /// (`mis_compensation` is read and has no effect on the expected image); neumann's `mapping`
-/// (`latlong`, or pbrt-v4's `equal_area` square, which may take pbrt-v4's `illuminance`).
+/// (`latlong`, or pbrt-v4's `equal_area` square, which may take pbrt-v4's `illuminance`, or
+/// `pbrt`: the equal-area square if the image is square, else pbrt-v3's latitude-longitude
+/// layout, `u = φ/2π` with `φ = atan2(y, x)` and `v = θ/π` from the local +z).
 fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
     // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).
     o.bool("mis_compensation", false)?;
-    let to_world = o.transform("to_world")?;
-    let map = match o.choice("mapping", &["latlong", "equal_area"])?.as_str() {
+    let mut to_world = o.transform("to_world")?;
+    let mut mapping = o.choice("mapping", &["latlong", "equal_area", "pbrt"])?;
+    if mapping == "pbrt" {
+        mapping = if image.width == image.height { "equal_area".into() } else { "latlong".into() };
+        if mapping == "latlong" {
+            if o.has("illuminance") {
+                return Err(o.error_at(
+                    "illuminance",
+                    "an illuminance is implemented for pbrt-v4's equal-area maps, not for latitude-longitude images",
+                ));
+            }
+            // pbrt-v3's (x, y, z) of Mitsuba's local (x, y, z) is (−z, x, y): Mitsuba's u =
+            // atan2(x, −z)/2π and v = acos(y)/π become atan2(y, x)/2π and acos(z)/π (a
+            // reflection: the two layouts run φ in opposite senses).
+            let m = crate::math::Mat4::from_cols(
+                crate::math::Vec4::new(0.0, 1.0, 0.0, 0.0),
+                crate::math::Vec4::new(0.0, 0.0, 1.0, 0.0),
+                crate::math::Vec4::new(-1.0, 0.0, 0.0, 0.0),
+                crate::math::Vec4::W,
+            );
+            to_world = to_world * crate::math::Transform::from_matrix(m).expect("orthogonal");
+        }
+    }
+    let map = match mapping.as_str() {
         "equal_area" => {
             let mut scale = scale;
             if let Some(e) = o.float_opt("illuminance")? {

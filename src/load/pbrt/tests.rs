@@ -463,6 +463,27 @@ fn lights_follow_pbrt_v4_normalisations() {
     assert!((lit.eval(crate::math::Vec3::new(0.0, -1.0, 0.0)) - pixels[36] * (5.0 / k)).abs().max_element() < 1e-3);
     let e = err(&text.replace("\"float scale\" 2", "\"rgb L\" [1 1 1]"));
     assert!(e.contains("either \"L\" or \"filename\""), "{e}");
+    // A latitude-longitude image (not square): pbrt-v3's layout about the light's +z, u = φ/2π
+    // with φ = atan2(y, x), v = θ/π; 4 × 3 puts the middle row on the equator and texel
+    // centres at φ = π/4, 3π/4, ….
+    let px: Vec<Rgb> = [[5.0; 4].map(Rgb::splat), [Rgb::X, Rgb::Y, Rgb::Z, Rgb::splat(0.5)], [Rgb::ZERO; 4]].concat();
+    crate::film::output::write_image(&dir.join("latlong.exr"), 4, 3, &px, &Default::default()).unwrap();
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"string filename\" \"{}\"\n",
+        dir.join("latlong.exr").display()
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let Light::EnvMap { map, .. } = &f.scene.lights()[0] else { panic!() };
+    assert_eq!(map.layout(), EnvMapLayout::LatLong);
+    let at = |x: f32, y: f32, z: f32| map.eval(crate::math::Vec3::new(x, y, z).normalize());
+    assert!((at(0.0, 0.0, 1.0) - Rgb::splat(5.0)).abs().max_element() < 1e-4, "+z is the top row");
+    assert!(at(0.0, 0.0, -1.0).max_element() < 1e-4, "−z is the bottom row");
+    for (d, want) in [((1.0, 1.0), Rgb::X), ((-1.0, 1.0), Rgb::Y), ((-1.0, -1.0), Rgb::Z), ((1.0, -1.0), Rgb::splat(0.5))] {
+        let got = at(d.0, d.1, 0.0);
+        assert!((got - want).abs().max_element() < 1e-3, "{d:?}: {got} vs {want}");
+    }
+    let e = err(&text.replace(".exr\"", ".exr\" \"float illuminance\" 2"));
+    assert!(e.contains("latitude-longitude"), "{e}");
     let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"spot\" \"float conedelta\" 5\n");
     assert!(e.contains("conedelta"), "{e}");
 }

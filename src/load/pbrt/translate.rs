@@ -807,10 +807,11 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                 if ps.has("L") {
                     return Err(ps.error_at("L", "give either \"L\" or \"filename\" (as pbrt-v4 requires)"));
                 }
-                // pbrt-v4's equal-area octahedral square around the light's +z.
+                // pbrt-v4's equal-area octahedral square around the light's +z (or, for an image
+                // that is not square, pbrt-v3's latitude-longitude layout about +z).
                 let mut o = obj("emitter", "envmap", l);
                 set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
-                set(&mut o, "mapping", Value::String("equal_area".into()), l);
+                set(&mut o, "mapping", Value::String("pbrt".into()), l);
                 set(&mut o, "scale", Value::Float(s as f64), &ploc(ps, "scale"));
                 if e > 0.0 {
                     set(&mut o, "illuminance", Value::Float(e as f64), &ploc(ps, "illuminance"));
