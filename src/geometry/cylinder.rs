@@ -106,7 +106,7 @@ impl Cylinder {
             let z = r.o.z + t * r.d.z;
             if (0.0..=1.0).contains(&z) {
                 let (x, y) = ((ox + t as f64 * dx) as f32, (oy + t as f64 * dy) as f32);
-                if self.phi_max < 2.0 * PI && azimuth(x, y) > self.phi_max {
+                if self.phi_max < 2.0 * PI && crate::math::spherical_phi(Vec3::new(x, y, 0.0)) > self.phi_max {
                     continue;
                 }
                 return Some((t, Vec3::new(x, y, z)));
@@ -131,7 +131,10 @@ impl Cylinder {
         if self.flip {
             n = -n;
         }
-        (SurfacePoint { p, n, p_error }, Vec2::new(azimuth(q.x, q.y) / self.phi_max, q.z))
+        (
+            SurfacePoint { p, n, p_error },
+            Vec2::new(crate::math::spherical_phi(Vec3::new(q.x, q.y, 0.0)) / self.phi_max, q.z),
+        )
     }
 
     /// `(∂p/∂u, ∂p/∂v)` at the local point `local` for `uv = (φ / φ_max, z)`, as Mitsuba gives
@@ -153,17 +156,6 @@ impl Cylinder {
         let (s, c) =
             if self.phi_max < 2.0 * PI { (u.x * self.phi_max).sin_cos() } else { crate::math::sin_cos_2pi(u.x) };
         Vec3::new(c, s, u.y)
-    }
-}
-
-/// `atan2(y, x)` in `[0, 2π)`.
-#[inline]
-fn azimuth(x: f32, y: f32) -> f32 {
-    let phi = y.atan2(x);
-    if phi < 0.0 {
-        phi + 2.0 * PI
-    } else {
-        phi
     }
 }
 
@@ -247,7 +239,7 @@ mod tests {
             200_000,
             |r| {
                 let local = part.to_object.apply_point(part.sample_area(u2(r)).0.p);
-                assert!(azimuth(local.x, local.y) <= 2.0 + 1e-4);
+                assert!(crate::math::spherical_phi(Vec3::new(local.x, local.y, 0.0)) <= 2.0 + 1e-4);
                 Some(part.surface(local).1)
             },
             |_| 1.0,

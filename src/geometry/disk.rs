@@ -91,7 +91,9 @@ impl Disk {
         if r2 > 1.0 {
             return None;
         }
-        if self.is_partial() && (r2 < self.inner * self.inner || azimuth(Vec2::new(x, y)) > self.phi_max) {
+        if self.is_partial()
+            && (r2 < self.inner * self.inner || crate::math::spherical_phi(Vec3::new(x, y, 0.0)) > self.phi_max)
+        {
             return None;
         }
         Some((t, Vec2::new(x, y)))
@@ -106,7 +108,7 @@ impl Disk {
         let m = self.to_world.matrix();
         let abs_lin = m.x_axis.truncate().abs() * local.x.abs() + m.y_axis.truncate().abs() * local.y.abs();
         let p_error = gamma(6) * (abs_lin + m.w_axis.truncate().abs());
-        let phi = azimuth(q);
+        let phi = crate::math::spherical_phi(Vec3::new(q.x, q.y, 0.0));
         let uv = if self.pbrt_uv {
             Vec2::new(phi / self.phi_max, (1.0 - q.length()) / (1.0 - self.inner))
         } else {
@@ -148,17 +150,6 @@ impl Disk {
         let r = (self.inner * self.inner + u.x * (1.0 - self.inner * self.inner)).sqrt();
         let (s, c) = (u.y * self.phi_max).sin_cos();
         Vec2::new(r * c, r * s)
-    }
-}
-
-/// `atan2(y, x)` in `[0, 2π)`.
-#[inline]
-fn azimuth(q: Vec2) -> f32 {
-    let phi = q.y.atan2(q.x);
-    if phi < 0.0 {
-        phi + 2.0 * PI
-    } else {
-        phi
     }
 }
 

@@ -57,18 +57,9 @@ impl SphereClip {
     /// Whether the unit-sphere point `local` (object frame) is kept.
     #[inline]
     fn contains(&self, local: Vec3) -> bool {
-        local.z >= self.z_min && local.z <= self.z_max && (self.phi_max >= 2.0 * PI || azimuth(local) <= self.phi_max)
-    }
-}
-
-/// `atan2(y, x)` in `[0, 2π)`.
-#[inline]
-fn azimuth(v: Vec3) -> f32 {
-    let phi = v.y.atan2(v.x);
-    if phi < 0.0 {
-        phi + 2.0 * PI
-    } else {
-        phi
+        local.z >= self.z_min
+            && local.z <= self.z_max
+            && (self.phi_max >= 2.0 * PI || crate::math::spherical_phi(local) <= self.phi_max)
     }
 }
 
@@ -320,7 +311,7 @@ mod tests {
         for _ in 0..20_000 {
             let (sp, pdf) = s.sample_area(u2(&mut rng));
             let local = sp.p / 2.0;
-            let phi = azimuth(local);
+            let phi = crate::math::spherical_phi(local);
             let kept_phi = phi <= clip.phi_max + 1e-4 || phi >= 2.0 * PI - 1e-4;
             assert!(local.z >= clip.z_min - 1e-5 && local.z <= clip.z_max + 1e-5 && kept_phi, "{local}");
             assert!((pdf - 1.0 / s.area()).abs() < 1e-7);
