@@ -208,7 +208,7 @@ impl Integrator for AovIntegrator {
             for &(_, kind) in &self.aovs {
                 if kind == AovKind::Emission {
                     let d = ray.d.normalize();
-                    let sky: Rgb = scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(d)).sum();
+                    let sky: Rgb = scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(ray.o, d)).sum();
                     rest[at..at + 3].copy_from_slice(&[sky.x, sky.y, sky.z]);
                 }
                 at += kind.channels().len();

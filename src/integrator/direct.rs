@@ -61,7 +61,7 @@ impl DirectIntegrator {
         };
         let Some(si) = hit else {
             let mut l = Rgb::ZERO;
-            trace::escaped(scene, ray.d.normalize(), None, hide, &mis, |le, w| l += le * w);
+            trace::escaped(scene, ray.o, ray.d.normalize(), None, hide, &mis, |le, w| l += le * w);
             return (l, covered);
         };
         let shape = scene.shapes()[si.shape as usize];
@@ -108,7 +108,7 @@ impl DirectIntegrator {
                         }
                     }
                 }
-                None => trace::escaped(scene, wi, Some(&prev), false, &mis, |e, w| le += e * w),
+                None => trace::escaped(scene, si.p, wi, Some(&prev), false, &mis, |e, w| le += e * w),
             }
             // bs.weight = f cos / pdf; divide by the number of BSDF samples.
             l += bs.weight * le / nb as f32;

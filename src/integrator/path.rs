@@ -128,7 +128,7 @@ impl PathIntegrator {
                 Some(i) => scene.lights()[i as usize].le(hit.ns, -w, hit.uv),
                 None => Rgb::ZERO,
             },
-            None => scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(w)).sum(),
+            None => scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(si.p, w)).sum(),
         };
         pdf = pdf.max(f32::MIN_POSITIVE);
         f * le / pdf
@@ -175,7 +175,7 @@ impl PathIntegrator {
             let Some(si) = hit else {
                 // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
                 let d = ray.d.normalize();
-                trace::escaped(scene, d, prev.as_ref(), hide, &mis, |le, w| record(depth + 1, beta * le * w));
+                trace::escaped(scene, ray.o, d, prev.as_ref(), hide, &mis, |le, w| record(depth + 1, beta * le * w));
                 break;
             };
             let wo = -ray.d.normalize();

@@ -191,12 +191,13 @@ pub fn emission_weight(
     }
 }
 
-/// The escaped-ray rule: a ray that leaves the scene in unit direction `d` sees each light at
-/// infinity; `add(Lₑ, w)` receives each one's radiance with its [`emission_weight`] (`prev`:
-/// the vertex the ray left, `None` for camera rays).
+/// The escaped-ray rule: a ray from `o` that leaves the scene in unit direction `d` sees each
+/// light at infinity; `add(Lₑ, w)` receives each one's radiance with its [`emission_weight`]
+/// (`prev`: the vertex the ray left, `None` for camera rays).
 #[inline]
 pub fn escaped(
     scene: &Scene,
+    o: Vec3,
     d: Vec3,
     prev: Option<&PrevVertex>,
     hide_emitters: bool,
@@ -205,11 +206,11 @@ pub fn escaped(
 ) {
     for &i in scene.infinite_lights() {
         let light = &scene.lights()[i as usize];
-        let le = light.le_escaped(d);
+        let le = light.le_escaped(o, d);
         if le == Rgb::ZERO {
             continue;
         }
-        let w = emission_weight(prev, hide_emitters, mis, |ctx| scene.light_pmf(ctx, i) * light.pdf_li_direction(d));
+        let w = emission_weight(prev, hide_emitters, mis, |ctx| scene.light_pmf(ctx, i) * light.pdf_li_direction(ctx.p, d));
         add(le, w);
     }
 }

@@ -187,7 +187,7 @@ impl Integrator for VolPathIntegrator {
             }
 
             let Some(si) = hit else {
-                trace::escaped(scene, ray.d, prev.as_ref(), hide, &mis, |le, w| l += beta * le * w);
+                trace::escaped(scene, ray.o, ray.d, prev.as_ref(), hide, &mis, |le, w| l += beta * le * w);
                 break;
             };
             let shape = scene.shapes()[si.shape as usize];

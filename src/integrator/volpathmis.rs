@@ -318,12 +318,12 @@ impl Integrator for VolPathMisIntegrator {
                         break;
                     }
                     let light = &scene.lights()[i as usize];
-                    let le = light.le_escaped(ray.d);
+                    let le = light.le_escaped(ray.o, ray.d);
                     if le == Rgb::ZERO {
                         continue;
                     }
                     l += le * self.emission_weight(&path, &path_nee, count_direct || depth == 0, last.as_ref(), |c| {
-                        scene.light_pmf(c, i) * light.pdf_li_direction(ray.d)
+                        scene.light_pmf(c, i) * light.pdf_li_direction(c.p, ray.d)
                     });
                 }
                 break;

@@ -21,12 +21,18 @@
 //!
 //! Parameters (Mitsuba): `filename`, `scale` (default 1), `to_world` (rotation); neumann's
 //! `mapping` (`latlong`, the default, or `equal_area`).
+//!
+//! With a [`Portal`] (pbrt-v4's `portal`) the map shines only through that rectangle: its
+//! radiance arrives along rays that cross the portal, and light sampling picks points of the
+//! portal (the `_from` methods, which take the point the light is seen from).
 
 use crate::image::Image;
 use crate::math::{luminance, Rgb, Transform, Vec2, Vec3, INV_4PI, PI};
 use crate::sampling::equal_area::{equal_area_sphere_to_square, equal_area_square_to_sphere};
 use crate::sampling::PiecewiseConstant2D;
 use std::sync::Arc;
+
+pub use super::portal::Portal;
 
 /// How image coordinates cover the sphere.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,6 +54,8 @@ pub struct EnvMap {
     scale: f32,
     to_world: Transform,
     to_local: Transform,
+    /// The window the map shines through (`None`: everywhere).
+    portal: Option<Portal>,
 }
 
 /// Why an image and scale do not make an environment map.
@@ -137,6 +145,49 @@ impl EnvMap {
             scale,
             to_world,
             to_local: to_world.inverse(),
+            portal: None,
+        }
+    }
+
+    /// The same map shining only through `portal`.
+    pub fn with_portal(self, portal: Portal) -> EnvMap {
+        EnvMap { portal: Some(portal), ..self }
+    }
+
+    /// The portal, if the map has one.
+    pub fn portal(&self) -> Option<&Portal> {
+        self.portal.as_ref()
+    }
+
+    /// Radiance arriving at `o` from unit world direction `d`: [`EnvMap::eval`], or zero if a
+    /// portal does not let it through.
+    #[inline]
+    pub fn eval_from(&self, o: Vec3, d: Vec3) -> Rgb {
+        match &self.portal {
+            Some(portal) if portal.crossing(o, d).is_none() => Rgb::ZERO,
+            _ => self.eval(d),
+        }
+    }
+
+    /// A direction of light arriving at `p_ref`: [`EnvMap::sample`], or through a uniform
+    /// point of the portal. `(direction, radiance, solid-angle pdf)`.
+    #[inline]
+    pub fn sample_from(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
+        match &self.portal {
+            None => self.sample(u),
+            Some(portal) => {
+                let (wi, pdf) = portal.sample(p_ref, u)?;
+                Some((wi, self.eval(wi), pdf))
+            }
+        }
+    }
+
+    /// Density of [`EnvMap::sample_from`] at `p_ref` for the unit world direction `d`.
+    #[inline]
+    pub fn pdf_from(&self, p_ref: Vec3, d: Vec3) -> f32 {
+        match &self.portal {
+            None => self.pdf(d),
+            Some(portal) => portal.pdf(p_ref, d),
         }
     }
 

@@ -8,6 +8,7 @@
 mod bvh;
 mod envmap;
 mod goniometric;
+mod portal;
 mod projector;
 mod registry;
 mod sampler;
@@ -15,6 +16,7 @@ mod sampler;
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
 pub use goniometric::{Goniometric, GoniometricError};
+pub use portal::{Portal, PortalError};
 pub use projector::{Projector, ProjectorEmission};
 pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
@@ -283,13 +285,14 @@ impl Light {
         matches!(self, Light::Constant { .. } | Light::EnvMap { .. })
     }
 
-    /// Radiance arriving from an infinite light along a ray that escaped in direction `d`
-    /// (world, unit); zero for lights that are not at infinity.
+    /// Radiance arriving from an infinite light along a ray from `o` that escaped in direction
+    /// `d` (world, unit; the origin matters to an environment map with a portal); zero for
+    /// lights that are not at infinity.
     #[inline]
-    pub fn le_escaped(&self, d: Vec3) -> Rgb {
+    pub fn le_escaped(&self, o: Vec3, d: Vec3) -> Rgb {
         match self {
             Light::Constant { radiance, .. } => *radiance,
-            Light::EnvMap { map, .. } => map.eval(d),
+            Light::EnvMap { map, .. } => map.eval_from(o, d),
             _ => Rgb::ZERO,
         }
     }
@@ -330,7 +333,7 @@ impl Light {
                 })
             }
             Light::EnvMap { map, center, radius } => {
-                let (wi, li, pdf) = map.sample(u)?;
+                let (wi, li, pdf) = map.sample_from(p_ref, u)?;
                 let far = beyond_scene(p_ref, *center, *radius);
                 Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
             }
@@ -401,17 +404,17 @@ impl Light {
             | Light::Directional { .. }
             | Light::Projector(_)
             | Light::Goniometric(_) => 0.0,
-            Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction((p - p_ref).normalize_or_zero()),
+            Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction(p_ref, (p - p_ref).normalize_or_zero()),
         }
     }
 
     /// Solid-angle density with which [`Light::sample_li`] picks direction `wi` toward an
     /// infinite light (0 for other lights).
     #[inline]
-    pub fn pdf_li_direction(&self, wi: Vec3) -> f32 {
+    pub fn pdf_li_direction(&self, p_ref: Vec3, wi: Vec3) -> f32 {
         match self {
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
-            Light::EnvMap { map, .. } => map.pdf(wi),
+            Light::EnvMap { map, .. } => map.pdf_from(p_ref, wi),
             _ => 0.0,
         }
     }
@@ -485,11 +488,26 @@ impl Light {
                     weight: *radiance * (area / wi.pdf),
                 }
             }
-            Light::EnvMap { map, center, radius } => {
-                let (wi, li, pdf) = map.sample(u_dir)?;
-                let (p, area) = parallel(-wi, *center, *radius);
-                EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
-            }
+            Light::EnvMap { map, center, radius } => match map.portal() {
+                None => {
+                    let (wi, li, pdf) = map.sample(u_dir)?;
+                    let (p, area) = parallel(-wi, *center, *radius);
+                    EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
+                }
+                Some(portal) => {
+                    // Through the portal: a point uniform on it, a direction from the map's
+                    // distribution (rays that do not enter through it carry nothing). The ray
+                    // starts beyond the scene so that what stands outside the window shades it.
+                    let (wi, li, pdf) = map.sample(u_dir)?;
+                    let cos = wi.dot(portal.normal());
+                    if cos <= 0.0 {
+                        return None;
+                    }
+                    let q = portal.point(u_pos);
+                    let p = q + wi * beyond_scene(q, *center, *radius);
+                    EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (portal.area() * cos / pdf) }
+                }
+            },
         };
         (s.weight.is_finite() && s.weight.max_element() > 0.0).then_some(s)
     }

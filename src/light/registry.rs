@@ -220,5 +220,17 @@ fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
         _ => EnvMap::new(image, scale, to_world),
     }
     .map_err(|e| o.error(e.to_string()))?;
+    // neumann's `portal_p0` … `portal_p3` (pbrt-v4's portal: the map shines only through that
+    // rectangle, world space).
+    let names = ["portal_p0", "portal_p1", "portal_p2", "portal_p3"];
+    let map = if names.iter().any(|n| o.has(n)) {
+        let mut corners = [Vec3::ZERO; 4];
+        for (c, n) in corners.iter_mut().zip(names) {
+            *c = o.point_opt(n)?.ok_or_else(|| o.error_at(names[0], "a portal needs all four corners portal_p0 … portal_p3"))?;
+        }
+        map.with_portal(super::Portal::new(corners).map_err(|e| o.error_at(names[0], e.to_string()))?)
+    } else {
+        map
+    };
     Ok(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 })
 }

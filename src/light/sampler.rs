@@ -185,7 +185,7 @@ mod tests {
                                 _ => 0.0,
                             }
                         }
-                        _ => light.pdf_li_direction(*w),
+                        _ => light.pdf_li_direction(p, *w),
                     };
                     total += (sampler.pmf(&ctx, i as u32) * density) as f64;
                 }

@@ -133,7 +133,7 @@ pub fn render_light_paths_with(
                     continue;
                 }
                 let le: Rgb =
-                    scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(ray.d)).sum();
+                    scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(ray.o, ray.d)).sum();
                 if le.is_finite() {
                     splatter.splat(film_pos, settings.transform.apply(le), &mut out);
                 } else {

@@ -285,47 +285,43 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         match fty.as_str() {
             "gaussian" => {
                 set(&mut rfilter, "stddev", Value::Float(f.float("sigma", 0.5)? as f64), &loc_of(&f, "sigma"));
-                f.floats("radius", &["float"])?;
+                // neumann's Gaussian reaches 4σ (README): pbrt's truncation radius is read only.
+                filter_radius(&f, 1.5)?;
             }
             "box" => {
                 rfilter.ty = "box".into();
-                if let Some(r) = f.floats("radius", &["float"])? {
-                    if r.iter().any(|&x| (x - 0.5).abs() > 1e-6) {
-                        return Err(f.error_at(
-                            "radius",
-                            "a box filter other than one pixel (radius 0.5) is not implemented by neumann",
-                        ));
-                    }
+                if (filter_radius(&f, 0.5)? - 0.5).abs() > 1e-6 {
+                    return Err(f.error_at(
+                        "xradius",
+                        "a box filter other than one pixel (radius 0.5) is not implemented by neumann",
+                    ));
                 }
             }
             "triangle" => {
                 rfilter.ty = "tent".into();
-                let r = f.floats("radius", &["float"])?.unwrap_or(vec![2.0, 2.0]);
-                if r.len() != 2 || r[0] != r[1] {
-                    return Err(f.error_at("radius", "the triangle filter's radius must be one value for x and y"));
-                }
-                set(&mut rfilter, "radius", Value::Float(r[0]), &loc_of(&f, "radius"));
+                let r = filter_radius(&f, 2.0)?;
+                set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
             "mitchell" => {
                 rfilter.ty = "mitchell".into();
                 set(&mut rfilter, "B", Value::Float(f.float("B", 1.0 / 3.0)? as f64), &loc_of(&f, "B"));
                 set(&mut rfilter, "C", Value::Float(f.float("C", 1.0 / 3.0)? as f64), &loc_of(&f, "C"));
-                let r = f.floats("radius", &["float"])?.unwrap_or(vec![2.0, 2.0]);
-                if r.len() != 2 || r[0] != r[1] {
-                    return Err(f.error_at("radius", "the filter's radius must be one value for x and y"));
-                }
-                set(&mut rfilter, "radius", Value::Float(r[0]), &loc_of(&f, "radius"));
+                let r = filter_radius(&f, 2.0)?;
+                set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
             "lanczos" | "sinc" => {
                 rfilter.ty = "lanczos".into();
                 let tau = f.float("tau", 3.0)?;
-                let r = f.floats("radius", &["float"])?.unwrap_or(vec![4.0, 4.0]);
-                if r.iter().any(|&x| (x as f32 - tau).abs() > 1e-6) {
-                    return Err(
-                        f.error_at("radius", "neumann's Lanczos filter has radius = tau (lobes); give both equal")
-                    );
+                if (filter_radius(&f, 4.0)? - tau).abs() > 1e-6 {
+                    return Err(f.error_at(
+                        "xradius",
+                        "neumann's Lanczos filter reaches as far as its lobes: give xradius and yradius equal to tau (pbrt's defaults are 4 and 3)",
+                    ));
                 }
-                set(&mut rfilter, "lobes", Value::Float(tau as f64), &loc_of(&f, "tau"));
+                if tau.fract() != 0.0 || tau < 1.0 {
+                    return Err(f.error_at("tau", format!("neumann's Lanczos filter has a whole number of lobes, got tau {tau}")));
+                }
+                set(&mut rfilter, "lobes", Value::Integer(tau as i64), &loc_of(&f, "tau"));
             }
             other => return Err(f.error(format!("unknown filter \"{other}\""))),
         }
@@ -373,3 +369,16 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
 
 #[cfg(test)]
 mod tests;
+
+/// pbrt-v4's filter radius: `xradius` and `yradius` (both `default`), which neumann's filters
+/// (one radius) need equal.
+fn filter_radius(f: &ParamSet, default: f32) -> Result<f32> {
+    let (x, y) = (f.float("xradius", default)?, f.float("yradius", default)?);
+    if x != y {
+        return Err(f.error_at("yradius", format!("neumann's filters have one radius: xradius {x} and yradius {y} differ")));
+    }
+    if !(x > 0.0 && x.is_finite()) {
+        return Err(f.error_at("xradius", format!("a filter radius must be positive, got {x}")));
+    }
+    Ok(x)
+}

@@ -917,6 +917,75 @@ fn projection_lights() {
     assert!(e.contains("filename"), "{e}");
 }
 
+/// pbrt-v4's portal: the environment shines only through the rectangle (rays crossing it toward
+/// its normal, p3 − p0 × p1 − p0). A room open on its +x side renders the same with a portal
+/// over the opening as without (light enters only there anyway), with less noise, since light
+/// samples then all go through the opening.
+#[test]
+fn portal_infinite_lights() {
+    use crate::load::test_support::{mean, rel_mse, render};
+    use crate::math::Vec3;
+    let dir = tmp("portal");
+    let n = 8u32;
+    let sky: Vec<Rgb> = (0..n * n).map(|i| Rgb::new(0.5 + (i % 5) as f32 * 0.4, 1.0, 0.5 + (i % 3) as f32 * 0.5)).collect();
+    crate::film::output::write_image(&dir.join("sky.exr"), n, n, &sky, &Default::default()).unwrap();
+    let room = |portal: &str| {
+        format!(
+            "LookAt 0 0 0.2  -1 0.3 -0.6  0 0 1\nCamera \"perspective\" \"float fov\" 70\n\
+             Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24\nWorldBegin\n\
+             LightSource \"infinite\" \"string filename\" \"{}\" {portal}\n\
+             Material \"diffuse\" \"rgb reflectance\" [0.6 0.5 0.4]\n\
+             Shape \"trianglemesh\" \"point3 P\" [-1 -1 -1  1 -1 -1  1 1 -1  -1 1 -1  -1 -1 1  1 -1 1  1 1 1  -1 1 1]\n\
+             \"integer indices\" [0 1 2 0 2 3  4 6 5 4 7 6  0 4 5 0 5 1  3 2 6 3 6 7  0 3 7 0 7 4]\n",
+            dir.join("sky.exr").display()
+        )
+    };
+    let corners = "\"point3 portal\" [1 -1 -1  1 -1 1  1 1 1  1 1 -1]";
+    let with = load(&room(corners)).unwrap_or_else(|e| panic!("{e}"));
+    let without = load(&room("")).unwrap();
+    // Through the opening from inside: the map; from outside, or away from it: nothing.
+    let (l, plain) = (&with.scene.lights()[0], &without.scene.lights()[0]);
+    let d = Vec3::new(1.0, 0.2, 0.1).normalize();
+    assert_eq!(l.le_escaped(Vec3::ZERO, d), plain.le_escaped(Vec3::ZERO, d));
+    assert_eq!(l.le_escaped(Vec3::new(2.0, 0.0, 0.0), d), Rgb::ZERO);
+    assert_eq!(l.le_escaped(Vec3::ZERO, -d), Rgb::ZERO);
+    assert_eq!(l.le_escaped(Vec3::ZERO, Vec3::new(1.0, 3.0, 0.0).normalize()), Rgb::ZERO, "beside the opening");
+    // Against a 1024-spp render without the portal: the same mean and image within the portal
+    // render's noise, which is far below the plain render's.
+    let (a, reference) = (render(&with, 64, 1), render(&without, 1024, 1));
+    let (ma, mr) = (mean(&a), mean(&reference));
+    assert!(mr > 0.01 && (ma / mr - 1.0).abs() < 0.01, "means {ma} vs {mr}");
+    let noise_portal = rel_mse(&render(&with, 64, 2), &a);
+    let noise_plain = rel_mse(&render(&without, 64, 2), &render(&without, 64, 1));
+    let diff = rel_mse(&a, &reference);
+    assert!(diff <= 1.5 * noise_portal, "relMSE {diff} against a noise level of {noise_portal}");
+    assert!(noise_portal < 0.5 * noise_plain, "the portal samples better: {noise_portal} vs {noise_plain}");
+    let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"point3 portal\" [0 0 0  1 0 0  1 1 0]\n");
+    assert!(e.contains("portal"), "{e}");
+}
+
+/// pbrt-v4's filter radii are `xradius` and `yradius` (one value each; neumann's filters need
+/// them equal); a box wider than a pixel and a sinc whose radius is not its tau are errors.
+#[test]
+fn filter_radii() {
+    use crate::film::filter::Filter;
+    let filter = |f: &str| load(&format!("PixelFilter {f}\nCamera \"perspective\"\nWorldBegin\n")).map(|s| s.filter);
+    assert!(matches!(filter("\"triangle\" \"float xradius\" 1.5 \"float yradius\" 1.5"), Ok(Filter::Tent { radius }) if radius == 1.5));
+    assert!(matches!(filter("\"triangle\""), Ok(Filter::Tent { radius }) if radius == 2.0));
+    assert!(matches!(filter("\"box\" \"float xradius\" 0.5"), Ok(Filter::Box)));
+    assert!(matches!(filter("\"gaussian\" \"float xradius\" 2 \"float yradius\" 2 \"float sigma\" 0.4"), Ok(Filter::Gaussian { stddev }) if stddev == 0.4));
+    assert!(filter("\"sinc\" \"float xradius\" 3 \"float yradius\" 3").is_ok());
+    for (f, what) in [
+        ("\"triangle\" \"float xradius\" 1", "yradius"),
+        ("\"box\" \"float xradius\" 1 \"float yradius\" 1", "box"),
+        ("\"sinc\"", "tau"),
+        ("\"mitchell\" \"float radius\" 1", "radius"),
+    ] {
+        let e = filter(f).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("test.pbrt:1") && e.contains(what), "{f}: {e}");
+    }
+}
+
 /// pbrt-v4's (u, v) on its quadrics: a sphere's v runs from the −z pole (1 − θ/π), a disk's
 /// u is φ/2π and its v 1 − r; so an image texture lands where pbrt puts it.
 #[test]

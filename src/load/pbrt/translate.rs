@@ -798,10 +798,18 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             o
         }
         "infinite" => {
-            if ps.has("portal") {
-                return Err(ps.error_at("portal", "portal infinite lights are not implemented by neumann"));
-            }
             let mut s = light_scale(p, ps)?;
+            // pbrt-v4's portal: four corners in world space.
+            let portal = match ps.floats("portal", &["point3", "point"])? {
+                None => None,
+                Some(v) if v.len() == 12 => {
+                    Some(std::array::from_fn::<Vec3, 4, _>(|i| Vec3::new(v[3 * i] as f32, v[3 * i + 1] as f32, v[3 * i + 2] as f32)))
+                }
+                Some(v) => return Err(ps.error_at("portal", format!("a portal is 4 points (12 numbers), got {} numbers", v.len()))),
+            };
+            if portal.is_some() && !ps.has("filename") {
+                return Err(ps.error_at("portal", "portals are for infinite lights with a \"filename\" (as in pbrt-v4)"));
+            }
             let e = ps.float("illuminance", -1.0)?;
             if let Some(file) = ps.string("filename")? {
                 if ps.has("L") {
@@ -815,6 +823,9 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                 set(&mut o, "scale", Value::Float(s as f64), &ploc(ps, "scale"));
                 if e > 0.0 {
                     set(&mut o, "illuminance", Value::Float(e as f64), &ploc(ps, "illuminance"));
+                }
+                for (k, corner) in portal.into_iter().flatten().enumerate() {
+                    set(&mut o, &format!("portal_p{k}"), Value::Point(corner), &ploc(ps, "portal"));
                 }
                 set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
                 return Ok(o);
