@@ -18,7 +18,7 @@ pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
 pub use goniometric::{Goniometric, GoniometricError};
 pub use portal::{Portal, PortalError};
 pub use projector::{Projector, ProjectorEmission};
-pub use registry::{area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
+pub use registry::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
 
 use crate::geometry::Geometry;

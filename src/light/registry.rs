@@ -40,6 +40,19 @@ pub fn area_radiance_from_props(o: &Obj, textures: &mut dyn TextureSource) -> Re
     Ok(t)
 }
 
+/// neumann's `opacity` of an area emitter (pbrt-v4's alpha on an area light): the texture its
+/// radiance is multiplied by, `None` when absent. Looked up by uv, as the radiance is.
+pub fn area_opacity_from_props(o: &Obj, textures: &mut dyn TextureSource) -> Result<Option<crate::texture::Texture>> {
+    if !o.has("opacity") {
+        return Ok(None);
+    }
+    let t = textures.texture(o, "opacity", Rgb::ONE)?;
+    if t.uses_position() {
+        return Err(o.error_at("opacity", not_by_position("opacity")));
+    }
+    Ok(Some(t))
+}
+
 /// The error for a texture that varies with position (pbrt-v4's projections, 3D patterns,
 /// `directionmix`) as an emitter's parameter: emitters look textures up by uv.
 fn not_by_position(name: &str) -> String {

@@ -19,7 +19,7 @@ use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGIN
 use crate::image::{GridVolume, Image, ImageSource, VolumeSource};
 use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
-use crate::light::{area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
+use crate::light::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
 use crate::load::image::load_image;
 use crate::load::memory::MemoryFiles;
 use crate::load::FileResolver;
@@ -323,18 +323,8 @@ impl Builder {
                 }
                 // neumann's `opacity` (pbrt-v4's alpha on an area light): no emission where the
                 // shape is cut out, after `power` (which pbrt computes without the alpha).
-                if e.has("opacity") {
-                    let opacity = crate::texture::TextureSource::texture(self, e, "opacity", Rgb::ONE)?;
-                    if opacity.uses_position() {
-                        return Err(e.error_at(
-                            "opacity",
-                            "a texture that varies with position or normal is not implemented as an emitter's opacity: emitters look their textures up by uv",
-                        ));
-                    }
-                    radiance = match (radiance, opacity) {
-                        (Texture::Constant(a), Texture::Constant(b)) => Texture::Constant(a * b),
-                        (l, a) => Texture::Scale(Box::new([l, a])),
-                    };
+                if let Some(opacity) = area_opacity_from_props(e, self)? {
+                    radiance = radiance.times(opacity);
                 }
                 let power = std::f32::consts::PI * sides * geometry.area() * radiance.mean().max_element();
                 if !power.is_finite() {

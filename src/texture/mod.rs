@@ -175,6 +175,14 @@ impl Texture {
         Texture::Checkerboard { color0: Box::new(color0.into()), color1: Box::new(color1.into()), to_uv }
     }
 
+    /// The product of two textures per channel (pbrt-v4's `scale`): a constant when both are.
+    pub fn times(self, other: Texture) -> Texture {
+        match (self, other) {
+            (Texture::Constant(a), Texture::Constant(b)) => Texture::Constant(a * b),
+            (a, b) => Texture::Scale(Box::new([a, b])),
+        }
+    }
+
     /// Whether `uv` lies in a `color0` cell of a checkerboard with uv transform `to_uv`.
     #[inline]
     fn checker_cell0(to_uv: &Mat3, uv: Vec2) -> bool {
@@ -623,10 +631,7 @@ fn scale_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
     let kind = SpectrumKind::Unbounded;
     let tex = b.texture_of(o, "tex", Rgb::ONE, kind)?;
     let scale = b.texture_of(o, "scale", Rgb::ONE, kind)?;
-    Ok(match (tex, scale) {
-        (Texture::Constant(a), Texture::Constant(b)) => Texture::Constant(a * b),
-        (t, s) => Texture::Scale(Box::new([t, s])),
-    })
+    Ok(tex.times(scale))
 }
 
 /// neumann's `threshold`: 1 where the texture `tex` (required) as a scalar reaches `threshold`
