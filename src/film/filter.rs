@@ -4,13 +4,17 @@
 //! `Σ f L / Σ f`.
 //!
 //! All filters here are separable, `f(x, y) = f₁(x) f₁(y)`, with `f₁` (unnormalized, in pixels):
-//! - `box` (radius ½): `f₁(x) = 1` for `|x| ≤ ½`; the sample counts in its own pixel only.
+//! - `box` (radius r, ½ in Mitsuba: the sample counts in its own pixel only; pbrt-v4's
+//!   `xradius`): `f₁(x) = 1` for `|x| ≤ r`.
 //! - `tent` (radius r, default 1): `f₁(x) = max(0, 1 − |x|/r)`.
-//! - `gaussian` (standard deviation σ, default ½; radius 4σ as in Mitsuba):
-//!   `f₁(x) = max(0, exp(−x²/2σ²) − exp(−8))` (shifted to reach zero at the radius).
+//! - `gaussian` (standard deviation σ, default ½; radius r, 4σ in Mitsuba, pbrt-v4's `xradius`
+//!   default 1.5): `f₁(x) = max(0, exp(−x²/2σ²) − exp(−r²/2σ²))` (shifted to reach zero at the
+//!   radius; Mitsuba's shift is exp(−8)).
 //! - `mitchell` (B = C = ⅓) and `catmullrom` (B = 0, C = ½): Mitchell–Netravali cubics on
-//!   `|x| < 2` (Mitsuba's `radius`, default 2, can only cut them shorter).
-//! - `lanczos` (`lobes` n, default 3): `sinc(x) sinc(x/n)` on `|x| < n`.
+//!   `|x| < 2` (Mitsuba's `radius`, default 2, can only cut them shorter; neumann's `stretch`
+//!   scales the cubic to `|x| < stretch`, pbrt-v4's `mitchell` of radius `stretch`).
+//! - `lanczos` (`lobes` n, default 3): `sinc(x) sinc(x/n)` on `|x| < n`; pbrt-v4's `sinc`
+//!   window `sinc(x) sinc(x/τ)` on `|x| ≤ r` with any radius r and τ.
 //!
 //! The last three have negative lobes: samples add negative weights to some pixels, and the
 //! ratio `Σ f L / Σ f` still has the right expectation (Mitsuba's handling).
@@ -28,20 +32,26 @@ pub const MAX_RADIUS: f32 = MAX_BORDER as f32 + 0.5;
 /// A reconstruction filter.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Filter {
-    /// The pixel's square.
-    Box,
+    /// A square of half-width `radius` (pixels; ½ is the pixel's own square, [`Filter::BOX`]).
+    Box {
+        /// Half-width in pixels.
+        radius: f32,
+    },
     /// Tent of the given radius (pixels).
     Tent {
         /// Radius in pixels.
         radius: f32,
     },
-    /// Truncated, shifted Gaussian.
+    /// Truncated Gaussian, shifted to reach zero at `radius`.
     Gaussian {
         /// Standard deviation in pixels.
         stddev: f32,
+        /// Support half-width (pixels; Mitsuba's is 4σ).
+        radius: f32,
     },
     /// Mitchell–Netravali cubic with parameters `b`, `c` (Mitsuba's `mitchell`: ⅓, ⅓;
-    /// `catmullrom`: 0, ½), cut at `radius` (≤ 2).
+    /// `catmullrom`: 0, ½) stretched so that its support `[-2, 2]` spans `[-stretch, stretch]`
+    /// pixels (Mitsuba: 2, pbrt-v4: its radius), and cut at `radius` (≤ `stretch`).
     Cubic {
         /// B.
         b: f32,
@@ -49,11 +59,16 @@ pub enum Filter {
         c: f32,
         /// Support half-width (pixels).
         radius: f32,
+        /// Half-width the cubic's natural support of 2 is stretched to (pixels).
+        stretch: f32,
     },
-    /// Windowed sinc with `lobes` lobes (Mitsuba's `lanczos`).
+    /// Windowed sinc `sinc(x) sinc(x/τ)` cut at `radius` (Mitsuba's `lanczos` has `τ` =
+    /// `radius` = its `lobes`; pbrt-v4's `sinc` any of each).
     Lanczos {
-        /// Number of lobes (the radius, in pixels).
-        lobes: f32,
+        /// Width of the window's sinc, τ (pixels; the number of lobes when it equals the radius).
+        tau: f32,
+        /// Support half-width (pixels).
+        radius: f32,
     },
 }
 
@@ -61,16 +76,38 @@ impl std::fmt::Display for Filter {
     /// The filter as a scene file names it, with its parameters (`gaussian, stddev 0.5`).
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         match self {
-            Filter::Box => write!(f, "box"),
+            Filter::Box { radius } if *radius == 0.5 => write!(f, "box"),
+            Filter::Box { radius } => write!(f, "box, radius {radius}"),
             Filter::Tent { radius } => write!(f, "tent, radius {radius}"),
-            Filter::Gaussian { stddev } => write!(f, "gaussian, stddev {stddev}"),
-            Filter::Cubic { b, c, radius } => write!(f, "cubic, B {b}, C {c}, radius {radius}"),
-            Filter::Lanczos { lobes } => write!(f, "lanczos, lobes {lobes}"),
+            Filter::Gaussian { stddev, radius } if *radius == 4.0 * stddev => write!(f, "gaussian, stddev {stddev}"),
+            Filter::Gaussian { stddev, radius } => write!(f, "gaussian, stddev {stddev}, radius {radius}"),
+            Filter::Cubic { b, c, radius, stretch } if *stretch == 2.0 => {
+                write!(f, "cubic, B {b}, C {c}, radius {radius}")
+            }
+            Filter::Cubic { b, c, radius, stretch } => {
+                write!(f, "cubic, B {b}, C {c}, radius {radius}, stretched to {stretch}")
+            }
+            Filter::Lanczos { tau, radius } if tau == radius => write!(f, "lanczos, lobes {tau}"),
+            Filter::Lanczos { tau, radius } => write!(f, "windowed sinc, tau {tau}, radius {radius}"),
         }
     }
 }
 
 impl Filter {
+    /// The pixel's own square (Mitsuba's `box`): a sample counts in its pixel only.
+    pub const BOX: Filter = Filter::Box { radius: 0.5 };
+
+    /// Whether this is [`Filter::BOX`] (the renderers' fast path: no footprint to visit).
+    pub fn is_pixel_box(&self) -> bool {
+        matches!(self, Filter::Box { radius } if *radius == 0.5)
+    }
+
+    /// A box of half-width `radius` (pixels, in `[½, MAX_RADIUS]`: narrower boxes would miss
+    /// pixel centres).
+    pub fn boxed(radius: f32) -> Option<Filter> {
+        (0.5..=MAX_RADIUS).contains(&radius).then_some(Filter::Box { radius })
+    }
+
     /// Mitsuba's `tent` of radius `radius` (pixels, in `(0, MAX_RADIUS]`).
     pub fn tent(radius: f32) -> Option<Filter> {
         (radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Tent { radius })
@@ -78,17 +115,27 @@ impl Filter {
 
     /// Mitsuba's `gaussian` with standard deviation `stddev` (pixels, `0 < 4σ ≤ MAX_RADIUS`).
     pub fn gaussian(stddev: f32) -> Option<Filter> {
-        (stddev > 0.0 && 4.0 * stddev <= MAX_RADIUS).then_some(Filter::Gaussian { stddev })
+        Filter::gaussian_cut(stddev, 4.0 * stddev)
+    }
+
+    /// A Gaussian of standard deviation `stddev` cut at `radius` (pixels, `0 < r ≤ MAX_RADIUS`;
+    /// pbrt-v4's `gaussian`).
+    pub fn gaussian_cut(stddev: f32, radius: f32) -> Option<Filter> {
+        (stddev > 0.0 && radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Gaussian { stddev, radius })
+    }
+
+    /// pbrt-v4's `sinc` (windowed sinc, τ `tau`, cut at `radius`; both in pixels, τ > 0,
+    /// `0 < r ≤ MAX_RADIUS`). Mitsuba's `lanczos` with `n` lobes is `windowed_sinc(n, n)`.
+    pub fn windowed_sinc(tau: f32, radius: f32) -> Option<Filter> {
+        (tau > 0.0 && tau.is_finite() && radius > 0.0 && radius <= MAX_RADIUS)
+            .then_some(Filter::Lanczos { tau, radius })
     }
 
     /// Half-width of the filter's support (pixels).
     pub fn radius(&self) -> f32 {
         match self {
-            Filter::Box => 0.5,
-            Filter::Tent { radius } => *radius,
-            Filter::Gaussian { stddev } => 4.0 * stddev,
-            Filter::Cubic { radius, .. } => *radius,
-            Filter::Lanczos { lobes } => *lobes,
+            Filter::Box { radius } | Filter::Tent { radius } => *radius,
+            Filter::Gaussian { radius, .. } | Filter::Cubic { radius, .. } | Filter::Lanczos { radius, .. } => *radius,
         }
     }
 
@@ -101,21 +148,22 @@ impl Filter {
     #[inline]
     pub fn eval_1d(&self, x: f32) -> f32 {
         match self {
-            Filter::Box => f32::from(x.abs() <= 0.5),
+            Filter::Box { radius } => f32::from(x.abs() <= *radius),
             Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
-            Filter::Gaussian { stddev } => {
-                if x.abs() <= 4.0 * stddev {
-                    // exp(-(4σ)² / 2σ²) = exp(-8): the shift that makes f reach 0 at the radius.
-                    ((-x * x / (2.0 * stddev * stddev)).exp() - (-8.0f32).exp()).max(0.0)
+            Filter::Gaussian { stddev, radius } => {
+                if x.abs() <= *radius {
+                    // exp(-r² / 2σ²): the shift that makes f reach 0 at the radius (exp(-8) at 4σ).
+                    let s = -1.0 / (2.0 * stddev * stddev);
+                    ((s * x * x).exp() - (s * radius * radius).exp()).max(0.0)
                 } else {
                     0.0
                 }
             }
-            Filter::Cubic { b, c, radius } => {
-                let x = x.abs();
-                if x >= radius.min(2.0) {
+            Filter::Cubic { b, c, radius, stretch } => {
+                if x.abs() >= radius.min(*stretch) {
                     return 0.0;
                 }
+                let x = x.abs() * (2.0 / stretch);
                 let (x2, x3) = (x * x, x * x * x);
                 let v = if x < 1.0 {
                     (12.0 - 9.0 * b - 6.0 * c) * x3 + (-18.0 + 12.0 * b + 6.0 * c) * x2 + (6.0 - 2.0 * b)
@@ -124,14 +172,14 @@ impl Filter {
                 };
                 v / 6.0
             }
-            Filter::Lanczos { lobes } => {
+            Filter::Lanczos { tau, radius } => {
                 let x = x.abs();
                 if x < 1e-5 {
                     1.0
-                } else if x >= *lobes {
+                } else if x >= *radius {
                     0.0
                 } else {
-                    let (a, b) = (std::f32::consts::PI * x, std::f32::consts::PI * x / lobes);
+                    let (a, b) = (std::f32::consts::PI * x, std::f32::consts::PI * x / tau);
                     (a.sin() * b.sin()) / (a * b)
                 }
             }
@@ -181,15 +229,20 @@ impl Filter {
 }
 
 /// Every reconstruction-filter plugin by its (Mitsuba) name.
-pub const FILTER_PLUGINS: &[&str] = &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"];
+pub const FILTER_PLUGINS: &[&str] = &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos", "sinc"];
 
 impl Filter {
     /// Mitsuba's `rfilter` plugins: `box`, `tent` (`radius` 1), `gaussian` (`stddev` 0.5),
-    /// `mitchell` (`B` ⅓, `C` ⅓, `radius` 2), `catmullrom` (`radius` 2), `lanczos` (`lobes` 3).
+    /// `mitchell` (`B` ⅓, `C` ⅓, `radius` 2), `catmullrom` (`radius` 2), `lanczos` (`lobes` 3);
+    /// with neumann's parameters for pbrt-v4's filters: `box` `radius` (0.5), `gaussian`
+    /// `radius` (4σ), `mitchell`/`catmullrom` `stretch` (2), and the `sinc` plugin (`radius` 4,
+    /// `tau` 3, pbrt-v4's defaults).
     pub fn from_props(r: &Obj) -> PropResult<Filter> {
         r.built.set(true);
+        let too_wide = "radius must be positive and at most 16.5 pixels";
         match r.ty.as_str() {
-            "box" => Ok(Filter::Box),
+            "box" => Filter::boxed(r.float("radius", 0.5)?)
+                .ok_or_else(|| r.error_at("radius", "a box's radius must be at least 0.5 and at most 16.5 pixels")),
             "tent" => {
                 let radius = r.float("radius", 1.0)?;
                 Filter::tent(radius)
@@ -197,24 +250,37 @@ impl Filter {
             }
             "gaussian" => {
                 let s = r.float("stddev", 0.5)?;
-                Filter::gaussian(s).ok_or_else(|| {
-                    r.error_at("stddev", "stddev must be positive and at most 4.125 pixels (radius 4 stddev)")
-                })
+                if s.is_nan() || s <= 0.0 {
+                    return Err(r.error_at("stddev", format!("stddev must be positive, got {s}")));
+                }
+                Filter::gaussian_cut(s, r.float("radius", 4.0 * s)?).ok_or_else(|| r.error_at("radius", too_wide))
             }
             "mitchell" | "catmullrom" => {
-                let (b, c) = if r.ty == "mitchell" { (r.float("B", 1.0 / 3.0)?, r.float("C", 1.0 / 3.0)?) } else { (0.0, 0.5) };
-                let radius = r.float("radius", 2.0)?;
-                if !(radius > 0.0 && radius <= MAX_RADIUS) {
-                    return Err(r.error_at("radius", "radius must be positive and at most 16.5 pixels"));
+                let (b, c) =
+                    if r.ty == "mitchell" { (r.float("B", 1.0 / 3.0)?, r.float("C", 1.0 / 3.0)?) } else { (0.0, 0.5) };
+                let stretch = r.float("stretch", 2.0)?;
+                if !(stretch > 0.0 && stretch <= MAX_RADIUS) {
+                    return Err(r.error_at("stretch", "stretch must be positive and at most 16.5 pixels"));
                 }
-                Ok(Filter::Cubic { b, c, radius })
+                let radius = r.float("radius", stretch)?;
+                if !(radius > 0.0 && radius <= MAX_RADIUS) {
+                    return Err(r.error_at("radius", too_wide));
+                }
+                Ok(Filter::Cubic { b, c, radius, stretch })
             }
             "lanczos" => {
                 let lobes = r.int("lobes", 3)?;
                 if !(1..=16).contains(&lobes) {
                     return Err(r.error_at("lobes", format!("lobes must be between 1 and 16, got {lobes}")));
                 }
-                Ok(Filter::Lanczos { lobes: lobes as f32 })
+                Ok(Filter::Lanczos { tau: lobes as f32, radius: lobes as f32 })
+            }
+            "sinc" => {
+                let tau = r.float("tau", 3.0)?;
+                if !(tau > 0.0 && tau.is_finite()) {
+                    return Err(r.error_at("tau", format!("tau must be positive, got {tau}")));
+                }
+                Filter::windowed_sinc(tau, r.float("radius", 4.0)?).ok_or_else(|| r.error_at("radius", too_wide))
             }
             _ => Err(r.unknown_plugin(FILTER_PLUGINS)),
         }
@@ -230,7 +296,7 @@ mod tests {
         let g = Filter::gaussian(0.5).unwrap();
         assert_eq!(g.radius(), 2.0);
         assert_eq!(g.border(), 2);
-        assert_eq!(Filter::Box.border(), 0);
+        assert_eq!(Filter::BOX.border(), 0);
         assert_eq!(Filter::tent(1.0).unwrap().border(), 1);
         assert_eq!(Filter::tent(1.6).unwrap().border(), 2);
         assert!((g.eval_1d(0.0) - (1.0 - (-8.0f32).exp())).abs() < 1e-6);
@@ -246,15 +312,39 @@ mod tests {
     /// lobes, zero at the support's edge, and the footprint keeps the negative weights.
     #[test]
     fn cubic_and_lanczos_filters() {
-        let m = Filter::Cubic { b: 1.0 / 3.0, c: 1.0 / 3.0, radius: 2.0 };
+        let m = Filter::Cubic { b: 1.0 / 3.0, c: 1.0 / 3.0, radius: 2.0, stretch: 2.0 };
         assert!((m.eval_1d(0.0) - (6.0 - 2.0 / 3.0) / 6.0).abs() < 1e-6);
         assert!((m.eval_1d(1.0) - 1.0 / 18.0).abs() < 1e-6, "{}", m.eval_1d(1.0));
         assert!(m.eval_1d(1.5) < 0.0 && m.eval_1d(2.0) == 0.0 && m.radius() == 2.0);
-        let l = Filter::Lanczos { lobes: 3.0 };
+        let l = Filter::windowed_sinc(3.0, 3.0).unwrap();
         assert_eq!(l.eval_1d(0.0), 1.0);
         assert!(l.eval_1d(1.0).abs() < 1e-6 && l.eval_1d(1.5) < 0.0 && l.eval_1d(3.0) == 0.0);
         let mut negative = 0;
         l.footprint([10, 10], Vec2::new(0.3, 0.6), [0, 0], [20, 20], |_, _, w| negative += usize::from(w < 0.0));
         assert!(negative > 0, "negative lobes reach the film");
+    }
+
+    /// pbrt-v4's filters: a box of any radius, a Gaussian cut at its radius (not 4σ), the
+    /// Mitchell cubic stretched to its radius, and a windowed sinc whose radius is not its τ.
+    #[test]
+    fn pbrt_filter_shapes() {
+        let b = Filter::boxed(1.5).unwrap();
+        assert_eq!((b.eval_1d(1.5), b.eval_1d(1.51), b.border()), (1.0, 0.0, 1));
+        let mut n = 0;
+        b.footprint([10, 10], Vec2::new(0.5, 0.5), [0, 0], [20, 20], |_, _, w| n += usize::from(w == 1.0));
+        assert_eq!(n, 9, "a 3-pixel box from the pixel centre covers 3×3 pixels");
+        assert!(Filter::boxed(0.4).is_none());
+        let g = Filter::gaussian_cut(0.5, 1.5).unwrap();
+        assert!((g.eval_1d(0.0) - (1.0 - (-4.5f32).exp())).abs() < 1e-6 && g.eval_1d(1.5) == 0.0 && g.radius() == 1.5);
+        let mitsuba = Filter::Cubic { b: 1.0 / 3.0, c: 1.0 / 3.0, radius: 2.0, stretch: 2.0 };
+        let pbrt = Filter::Cubic { b: 1.0 / 3.0, c: 1.0 / 3.0, radius: 1.0, stretch: 1.0 };
+        for x in [0.0, 0.2, 0.45, 0.7, 0.99] {
+            assert!((pbrt.eval_1d(x) - mitsuba.eval_1d(2.0 * x)).abs() < 1e-6, "{x}");
+        }
+        assert_eq!(pbrt.eval_1d(1.0), 0.0);
+        let s = Filter::windowed_sinc(3.0, 4.0).unwrap();
+        let sinc = |x: f32| (std::f32::consts::PI * x).sin() / (std::f32::consts::PI * x);
+        assert!((s.eval_1d(3.5) - sinc(3.5) * sinc(3.5 / 3.0)).abs() < 1e-6 && s.eval_1d(3.5) != 0.0);
+        assert_eq!((s.eval_1d(4.0), s.radius(), s.border()), (0.0, 4.0, 4));
     }
 }

@@ -251,7 +251,7 @@ impl TileBuffer {
         }
         let terms = if sample.terms.iter().all(|t| t.is_finite()) { sample.terms } else { &[] };
         let sample = FilmSample { terms, ..sample };
-        if let Filter::Box = filter {
+        if filter.is_pixel_box() {
             self.px.put(own, 1.0, &sample);
             return;
         }
@@ -266,7 +266,7 @@ impl TileBuffer {
     /// inside the buffer). Samples with a NaN or infinite component are dropped and counted.
     #[inline]
     pub fn add(&mut self, x: u32, y: u32, l: Rgb) {
-        self.put([x, y], Vec2::splat(0.5), &Filter::Box, FilmSample { l, ..Default::default() });
+        self.put([x, y], Vec2::splat(0.5), &Filter::BOX, FilmSample { l, ..Default::default() });
     }
 
     /// Non-finite samples dropped so far.
@@ -567,7 +567,7 @@ impl Default for FilmSettings {
             height: 576,
             window: None,
             alpha: false,
-            filter: Filter::Gaussian { stddev: 0.5 },
+            filter: Filter::gaussian(0.5).unwrap(),
             transform: sensor::SampleTransform::default(),
         }
     }

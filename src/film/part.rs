@@ -643,7 +643,7 @@ mod tests {
         let integrator = PathIntegrator::default();
         let never = AtomicBool::new(false);
         let image = [0, 0, 30, 20];
-        let base = RenderSettings { spp: 24, seed: 3, filter: Filter::Gaussian { stddev: 0.5 }, ..Default::default() };
+        let base = RenderSettings { spp: 24, seed: 3, filter: Filter::gaussian(0.5).unwrap(), ..Default::default() };
         let whole = render(&scene, &integrator, &base, &never).unwrap().film;
         let d = dir("split");
         let mut paths = Vec::new();

@@ -313,7 +313,7 @@ mod tests {
         b.set_camera(Camera::perspective(to_world, 40.0, FovAxis::X, 9, 9).unwrap());
         let scene = b.build().unwrap();
         let aov = AnyIntegrator::with_kind(crate::integrator::IntegratorKind::Aov, Default::default());
-        let settings = RenderSettings { spp: 16, filter: Filter::Box, ..Default::default() };
+        let settings = RenderSettings { spp: 16, filter: Filter::BOX, ..Default::default() };
         let out = render(&scene, aov.camera().unwrap(), &settings, &AtomicBool::new(false)).unwrap();
         let channels = out.film.aov_channels();
         let get = |name: &str, pixel: usize| channels.iter().find(|c| c.0 == name).unwrap().1[pixel];

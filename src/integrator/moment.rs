@@ -124,7 +124,7 @@ mod tests {
         let path = PathIntegrator { settings: PathSettings::default(), ..Default::default() };
         let moment = AnyIntegrator::with_kind(IntegratorKind::Moment, PathSettings::default());
         assert_eq!(moment.name(), IntegratorKind::Moment.name());
-        let settings = RenderSettings { spp: 64, seed: 3, filter: Filter::Box, ..Default::default() };
+        let settings = RenderSettings { spp: 64, seed: 3, filter: Filter::BOX, ..Default::default() };
         let never = AtomicBool::new(false);
         let plain = render(&scene, &path, &settings, &never).unwrap();
         let with = render(&scene, moment.camera().unwrap(), &settings, &never).unwrap();

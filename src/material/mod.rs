@@ -143,7 +143,8 @@ pub enum Bsdf {
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided([Arc<Bsdf>; 2]),
-    /// Mitsuba's `normalmap` and `bumpmap`: a nested BSDF under a perturbed shading normal.
+    /// Mitsuba's `normalmap` and `bumpmap`, pbrt-v4's `displacement`: a nested BSDF under a
+    /// perturbed shading normal.
     Perturbed(Perturbed),
 }
 
@@ -175,6 +176,7 @@ impl Bsdf {
             Bsdf::Perturbed(p) => match p.perturbation {
                 Perturbation::NormalMap { .. } => "normalmap",
                 Perturbation::BumpMap { .. } => "bumpmap",
+                Perturbation::Displacement { .. } => "displacement",
             },
         }
     }
@@ -420,7 +422,9 @@ impl Bsdf {
             Bsdf::TwoSided(b) => distinct(b).iter().flat_map(|b| b.textures()).collect(),
             Bsdf::Perturbed(n) => {
                 let mut v = vec![match &n.perturbation {
-                    Perturbation::NormalMap { map: t, .. } | Perturbation::BumpMap { height: t, .. } => t,
+                    Perturbation::NormalMap { map: t, .. }
+                    | Perturbation::BumpMap { height: t, .. }
+                    | Perturbation::Displacement { displacement: t } => t,
                 }];
                 v.extend(n.bsdf.textures());
                 v
@@ -433,7 +437,8 @@ impl Bsdf {
     pub fn perturbs_with_height(&self) -> bool {
         match self {
             Bsdf::Perturbed(p) => {
-                matches!(p.perturbation, Perturbation::BumpMap { .. }) || p.bsdf.perturbs_with_height()
+                matches!(p.perturbation, Perturbation::BumpMap { .. } | Perturbation::Displacement { .. })
+                    || p.bsdf.perturbs_with_height()
             }
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.perturbs_with_height()),
             Bsdf::Mask { bsdf, .. } => bsdf.perturbs_with_height(),

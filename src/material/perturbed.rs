@@ -1,4 +1,5 @@
-//! Mitsuba's `normalmap` and `bumpmap`: a nested BSDF seen through a perturbed shading normal.
+//! Mitsuba's `normalmap` and `bumpmap`, and pbrt-v4's `displacement`: a nested BSDF seen
+//! through a perturbed shading normal.
 //!
 //! - `normalmap`: the normal is read from a texture, in tangent space: its RGB `c` gives
 //!   `2c − 1` in the local shading frame, whose x follows `∂p/∂u` (read the image with `raw`
@@ -7,6 +8,15 @@
 //!   `h` (a bitmap's luminance, times `scale`): with the slopes `(∂h/∂u, ∂h/∂v)` of the bilinear
 //!   interpolant, `∂p/∂u' = ∂p/∂u + n (∂h/∂u − n·∂p/∂u)` (and alike for v), and the normal
 //!   `∂p/∂u' × ∂p/∂v'`, turned to the side of the geometric normal.
+//! - `displacement` (neumann's plugin for pbrt-v4's material `displacement`): the surface
+//!   displaced by a scalar texture `d` (world units) along the shading normal, differentiated as
+//!   pbrt-v4's `BumpMap` does, by forward differences of `δ` = [`DISPLACEMENT_DELTA`] in u and v
+//!   (the texture looked up at `uv + (δ, 0)` and `p + δ ∂p/∂u`, and alike for v):
+//!   `∂p/∂u' = ∂p/∂u + n ((d(u + δ) − d(u)) / δ − n·∂p/∂u)` (pbrt's shading ∂p/∂u is the one
+//!   perpendicular to n); any texture, procedural or image. pbrt-v4 takes δ from the ray
+//!   differentials (half the pixel's footprint in uv, shrunk with the sample count) where neumann
+//!   has none, and adds `d ∂n/∂u`, the turning of the normal, which neumann leaves out (zero on
+//!   flat triangles; it scales both tangents alike on spheres).
 //!
 //! Both as Mitsuba 3.9 applies them (its `PerturbedBSDF`, measured against Mitsuba 3.9.1):
 //! - `flip_invalid_normals` (default true): a perturbed normal whose side differs from the
@@ -19,11 +29,11 @@
 //!   of Estevez et al. 2019 (the bump-terminator fix), `2 / (1 + √(1 + α² tan²θᵢ))` with
 //!   `α² = min(tan²θₙ / 8, 1)`, θᵢ and θₙ measured from the original normal.
 
-use std::sync::Arc;
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{Frame, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use crate::texture::Texture;
+use std::sync::Arc;
 
 /// Where the perturbed normal comes from.
 #[derive(Clone, Debug)]
@@ -35,6 +45,12 @@ pub enum Perturbation {
         /// A factor on the normal's tangential components before it is normalized (glTF's
         /// `normalTexture.scale`; 1 in Mitsuba).
         scale: f32,
+    },
+    /// pbrt-v4's displacement: a scalar texture (world units along the shading normal),
+    /// differentiated by forward differences.
+    Displacement {
+        /// The displacement.
+        displacement: Texture,
     },
     /// A height field (a bitmap's luminance) times `scale`.
     BumpMap {
@@ -57,6 +73,10 @@ pub struct Perturbed {
     /// Attenuate by the bump-terminator shadowing function.
     pub shadowing: bool,
 }
+
+/// The step of pbrt-v4's forward differences of a displacement texture, in u and in v (pbrt's
+/// value where a ray has no differentials).
+pub const DISPLACEMENT_DELTA: f32 = 0.0005;
 
 /// `tan²θ` of a unit vector in the local frame.
 #[inline]
@@ -109,6 +129,25 @@ impl Perturbation {
                 let n = si.ns;
                 let dpdu = si.dpdu + n * (g.x - n.dot(si.dpdu));
                 let dpdv = si.dpdv + n * (g.y - n.dot(si.dpdv));
+                let mut cr = dpdu.cross(dpdv);
+                if si.ng.dot(cr) < 0.0 {
+                    cr = -cr;
+                }
+                si.frame().to_local(cr)
+            }
+            Perturbation::Displacement { displacement } => {
+                let Some(si) = ctx.si else { return Vec3::Z };
+                let at = ctx.point();
+                let d = displacement.eval_scalar(&at);
+                let delta = DISPLACEMENT_DELTA;
+                let shifted = |duv: Vec2, dp: Vec3| {
+                    let moved = crate::texture::TexPoint { uv: at.uv + duv, p: at.p + dp * delta, ..at };
+                    (displacement.eval_scalar(&moved) - d) / delta
+                };
+                let (gu, gv) = (shifted(Vec2::new(delta, 0.0), si.dpdu), shifted(Vec2::new(0.0, delta), si.dpdv));
+                let n = si.ns;
+                let dpdu = si.dpdu + n * (gu - n.dot(si.dpdu));
+                let dpdv = si.dpdv + n * (gv - n.dot(si.dpdv));
                 let mut cr = dpdu.cross(dpdv);
                 if si.ng.dot(cr) < 0.0 {
                     cr = -cr;
@@ -181,10 +220,23 @@ impl Perturbed {
         if !o.has("normalmap") {
             return Err(o.error("a normalmap needs its 'normalmap' texture (a bitmap read with raw = true)"));
         }
-        let map = b.texture_of(o, "normalmap", Rgb::new(0.5, 0.5, 1.0), crate::math::spectrum::SpectrumKind::Unbounded)?;
+        let map =
+            b.texture_of(o, "normalmap", Rgb::new(0.5, 0.5, 1.0), crate::math::spectrum::SpectrumKind::Unbounded)?;
         // neumann's `scale` (1): glTF's normalTexture.scale.
         let scale = o.float_checked("scale", 1.0, f32::is_finite, "a number")?;
         Perturbed::from_props(Perturbation::NormalMap { map, scale }, o, b)
+    }
+
+    /// neumann's `displacement` (pbrt-v4's material `displacement`): `displacement` (a scalar
+    /// texture, world units; required), the nested BSDF, and the shared parameters (pbrt applies
+    /// neither: its translation sets both false).
+    pub fn displacement_from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
+        if !o.has("displacement") {
+            return Err(o.error("a displacement needs its 'displacement' texture (world units along the normal)"));
+        }
+        let displacement =
+            b.texture_of(o, "displacement", Rgb::ZERO, crate::math::spectrum::SpectrumKind::Unbounded)?;
+        Perturbed::from_props(Perturbation::Displacement { displacement }, o, b)
     }
 
     /// Mitsuba's `bumpmap`: one nested (unnamed) bitmap texture, the height field; `scale` (1);
@@ -192,11 +244,16 @@ impl Perturbed {
     pub fn bumpmap_from_props(o: &Obj, b: &mut dyn BsdfBuilder) -> PropResult<Bsdf> {
         let mut textures = b.nested_textures(o)?;
         if textures.len() != 1 {
-            return Err(o.error(format!("a bumpmap takes exactly one nested <texture> (its height field), found {}", textures.len())));
+            return Err(o.error(format!(
+                "a bumpmap takes exactly one nested <texture> (its height field), found {}",
+                textures.len()
+            )));
         }
         let height = textures.pop().expect("one");
         if !matches!(height, Texture::Bitmap { .. }) {
-            return Err(o.error("a bumpmap's height field must be a bitmap texture (Mitsuba differentiates bitmaps only)"));
+            return Err(
+                o.error("a bumpmap's height field must be a bitmap texture (Mitsuba differentiates bitmaps only)")
+            );
         }
         let scale = o.float("scale", 1.0)?;
         Perturbed::from_props(Perturbation::BumpMap { height, scale }, o, b)
@@ -266,6 +323,60 @@ mod tests {
         assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
 
+    /// pbrt-v4's displacement: the same ramp as a displacement of 0.3 world units per unit of
+    /// u tilts the normal as the bump map's slope does (forward differences agree with the
+    /// bilinear slope inside a texel), a constant displacement tilts nothing, and a ramp along v
+    /// tilts it about the other axis.
+    #[test]
+    fn displacement_tilts_by_its_forward_difference() {
+        use crate::geometry::SurfaceInteraction;
+        use crate::texture::{Bitmap, Filter, Wrap};
+        let ramp = |to_uv: glam::Mat3| Texture::Bitmap {
+            bitmap: Bitmap {
+                image: std::sync::Arc::new(crate::image::Image {
+                    width: 4,
+                    height: 1,
+                    pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec(),
+                }),
+                filter: Filter::Bilinear,
+                wrap: [Wrap::Clamp; 2],
+            },
+            to_uv,
+        };
+        let displaced = |displacement: Texture| Perturbed {
+            perturbation: Perturbation::Displacement { displacement },
+            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
+            flip_invalid_normals: false,
+            shadowing: false,
+        };
+        let si = SurfaceInteraction {
+            p: Vec3::ZERO,
+            p_error: Vec3::ZERO,
+            t: 1.0,
+            ng: Vec3::Z,
+            ns: Vec3::Z,
+            uv: Vec2::new(0.5, 0.4),
+            dpdu: Vec3::new(2.0, 0.0, 0.0),
+            dpdv: Vec3::new(0.0, 2.0, 0.0),
+            shape: 0,
+            prim: 0,
+            bary: Vec2::ZERO,
+        };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
+        let along_u = displaced(ramp(glam::Mat3::IDENTITY).times(Texture::Constant(Rgb::splat(0.3))));
+        let n = along_u.frame(&ctx, Vec3::Z).n;
+        let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();
+        assert!((n - expected).length() < 1e-3, "{n} vs {expected}");
+        let flat = displaced(Texture::Constant(Rgb::splat(0.7)));
+        assert!((flat.frame(&ctx, Vec3::Z).n - Vec3::Z).length() < 1e-6);
+        // The image's s along v: uv (u, v) ↦ (v, u).
+        let swap = glam::Mat3::from_cols(glam::Vec3::Y, glam::Vec3::X, glam::Vec3::Z);
+        let along_v = displaced(ramp(swap));
+        let n = along_v.frame(&ctx, Vec3::Z).n;
+        let expected = Vec3::new(0.0, -0.5, 1.0).normalize();
+        assert!((n - expected).length() < 1e-3, "{n} vs {expected}");
+    }
+
     /// An unperturbing map ((0.5, 0.5, 1): the normal +z) leaves the BSDF as it is; a tilted
     /// one makes the diffuse cosine about the tilted normal, and lets nothing through from below
     /// the original surface (no light leaks) even where the tilted normal faces it.
@@ -281,7 +392,10 @@ mod tests {
         assert!((f - 0.6 / std::f32::consts::PI * wi.dot(n)).abs() < 1e-5, "{f}");
         // The shadowing function: Mitsuba 3.9.1's BSDF value over its pdf for a diffuse under
         // a normal with cos θₙ = 0.76128 and a light at cos θᵢ = 0.69171 was 0.97644.
-        let g = shadow_terminator(Vec3::new((1.0f32 - 0.76128 * 0.76128).sqrt(), 0.0, 0.76128), Vec3::new((1.0f32 - 0.69171 * 0.69171).sqrt(), 0.0, 0.69171));
+        let g = shadow_terminator(
+            Vec3::new((1.0f32 - 0.76128 * 0.76128).sqrt(), 0.0, 0.76128),
+            Vec3::new((1.0f32 - 0.69171 * 0.69171).sqrt(), 0.0, 0.69171),
+        );
         assert!((g - 0.97644).abs() < 1e-4, "{g}");
         let shadowed = map(n, diffuse, true);
         let ratio = shadowed.eval(&ctx(), wo, wi).x / f;

@@ -48,6 +48,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("null", null),
     ("normalmap", super::Perturbed::normalmap_from_props),
     ("bumpmap", super::Perturbed::bumpmap_from_props),
+    ("displacement", super::Perturbed::displacement_from_props),
 ];
 
 /// The constructor of the BSDF plugin `name`.

@@ -87,7 +87,7 @@ impl Default for RenderSettings {
             tile_size: 16,
             sampler: SamplerKind::Independent,
             progress: false,
-            filter: Filter::Box,
+            filter: Filter::BOX,
             window: None,
             alpha: false,
             terms: 0,
@@ -596,8 +596,8 @@ mod tests {
         let mut tile = TileBuffer::new(0, 0, 2, 1).with_half(true);
         for i in 0..8u32 {
             let l = Rgb::splat(if i % 2 == 0 { 1.0 } else { 3.0 });
-            tile.put([0, 0], Vec2::splat(0.5), &Filter::Box, FilmSample { l, half: i % 2 == 1, ..Default::default() });
-            tile.put([1, 0], Vec2::splat(0.5), &Filter::Box, FilmSample { l: Rgb::ONE, half: i % 2 == 1, ..Default::default() });
+            tile.put([0, 0], Vec2::splat(0.5), &Filter::BOX, FilmSample { l, half: i % 2 == 1, ..Default::default() });
+            tile.put([1, 0], Vec2::splat(0.5), &Filter::BOX, FilmSample { l: Rgb::ONE, half: i % 2 == 1, ..Default::default() });
         }
         let mut film = Film::new(2, 1).with_half();
         film.merge(&tile);
@@ -621,7 +621,7 @@ mod tests {
                     for i in 0..8u32 {
                         let v = if (x, y) == (film_x, film_y) && i % 2 == 0 { 3.0 } else { 1.0 };
                         let s = FilmSample { l: Rgb::splat(v), half: i % 2 == 1, ..Default::default() };
-                        tile.put([x, y], Vec2::splat(0.5), &Filter::Box, s);
+                        tile.put([x, y], Vec2::splat(0.5), &Filter::BOX, s);
                     }
                 }
             }

@@ -73,7 +73,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         spp,
         sampler: SamplerKind::Independent,
         seed: 0,
-        filter: Filter::Box,
+        filter: Filter::BOX,
         window: None,
         alpha: false,
         transform: Default::default(),

@@ -45,7 +45,7 @@ fn shared_cornell_box_matches_the_builtin() {
     assert_eq!((file.scene.camera().width(), file.scene.camera().height()), (256, 256));
     assert_eq!(file.spp, 64);
     assert!(matches!(file.integrator, crate::integrator::AnyIntegrator::Path(p) if p.settings.max_depth == 65));
-    assert!(matches!(file.filter, Filter::Box));
+    assert!(file.filter.is_pixel_box());
     let builtin = crate::scene::cornell::cornell_box(256, 256).unwrap();
     assert_eq!(file.scene.primitive_count(), builtin.primitive_count());
     assert_eq!(file.scene.lights().len(), builtin.lights().len());

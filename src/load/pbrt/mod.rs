@@ -74,7 +74,7 @@ fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let ty = plugin_type(&ps);
     let kind = match ty.as_str() {
         "path" | "simplepath" | "randomwalk" => "path",
-        "volpath" => "volpath",
+        "volpath" | "simplevolpath" => "volpath",
         "lightpath" => "ptracer",
         "bdpt" | "mlt" | "sppm" => {
             p.warnings.push(format!(
@@ -91,7 +91,7 @@ fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             "path"
         }
         "ambientocclusion" | "aov" => return Err(ps.error(format!("the \"{ty}\" integrator is not implemented by neumann (its image is not the rendering equation's solution)"))),
-        other => return Err(ps.error(format!("unknown integrator \"{other}\""))),
+        other => return Err(ps.unknown("integrator", other, &["ambientocclusion", "aov", "bdpt", "lightpath", "mlt", "path", "randomwalk", "simplepath", "simplevolpath", "sppm", "volpath"])),
     };
     let mut o = obj("integrator", kind, &ps.loc);
     let depth = ps.int("maxdepth", 5)?;
@@ -231,7 +231,7 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         "realistic" => {
             return Err(cam.error("the \"realistic\" camera (lens systems) is not implemented by neumann yet"))
         }
-        other => return Err(cam.error(format!("unknown camera \"{other}\""))),
+        other => return Err(cam.unknown("camera", other, &["orthographic", "perspective", "realistic", "spherical"])),
     }
     if let Some(a) = cam.floats("frameaspectratio", &["float"])? {
         if (a[0] as f32 - aspect).abs() > 1e-4 {
@@ -277,25 +277,24 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         set(&mut film, "crop_width", Value::Integer(x1 - x0), loc);
         set(&mut film, "crop_height", Value::Integer(y1 - y0), loc);
     }
-    // Filter (pbrt-v4's default: Gaussian, σ 0.5).
+    // Filter (pbrt-v4's default: Gaussian, σ 0.5, radius 1.5).
     let mut rfilter = obj("rfilter", "gaussian", loc);
+    if p.filter.is_none() {
+        set(&mut rfilter, "radius", Value::Float(1.5), loc);
+    }
     if let Some(f) = p.filter.take() {
         let fty = plugin_type(&f);
         rfilter.loc = f.loc.clone();
         match fty.as_str() {
             "gaussian" => {
                 set(&mut rfilter, "stddev", Value::Float(f.float("sigma", 0.5)? as f64), &loc_of(&f, "sigma"));
-                // neumann's Gaussian reaches 4σ (README): pbrt's truncation radius is read only.
-                filter_radius(&f, 1.5)?;
+                let r = filter_radius(&f, 1.5)?;
+                set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
             "box" => {
                 rfilter.ty = "box".into();
-                if (filter_radius(&f, 0.5)? - 0.5).abs() > 1e-6 {
-                    return Err(f.error_at(
-                        "xradius",
-                        "a box filter other than one pixel (radius 0.5) is not implemented by neumann",
-                    ));
-                }
+                let r = filter_radius(&f, 0.5)?;
+                set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
             "triangle" => {
                 rfilter.ty = "tent".into();
@@ -303,27 +302,20 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
                 set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
             "mitchell" => {
+                // pbrt-v4 stretches the cubic to its radius (Mitchell1D(2x / radius)).
                 rfilter.ty = "mitchell".into();
                 set(&mut rfilter, "B", Value::Float(f.float("B", 1.0 / 3.0)? as f64), &loc_of(&f, "B"));
                 set(&mut rfilter, "C", Value::Float(f.float("C", 1.0 / 3.0)? as f64), &loc_of(&f, "C"));
                 let r = filter_radius(&f, 2.0)?;
+                set(&mut rfilter, "stretch", Value::Float(r as f64), &loc_of(&f, "xradius"));
+            }
+            "sinc" => {
+                rfilter.ty = "sinc".into();
+                set(&mut rfilter, "tau", Value::Float(f.float("tau", 3.0)? as f64), &loc_of(&f, "tau"));
+                let r = filter_radius(&f, 4.0)?;
                 set(&mut rfilter, "radius", Value::Float(r as f64), &loc_of(&f, "xradius"));
             }
-            "lanczos" | "sinc" => {
-                rfilter.ty = "lanczos".into();
-                let tau = f.float("tau", 3.0)?;
-                if (filter_radius(&f, 4.0)? - tau).abs() > 1e-6 {
-                    return Err(f.error_at(
-                        "xradius",
-                        "neumann's Lanczos filter reaches as far as its lobes: give xradius and yradius equal to tau (pbrt's defaults are 4 and 3)",
-                    ));
-                }
-                if tau.fract() != 0.0 || tau < 1.0 {
-                    return Err(f.error_at("tau", format!("neumann's Lanczos filter has a whole number of lobes, got tau {tau}")));
-                }
-                set(&mut rfilter, "lobes", Value::Integer(tau as i64), &loc_of(&f, "tau"));
-            }
-            other => return Err(f.error(format!("unknown filter \"{other}\""))),
+            other => return Err(f.unknown("filter", other, &["box", "gaussian", "mitchell", "sinc", "triangle"])),
         }
         f.check_unused()?;
     }
@@ -344,7 +336,7 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
                 spp = x * y;
                 "stratified"
             }
-            other => return Err(sp.error(format!("unknown sampler \"{other}\""))),
+            other => return Err(sp.unknown("sampler", other, &["halton", "independent", "paddedsobol", "pmj02bn", "sobol", "stratified", "zsobol"])),
         }
         .into();
         if sty != "stratified" {

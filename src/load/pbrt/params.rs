@@ -77,6 +77,15 @@ impl ParamSet {
         SceneError::at(loc, format!("{}: {}", self.what, message.into()))
     }
 
+    /// The error for a plugin name pbrt-v4 does not have: pbrt-v4's `names` of that `kind`,
+    /// and the nearest of them.
+    pub fn unknown(&self, kind: &str, name: &str, names: &[&str]) -> SceneError {
+        let hint = crate::choice::nearest(name, names.iter().copied())
+            .map(|n| format!("; the nearest is '{n}'"))
+            .unwrap_or_default();
+        self.error(format!("unknown {kind} \"{name}\" (pbrt-v4's: {}{hint})", names.join(", ")))
+    }
+
     /// An error at the directive.
     pub fn error(&self, message: impl Into<String>) -> SceneError {
         SceneError::at(&self.loc, format!("{}: {}", self.what, message.into()))

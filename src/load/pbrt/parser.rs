@@ -38,7 +38,7 @@ pub struct Graphics {
     pub material: MaterialRef,
     /// `AreaLightSource` (its translated emitter properties).
     pub area_light: Option<Rc<ParamSet>>,
-    /// `Attribute` defaults by target (`shape`, `light`, `material`, `texture`): parameters the
+    /// `Attribute` defaults by target (`shape`, `light`, `material`, `medium`, `texture`): parameters the
     /// target's directives get when they do not give them.
     attributes: Rc<Vec<(String, Param)>>,
     /// `MediumInterface`: the media inside and outside the shapes that follow (the outside one
@@ -500,7 +500,8 @@ impl Parser {
             "WorldEnd" => {}
             "MakeNamedMedium" => {
                 let medium = c.string("the medium's name")?;
-                let ps = c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?;
+                let mut ps = c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?;
+                self.with_attributes(&mut ps, "medium");
                 let obj = translate::medium(self, &ps)?;
                 ps.check_unused()?;
                 self.media.insert(medium, Rc::new(obj));
@@ -526,10 +527,9 @@ impl Parser {
             "Attribute" => {
                 let target = c.string("the attribute's target (shape, light, material, medium, texture)")?;
                 let ps = c.params(format!("Attribute \"{target}\""), loc.clone())?;
-                if !["shape", "light", "material", "texture"].contains(&target.as_str()) {
-                    return Err(ps.error(format!(
-                        "the target \"{target}\" is not implemented by neumann (shape, light, material, texture; media are not yet)"
-                    )));
+                const TARGETS: &[&str] = &["shape", "light", "material", "medium", "texture"];
+                if !TARGETS.contains(&target.as_str()) {
+                    return Err(ps.unknown("attribute target", &target, TARGETS));
                 }
                 let mut list: Vec<(String, Param)> =
                     self.gs.attributes.iter().map(|(t, p)| (t.clone(), p.clone())).collect();

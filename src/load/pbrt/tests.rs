@@ -283,8 +283,15 @@ Shape "sphere"
     assert_eq!(radii, [0.25, 3.0, 1.0]);
     let Light::Point { intensity, .. } = &f.scene.lights()[0] else { panic!() };
     assert_eq!(*intensity, Rgb::splat(2.0));
-    let e = err("WorldBegin\nAttribute \"medium\" \"float g\" 0.5\n");
-    assert!(e.contains("test.pbrt:2:1") && e.contains("\"medium\""), "{e}");
+    // Media take theirs at MakeNamedMedium.
+    let f = load(
+        "Attribute \"medium\" \"float g\" 0.5\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n\
+         MediumInterface \"\" \"fog\"\nCamera \"perspective\"\nWorldBegin\n",
+    )
+    .unwrap();
+    assert_eq!(f.scene.media()[0].phase, crate::medium::PhaseFunction::HenyeyGreenstein { g: 0.5 });
+    let e = err("WorldBegin\nAttribute \"meduim\" \"float g\" 0.5\n");
+    assert!(e.contains("test.pbrt:2:1") && e.contains("the nearest is 'medium'"), "{e}");
 }
 
 #[test]
@@ -478,7 +485,9 @@ fn lights_follow_pbrt_v4_normalisations() {
     let at = |x: f32, y: f32, z: f32| map.eval(crate::math::Vec3::new(x, y, z).normalize());
     assert!((at(0.0, 0.0, 1.0) - Rgb::splat(5.0)).abs().max_element() < 1e-4, "+z is the top row");
     assert!(at(0.0, 0.0, -1.0).max_element() < 1e-4, "−z is the bottom row");
-    for (d, want) in [((1.0, 1.0), Rgb::X), ((-1.0, 1.0), Rgb::Y), ((-1.0, -1.0), Rgb::Z), ((1.0, -1.0), Rgb::splat(0.5))] {
+    for (d, want) in
+        [((1.0, 1.0), Rgb::X), ((-1.0, 1.0), Rgb::Y), ((-1.0, -1.0), Rgb::Z), ((1.0, -1.0), Rgb::splat(0.5))]
+    {
         let got = at(d.0, d.1, 0.0);
         assert!((got - want).abs().max_element() < 1e-3, "{d:?}: {got} vs {want}");
     }
@@ -514,6 +523,41 @@ fn alpha_cut_outs_and_normal_maps() {
     let Bsdf::Perturbed(p) = b(1) else { unreachable!() };
     let plain = p.bsdf.eval(&ctx, wo, wi);
     assert!((plain.x - 0.5 / std::f32::consts::PI * wi.z).abs() < 1e-5, "{plain}");
+}
+
+/// pbrt-v4's material `displacement` bumps the shading normal by the texture's slope in world
+/// units (here 0.3 per unit of u over a quad with |∂p/∂u| = 2: a tilt of −0.15 in x per unit
+/// z), from a procedural texture as well as an image; a normal map takes precedence, as in pbrt.
+#[test]
+fn displacement_bumps_the_normal() {
+    use crate::material::Perturbation;
+    use crate::math::{Ray, Vec3};
+    let quad = "Shape \"bilinearmesh\" \"point3 P\" [0 0 0 2 0 0 0 2 0 2 2 0]\n";
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\n\
+         Texture \"d\" \"float\" \"bilerp\" \"float v00\" 0 \"float v01\" 0 \"float v10\" 0.3 \"float v11\" 0.3\n\
+         Material \"diffuse\" \"texture displacement\" \"d\"\n{quad}"
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.7, 1.1, 3.0), -Vec3::Z)).unwrap();
+    let Bsdf::Perturbed(p) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!() };
+    assert!(matches!(p.perturbation, Perturbation::Displacement { .. }) && !p.flip_invalid_normals && !p.shadowing);
+    let ctx = f.scene.bsdf_context(&si);
+    let frame = si.frame();
+    let n = frame.to_world(p.frame(&ctx, frame.to_local(Vec3::Z)).n);
+    assert!((n.x / n.z + 0.15).abs() < 1e-3 && n.y.abs() < 1e-4, "{n}");
+    let dir = tmp("displacement");
+    crate::film::output::write_image(&dir.join("n.exr"), 2, 2, &[Rgb::new(0.5, 0.5, 1.0); 4], &Default::default())
+        .unwrap();
+    let both = text.replace(
+        "\"texture displacement\"",
+        &format!("\"string normalmap\" \"{}\" \"texture displacement\"", dir.join("n.exr").display()),
+    );
+    let f = load(&both).unwrap_or_else(|e| panic!("{e}"));
+    let Bsdf::Perturbed(p) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!() };
+    assert!(matches!(p.perturbation, Perturbation::NormalMap { .. }));
+    let e = err("Camera \"perspective\"\nWorldBegin\nMaterial \"diffuse\" \"texture displacement\" \"nothing\"\n");
+    assert!(e.contains("no float texture named \"nothing\""), "{e}");
 }
 
 /// pbrt-v4's alpha on an area light: the shape is cut out (a `mask` of that opacity) and emits
@@ -745,7 +789,9 @@ fn image_area_lights_and_sampled_emission_spectra() {
 fn loop_subdivision_surfaces() {
     let octahedron = "\"point3 P\" [1 0 0 -1 0 0 0 1 0 0 -1 0 0 0 1 0 0 -1] \
         \"integer indices\" [0 2 4 2 1 4 1 3 4 3 0 4 2 0 5 1 2 5 3 1 5 0 3 5]";
-    let text = format!("Camera \"perspective\"\nWorldBegin\nTranslate 0 0 5\nShape \"loopsubdiv\" \"integer levels\" 2 {octahedron}\n");
+    let text = format!(
+        "Camera \"perspective\"\nWorldBegin\nTranslate 0 0 5\nShape \"loopsubdiv\" \"integer levels\" 2 {octahedron}\n"
+    );
     let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
     let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!() };
     assert_eq!(m.indices.len(), 8 * 16);
@@ -791,7 +837,10 @@ fn white_balance_and_sample_clamp() {
 fn spherical_camera() {
     let text = "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\nCamera \"spherical\"\nWorldBegin\nLightSource \"infinite\" \"rgb L\" [0.5 0.5 0.5]\n";
     let f = load(text).unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(f.scene.camera().projection(), crate::camera::Projection::Spherical(crate::camera::SphericalMapping::EqualArea));
+    assert_eq!(
+        f.scene.camera().projection(),
+        crate::camera::Projection::Spherical(crate::camera::SphericalMapping::EqualArea)
+    );
     for px in crate::load::test_support::render(&f, 2, 1) {
         assert!((px - Rgb::splat(0.5)).abs().max_element() < 1e-5, "{px}");
     }
@@ -903,7 +952,11 @@ fn projection_lights() {
     let li = |x: f32, y: f32| p.sample_li(Vec3::new(x, y, 2.0)).map(|s| s.li);
     let d2 = 1.0 + 1.0 + 9.0;
     assert!((li(1.0, 1.0).unwrap() - Rgb::new(0.0, 2.0, 0.0) / d2).abs().max_element() < 1e-6, "{:?}", li(1.0, 1.0));
-    assert!((li(-1.0, -1.0).unwrap() - Rgb::new(0.0, 0.0, 2.0) / d2).abs().max_element() < 1e-6, "{:?}", li(-1.0, -1.0));
+    assert!(
+        (li(-1.0, -1.0).unwrap() - Rgb::new(0.0, 0.0, 2.0) / d2).abs().max_element() < 1e-6,
+        "{:?}",
+        li(-1.0, -1.0)
+    );
     assert!((li(-1.0, 1.0).unwrap() - Rgb::new(2.0, 0.0, 0.0) / d2).abs().max_element() < 1e-6);
     assert!(li(3.5, 0.0).is_none(), "outside the 90° frustum");
     let f = load(&text.replace("\"float scale\" 2", "\"float power\" 10")).unwrap();
@@ -927,7 +980,8 @@ fn portal_infinite_lights() {
     use crate::math::Vec3;
     let dir = tmp("portal");
     let n = 8u32;
-    let sky: Vec<Rgb> = (0..n * n).map(|i| Rgb::new(0.5 + (i % 5) as f32 * 0.4, 1.0, 0.5 + (i % 3) as f32 * 0.5)).collect();
+    let sky: Vec<Rgb> =
+        (0..n * n).map(|i| Rgb::new(0.5 + (i % 5) as f32 * 0.4, 1.0, 0.5 + (i % 3) as f32 * 0.5)).collect();
     crate::film::output::write_image(&dir.join("sky.exr"), n, n, &sky, &Default::default()).unwrap();
     let room = |portal: &str| {
         format!(
@@ -960,26 +1014,46 @@ fn portal_infinite_lights() {
     let diff = rel_mse(&a, &reference);
     assert!(diff <= 1.5 * noise_portal, "relMSE {diff} against a noise level of {noise_portal}");
     assert!(noise_portal < 0.5 * noise_plain, "the portal samples better: {noise_portal} vs {noise_plain}");
-    let e = err("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"point3 portal\" [0 0 0  1 0 0  1 1 0]\n");
+    let e =
+        err("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"point3 portal\" [0 0 0  1 0 0  1 1 0]\n");
     assert!(e.contains("portal"), "{e}");
 }
 
 /// pbrt-v4's filter radii are `xradius` and `yradius` (one value each; neumann's filters need
-/// them equal); a box wider than a pixel and a sinc whose radius is not its tau are errors.
+/// them equal), read with pbrt-v4's meaning: a Gaussian cut at its radius (1.5), boxes of any
+/// width, a Mitchell cubic stretched to its radius, a sinc whose radius (4) is not its tau (3).
 #[test]
 fn filter_radii() {
     use crate::film::filter::Filter;
     let filter = |f: &str| load(&format!("PixelFilter {f}\nCamera \"perspective\"\nWorldBegin\n")).map(|s| s.filter);
-    assert!(matches!(filter("\"triangle\" \"float xradius\" 1.5 \"float yradius\" 1.5"), Ok(Filter::Tent { radius }) if radius == 1.5));
+    assert!(
+        matches!(filter("\"triangle\" \"float xradius\" 1.5 \"float yradius\" 1.5"), Ok(Filter::Tent { radius }) if radius == 1.5)
+    );
     assert!(matches!(filter("\"triangle\""), Ok(Filter::Tent { radius }) if radius == 2.0));
-    assert!(matches!(filter("\"box\" \"float xradius\" 0.5"), Ok(Filter::Box)));
-    assert!(matches!(filter("\"gaussian\" \"float xradius\" 2 \"float yradius\" 2 \"float sigma\" 0.4"), Ok(Filter::Gaussian { stddev }) if stddev == 0.4));
-    assert!(filter("\"sinc\" \"float xradius\" 3 \"float yradius\" 3").is_ok());
+    assert!(matches!(filter("\"box\" \"float xradius\" 0.5"), Ok(f) if f.is_pixel_box()));
+    assert_eq!(filter("\"box\" \"float xradius\" 1 \"float yradius\" 1").unwrap(), Filter::boxed(1.0).unwrap());
+    assert_eq!(
+        filter("\"gaussian\" \"float xradius\" 2 \"float yradius\" 2 \"float sigma\" 0.4").unwrap(),
+        Filter::gaussian_cut(0.4, 2.0).unwrap()
+    );
+    assert_eq!(filter("\"gaussian\"").unwrap(), Filter::gaussian_cut(0.5, 1.5).unwrap());
+    assert_eq!(
+        load("Camera \"perspective\"\nWorldBegin\n").unwrap().filter,
+        Filter::gaussian_cut(0.5, 1.5).unwrap(),
+        "pbrt-v4's default filter"
+    );
+    assert_eq!(filter("\"sinc\"").unwrap(), Filter::windowed_sinc(3.0, 4.0).unwrap());
+    assert_eq!(
+        filter("\"sinc\" \"float xradius\" 2 \"float yradius\" 2 \"float tau\" 2.5").unwrap(),
+        Filter::windowed_sinc(2.5, 2.0).unwrap()
+    );
+    let m = filter("\"mitchell\" \"float xradius\" 1 \"float yradius\" 1").unwrap();
+    assert_eq!(m, Filter::Cubic { b: 1.0 / 3.0, c: 1.0 / 3.0, radius: 1.0, stretch: 1.0 });
     for (f, what) in [
         ("\"triangle\" \"float xradius\" 1", "yradius"),
-        ("\"box\" \"float xradius\" 1 \"float yradius\" 1", "box"),
-        ("\"sinc\"", "tau"),
+        ("\"box\" \"float xradius\" 0.25 \"float yradius\" 0.25", "box"),
         ("\"mitchell\" \"float radius\" 1", "radius"),
+        ("\"gausian\"", "the nearest is 'gaussian'"),
     ] {
         let e = filter(f).map(|_| ()).unwrap_err().to_string();
         assert!(e.contains("test.pbrt:1") && e.contains(what), "{f}: {e}");

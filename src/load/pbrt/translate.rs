@@ -6,8 +6,8 @@
 //!   the sensor's `to_world` is pbrt's world-from-camera times a mirror in x;
 //! - `Film` `rgb` / `gbuffer` (`xresolution`, `yresolution`, `cropwindow`, `pixelbounds`;
 //!   `filename` is the default output's name only; `iso` and the camera's shutter interval
-//!   scale every light by pbrt's imaging ratio; `whitebalance` at its default), `PixelFilter`s (`box`, `gaussian` → Gaussian of that σ, `triangle` →
-//!   tent, `mitchell`, `lanczos`), `Sampler`s (`pixelsamples`; `zsobol`, `sobol`,
+//!   scale every light by pbrt's imaging ratio; `whitebalance` at its default), `PixelFilter`s (`box`, `gaussian`, `triangle` → tent, `mitchell`,
+//!   `sinc`, with pbrt-v4's radii), `Sampler`s (`pixelsamples`; `zsobol`, `sobol`,
 //!   `paddedsobol`, `halton` → Owen-scrambled Sobol, `pmj02bn`, `stratified` → stratified,
 //!   `independent`), `Integrator`s (`path`, `volpath`, `lightpath` → `ptracer`, `simplepath`,
 //!   `randomwalk` → `path`; `bdpt`, `mlt`, `sppm` → `path` with a warning; `maxdepth` bounces →
@@ -20,7 +20,8 @@
 //!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
 //!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
 //!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`; reflective ones wrapped in
-//!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`;
+//!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`,
+//!   `displacement` → neumann's `displacement` bump map;
 //! - textures `imagemap`, `checkerboard` (2D and 3D), `scale`, `constant`, `mix`,
 //!   `directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`, over pbrt's uv,
 //!   spherical, cylindrical and planar mappings;
@@ -390,9 +391,31 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
             o
         }
         "ptex" => {
-            return Err(ps.error("ptex textures (per-face images of Disney's Ptex format) are not implemented by neumann"))
+            return Err(
+                ps.error("ptex textures (per-face images of Disney's Ptex format) are not implemented by neumann")
+            )
         }
-        other => return Err(ps.error(format!("unknown texture class \"{other}\""))),
+        other => {
+            return Err(ps.unknown(
+                "texture class",
+                other,
+                &[
+                    "bilerp",
+                    "checkerboard",
+                    "constant",
+                    "directionmix",
+                    "dots",
+                    "fbm",
+                    "imagemap",
+                    "marble",
+                    "mix",
+                    "ptex",
+                    "scale",
+                    "windy",
+                    "wrinkled",
+                ],
+            ))
+        }
     };
     Ok(o)
 }
@@ -522,15 +545,32 @@ fn named_ior(name: &str) -> Option<f32> {
 
 /// `Material` / `MakeNamedMaterial`.
 pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
-    if ps.has("displacement") {
-        return Err(ps.error_at("displacement", "displacement is not implemented by neumann"));
+    let displacement = texturable(p, ps, "displacement", true)?;
+    let mut bsdf = material_bsdf(p, ty, ps)?;
+    if displacement.is_some() && (ty == "interface" || ty == "mix") {
+        return Err(ps.error_at("displacement", format!("a \"{ty}\" material takes no displacement")));
     }
-    let bsdf = material_bsdf(p, ty, ps)?;
-    match ps.string("normalmap")? {
-        Some(file) if ty != "interface" && ty != "mix" => Ok(normal_mapped(bsdf, file, &ploc(ps, "normalmap"))),
-        Some(_) => Err(ps.error_at("normalmap", format!("a \"{ty}\" material takes no normal map"))),
-        None => Ok(bsdf),
-    }
+    // pbrt-v4 applies the normal map when there is one, else the displacement.
+    bsdf = match ps.string("normalmap")? {
+        Some(file) if ty != "interface" && ty != "mix" => normal_mapped(bsdf, file, &ploc(ps, "normalmap")),
+        Some(_) => return Err(ps.error_at("normalmap", format!("a \"{ty}\" material takes no normal map"))),
+        None => match displacement {
+            Some(d) => displaced(bsdf, d, &ploc(ps, "displacement")),
+            None => bsdf,
+        },
+    };
+    Ok(bsdf)
+}
+
+/// pbrt-v4's `displacement` (a float texture, world units along the shading normal): neumann's
+/// `displacement` bump map, without Mitsuba's invalid-normal flip and shadowing term.
+fn displaced(bsdf: Obj, displacement: Value, loc: &Loc) -> Obj {
+    let mut n = obj("bsdf", "displacement", loc);
+    set(&mut n, "displacement", displacement, loc);
+    set(&mut n, "flip_invalid_normals", Value::Bool(false), loc);
+    set(&mut n, "use_shadowing_function", Value::Bool(false), loc);
+    n.children.push(Rc::new(bsdf));
+    n
 }
 
 /// pbrt-v4's `normalmap`: tangent-space normals `2 rgb − 1` read linearly, bilinear, repeating,
@@ -666,7 +706,26 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
         "hair" | "measured" | "subsurface" => {
             return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
         }
-        other => return Err(ps.error(format!("unknown material \"{other}\""))),
+        other => {
+            return Err(ps.unknown(
+                "material",
+                other,
+                &[
+                    "coatedconductor",
+                    "coateddiffuse",
+                    "conductor",
+                    "dielectric",
+                    "diffuse",
+                    "diffusetransmission",
+                    "hair",
+                    "interface",
+                    "measured",
+                    "mix",
+                    "subsurface",
+                    "thindielectric",
+                ],
+            ))
+        }
     })
 }
 
@@ -802,13 +861,19 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             // pbrt-v4's portal: four corners in world space.
             let portal = match ps.floats("portal", &["point3", "point"])? {
                 None => None,
-                Some(v) if v.len() == 12 => {
-                    Some(std::array::from_fn::<Vec3, 4, _>(|i| Vec3::new(v[3 * i] as f32, v[3 * i + 1] as f32, v[3 * i + 2] as f32)))
+                Some(v) if v.len() == 12 => Some(std::array::from_fn::<Vec3, 4, _>(|i| {
+                    Vec3::new(v[3 * i] as f32, v[3 * i + 1] as f32, v[3 * i + 2] as f32)
+                })),
+                Some(v) => {
+                    return Err(
+                        ps.error_at("portal", format!("a portal is 4 points (12 numbers), got {} numbers", v.len()))
+                    )
                 }
-                Some(v) => return Err(ps.error_at("portal", format!("a portal is 4 points (12 numbers), got {} numbers", v.len()))),
             };
             if portal.is_some() && !ps.has("filename") {
-                return Err(ps.error_at("portal", "portals are for infinite lights with a \"filename\" (as in pbrt-v4)"));
+                return Err(
+                    ps.error_at("portal", "portals are for infinite lights with a \"filename\" (as in pbrt-v4)")
+                );
             }
             let e = ps.float("illuminance", -1.0)?;
             if let Some(file) = ps.string("filename")? {
@@ -842,7 +907,8 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             // pbrt-v4: the diagram in the light's frame with y and z swapped (neumann's
             // goniometric has the same layout), `power` over 4π × the diagram's mean.
             let s = light_scale(p, ps)?;
-            let file = ps.string("filename")?.ok_or_else(|| ps.error("a goniometric light needs its \"string filename\""))?;
+            let file =
+                ps.string("filename")?.ok_or_else(|| ps.error("a goniometric light needs its \"string filename\""))?;
             let mut o = obj("emitter", "goniometric", l);
             set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
             set(&mut o, "intensity", spectrum("I")?, &ploc(ps, "I"));
@@ -860,12 +926,15 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             // image's s axis along the light's +x and t down its +y → neumann's projector with
             // `emission` `intensity` (whose u runs along −x: mirrored).
             let s = light_scale(p, ps)?;
-            let file = ps.string("filename")?.ok_or_else(|| ps.error("a projection light needs its \"string filename\""))?;
+            let file =
+                ps.string("filename")?.ok_or_else(|| ps.error("a projection light needs its \"string filename\""))?;
             let at = ploc(ps, "filename");
             let mut b = obj("texture", "bitmap", &at);
             set(&mut b, "filename", Value::String(file), &at);
             set(&mut b, "filter_type", Value::String("nearest".into()), &at);
-            let mirror = Mat4::from_cols_array(&[-1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+            let mirror = Mat4::from_cols_array(&[
+                -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0,
+            ]);
             set(&mut b, "to_uv", Value::Transform(transform(mirror, ps)?), &at);
             let mut o = obj("emitter", "projector", l);
             set(&mut o, "irradiance", Value::Object(Rc::new(b)), &at);
@@ -880,7 +949,13 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             set(&mut o, "to_world", Value::Transform(transform(ctm, ps)?), l);
             o
         }
-        other => return Err(ps.error(format!("unknown light \"{other}\""))),
+        other => {
+            return Err(ps.unknown(
+                "light",
+                other,
+                &["distant", "goniometric", "infinite", "point", "projection", "spot"],
+            ))
+        }
     })
 }
 
@@ -963,7 +1038,14 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
             }
             Some(v) => Err(ps.error_at(
                 name,
-                format!("\"{name}\" has {} values for a {}×{}×{} grid ({} expected)", v.len(), res[0], res[1], res[2], n * per),
+                format!(
+                    "\"{name}\" has {} values for a {}×{}×{} grid ({} expected)",
+                    v.len(),
+                    res[0],
+                    res[1],
+                    res[2],
+                    n * per
+                ),
             )),
         }
     };
@@ -974,7 +1056,8 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
         let al: Vec<f32> = st.iter().zip(&ss).map(|(t, s)| if *t > 0.0 { s / t } else { 0.0 }).collect();
         (st, Err(al))
     } else {
-        let density = values("density", 1, &["float"])?.ok_or_else(|| ps.error("a uniformgrid needs its \"float density\""))?;
+        let density =
+            values("density", 1, &["float"])?.ok_or_else(|| ps.error("a uniformgrid needs its \"float density\""))?;
         let coefficient = |name: &str| -> Result<Rgb> {
             match ps.spectrum(name)? {
                 None => Ok(Rgb::ONE),
@@ -1097,7 +1180,9 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
                 let mut b = obj("texture", "bitmap", &at);
                 set(&mut b, "filename", Value::String(file), &at);
                 set(&mut b, "wrap_mode", Value::String("clamp".into()), &at);
-                let flip = Mat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0]);
+                let flip = Mat4::from_cols_array(&[
+                    1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0,
+                ]);
                 set(&mut b, "to_uv", Value::Transform(transform(flip, &al)?), &at);
                 match s {
                     1.0 => Value::Object(Rc::new(b)),
@@ -1219,7 +1304,13 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
         "curve" | "cone" | "paraboloid" | "hyperboloid" => {
             return Err(ps.error(format!("the \"{ty}\" shape is not implemented by neumann yet")))
         }
-        other => return Err(ps.error(format!("unknown shape \"{other}\""))),
+        other => {
+            return Err(ps.unknown(
+                "shape",
+                other,
+                &["bilinearmesh", "curve", "cylinder", "disk", "loopsubdiv", "plymesh", "sphere", "trianglemesh"],
+            ))
+        }
     };
     Ok(vec![Rc::new(obj)])
 }
