@@ -5,6 +5,7 @@
 //! All geometry is stored in world space (transforms are applied when a shape is built), so
 //! the BVH intersects world-space rays directly.
 
+pub mod curve;
 pub mod cylinder;
 pub mod disk;
 pub mod interaction;
@@ -17,6 +18,7 @@ pub mod subdivision;
 pub mod triangle;
 pub mod triangle4;
 
+pub use curve::{CurveSet, Curves};
 pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use interaction::SurfaceInteraction;

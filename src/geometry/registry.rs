@@ -26,6 +26,9 @@ pub struct MeshFile {
 pub trait MeshSource: VolumeSource {
     /// The mesh named by parameter `name` of `o`; errors are located at the parameter.
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile>;
+
+    /// The curves a scene format decoded, named by parameter `name` of `o`.
+    fn curves(&mut self, o: &Obj, name: &str) -> Result<super::CurveSet>;
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
@@ -43,6 +46,7 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("sphere", sphere),
     ("cylinder", cylinder),
     ("sdfgrid", sdfgrid),
+    ("curve", curve),
 ];
 
 /// The constructor of the shape plugin `name`.
@@ -116,7 +120,8 @@ fn phi_max(o: &Obj) -> Result<f32> {
 /// that radius, the disk's being 1) and `phimax` (degrees) make pbrt-v4's partial disk.
 fn disk(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
     let d = Disk::new(*to_world, flip).ok_or_else(|| o.error_at("to_world", "the transform flattens the disk"))?;
-    let inner = o.float_checked("innerradius", 0.0, |r| (0.0..1.0).contains(&r), "in [0, 1) (the disk's radius is 1)")?;
+    let inner =
+        o.float_checked("innerradius", 0.0, |r| (0.0..1.0).contains(&r), "in [0, 1) (the disk's radius is 1)")?;
     let d = d.partial(inner, phi_max(o)?).expect("checked above");
     Ok(Geometry::Disk(if pbrt_uv(o)? { d.with_pbrt_uv() } else { d }))
 }
@@ -130,7 +135,8 @@ fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> 
     // pbrt's v runs from the −z pole: the object's z axis reversed (a reflection the sphere's
     // surface and normals do not see).
     let pbrt = pbrt_uv(o)?;
-    let to_world = &(if pbrt { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
+    let to_world =
+        &(if pbrt { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
     let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
     let (zmin, zmax) = (o.float("zmin", -radius)?, o.float("zmax", radius)?);
@@ -184,4 +190,11 @@ fn similarity(t: &Transform) -> Option<(Vec3, f32)> {
         && (cols[0].dot(cols[2])).abs() <= 1e-4 * r * r
         && (cols[1].dot(cols[2])).abs() <= 1e-4 * r * r;
     (uniform && orthogonal && r > 0.0).then(|| (t.apply_point(Vec3::ZERO), r))
+}
+
+/// neumann's `curve`: pbrt-v4's curves as a scene format decoded them (`filename` names them
+/// among the decoded files), placed by `to_world` (`flip_normals` turns their normals over).
+fn curve(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
+    let set = meshes.curves(o, "filename")?;
+    Ok(Geometry::Curves(Box::new(super::Curves::new(&set, to_world, flip))))
 }

@@ -1,6 +1,6 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
-use super::{Cylinder, Disk, SdfGrid, Sphere, TriangleMesh};
+use super::{Curves, Cylinder, Disk, SdfGrid, Sphere, TriangleMesh};
 use crate::math::{Bounds3, DirectionCone, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
@@ -17,6 +17,8 @@ pub enum Geometry {
     Cylinder(Cylinder),
     /// Signed distance field on a grid (no area: it cannot emit).
     SdfGrid(Box<SdfGrid>),
+    /// pbrt-v4's curves (no area: they cannot emit).
+    Curves(Box<Curves>),
 }
 
 /// A point sampled on a shape as seen from a reference point.
@@ -43,7 +45,7 @@ impl Geometry {
             Geometry::Disk(d) => d.area(),
             Geometry::Cylinder(c) => c.area(),
             // As in Mitsuba: not sampled, so no area.
-            Geometry::SdfGrid(_) => 0.0,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) => 0.0,
         }
     }
 
@@ -52,6 +54,7 @@ impl Geometry {
         match self {
             Geometry::Mesh(m) => m.len(),
             Geometry::SdfGrid(g) => g.len(),
+            Geometry::Curves(c) => c.len(),
             _ => 1,
         }
     }
@@ -76,6 +79,7 @@ impl Geometry {
             }
             Geometry::Cylinder(c) => c.bounds(),
             Geometry::SdfGrid(g) => g.voxel_bounds(i),
+            Geometry::Curves(c) => c.bounds(i),
         }
     }
 
@@ -92,7 +96,9 @@ impl Geometry {
         match self {
             Geometry::Mesh(m) => m.normal_cone(),
             Geometry::Disk(d) => DirectionCone::from_direction(d.normal()),
-            Geometry::Sphere(_) | Geometry::Cylinder(_) | Geometry::SdfGrid(_) => DirectionCone::ENTIRE_SPHERE,
+            Geometry::Sphere(_) | Geometry::Cylinder(_) | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
+                DirectionCone::ENTIRE_SPHERE
+            }
         }
     }
 
@@ -122,7 +128,7 @@ impl Geometry {
                 let (sp, pdf) = c.sample_area(u);
                 (sp, sp.n, pdf)
             }
-            Geometry::SdfGrid(_) => return None,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) => return None,
         };
         Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
     }
@@ -144,7 +150,7 @@ impl Geometry {
                 let (sp, uv) = c.surface(c.sample_local(u));
                 (sp, sp.n, 1.0 / c.area(), uv)
             }
-            Geometry::SdfGrid(_) => return None,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) => return None,
         };
         Some((ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf }, uv))
     }

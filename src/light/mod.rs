@@ -633,7 +633,9 @@ mod tests {
                     Geometry::Disk(d) => d.intersect(&ray, f32::INFINITY).map(|(_, q)| (d.surface(q).0.p, d.normal())),
                     // Cylinders sample area like disks; their area sampling is χ²-tested in
                     // (φ, z) beside them (silhouette slivers of a tube defeat a direction test).
-                    Geometry::Cylinder(_) | Geometry::SdfGrid(_) => unreachable!("not among the shapes tested here"),
+                    Geometry::Cylinder(_) | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
+                        unreachable!("not among the shapes tested here")
+                    }
                 };
                 match hit {
                     Some((p, n)) if n.dot(-*w) > 0.0 => light.pdf_li(&shapes, p_ref, p, n) as f64,

@@ -285,6 +285,9 @@ impl Builder {
             Some(e) if e.ty == "area" && matches!(geometry, Geometry::SdfGrid(_)) => {
                 return Err(e.error("an sdfgrid cannot be an area emitter (as in Mitsuba: it has no area to sample)"));
             }
+            Some(e) if e.ty == "area" && matches!(geometry, Geometry::Curves(_)) => {
+                return Err(e.error("curves cannot be area emitters (as in pbrt-v4: they have no area to sample)"));
+            }
             Some(e) if e.ty == "area" => {
                 e.built.set(true);
                 e.check_children(&[])?;
@@ -308,7 +311,9 @@ impl Builder {
                         t if p > 0.0 && p.is_finite() && k > 0.0 && t.mean_is_exact() => {
                             let lum = crate::math::luminance(t.mean());
                             if lum.is_nan() || lum <= 0.0 {
-                                return Err(e.error_at("power", "the radiance image is black: no power can be given to it"));
+                                return Err(
+                                    e.error_at("power", "the radiance image is black: no power can be given to it")
+                                );
                             }
                             let factor = Texture::Constant(Rgb::splat(p / (k * lum)));
                             *t = Texture::Scale(Box::new([t.clone(), factor]));
@@ -609,6 +614,16 @@ impl VolumeSource for Builder {
 }
 
 impl MeshSource for Builder {
+    fn curves(&mut self, o: &Obj, name: &str) -> Result<crate::geometry::CurveSet> {
+        let file = o.string(name)?;
+        self.memory.curves.get(&file).cloned().ok_or_else(|| {
+            o.error_at(
+                name,
+                format!("no decoded curves named '{file}' (the 'curve' shape holds the curves of pbrt-v4 scenes)"),
+            )
+        })
+    }
+
     fn mesh(&mut self, o: &Obj, name: &str) -> Result<MeshFile> {
         if o.ty == "mesh" {
             let file = o.string(name)?;

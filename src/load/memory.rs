@@ -55,6 +55,8 @@ pub struct MemoryFiles {
     pub images: HashMap<String, EncodedImage>,
     /// Grid volumes (a `gridvolume`'s `filename`: pbrt-v4's grid media, written inline).
     pub volumes: HashMap<String, std::sync::Arc<crate::image::GridVolume>>,
+    /// Curves (the `curve` shape's `filename`: pbrt-v4's curves).
+    pub curves: HashMap<String, crate::geometry::CurveSet>,
 }
 
 impl MemoryFiles {

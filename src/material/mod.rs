@@ -12,6 +12,7 @@ mod conductor_presets;
 mod dielectric;
 mod diffuse;
 mod diffusetransmission;
+pub mod hair;
 pub mod fresnel;
 pub mod layered;
 pub mod microfacet;
@@ -29,6 +30,7 @@ pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use diffusetransmission::DiffuseTransmission;
+pub use hair::Hair;
 pub use layered::Layered;
 pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
@@ -98,6 +100,8 @@ pub enum Bsdf {
     Diffuse(Diffuse),
     /// pbrt-v4's diffuse reflection and transmission, from both sides.
     DiffuseTransmission(DiffuseTransmission),
+    /// pbrt-v4's hair fibre (Chiang et al. 2016).
+    Hair(Box<Hair>),
     /// Smooth conductor (mirror with Fresnel reflectance).
     Conductor(Conductor),
     /// Microfacet conductor.
@@ -155,6 +159,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(_) => "diffuse",
             Bsdf::DiffuseTransmission(_) => "diffusetransmission",
+            Bsdf::Hair(_) => "hair",
             Bsdf::Conductor(_) => "conductor",
             Bsdf::RoughConductor(_) => "roughconductor",
             Bsdf::Dielectric(_) => "dielectric",
@@ -190,6 +195,7 @@ impl Bsdf {
             | Bsdf::ThinDielectric(_)
             | Bsdf::Mask { .. }
             | Bsdf::DiffuseTransmission(_)
+            | Bsdf::Hair(_)
             | Bsdf::Null => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
@@ -213,6 +219,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.eval(ctx, wo, wi),
             Bsdf::DiffuseTransmission(b) => b.eval(ctx, wo, wi),
+            Bsdf::Hair(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.eval(ctx, wo, wi),
             Bsdf::Plastic(b) => b.eval(ctx, wo, wi),
@@ -244,6 +251,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.pdf(wo, wi),
             Bsdf::DiffuseTransmission(b) => b.pdf(ctx, wo, wi),
+            Bsdf::Hair(b) => b.pdf(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.pdf(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.pdf(ctx, wo, wi),
             Bsdf::Plastic(b) => b.pdf(wo, wi),
@@ -275,6 +283,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => b.sample(ctx, wo, u1, u),
             Bsdf::DiffuseTransmission(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::Hair(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Conductor(b) => b.sample(ctx, wo),
             Bsdf::RoughConductor(b) => b.sample(ctx, wo, u),
             Bsdf::Dielectric(b) => b.sample(ctx, wo, u1),
@@ -385,6 +394,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(b) => vec![&b.reflectance],
             Bsdf::DiffuseTransmission(b) => vec![&b.reflectance, &b.transmittance],
+            Bsdf::Hair(b) => b.textures(),
             Bsdf::Conductor(b) => {
                 let mut v = vec![&b.specular_reflectance];
                 v.extend(ConductorIor::textures(&b.ior));
@@ -452,6 +462,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(_)
             | Bsdf::DiffuseTransmission(_)
+            | Bsdf::Hair(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::Plastic(_)

@@ -79,6 +79,17 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
             transmittance: Rgb::new(0.6, 0.3, 0.1).into(),
         }),
     ));
+    // pbrt-v4's hair fibre (not reciprocal: its attenuation depends on θₒ only).
+    v.push((
+        "hair".into(),
+        Bsdf::Hair(Box::new(Hair {
+            colour: hair::HairColour::Absorption(Rgb::new(0.3, 0.8, 1.6).into()),
+            eta: 1.55,
+            beta_m: 0.25,
+            beta_n: 0.4,
+            alpha: 2.0,
+        })),
+    ));
     v.extend(rough_conductors());
     for (md, eta) in [
         (Microfacet::new(MicrofacetType::Ggx, 0.3, 0.3), 1.5),
@@ -271,7 +282,10 @@ fn outgoing() -> Vec<Vec3> {
 #[test]
 fn sample_matches_pdf_chi2() {
     let mut k = 0;
-    for (name, b) in all_non_delta() {
+    // The hair fibre has its own χ² test (`material::hair`) across the fibre: here (uv = 0) it
+    // is seen at its very edge, h = −1, where one reflection lobe takes everything and the f32
+    // granularity of u1 puts 2⁻²⁴ of the samples at one point of the logistic's far tail.
+    for (name, b) in all_non_delta().into_iter().filter(|(n, _)| n != "hair") {
         for wo in outgoing() {
             k += 1;
             if crate::testkit::integrate_pdf_2d(&SPHERE, [16, 16], |wi| b.pdf(&CTX, wo, *wi) as f64) < 1e-6 {
@@ -318,7 +332,7 @@ fn returned_pdf_and_weight_agree_with_pdf_and_eval() {
 #[test]
 fn reflection_is_reciprocal() {
     let mut rng = crate::sampling::Pcg32::new(9, 9);
-    for (name, b) in all_non_delta().into_iter().filter(|(n, _)| !n.starts_with("normalmap")) {
+    for (name, b) in all_non_delta().into_iter().filter(|(n, _)| !n.starts_with("normalmap") && n != "hair") {
         for _ in 0..500 {
             let a = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;
             let c = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;

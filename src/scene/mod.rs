@@ -106,6 +106,8 @@ enum Primitive {
     Cylinder,
     /// A voxel of an SDF grid.
     SdfVoxel,
+    /// A piece of a curve.
+    Curve,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -126,6 +128,8 @@ enum HitKind {
     Disk(Vec2, u32),
     Cylinder(Vec3, u32),
     SdfVoxel(u32),
+    /// A curve piece's (u, v).
+    Curve(Vec2, u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -311,9 +315,11 @@ impl Scene {
         let (prim, barycentrics) = match kind {
             HitKind::Block(h, b, lane) => (self.blocks[b as usize].id[lane], Vec2::new(h.b1, h.b2)),
             HitKind::Triangle(h, k) => (self.prims[k as usize].r, Vec2::new(h.b1, h.b2)),
-            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) | HitKind::SdfVoxel(r) => {
-                (r, Vec2::ZERO)
-            }
+            HitKind::Sphere(r)
+            | HitKind::Disk(_, r)
+            | HitKind::Cylinder(_, r)
+            | HitKind::SdfVoxel(r)
+            | HitKind::Curve(_, r) => (r, Vec2::ZERO),
         };
         Some(RayHit { t, prim, barycentrics })
     }
@@ -389,6 +395,13 @@ impl Scene {
                 }
                 _ => None,
             },
+            Primitive::Curve => match geometry() {
+                Geometry::Curves(c) => {
+                    let piece = self.refs[lp.r as usize].index as usize;
+                    c.intersect(piece, ray, t_max).map(|h| (h.t, HitKind::Curve(h.uv, lp.r)))
+                }
+                _ => None,
+            },
         }
     }
 
@@ -402,7 +415,11 @@ impl Scene {
                 LeafPrim { prim: Primitive::Triangle(p), r } => (h, p, r),
                 _ => unreachable!("HitKind::Triangle names a triangle"),
             },
-            HitKind::Sphere(r) | HitKind::Disk(_, r) | HitKind::Cylinder(_, r) | HitKind::SdfVoxel(r) => {
+            HitKind::Sphere(r)
+            | HitKind::Disk(_, r)
+            | HitKind::Cylinder(_, r)
+            | HitKind::SdfVoxel(r)
+            | HitKind::Curve(_, r) => {
                 return self.analytic_interaction(ray, t, kind, self.refs[r as usize]);
             }
         };
@@ -433,6 +450,12 @@ impl Scene {
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
             return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+        }
+        if let (HitKind::Curve(uv, _), Geometry::Curves(c)) = (kind, &self.geometries[r.shape as usize]) {
+            let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });
+            let (p, p_error, n, dpdu, dpdv) = (s.p, s.p_error, s.n, s.dpdu, s.dpdv);
+            let bary = Vec2::ZERO;
+            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
         }
         let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {

@@ -217,8 +217,8 @@ fn errors_name_the_place_and_what_was_expected() {
     assert!(e.contains("test.pbrt:3:") && e.contains("unused parameter \"float raduis\""), "{e}");
     let e = err(&format!("{head}Shape \"sphere\" \"flaot radius\" 1\n"));
     assert!(e.contains("unknown parameter type 'flaot'") && e.contains("'float'"), "{e}");
-    let e = err(&format!("{head}Material \"hair\"\n"));
-    assert!(e.contains("\"hair\" material is not implemented"), "{e}");
+    let e = err(&format!("{head}Material \"subsurface\"\n"));
+    assert!(e.contains("\"subsurface\" material is not implemented"), "{e}");
     let e = err(&format!("{head}Shape \"sphere\" \"float radius\" [ 1\n"));
     assert!(e.contains("expected ']'"), "{e}");
     let e = err(&format!("{head}AttributeEnd\n"));
@@ -1110,4 +1110,41 @@ fn image_texture_encodings() {
         path.display()
     ));
     assert!(e.contains("gamma G"), "{e}");
+}
+
+/// pbrt-v4's curves: each Bézier segment split into 2^splitdepth primitives, hit where pbrt
+/// hits them; the hair material reads the first of sigma_a, reflectance and melanin (all of
+/// them count as used); ribbons need their normals; curves cannot emit.
+#[test]
+fn curves_and_hair() {
+    use crate::material::hair::HairColour;
+    use crate::math::{Ray, Vec3};
+    let f = load(
+        "Camera \"perspective\"\nWorldBegin\n\
+         Material \"hair\" \"rgb sigma_a\" [0.1 0.2 0.3] \"float eumelanin\" 2 \"float beta_m\" 0.4\n\
+         Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0] \"float width\" 0.2 \"integer splitdepth\" 2\n\
+         Material \"hair\" \"float eumelanin\" 2\n\
+         Shape \"curve\" \"point3 P\" [0 5 0 1 5 0 2 5 0 3 5 0] \"string basis\" \"bspline\" \"string type\" \"cylinder\"\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let Geometry::Curves(c) = &f.scene.geometries()[0] else { panic!() };
+    assert_eq!(c.len(), 2 * 4, "two segments of four pieces");
+    let si = f.scene.intersect(&Ray::new(Vec3::new(4.5, 0.05, 3.0), -Vec3::Z)).expect("on the curve");
+    assert!((si.t - 3.0).abs() < 1e-4 && (si.uv.x - 0.5).abs() < 1e-3, "u along the second segment: {si:?}");
+    assert!(f.scene.intersect(&Ray::new(Vec3::new(4.5, 0.15, 3.0), -Vec3::Z)).is_none(), "beyond half the width");
+    let hair = |i: usize| match &f.scene.bsdfs()[f.scene.shapes()[i].bsdf as usize] {
+        Bsdf::Hair(h) => h.clone(),
+        b => panic!("{b:?}"),
+    };
+    assert!(matches!(hair(0).colour, HairColour::Absorption(_)) && hair(0).beta_m == 0.4);
+    assert!(matches!(hair(1).colour, HairColour::Melanin(..)) && hair(1).eta == 1.55);
+    for (bad, what) in [
+        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"string type\" \"ribbon\"", "normals"),
+        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"integer degree\" 4", "degree"),
+        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0] \"string basis\" \"bezeir\"", "the nearest is 'bezier'"),
+        ("AreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]", "area emitters"),
+    ] {
+        let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{bad}\n"));
+        assert!(e.contains(what), "{bad}: {e}");
+    }
 }

@@ -13,12 +13,13 @@
 //!   `randomwalk` → `path`; `bdpt`, `mlt`, `sppm` → `path` with a warning; `maxdepth` bounces →
 //!   `max_depth` = `maxdepth` + 1 segments);
 //! - shapes `trianglemesh`, `plymesh` (also gzip-compressed), `bilinearmesh` (two triangles per
-//!   patch), `sphere`, `disk`, `cylinder` (partial ones too); `alpha` (a float or float
+//!   patch), `sphere`, `disk`, `cylinder` (partial ones too), `curve` (→ neumann's `curve`);
+//!   `alpha` (a float or float
 //!   texture) → a `mask` of that opacity around the material (pbrt's stochastic alpha test in
 //!   expectation) and, on an area light, the emitter's `opacity`;
 //! - materials `diffuse`, `conductor` (`eta`/`k` of pbrt's named metals, RGB or spectra, or
 //!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
-//!   `thindielectric`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
+//!   `thindielectric`, `hair`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
 //!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`; reflective ones wrapped in
 //!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`,
 //!   `displacement` → neumann's `displacement` bump map;
@@ -703,7 +704,30 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             }
             o
         }
-        "hair" | "measured" | "subsurface" => {
+        "hair" => {
+            // pbrt-v4's HairMaterial: the first of sigma_a, reflectance, melanin that is given.
+            // pbrt reads all four, so none is an unused parameter.
+            let mut o = obj("bsdf", "hair", l);
+            let sigma_a = texturable(p, ps, "sigma_a", false)?;
+            let reflectance = texturable(p, ps, "reflectance", false)?;
+            let melanin = [texturable(p, ps, "eumelanin", true)?, texturable(p, ps, "pheomelanin", true)?];
+            if let Some(v) = sigma_a {
+                set(&mut o, "sigma_a", v, &ploc(ps, "sigma_a"));
+            } else if let Some(v) = reflectance {
+                set(&mut o, "reflectance", v, &ploc(ps, "reflectance"));
+            } else {
+                for (name, v) in ["eumelanin", "pheomelanin"].into_iter().zip(melanin) {
+                    if let Some(v) = v {
+                        set(&mut o, name, v, &ploc(ps, name));
+                    }
+                }
+            }
+            for (name, default) in [("eta", 1.55), ("beta_m", 0.3), ("beta_n", 0.3), ("alpha", 2.0)] {
+                set(&mut o, name, Value::Float(ps.float(name, default)? as f64), &ploc(ps, name));
+            }
+            o
+        }
+        "measured" | "subsurface" => {
             return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
         }
         other => {
@@ -1301,7 +1325,16 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
             set(&mut o, "filename", Value::String(name), &ploc(ps, "filename"));
             o
         }
-        "curve" | "cone" | "paraboloid" | "hyperboloid" => {
+        "curve" => {
+            let curves = curve_set(p, ps)?;
+            let name = format!("#pbrt-curve-{}", p.mesh_count);
+            p.mesh_count += 1;
+            p.memory.curves.insert(name.clone(), curves);
+            let mut o = shape_obj(p, "curve", ps, Some(transform(ctm, ps)?))?;
+            set(&mut o, "filename", Value::String(name), &ps.loc);
+            o
+        }
+        "cone" | "paraboloid" | "hyperboloid" => {
             return Err(ps.error(format!("the \"{ty}\" shape is not implemented by neumann yet")))
         }
         other => {
@@ -1313,6 +1346,54 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
         }
     };
     Ok(vec![Rc::new(obj)])
+}
+
+/// pbrt-v4's `curve`: `P` (control points), `basis` (`bezier`, `bspline`), `degree` (3 or
+/// 2), `type` (`flat`, `cylinder`, `ribbon` with one normal `N` per segment end), `width` (1),
+/// `width0`, `width1`, `splitdepth` (3).
+fn curve_set(p: &mut Parser, ps: &ParamSet) -> Result<crate::geometry::CurveSet> {
+    use crate::geometry::curve::CurveKind;
+    let triples = |name: &str, types: &[&str]| -> Result<Vec<Vec3>> {
+        let v = ps.floats(name, types)?.unwrap_or_default();
+        if v.len() % 3 != 0 {
+            return Err(ps.error_at(name, format!("\"{name}\" needs a multiple of 3 numbers, has {}", v.len())));
+        }
+        Ok(v.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect())
+    };
+    let cp = triples("P", &["point3", "point"])?;
+    if cp.is_empty() {
+        return Err(ps.error("a curve needs its control points \"point3 P\""));
+    }
+    let bspline = match ps.string("basis")?.as_deref() {
+        None | Some("bezier") => false,
+        Some("bspline") => true,
+        Some(other) => return Err(ps.unknown("basis", other, &["bezier", "bspline"])),
+    };
+    let degree = ps.int("degree", 3)?;
+    let kind = match ps.string("type")?.as_deref() {
+        None | Some("flat") => CurveKind::Flat,
+        Some("cylinder") => CurveKind::Cylinder,
+        Some("ribbon") => CurveKind::Ribbon,
+        Some(other) => return Err(ps.unknown("curve type", other, &["cylinder", "flat", "ribbon"])),
+    };
+    let mut normals = triples("N", &["normal3", "normal"])?;
+    if !normals.is_empty() && kind != CurveKind::Ribbon {
+        // pbrt-v4 ignores them too, with a warning.
+        p.warnings.push(format!(
+            "warning: {}: curve normals \"N\" are used by \"ribbon\" curves only (ignored, as pbrt does)",
+            ploc(ps, "N").position()
+        ));
+        normals.clear();
+    }
+    let width = ps.float("width", 1.0)?;
+    let w = [ps.float("width0", width)?, ps.float("width1", width)?];
+    let split = ps.int("splitdepth", 3)?;
+    if !(0..=10).contains(&split) {
+        return Err(ps.error_at("splitdepth", format!("splitdepth must be between 0 and 10, got {split}")));
+    }
+    let degree = usize::try_from(degree).unwrap_or(0);
+    crate::geometry::CurveSet::from_control_points(&cp, degree, bspline, kind, &normals, w, split as u32)
+        .map_err(|e| ps.error(e.to_string()))
 }
 
 /// A copy of a shape object placed by `instance` (applied after its own `to_world`).
