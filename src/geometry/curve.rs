@@ -226,9 +226,10 @@ impl Placed {
     }
 }
 
-/// One primitive: part `[u0, u1]` of curve `curve`.
+/// One primitive: part `[u0, u1]` of curve `curve`, with that part's control points.
 #[derive(Clone, Copy, Debug)]
 struct Piece {
+    cp: [Vec3; 4],
     curve: u32,
     u0: f32,
     u1: f32,
@@ -328,7 +329,11 @@ impl Curves {
         let n = 1u32 << set.split_depth;
         let pieces = (0..curves.len() as u32)
             .flat_map(|c| {
-                (0..n).map(move |i| Piece { curve: c, u0: i as f32 / n as f32, u1: (i + 1) as f32 / n as f32 })
+                let cp = curves[c as usize].cp;
+                (0..n).map(move |i| {
+                    let (u0, u1) = (i as f32 / n as f32, (i + 1) as f32 / n as f32);
+                    Piece { cp: part(&cp, u0, u1), curve: c, u0, u1 }
+                })
             })
             .collect();
         let flip = flip ^ (m.determinant() < 0.0);
@@ -350,7 +355,7 @@ impl Curves {
         let pc = self.pieces[i];
         let c = &self.curves[pc.curve as usize];
         let w = c.width_at(pc.u0).max(c.width_at(pc.u1));
-        bounds_of(&part(&c.cp, pc.u0, pc.u1), 0.5 * w)
+        bounds_of(&pc.cp, 0.5 * w)
     }
 
     /// The ray's frame for primitive `i` (pbrt orients it by the piece's chord).
@@ -362,9 +367,8 @@ impl Curves {
     pub fn intersect(&self, i: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
         let pc = self.pieces[i];
         let c = &self.curves[pc.curve as usize];
-        let world = part(&c.cp, pc.u0, pc.u1);
-        let f = self.frame(&world, ray);
-        let cp = world.map(|q| f.point(q));
+        let f = self.frame(&pc.cp, ray);
+        let cp = pc.cp.map(|q| f.point(q));
         let ray_length = ray.d.length();
         let z_max = ray_length * t_max;
         let max_width = c.width_at(pc.u0).max(c.width_at(pc.u1));
@@ -464,7 +468,7 @@ impl Curves {
             hit_width *= n.dot(ray.d).abs() / ray.d.length();
             n.cross(dpdu).normalize_or_zero() * hit_width
         } else {
-            let f = self.frame(&part(&c.cp, pc.u0, pc.u1), ray);
+            let f = self.frame(&pc.cp, ray);
             let du = f.vector(dpdu);
             let mut dv = Vec3::new(-du.y, du.x, 0.0).normalize_or_zero() * hit_width;
             if self.kind == CurveKind::Cylinder {
