@@ -15,6 +15,7 @@
 pub mod heterogeneous;
 pub mod homogeneous;
 pub mod phase;
+pub mod presets;
 pub mod volume;
 
 pub use heterogeneous::Heterogeneous;

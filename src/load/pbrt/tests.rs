@@ -1148,3 +1148,30 @@ fn curves_and_hair() {
         assert!(e.contains(what), "{bad}: {e}");
     }
 }
+
+/// pbrt-v4's medium presets: the named coefficients (σₛ = the table's σ's, σₐ) times `scale`;
+/// without a preset σₐ = σₛ = 1; an unknown preset is a warning naming the nearest, and its
+/// σₐ and σₛ count, as in pbrt.
+#[test]
+fn medium_presets() {
+    use crate::medium::{homogeneous::Homogeneous, Coefficients};
+    let medium = |params: &str| {
+        let f = load(&format!(
+            "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" {params}\nMediumInterface \"\" \"m\"\nCamera \"perspective\"\nWorldBegin\n"
+        ))
+        .unwrap_or_else(|e| panic!("{e}"));
+        let Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }) = f.scene.media()[0].coefficients.clone() else {
+            panic!()
+        };
+        (sigma_t, albedo, f.warnings)
+    };
+    let (ss, sa) = (Rgb::new(0.74, 0.88, 1.01), Rgb::new(0.032, 0.17, 0.48));
+    let (st, albedo, _) = medium("\"string preset\" \"Skin1\" \"float scale\" 2");
+    assert!((st - (ss + sa) * 2.0).abs().max_element() < 1e-5, "{st}");
+    assert!((albedo - ss / (ss + sa)).abs().max_element() < 1e-5, "{albedo}");
+    let (st, albedo, _) = medium("");
+    assert!((st - Rgb::splat(2.0)).abs().max_element() < 1e-6 && (albedo - Rgb::splat(0.5)).abs().max_element() < 1e-6);
+    let (st, _, warnings) = medium("\"string preset\" \"Skin 1\" \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [3 3 3]");
+    assert!((st - Rgb::splat(4.0)).abs().max_element() < 1e-5);
+    assert!(warnings.iter().any(|w| w.contains("the nearest is 'Skin1'")), "{warnings:?}");
+}

@@ -989,7 +989,7 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
 pub fn medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
     match ty.as_str() {
-        "homogeneous" => homogeneous_medium(ps),
+        "homogeneous" => homogeneous_medium(p, ps),
         "uniformgrid" | "rgbgrid" => grid_medium(p, ps, ty == "rgbgrid"),
         "nanovdb" | "cloud" => Err(ps.error_at(
             "type",
@@ -1124,11 +1124,26 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     Ok(o)
 }
 
-/// pbrt-v4's `homogeneous` medium.
-fn homogeneous_medium(ps: &ParamSet) -> Result<Obj> {
-    if ps.has("preset") {
-        return Err(ps.error_at("preset", "named scattering presets are not implemented by neumann yet"));
-    }
+/// pbrt-v4's `homogeneous` medium: `preset` (a measured medium by name, σₛ and σₐ in mm⁻¹,
+/// `crate::medium::presets`; an unknown name is a warning and the parameters count, as in pbrt),
+/// else `sigma_a`, `sigma_s` (1 each); `scale`, `g`.
+fn homogeneous_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
+    let preset = match ps.string("preset")? {
+        None => None,
+        Some(name) => match crate::medium::presets::preset(&name) {
+            Some(coefficients) => Some(coefficients),
+            None => {
+                let hint = crate::choice::nearest(&name, crate::medium::presets::preset_names())
+                    .map(|n| format!("; the nearest is '{n}'"))
+                    .unwrap_or_default();
+                p.warnings.push(format!(
+                    "warning: {}: medium preset \"{name}\" not found (ignored, as pbrt does{hint})",
+                    ploc(ps, "preset").position()
+                ));
+                None
+            }
+        },
+    };
     let rgb = |name: &str, default: Rgb| -> Result<Rgb> {
         match ps.spectrum(name)? {
             None => Ok(default),
@@ -1137,8 +1152,10 @@ fn homogeneous_medium(ps: &ParamSet) -> Result<Obj> {
             Some(_) => Err(ps.error_at(name, "give an rgb or a constant")),
         }
     };
-    let sigma_a = rgb("sigma_a", Rgb::new(0.0011, 0.0024, 0.014))?;
-    let sigma_s = rgb("sigma_s", Rgb::new(2.55, 3.21, 3.77))?;
+    let (sigma_s, sigma_a) = match preset {
+        Some(c) => c,
+        None => (rgb("sigma_s", Rgb::ONE)?, rgb("sigma_a", Rgb::ONE)?),
+    };
     let scale = ps.float("scale", 1.0)?;
     if let Some(le) = ps.spectrum("Le")? {
         if le != SpectrumParam::Constant(0.0) && le != SpectrumParam::Rgb(Rgb::ZERO) {
