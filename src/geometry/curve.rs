@@ -452,7 +452,8 @@ impl Curves {
         }
         let dist = dist2.sqrt();
         let edge = dpcdw.x * -pc.y + pc.x * dpcdw.y;
-        let v = if edge > 0.0 { 0.5 + dist / hit_width } else { 0.5 - dist / hit_width };
+        let across = if hit_width > 0.0 { dist / hit_width } else { 0.0 };
+        let v = if edge > 0.0 { 0.5 + across } else { 0.5 - across };
         *best = Some(CurveHit { t, uv: Vec2::new(u, v.clamp(0.0, 1.0)) });
     }
 
