@@ -278,47 +278,54 @@ mod tests {
         }
     }
 
-    /// A bump map's normal on a flat surface with `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 2, 0)`: a
-    /// height slope `g` along u (scale included) tilts it to `(−g/2, 0, 1)`, normalized; flipping
-    /// the geometric normal's side flips the result back onto it.
-    #[test]
-    fn bump_maps_tilt_by_the_height_slope() {
-        use crate::geometry::SurfaceInteraction;
+    /// A ramp image (0, 0.25, 0.5, 0.75 across four texels along its s axis: slope 1 per unit
+    /// of s, bilinear, clamped) looked up through `to_uv`.
+    fn ramp(to_uv: glam::Mat3) -> Texture {
         use crate::texture::{Bitmap, Filter, Wrap};
-        let ramp = std::sync::Arc::new(crate::image::Image {
+        let image = std::sync::Arc::new(crate::image::Image {
             width: 4,
             height: 1,
             pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec(),
         });
-        let height = Texture::Bitmap {
-            bitmap: Bitmap { image: ramp, filter: Filter::Bilinear, wrap: [Wrap::Clamp; 2] },
-            to_uv: glam::Mat3::IDENTITY,
-        };
-        // Slope of the height field along u: 0.25 per texel × 4 texels = 1, times scale 0.3.
-        let bump = Perturbed {
-            perturbation: Perturbation::BumpMap { height, scale: 0.3 },
-            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
-            flip_invalid_normals: false,
-            shadowing: false,
-        };
-        let si = SurfaceInteraction {
+        Texture::Bitmap { bitmap: Bitmap { image, filter: Filter::Bilinear, wrap: [Wrap::Clamp; 2] }, to_uv }
+    }
+
+    /// A diffuse BSDF under `perturbation`, without Mitsuba's flip and shadowing.
+    fn perturbed(perturbation: Perturbation) -> Perturbed {
+        let bsdf = Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE)));
+        Perturbed { perturbation, bsdf, flip_invalid_normals: false, shadowing: false }
+    }
+
+    /// A hit at `uv` on the plane z = 0 facing +z, with `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 2, 0)`.
+    fn flat_hit(uv: Vec2) -> crate::geometry::SurfaceInteraction {
+        crate::geometry::SurfaceInteraction {
             p: Vec3::ZERO,
             p_error: Vec3::ZERO,
             t: 1.0,
             ng: Vec3::Z,
             ns: Vec3::Z,
-            uv: Vec2::new(0.5, 0.5),
+            uv,
             dpdu: Vec3::new(2.0, 0.0, 0.0),
             dpdv: Vec3::new(0.0, 2.0, 0.0),
             shape: 0,
             prim: 0,
             bary: Vec2::ZERO,
-        };
+        }
+    }
+
+    /// A bump map's normal on a flat surface with `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 2, 0)`: a
+    /// height slope `g` along u (scale included) tilts it to `(−g/2, 0, 1)`, normalized; flipping
+    /// the geometric normal's side flips the result back onto it.
+    #[test]
+    fn bump_maps_tilt_by_the_height_slope() {
+        // Slope of the height field along u: 1, times scale 0.3.
+        let bump = perturbed(Perturbation::BumpMap { height: ramp(glam::Mat3::IDENTITY), scale: 0.3 });
+        let si = flat_hit(Vec2::new(0.5, 0.5));
         let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
         let n = bump.frame(&ctx, Vec3::Z).n;
         let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();
         assert!((n - expected).length() < 1e-5, "{n} vs {expected}");
-        let below = SurfaceInteraction { ng: -Vec3::Z, ..si };
+        let below = crate::geometry::SurfaceInteraction { ng: -Vec3::Z, ..si };
         let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&below) };
         assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
@@ -329,39 +336,8 @@ mod tests {
     /// tilts it about the other axis.
     #[test]
     fn displacement_tilts_by_its_forward_difference() {
-        use crate::geometry::SurfaceInteraction;
-        use crate::texture::{Bitmap, Filter, Wrap};
-        let ramp = |to_uv: glam::Mat3| Texture::Bitmap {
-            bitmap: Bitmap {
-                image: std::sync::Arc::new(crate::image::Image {
-                    width: 4,
-                    height: 1,
-                    pixels: [0.0, 0.25, 0.5, 0.75].map(Rgb::splat).to_vec(),
-                }),
-                filter: Filter::Bilinear,
-                wrap: [Wrap::Clamp; 2],
-            },
-            to_uv,
-        };
-        let displaced = |displacement: Texture| Perturbed {
-            perturbation: Perturbation::Displacement { displacement },
-            bsdf: Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))),
-            flip_invalid_normals: false,
-            shadowing: false,
-        };
-        let si = SurfaceInteraction {
-            p: Vec3::ZERO,
-            p_error: Vec3::ZERO,
-            t: 1.0,
-            ng: Vec3::Z,
-            ns: Vec3::Z,
-            uv: Vec2::new(0.5, 0.4),
-            dpdu: Vec3::new(2.0, 0.0, 0.0),
-            dpdv: Vec3::new(0.0, 2.0, 0.0),
-            shape: 0,
-            prim: 0,
-            bary: Vec2::ZERO,
-        };
+        let displaced = |displacement: Texture| perturbed(Perturbation::Displacement { displacement });
+        let si = flat_hit(Vec2::new(0.5, 0.4));
         let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
         let along_u = displaced(ramp(glam::Mat3::IDENTITY).times(Texture::Constant(Rgb::splat(0.3))));
         let n = along_u.frame(&ctx, Vec3::Z).n;
