@@ -246,7 +246,8 @@ struct RayFrame {
 impl RayFrame {
     fn new(ray: &Ray, up: Vec3) -> RayFrame {
         let z = ray.d.normalize();
-        let mut x = up.normalize().cross(z);
+        // `up` need not be a unit vector: x is normalised below.
+        let mut x = up.cross(z);
         if x.length_squared() == 0.0 || !x.is_finite() {
             x = crate::math::Frame::from_z(z).s;
         }
