@@ -366,6 +366,9 @@ impl Curves {
 
     /// The closest hit of primitive `i` within `(0, t_max)`.
     pub fn intersect(&self, i: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
+        // The piece's own box first: cheaper than the ray frame, and the BVH's leaf box holds
+        // several pieces.
+        self.bounds(i).intersect_p(ray, ray.d.recip())?;
         let pc = self.pieces[i];
         let c = &self.curves[pc.curve as usize];
         let f = self.frame(&pc.cp, ray);
