@@ -81,6 +81,9 @@ pub struct Parser {
     files: usize,
     bytes: usize,
     pub(super) mesh_count: usize,
+    /// Curve primitives made so far (each curve times 2^splitdepth), bounded by
+    /// [`super::translate::MAX_CURVE_PIECES`].
+    pub(super) curve_pieces: usize,
 }
 
 /// A token cursor over one file.
@@ -278,6 +281,7 @@ impl Parser {
             files: 0,
             bytes: 0,
             mesh_count: 0,
+            curve_pieces: 0,
         }
     }
 

@@ -1147,6 +1147,12 @@ fn curves_and_hair() {
         let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{bad}\n"));
         assert!(e.contains(what), "{bad}: {e}");
     }
+    // splitdepth multiplies memory: 65 537 segments split 1024 ways pass the scene's bound.
+    let points = "0 0 0 ".repeat(3 * 65_537 + 1);
+    let e = err(&format!(
+        "Camera \"perspective\"\nWorldBegin\nShape \"curve\" \"integer splitdepth\" 10 \"point3 P\" [{points}]\n"
+    ));
+    assert!(e.contains("pieces") && e.contains("test.pbrt:3"), "{e}");
 }
 
 /// pbrt-v4's medium presets: the named coefficients (σₛ = the table's σ's, σₐ) times `scale`;

@@ -1344,6 +1344,13 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
         }
         "curve" => {
             let curves = curve_set(p, ps)?;
+            p.curve_pieces += curves.curves.len() << curves.split_depth;
+            if p.curve_pieces > MAX_CURVE_PIECES {
+                return Err(ps.error_at(
+                    "splitdepth",
+                    format!("the scene's curves make more than {MAX_CURVE_PIECES} pieces (curves × 2^splitdepth)"),
+                ));
+            }
             let name = format!("#pbrt-curve-{}", p.mesh_count);
             p.mesh_count += 1;
             p.memory.curves.insert(name.clone(), curves);
@@ -1364,6 +1371,10 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
     };
     Ok(vec![Rc::new(obj)])
 }
+
+/// Most curve pieces (primitives) a scene may make: 2²⁶, about 4 GB of them; `splitdepth` (up
+/// to 10) would otherwise let a small file ask for unbounded memory.
+pub const MAX_CURVE_PIECES: usize = 1 << 26;
 
 /// pbrt-v4's `curve`: `P` (control points), `basis` (`bezier`, `bspline`), `degree` (3 or
 /// 2), `type` (`flat`, `cylinder`, `ribbon` with one normal `N` per segment end), `width` (1),
