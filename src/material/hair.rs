@@ -279,30 +279,32 @@ impl Hair {
         Outgoing { sin_o, cos_o, phi_o, gamma_o, gamma_t, a, a_pdf }
     }
 
-    /// `Σ_p M_p w_p N_p` at `wi` for per-term weights `w` (the attenuations or their pdf).
-    fn lobe_sum<T: Copy + std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T>>(
-        &self,
-        l: &Lobes,
-        o: &Outgoing,
-        wi: Vec3,
-        w: &[T; P_MAX + 1],
-        zero: T,
-    ) -> T {
+    /// The products `M_p N_p` of the four terms at `wi` (N uniform, 1/2π, for the last).
+    fn lobes_at(&self, l: &Lobes, o: &Outgoing, wi: Vec3) -> [f32; P_MAX + 1] {
         let sin_i = wi.x.clamp(-1.0, 1.0);
         let cos_i = safe_sqrt(1.0 - sin_i * sin_i);
         let dphi = wi.z.atan2(wi.y) - o.phi_o;
-        let mut sum = zero;
-        for (p, &wp) in w.iter().enumerate().take(P_MAX) {
-            let (s, c) = l.tilted(p, o.sin_o, o.cos_o);
-            sum = sum + wp * (mp(cos_i, c, sin_i, s, l.v[p]) * np(dphi, p, l.s, o.gamma_o, o.gamma_t));
-        }
-        sum + w[P_MAX] * (mp(cos_i, o.cos_o, sin_i, o.sin_o, l.v[P_MAX]) / (2.0 * PI))
+        std::array::from_fn(|p| {
+            if p < P_MAX {
+                let (s, c) = l.tilted(p, o.sin_o, o.cos_o);
+                mp(cos_i, c, sin_i, s, l.v[p]) * np(dphi, p, l.s, o.gamma_o, o.gamma_t)
+            } else {
+                mp(cos_i, o.cos_o, sin_i, o.sin_o, l.v[P_MAX]) / (2.0 * PI)
+            }
+        })
+    }
+
+    /// `Σ_p M_p A_p N_p` and `Σ_p M_p P(p) N_p` of the products `m` (the value and the density).
+    fn sums(o: &Outgoing, m: &[f32; P_MAX + 1]) -> (Rgb, f32) {
+        let f = (0..=P_MAX).fold(Rgb::ZERO, |acc, p| acc + o.a[p] * m[p]);
+        let pdf = (0..=P_MAX).map(|p| o.a_pdf[p] * m[p]).sum();
+        (f, pdf)
     }
 
     /// `f(wo, wi) |cos θᵢ|` = `Σ_p M_p A_p N_p` (local frame).
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         let o = self.outgoing(ctx, wo);
-        let v = self.lobe_sum(&Lobes::new(self), &o, wi, &o.a, Rgb::ZERO);
+        let (v, _) = Self::sums(&o, &self.lobes_at(&Lobes::new(self), &o, wi));
         if v.is_finite() {
             v
         } else {
@@ -313,7 +315,7 @@ impl Hair {
     /// The density of [`Hair::sample`] at `wi` (solid angle).
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         let o = self.outgoing(ctx, wo);
-        let p = self.lobe_sum(&Lobes::new(self), &o, wi, &o.a_pdf, 0.0);
+        let (_, p) = Self::sums(&o, &self.lobes_at(&Lobes::new(self), &o, wi));
         if p.is_finite() {
             p
         } else {
@@ -350,8 +352,7 @@ impl Hair {
             if p < P_MAX { phi(p, o.gamma_o, o.gamma_t) + sample_trimmed_logistic(uc, l.s) } else { 2.0 * PI * uc };
         let phi_i = o.phi_o + dphi;
         let wi = Vec3::new(sin_i, cos_i * phi_i.cos(), cos_i * phi_i.sin());
-        let pdf = self.lobe_sum(&l, &o, wi, &o.a_pdf, 0.0);
-        let f = self.lobe_sum(&l, &o, wi, &o.a, Rgb::ZERO);
+        let (f, pdf) = Self::sums(&o, &self.lobes_at(&l, &o, wi));
         (pdf > 0.0 && pdf.is_finite() && f.is_finite()).then(|| BsdfSample {
             wi,
             pdf,

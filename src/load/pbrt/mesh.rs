@@ -16,21 +16,21 @@ type Result<T> = std::result::Result<T, SceneError>;
 
 /// A `trianglemesh` or `bilinearmesh` from its parameters.
 pub fn from_params(ps: &ParamSet, bilinear: bool) -> Result<TriangleMesh> {
-    let p = ps.floats("P", &["point3", "point"])?.ok_or_else(|| ps.error("needs its vertex positions \"point3 P\""))?;
-    if p.len() % 3 != 0 || p.is_empty() {
-        return Err(ps.error_at("P", format!("\"P\" needs a multiple of 3 numbers, has {}", p.len())));
+    let positions =
+        ps.vec3s("P", &["point3", "point"])?.ok_or_else(|| ps.error("needs its vertex positions \"point3 P\""))?;
+    if positions.is_empty() {
+        return Err(ps.error_at("P", "\"P\" needs a multiple of 3 numbers, has 0"));
     }
-    let n_vertices = p.len() / 3;
-    let positions: Vec<Vec3> = p.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
+    let n_vertices = positions.len();
     let normals: Vec<Vec3> = match ps.floats("N", &["normal3", "normal"])? {
         None => Vec::new(),
-        Some(n) if n.len() == p.len() => {
+        Some(n) if n.len() == 3 * n_vertices => {
             n.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect()
         }
         Some(n) => {
             return Err(ps.error_at(
                 "N",
-                format!("\"N\" has {} numbers, \"P\" {}: one normal per vertex is needed", n.len(), p.len()),
+                format!("\"N\" has {} numbers, \"P\" {}: one normal per vertex is needed", n.len(), 3 * n_vertices),
             ))
         }
     };
@@ -84,11 +84,11 @@ pub fn loop_subdivision(ps: &ParamSet) -> Result<TriangleMesh> {
     if !(0..=12).contains(&levels) {
         return Err(ps.error_at("levels", format!("\"levels\" must be 0–12, got {levels}")));
     }
-    let p = ps.floats("P", &["point3", "point"])?.ok_or_else(|| ps.error("needs its control points \"point3 P\""))?;
-    if p.len() % 3 != 0 || p.is_empty() {
-        return Err(ps.error_at("P", format!("\"P\" needs a multiple of 3 numbers, has {}", p.len())));
+    let positions =
+        ps.vec3s("P", &["point3", "point"])?.ok_or_else(|| ps.error("needs its control points \"point3 P\""))?;
+    if positions.is_empty() {
+        return Err(ps.error_at("P", "\"P\" needs a multiple of 3 numbers, has 0"));
     }
-    let positions: Vec<Vec3> = p.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect();
     let idx = ps.floats("indices", &["integer"])?.ok_or_else(|| ps.error("needs its \"integer indices\""))?;
     if idx.is_empty() || !idx.len().is_multiple_of(3) {
         return Err(ps.error_at("indices", format!("\"indices\" needs a multiple of 3 values, has {}", idx.len())));

@@ -115,6 +115,16 @@ impl ParamSet {
         }
     }
 
+    /// A parameter of 3-vectors (`point3`, `normal3`, … as `types` says), read as triples; an
+    /// error at the parameter unless its numbers come in threes.
+    pub fn vec3s(&self, name: &str, types: &[&str]) -> Result<Option<Vec<Vec3>>> {
+        let Some(v) = self.floats(name, types)? else { return Ok(None) };
+        if !v.len().is_multiple_of(3) {
+            return Err(self.error_at(name, format!("\"{name}\" needs a multiple of 3 numbers, has {}", v.len())));
+        }
+        Ok(Some(v.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect()))
+    }
+
     /// A single `float` (default if absent).
     pub fn float(&self, name: &str, default: f32) -> Result<f32> {
         match self.find(name) {

@@ -1381,14 +1381,7 @@ pub const MAX_CURVE_PIECES: usize = 1 << 26;
 /// `width0`, `width1`, `splitdepth` (3).
 fn curve_set(p: &mut Parser, ps: &ParamSet) -> Result<crate::geometry::CurveSet> {
     use crate::geometry::curve::CurveKind;
-    let triples = |name: &str, types: &[&str]| -> Result<Vec<Vec3>> {
-        let v = ps.floats(name, types)?.unwrap_or_default();
-        if v.len() % 3 != 0 {
-            return Err(ps.error_at(name, format!("\"{name}\" needs a multiple of 3 numbers, has {}", v.len())));
-        }
-        Ok(v.chunks(3).map(|c| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32)).collect())
-    };
-    let cp = triples("P", &["point3", "point"])?;
+    let cp = ps.vec3s("P", &["point3", "point"])?.unwrap_or_default();
     if cp.is_empty() {
         return Err(ps.error("a curve needs its control points \"point3 P\""));
     }
@@ -1404,7 +1397,7 @@ fn curve_set(p: &mut Parser, ps: &ParamSet) -> Result<crate::geometry::CurveSet>
         Some("ribbon") => CurveKind::Ribbon,
         Some(other) => return Err(ps.unknown("curve type", other, &["cylinder", "flat", "ribbon"])),
     };
-    let mut normals = triples("N", &["normal3", "normal"])?;
+    let mut normals = ps.vec3s("N", &["normal3", "normal"])?.unwrap_or_default();
     if !normals.is_empty() && kind != CurveKind::Ribbon {
         // pbrt-v4 ignores them too, with a warning.
         p.warnings.push(format!(
