@@ -114,7 +114,8 @@ impl RoughConductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let m = self.roughness.at(ctx).sample(wo, u);
+        let distribution = self.roughness.at(ctx);
+        let m = distribution.sample(wo, u);
         if m.pdf <= 0.0 {
             return None;
         }
@@ -123,7 +124,14 @@ impl RoughConductor {
             return None;
         }
         let pdf = m.pdf / (4.0 * wo.dot(m.value).abs());
-        let weight = self.eval(ctx, wo, wi) / pdf;
+        let weight = if distribution.samples_visible_normals() {
+            // f cos θᵢ / pdf with pdf(m) = G1(wo, m) (wo·m) D(m) / cos θₒ: D and G1(wo) cancel,
+            // leaving F G1(wi, m) (Mitsuba's weight), without evaluating D and G1(wo) again.
+            let f = ConductorIor::reflectance(&self.ior, ctx, wi.dot(m.value));
+            ctx.eval(&self.specular_reflectance) * f * distribution.g1(wi, m.value)
+        } else {
+            self.eval(ctx, wo, wi) / pdf
+        };
         (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
     }
 }

@@ -63,6 +63,12 @@ impl Microfacet {
         Microfacet { kind: MicrofacetType::BlinnPhong(n), alpha_u: a, alpha_v: a }
     }
 
+    /// Whether [`Microfacet::sample`] samples visible normals (GGX and Beckmann), so that its
+    /// density is `G1(wi, m) (wi·m) D(m) / cos θᵢ` and sampling weights simplify.
+    pub fn samples_visible_normals(&self) -> bool {
+        !matches!(self.kind, MicrofacetType::BlinnPhong(_))
+    }
+
     /// Whether the distribution is anisotropic.
     pub fn is_anisotropic(&self) -> bool {
         self.alpha_u != self.alpha_v
@@ -216,7 +222,8 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
         let value = normalization * (1.0 + b + INV_SQRT_PI * tan_theta_i * (-inv_erf * inv_erf).exp()) - sample_x;
         let derivative = normalization * (1.0 - inv_erf * tan_theta_i);
         if value.abs() < 1e-6 {
-            break;
+            // Converged at b, whose inverse is at hand.
+            return (inv_erf, erfinv(2.0 * u.y.max(1e-6) - 1.0));
         }
         if value > 0.0 {
             c = b;
@@ -266,7 +273,8 @@ impl Roughness {
     /// `alpha` or `alpha_u` / `alpha_v` may be textures (then `distribution` is `beckmann` or
     /// `ggx`).
     pub fn from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Roughness> {
-        let textured = ["alpha", "alpha_u", "alpha_v"].iter().any(|n| matches!(o.object_opt(n, "texture"), Ok(Some(_))));
+        let textured =
+            ["alpha", "alpha_u", "alpha_v"].iter().any(|n| matches!(o.object_opt(n, "texture"), Ok(Some(_))));
         if !textured {
             return Microfacet::from_props(o, true).map(Roughness::from);
         }

@@ -2,7 +2,10 @@
 //! Beckmann microfacet distribution.
 
 /// The error function `erf(x) = 2/√π ∫₀ˣ e^(-t²) dt`, from the Chebyshev-fitted complementary
-/// error function of Numerical Recipes (relative error < 1.2·10⁻⁷), evaluated in `f64`.
+/// error function of Numerical Recipes (relative error < 1.2·10⁻⁷): the polynomial and the
+/// final `1 − erfc` in `f64` (near zero `erfc` is close to 1), its exponential in `f32` (an
+/// `f64` exponential costs about three times as much and adds nothing at this precision).
+/// Absolute error below 1.5·10⁻⁷ (tested against the Taylor series; 1.1·10⁻⁷ measured).
 pub fn erf(x: f32) -> f32 {
     let z = (x as f64).abs();
     let t = 1.0 / (1.0 + 0.5 * z);
@@ -13,13 +16,14 @@ pub fn erf(x: f32) -> f32 {
                     + t * (-0.186_288_06
                         + t * (0.278_868_07
                             + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let erfc = t * poly.exp();
+    let erfc = t * (poly as f32).exp() as f64;
     let r = 1.0 - erfc;
     (if x >= 0.0 { r } else { -r }) as f32
 }
 
 /// The inverse error function on (-1, 1) (Giles, "Approximating the erfinv function", 2010;
-/// single-precision polynomial fit), refined by one Newton step in `f64`.
+/// single-precision polynomial fit), refined by one Newton step on [`erf`] (the correction
+/// is small, so `f32` suffices for it).
 pub fn erfinv(x: f32) -> f32 {
     let x = x.clamp(-1.0 + 1e-7, 1.0 - 1e-7);
     let mut w = -((1.0 - x) * (1.0 + x)).ln();
@@ -56,10 +60,10 @@ pub fn erfinv(x: f32) -> f32 {
         }
         p
     };
-    let y = (p * x) as f64;
+    let y = p * x;
     // Newton: erf(y) - x = 0, erf'(y) = 2/√π e^(-y²).
-    let err = erf(y as f32) as f64 - x as f64;
-    (y - err / (2.0 / std::f64::consts::PI.sqrt() * (-y * y).exp())) as f32
+    let err = erf(y) - x;
+    y - err / (std::f32::consts::FRAC_2_SQRT_PI * (-y * y).exp())
 }
 
 #[cfg(test)]
@@ -78,6 +82,36 @@ mod tests {
         ] {
             assert!((erf(x) as f64 - e).abs() < 3e-7, "erf({x})");
         }
+    }
+
+    /// erf by its Taylor series in `f64` (accurate to about 10⁻⁹ for |x| ≤ 4).
+    fn erf_series(x: f64) -> f64 {
+        let (mut term, mut sum) = (x, x);
+        for n in 1..200 {
+            term *= -x * x / n as f64;
+            sum += term / (2 * n + 1) as f64;
+        }
+        sum * 2.0 / std::f64::consts::PI.sqrt()
+    }
+
+    /// Over a dense grid of (-4, 4): erf within 1.5·10⁻⁷ of the series, and erfinv inverts the
+    /// series' erf to within 1.5·10⁻⁷ (about one ulp of the values near ±1 it inverts). Both
+    /// measure 1.1·10⁻⁷ (with the exponentials in `f64`: 0.86·10⁻⁷).
+    #[test]
+    fn erf_and_erfinv_against_the_series() {
+        let (mut worst_erf, mut worst_inv) = (0.0f64, 0.0f64);
+        for i in -4000..=4000 {
+            let x = i as f64 / 1000.0;
+            worst_erf = worst_erf.max((erf(x as f32) as f64 - erf_series(x)).abs());
+            if x.abs() < 3.0 {
+                let e = erf_series(x) as f32;
+                if e.abs() < 1.0 {
+                    worst_inv = worst_inv.max((erf_series(erfinv(e) as f64) - e as f64).abs());
+                }
+            }
+        }
+        assert!(worst_erf < 1.5e-7, "erf: {worst_erf:e}");
+        assert!(worst_inv < 1.5e-7, "erfinv: {worst_inv:e}");
     }
 
     #[test]
