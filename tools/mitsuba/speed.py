@@ -12,7 +12,9 @@ generation; `apt-get install libllvm19` and point DRJIT_LIBLLVM_PATH at it):
     DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so \\
         ~/mitsuba-venv/bin/python tools/mitsuba/speed.py [--res N] [--runs K] [scene ...]
 Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every validation scene
-(tools/mitsuba/references.py) at the settings `neumann validate` uses (--res, default 128)."""
+(tools/mitsuba/references.py) at the settings `neumann validate` uses (--res, default 128).
+--depths 1,2,3,8 adds the Cornell box at 512², 64 spp at each of those maximum depths: where the
+ratio changes with depth tells camera rays and direct light (depth ≤ 2) from bounces."""
 import argparse
 import os
 import subprocess
@@ -42,6 +44,7 @@ def main():
     parser = argparse.ArgumentParser(description="neumann and Mitsuba llvm_ad_rgb side by side")
     parser.add_argument("--res", type=int, default=128, help="film size of the validation scenes")
     parser.add_argument("--runs", type=int, default=2, help="timed runs of each renderer (the best counts)")
+    parser.add_argument("--depths", default="", help="also the Cornell box at these max_depth values (comma-separated)")
     parser.add_argument("scenes", nargs="*", help="scene names (default: all)")
     opts = parser.parse_args()
     res, runs, args = opts.res, opts.runs, opts.scenes
@@ -51,8 +54,9 @@ def main():
     jobs += [(name, res, spec[1], dict(spec[2])) for name, spec in SCENES.items()]
     if args:
         jobs = [j for j in jobs if j[0] in args]
+    jobs += [("cbox", 512, 64, {"max_depth": d}) for d in opts.depths.split(",") if d]
     neumann = os.path.join("target", "release", "neumann")
-    print(f"{'scene':<18} {'res':>5} {'spp':>5}  {'neumann M/s':>11}  {'Mitsuba M/s':>11}  ratio")
+    print(f"{'scene':<18} {'res':>5} {'spp':>5} {'depth':>5}  {'neumann M/s':>11}  {'Mitsuba M/s':>11}  ratio")
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
         for name, r, spp, extra in jobs:
@@ -64,7 +68,8 @@ def main():
             t_n = min(timed(n_cmd) for _ in range(runs))
             t_m = min(timed(m_cmd) for _ in range(runs))
             samples = r * r * spp
-            print(f"{name:<18} {r:>5} {spp:>5}  {samples / t_n / 1e6:>11.3f}  {samples / t_m / 1e6:>11.3f}  {t_m / t_n:.2f}",
+            depth = extra.get("max_depth", "")
+            print(f"{name:<18} {r:>5} {spp:>5} {depth:>5}  {samples / t_n / 1e6:>11.3f}  {samples / t_m / 1e6:>11.3f}  {t_m / t_n:.2f}",
                   flush=True)
 
 
