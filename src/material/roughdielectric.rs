@@ -17,9 +17,9 @@
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
 use super::microfacet::Roughness;
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
-use crate::texture::Texture;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
+use crate::texture::Texture;
 
 /// Rough dielectric interface.
 #[derive(Clone, Debug)]
@@ -82,7 +82,8 @@ impl RoughDielectric {
             ctx.eval(&self.specular_reflectance) * (f * d * g / (4.0 * wo.z.abs()))
         } else {
             let denom = wom + c.e * wim;
-            ctx.eval(&self.specular_transmittance) * ((1.0 - f) * d * g * (wim * wom).abs() / (wo.z.abs() * denom * denom))
+            ctx.eval(&self.specular_transmittance)
+                * ((1.0 - f) * d * g * (wim * wom).abs() / (wo.z.abs() * denom * denom))
         }
     }
 
@@ -110,7 +111,9 @@ impl RoughDielectric {
             return None;
         }
         let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let m = self.roughness.at(ctx).sample(wo_up, u).value;
+        let distribution = self.roughness.at(ctx);
+        let sampled = distribution.sample(wo_up, u);
+        let m = sampled.value;
         let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.dot(m), self.eta);
         let reflected = u1 <= f;
         let (wi, eta) = if reflected {
@@ -126,11 +129,33 @@ impl RoughDielectric {
         if (wi.z * wo.z > 0.0) != reflected {
             return None;
         }
-        let pdf = self.pdf(ctx, wo, wi);
-        if pdf <= 0.0 || pdf.is_nan() {
+        if !distribution.samples_visible_normals() {
+            let pdf = self.pdf(ctx, wo, wi);
+            if pdf <= 0.0 || pdf.is_nan() {
+                return None;
+            }
+            let weight = self.eval(ctx, wo, wi) / pdf;
+            return weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta });
+        }
+        // Visible normals: pdf(m) = G1(wo, m) |wo·m| D(m) / |cos θₒ|, and the choice between
+        // reflection and refraction has probability F or 1 − F, so [`RoughDielectric::pdf`] and
+        // [`RoughDielectric::eval`] share D, G1(wo) and F, which cancel in the weight: G1(wi, m)
+        // for a reflection, G1(wi, m) / e² for a refraction (e the index ratio across the
+        // interface), Mitsuba's weights. The density is theirs, from the values at hand.
+        let (wom, wim) = (wo.dot(m), wi.dot(m));
+        let pdf_m = sampled.pdf;
+        let g1 = distribution.g1(wi, m);
+        let (pdf, weight) = if reflected {
+            (pdf_m * f / (4.0 * wom.abs()), ctx.eval(&self.specular_reflectance) * g1)
+        } else {
+            let e = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
+            let denom = wom + e * wim;
+            let pdf = pdf_m * (1.0 - f) * e * e * wim.abs() / (denom * denom);
+            (pdf, ctx.eval(&self.specular_transmittance) * (g1 / (e * e)))
+        };
+        if !(pdf > 0.0) || g1 <= 0.0 {
             return None;
         }
-        let weight = self.eval(ctx, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 }
