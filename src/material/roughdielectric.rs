@@ -153,7 +153,7 @@ impl RoughDielectric {
             let pdf = pdf_m * (1.0 - f) * e * e * wim.abs() / (denom * denom);
             (pdf, ctx.eval(&self.specular_transmittance) * (g1 / (e * e)))
         };
-        if !(pdf > 0.0) || g1 <= 0.0 {
+        if pdf <= 0.0 || pdf.is_nan() || g1 <= 0.0 {
             return None;
         }
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
