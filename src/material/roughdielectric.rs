@@ -43,19 +43,23 @@ struct Config {
 }
 
 impl RoughDielectric {
+    /// The index ratio across the interface for a refraction from `wo`'s side (wi's side over
+    /// wo's).
+    fn refraction_ratio(&self, wo: Vec3) -> f32 {
+        if wo.z > 0.0 {
+            self.eta
+        } else {
+            1.0 / self.eta
+        }
+    }
+
     fn config(&self, wo: Vec3, wi: Vec3) -> Option<Config> {
         if wo.z == 0.0 || wi.z == 0.0 {
             return None;
         }
         let reflect = wo.z * wi.z > 0.0;
         // Index ratio across the interface, from wo's side to wi's side.
-        let e = if reflect {
-            1.0
-        } else if wo.z > 0.0 {
-            self.eta
-        } else {
-            1.0 / self.eta
-        };
+        let e = if reflect { 1.0 } else { self.refraction_ratio(wo) };
         let m = if reflect { wo + wi } else { -(wo + wi * e) };
         let len = m.length();
         if len == 0.0 {
@@ -148,7 +152,7 @@ impl RoughDielectric {
         let (pdf, weight) = if reflected {
             (pdf_m * f / (4.0 * wom.abs()), ctx.eval(&self.specular_reflectance) * g1)
         } else {
-            let e = if wo.z > 0.0 { self.eta } else { 1.0 / self.eta };
+            let e = self.refraction_ratio(wo);
             let denom = wom + e * wim;
             let pdf = pdf_m * (1.0 - f) * e * e * wim.abs() / (denom * denom);
             (pdf, ctx.eval(&self.specular_transmittance) * (g1 / (e * e)))
