@@ -101,12 +101,7 @@ impl RoughDielectric {
         let wo_up = if wo.z < 0.0 { -wo } else { wo };
         let pdf_m = self.roughness.at(ctx).pdf(wo_up, c.m);
         let (f, ..) = fresnel_dielectric(wom, self.eta);
-        if c.reflect {
-            pdf_m * f / (4.0 * wom.abs())
-        } else {
-            let denom = wom + c.e * wim;
-            pdf_m * (1.0 - f) * c.e * c.e * wim.abs() / (denom * denom)
-        }
+        wi_pdf(pdf_m, f, c.reflect, c.e, wom, wim)
     }
 
     /// A visible normal from `wo`, then reflection (probability F) or refraction.
@@ -118,7 +113,8 @@ impl RoughDielectric {
         let distribution = self.roughness.at(ctx);
         let sampled = distribution.sample(wo_up, u);
         let m = sampled.value;
-        let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.dot(m), self.eta);
+        let wom = wo.dot(m);
+        let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wom, self.eta);
         let reflected = u1 <= f;
         let (wi, eta) = if reflected {
             (reflect_about(wo, m), 1.0)
@@ -146,16 +142,13 @@ impl RoughDielectric {
         // [`RoughDielectric::eval`] share D, G1(wo) and F, which cancel in the weight: G1(wi, m)
         // for a reflection, G1(wi, m) / e² for a refraction (e the index ratio across the
         // interface), Mitsuba's weights. The density is theirs, from the values at hand.
-        let (wom, wim) = (wo.dot(m), wi.dot(m));
-        let pdf_m = sampled.pdf;
         let g1 = distribution.g1(wi, m);
-        let (pdf, weight) = if reflected {
-            (pdf_m * f / (4.0 * wom.abs()), ctx.eval(&self.specular_reflectance) * g1)
+        let e = if reflected { 1.0 } else { self.refraction_ratio(wo) };
+        let pdf = wi_pdf(sampled.pdf, f, reflected, e, wom, wi.dot(m));
+        let weight = if reflected {
+            ctx.eval(&self.specular_reflectance) * g1
         } else {
-            let e = self.refraction_ratio(wo);
-            let denom = wom + e * wim;
-            let pdf = pdf_m * (1.0 - f) * e * e * wim.abs() / (denom * denom);
-            (pdf, ctx.eval(&self.specular_transmittance) * (g1 / (e * e)))
+            ctx.eval(&self.specular_transmittance) * (g1 / (e * e))
         };
         if pdf <= 0.0 || pdf.is_nan() || g1 <= 0.0 {
             return None;
@@ -163,6 +156,19 @@ impl RoughDielectric {
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 }
+/// Density of `wi` (solid angle) given the microfacet normal `m`'s density `pdf_m` and the
+/// Fresnel reflectance `f` at `wo·m`: a reflection (probability F, Jacobian 1 / (4 |wo·m|)) or a
+/// refraction (probability 1 − F, Jacobian e² |wi·m| / (wo·m + e wi·m)², `e` the index ratio
+/// across the interface).
+fn wi_pdf(pdf_m: f32, f: f32, reflect: bool, e: f32, wom: f32, wim: f32) -> f32 {
+    if reflect {
+        pdf_m * f / (4.0 * wom.abs())
+    } else {
+        let denom = wom + e * wim;
+        pdf_m * (1.0 - f) * e * e * wim.abs() / (denom * denom)
+    }
+}
+
 impl RoughDielectric {
     /// Mitsuba's `roughdielectric`: the dielectric's parameters and the microfacet
     /// distribution's (roughness and scales texturable).
