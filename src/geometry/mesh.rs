@@ -118,6 +118,19 @@ pub enum MeshError {
     NonFinite(usize),
 }
 
+/// A triangle mesh's surface at a hit ([`TriangleMesh::surface_at`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshSurface {
+    /// Shading normal (unit, world space).
+    pub ns: Vec3,
+    /// Texture coordinates.
+    pub uv: Vec2,
+    /// `∂p/∂u` (world space).
+    pub dpdu: Vec3,
+    /// `∂p/∂v` (world space; zero when not asked for).
+    pub dpdv: Vec3,
+}
+
 impl TriangleMesh {
     /// A mesh from its arrays. `normals` and `uvs` are either empty or one per vertex; the
     /// first problem found is the error.
@@ -365,57 +378,49 @@ impl TriangleMesh {
         }
     }
 
-    /// The texture-coordinate differences `(uv1 − uv0, uv2 − uv0)` of triangle `i` and their
-    /// determinant, where the uvs span the triangle.
-    #[inline]
-    fn uv_deltas(&self, i: usize) -> Option<(Vec2, Vec2, f32)> {
-        if self.uvs.is_empty() {
-            return None;
-        }
-        let [a, b, c] = self.indices[i].map(|v| v as usize);
-        let (duv0, duv1) = (self.uvs[b] - self.uvs[a], self.uvs[c] - self.uvs[a]);
-        let det = duv0.x * duv1.y - duv0.y * duv1.x;
-        (det != 0.0).then_some((duv0, duv1, det))
-    }
-
-    /// `∂p/∂u` of triangle `i` (world positions `p`, unit face normal `ng`), as Mitsuba 3.9
-    /// computes it: from the vertices' texture coordinates where they span the triangle (else
-    /// the first tangent of Duff et al.'s basis around `ng`, Mitsuba's `coordinate_system`);
-    /// without texture coordinates the barycentric parameterization uv = (b1, b2) gives
-    /// `p1 − p0` (measured against Mitsuba: anisotropic BSDFs on such meshes change frame from
-    /// triangle to triangle there, and so they do here).
-    #[inline]
-    pub fn dpdu(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> Vec3 {
-        if self.uvs.is_empty() {
-            return p[1] - p[0];
-        }
-        if let Some((duv0, duv1, det)) = self.uv_deltas(i) {
-            let d = ((p[1] - p[0]) * duv1.y - (p[2] - p[0]) * duv0.y) / det;
-            if d.is_finite() {
-                return d;
-            }
-        }
-        crate::math::Frame::from_z(ng).s
-    }
-
-    /// `(∂p/∂u, ∂p/∂v)` of triangle `i`, as [`TriangleMesh::dpdu`] (without texture
-    /// coordinates `p1 − p0` and `p2 − p0`; the tangents of Duff et al.'s basis where the uvs
-    /// are degenerate).
-    #[inline]
-    pub fn dpduv(&self, i: usize, p: &[Vec3; 3], ng: Vec3) -> (Vec3, Vec3) {
+    /// The surface of triangle `i` (world vertices `p`, unit face normal `ng`) at barycentrics
+    /// `b = (b0, b1, b2)`: shading normal, uv, and `∂p/∂u` (and `∂p/∂v` when `with_v`, else
+    /// zero), as Mitsuba 3.9 computes them. The partial derivatives come from the vertices'
+    /// texture coordinates where they span the triangle (else the tangents of Duff et al.'s
+    /// basis around `ng`, Mitsuba's `coordinate_system`); without texture coordinates the
+    /// barycentric parameterization uv = (b1, b2) gives `p1 − p0` and `p2 − p0` (measured against
+    /// Mitsuba: anisotropic BSDFs on such meshes change frame from triangle to triangle there,
+    /// and so they do here). Reads the triangle's indices once for all of it.
+    #[inline(always)]
+    pub fn surface_at(&self, i: usize, p: &[Vec3; 3], b: [f32; 3], ng: Vec3, with_v: bool) -> MeshSurface {
         let (dp0, dp1) = (p[1] - p[0], p[2] - p[0]);
-        if self.uvs.is_empty() {
-            return (dp0, dp1);
+        let barycentric_dpdv = if with_v { dp1 } else { Vec3::ZERO };
+        if self.normals.is_empty() && self.uvs.is_empty() {
+            // No vertex data to interpolate: no need to fetch the indices.
+            return MeshSurface { ns: ng, uv: Vec2::new(b[1], b[2]), dpdu: dp0, dpdv: barycentric_dpdv };
         }
-        if let Some((duv0, duv1, det)) = self.uv_deltas(i) {
+        let [a, bb, c] = self.indices[i].map(|v| v as usize);
+        let ns = if self.normals.is_empty() {
+            ng
+        } else {
+            let n = (self.normals[a] * b[0] + self.normals[bb] * b[1] + self.normals[c] * b[2]).normalize_or(ng);
+            if self.flip_normals {
+                -n
+            } else {
+                n
+            }
+        };
+        if self.uvs.is_empty() {
+            return MeshSurface { ns, uv: Vec2::new(b[1], b[2]), dpdu: dp0, dpdv: barycentric_dpdv };
+        }
+        let (uv0, uv1, uv2) = (self.uvs[a], self.uvs[bb], self.uvs[c]);
+        let uv = uv0 * b[0] + uv1 * b[1] + uv2 * b[2];
+        let (duv0, duv1) = (uv1 - uv0, uv2 - uv0);
+        let det = duv0.x * duv1.y - duv0.y * duv1.x;
+        if det != 0.0 {
             let dpdu = (dp0 * duv1.y - dp1 * duv0.y) / det;
-            let dpdv = (dp1 * duv0.x - dp0 * duv1.x) / det;
+            let dpdv = if with_v { (dp1 * duv0.x - dp0 * duv1.x) / det } else { Vec3::ZERO };
             if dpdu.is_finite() && dpdv.is_finite() {
-                return (dpdu, dpdv);
+                return MeshSurface { ns, uv, dpdu, dpdv };
             }
         }
         let f = crate::math::Frame::from_z(ng);
-        (f.s, f.t)
+        MeshSurface { ns, uv, dpdu: f.s, dpdv: if with_v { f.t } else { Vec3::ZERO } }
     }
 
     /// Shading normal and uv at barycentrics `(b0, b1, b2)` of triangle `i`, given its face

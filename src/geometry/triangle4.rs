@@ -36,7 +36,10 @@ impl Triangle4 {
     /// The vertices of lane `k`'s triangle.
     #[inline]
     pub fn triangle(&self, k: usize) -> [Vec3; 3] {
-        std::array::from_fn(|vertex| Vec3::new(self.v[vertex][0][k], self.v[vertex][1][k], self.v[vertex][2][k]))
+        // `as_ref` views a lane vector as an array: one indexed load (glam's `Index` matches on
+        // the lane).
+        let c = |vertex: usize, axis: usize| self.v[vertex][axis].as_ref()[k];
+        std::array::from_fn(|vertex| Vec3::new(c(vertex, 0), c(vertex, 1), c(vertex, 2)))
     }
 
     /// The closest hit among the four triangles within `(0, t_max)`: lane and hit.
@@ -62,14 +65,14 @@ impl Triangle4 {
             // t_min is NaN (overflowing coordinates): no hit.
             return None;
         }
-        let inv_det = l.inv_det[lane];
+        let inv_det = l.inv_det.as_ref()[lane];
         Some((
             lane,
             TriangleHit {
                 t: t_min,
-                b0: l.e[0][lane] * inv_det,
-                b1: l.e[1][lane] * inv_det,
-                b2: l.e[2][lane] * inv_det,
+                b0: l.e[0].as_ref()[lane] * inv_det,
+                b1: l.e[1].as_ref()[lane] * inv_det,
+                b2: l.e[2].as_ref()[lane] * inv_det,
             },
         ))
     }

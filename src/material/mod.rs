@@ -56,16 +56,24 @@ pub struct BsdfContext<'a> {
 }
 
 impl BsdfContext<'_> {
-    /// The texture `t` here.
+    /// The texture `t` here. A constant (most parameters of most scenes) is read without
+    /// building the lookup point or calling the general evaluation.
     #[inline]
     pub fn eval(&self, t: &crate::texture::Texture) -> Rgb {
-        t.eval_at(&self.point())
+        match t {
+            crate::texture::Texture::Constant(c) => *c,
+            _ => t.eval_at(&self.point()),
+        }
     }
 
-    /// The texture `t` here as a scalar ([`crate::texture::Texture::eval_scalar`]).
+    /// The texture `t` here as a scalar ([`crate::texture::Texture::eval_scalar`]; a constant
+    /// read directly, as in [`BsdfContext::eval`]).
     #[inline]
     pub fn scalar(&self, t: &crate::texture::Texture) -> f32 {
-        t.eval_scalar(&self.point())
+        match t {
+            crate::texture::Texture::Constant(c) => crate::math::luminance(*c),
+            _ => t.eval_scalar(&self.point()),
+        }
     }
 
     /// Where textures are looked up: the uv, and the hit's position and geometric normal where

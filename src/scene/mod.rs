@@ -359,6 +359,9 @@ impl Scene {
                 if let Some((lane, h)) = block.intersect(pre, *t_max) {
                     *t_max = h.t;
                     *best = Some((h.t, HitKind::Block(h, b, lane)));
+                    // The surface interaction starts from the triangle's reference: its cache
+                    // miss in a large mesh overlaps the rest of the traversal.
+                    prefetch(self.refs.as_ptr().wrapping_add(block.id[lane] as usize), size_of::<PrimRef>());
                 }
             }
             return;
@@ -426,9 +429,11 @@ impl Scene {
         let r = self.refs[r as usize];
         let Geometry::Mesh(m) = &self.geometries[r.shape as usize] else { unreachable!("triangles belong to meshes") };
         let i = r.index as usize;
-        let ng = m.face_normal(i);
-        let (ns, uv) = m.shading(i, [h.b0, h.b1, h.b2], ng);
-        let (dpdu, dpdv) = if self.needs_dpdv { m.dpduv(i, &p, ng) } else { (m.dpdu(i, &p, ng), Vec3::ZERO) };
+        // From the vertices at hand (the ones the mesh's cached normals were computed from, so
+        // the same bits): a cached normal is a cache miss in a large mesh.
+        let ng = m.normal_of(&p);
+        let crate::geometry::mesh::MeshSurface { ns, uv, dpdu, dpdv } =
+            m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, self.needs_dpdv);
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
             p_error: triangle_point_error(&p, &h),
