@@ -148,7 +148,7 @@ impl PathIntegrator {
     ) -> bool {
         let max_depth = self.settings.max_segments();
         if max_depth == 0 {
-            return scene.intersect(camera_ray).is_some();
+            return scene.intersect_deferred(camera_ray).is_some();
         }
         let mut covered = false;
         let hide = self.settings.hide_emitters;
@@ -168,9 +168,18 @@ impl PathIntegrator {
                 covered = touched;
                 hit
             } else {
-                let hit = scene.intersect(&ray);
-                covered |= depth == 0 && hit.is_some();
-                hit
+                match scene.intersect_deferred(&ray) {
+                    None => None,
+                    Some(hit) => {
+                        covered |= depth == 0;
+                        // At the path's last vertex only emission counts: the surface
+                        // interaction of a shape that does not emit is not needed.
+                        if depth + 1 >= max_depth && scene.shapes()[hit.shape() as usize].light.is_none() {
+                            break;
+                        }
+                        Some(hit.interaction())
+                    }
+                }
             };
             let Some(si) = hit else {
                 // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.

@@ -58,6 +58,39 @@ pub fn bvh_options(primitives: usize) -> BuildOptions {
     }
 }
 
+/// A closest hit whose surface interaction is computed on demand ([`Scene::intersect_deferred`]).
+#[derive(Clone, Copy, Debug)]
+pub struct DeferredHit<'a> {
+    scene: &'a Scene,
+    ray: Ray,
+    t: f32,
+    kind: HitKind,
+}
+
+impl DeferredHit<'_> {
+    /// Index of the shape hit (into [`Scene::shapes`]).
+    #[inline]
+    pub fn shape(&self) -> u32 {
+        let s = self.scene;
+        let r = match self.kind {
+            HitKind::Block(_, b, lane) => s.blocks[b as usize].id[lane],
+            HitKind::Triangle(_, k) => s.prims[k as usize].r,
+            HitKind::Sphere(r)
+            | HitKind::Disk(_, r)
+            | HitKind::Cylinder(_, r)
+            | HitKind::SdfVoxel(r)
+            | HitKind::Curve(_, r) => r,
+        };
+        s.refs[r as usize].shape
+    }
+
+    /// The surface interaction at the hit, as [`Scene::intersect`] returns it.
+    #[inline]
+    pub fn interaction(&self) -> SurfaceInteraction {
+        self.scene.interaction(&self.ray, self.t, self.kind)
+    }
+}
+
 /// The scene's primitive tests as the BVH traversals' leaf work, always inlined into them
 /// (closures would be compiled once for both traversals and called).
 struct LeafTest<'a> {
@@ -304,6 +337,16 @@ impl Scene {
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let (t, kind) = self.closest(ray)?;
         Some(self.interaction(ray, t, kind))
+    }
+
+    /// The closest surface hit along `ray` within `(0, ray.t_max)`, its surface interaction
+    /// not yet computed: for callers that may need only which shape was hit (the last vertex
+    /// of a path, where only an emitter matters). [`DeferredHit::interaction`] gives what
+    /// [`Scene::intersect`] would have.
+    #[inline]
+    pub fn intersect_deferred<'a>(&'a self, ray: &Ray) -> Option<DeferredHit<'a>> {
+        let (t, kind) = self.closest(ray)?;
+        Some(DeferredHit { scene: self, ray: *ray, t, kind })
     }
 
     /// The closest hit along `ray` within `(0, ray.t_max)` without its surface interaction
