@@ -153,8 +153,11 @@ impl Bvh {
     /// found; traversal then culls everything farther. The children of a node are tested at
     /// once and visited nearest first; postponed ones are skipped when a closer hit was found
     /// meanwhile. One or two hit children (the common cases) are handled without a sort.
-    /// Postponed children are not prefetched (unlike [`Bvh::any_hit`]): many are culled by a
-    /// closer hit before their turn, and prefetching them measured slower.
+    /// Of the postponed children only the next one, if it is an interior node, is prefetched
+    /// (the far child of two, the second nearest of more): many of the others are culled by a
+    /// closer hit before their turn, and prefetching all of them measured slower. The one
+    /// prefetch made incoherent rays in a 1M-triangle mesh (nodes out of cache) 10–15 % faster,
+    /// and changed nothing measurable at 100k triangles.
     #[inline]
     pub fn closest_hit(&self, ray: &Ray, t_max: f32, leaf: impl FnMut(u32, u32, &mut f32)) {
         self.closest_hit_visit(ray, t_max, ClosestLeafFn(leaf))
@@ -209,6 +212,9 @@ impl Bvh {
                     mask &= mask - 1;
                     if mask == 0 {
                         let (near, far) = if t_near[a] <= t_near[b] { (a, b) } else { (b, a) };
+                        if node.count[far] == 0 {
+                            prefetch(self.nodes.as_ptr().wrapping_add(node.child[far] as usize), size_of::<Node8>());
+                        }
                         stack[sp].write((node.child[far], node.count[far], t_near[far]));
                         sp += 1;
                         (child, count) = (node.child[near], node.count[near]);
@@ -239,6 +245,10 @@ impl Bvh {
                     sp -= 1;
                     // SAFETY: written above.
                     let nearest = unsafe { stack[sp].assume_init() };
+                    let next = pushed[pushed.len() - 2];
+                    if next.1 == 0 {
+                        prefetch(self.nodes.as_ptr().wrapping_add(next.0 as usize), size_of::<Node8>());
+                    }
                     (child, count) = (nearest.0, nearest.1);
                     continue;
                 }
