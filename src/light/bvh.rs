@@ -22,7 +22,6 @@
 
 use super::Light;
 use crate::geometry::Geometry;
-use crate::math::cone::cos_subtended;
 use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, PI};
 
 /// Spatial and directional bounds of a set of emitters.
@@ -153,8 +152,9 @@ impl NodeBounds {
         }
     }
 
-    /// See [`LightBounds::importance`].
-    #[inline]
+    /// See [`LightBounds::importance`]. Inlined, so that the two children's evaluations in
+    /// [`LightBvh::sample`] interleave.
+    #[inline(always)]
     fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
         #[inline(always)]
@@ -177,12 +177,21 @@ impl NodeBounds {
         let dist2 = d.length_squared();
         // pbrt-v4 clamps d² below by half the box diagonal (a length: its units as written).
         let d2 = dist2.max(self.radius);
-        let wi = if dist2 > 0.0 { d / dist2.sqrt() } else { Vec3::ZERO };
+        // One square root and one division give the unit direction and the cone below (this
+        // runs twice per level of the tree for every light sample: its chain of square roots and
+        // divisions is the light choice's latency).
+        let inv_dist = if dist2 > 0.0 { 1.0 / dist2.sqrt() } else { 0.0 };
+        let wi = d * inv_dist;
         let cos_w = self.w.dot(wi);
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        // The cone of directions from p to the bounding sphere (the whole sphere from inside).
-        let cos_b = cos_subtended(dist2, self.radius * self.radius);
-        let sin_b = safe_sqrt(1.0 - cos_b * cos_b);
+        // The cone of directions from p to the bounding sphere, sin θb = r / d (the whole sphere
+        // from inside: cos θb = −1).
+        let (sin_b, cos_b) = if dist2 <= self.radius * self.radius {
+            (0.0, -1.0)
+        } else {
+            let sin_b = (self.radius * inv_dist).min(1.0);
+            (sin_b, safe_sqrt(1.0 - sin_b * sin_b))
+        };
         let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
         let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
