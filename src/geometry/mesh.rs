@@ -395,16 +395,7 @@ impl TriangleMesh {
             return MeshSurface { ns: ng, uv: Vec2::new(b[1], b[2]), dpdu: dp0, dpdv: barycentric_dpdv };
         }
         let [a, bb, c] = self.indices[i].map(|v| v as usize);
-        let ns = if self.normals.is_empty() {
-            ng
-        } else {
-            let n = (self.normals[a] * b[0] + self.normals[bb] * b[1] + self.normals[c] * b[2]).normalize_or(ng);
-            if self.flip_normals {
-                -n
-            } else {
-                n
-            }
-        };
+        let ns = self.interpolated_normal([a, bb, c], b, ng);
         if self.uvs.is_empty() {
             return MeshSurface { ns, uv: Vec2::new(b[1], b[2]), dpdu: dp0, dpdv: barycentric_dpdv };
         }
@@ -423,6 +414,22 @@ impl TriangleMesh {
         MeshSurface { ns, uv, dpdu: f.s, dpdv: if with_v { f.t } else { Vec3::ZERO } }
     }
 
+    /// The shading normal at barycentrics `b` of the triangle with vertex indices `v`: the
+    /// vertex normals interpolated and normalized (front side), or the face normal `ng` where
+    /// the mesh has none (or they cancel).
+    #[inline(always)]
+    fn interpolated_normal(&self, v: [usize; 3], b: [f32; 3], ng: Vec3) -> Vec3 {
+        if self.normals.is_empty() {
+            return ng;
+        }
+        let n = (self.normals[v[0]] * b[0] + self.normals[v[1]] * b[1] + self.normals[v[2]] * b[2]).normalize_or(ng);
+        if self.flip_normals {
+            -n
+        } else {
+            n
+        }
+    }
+
     /// Shading normal and uv at barycentrics `(b0, b1, b2)` of triangle `i`, given its face
     /// normal `ng`. Without texture coordinates uv is `(b1, b2)`, as in Mitsuba.
     #[inline]
@@ -432,16 +439,7 @@ impl TriangleMesh {
             return (ng, Vec2::new(b[1], b[2]));
         }
         let [a, bb, c] = self.indices[i].map(|v| v as usize);
-        let ns = if self.normals.is_empty() {
-            ng
-        } else {
-            let n = (self.normals[a] * b[0] + self.normals[bb] * b[1] + self.normals[c] * b[2]).normalize_or(ng);
-            if self.flip_normals {
-                -n
-            } else {
-                n
-            }
-        };
+        let ns = self.interpolated_normal([a, bb, c], b, ng);
         let uv = if self.uvs.is_empty() {
             Vec2::new(b[1], b[2])
         } else {
