@@ -96,9 +96,11 @@ impl DirectIntegrator {
             let wi = frame.to_world(bs.wi);
             let prev = PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta };
             let mut le = Rgb::ZERO;
-            match scene.intersect(&si.spawn_ray(wi)) {
+            // Only an emitter's surface interaction is needed.
+            match scene.intersect_deferred(&si.spawn_ray(wi)) {
                 Some(hit) => {
-                    if let Some(i) = scene.shapes()[hit.shape as usize].light {
+                    if let Some(i) = scene.shapes()[hit.shape() as usize].light {
+                        let hit = hit.interaction();
                         let e = scene.lights()[i as usize].le(hit.ns, -wi, hit.uv);
                         if e != Rgb::ZERO {
                             let w = trace::emission_weight(Some(&prev), false, &mis, |c| {

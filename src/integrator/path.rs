@@ -123,9 +123,12 @@ impl PathIntegrator {
             return Rgb::ZERO;
         }
         w = frame.to_world(w).normalize();
-        let le = match scene.intersect(&si.spawn_ray(w)) {
-            Some(hit) => match scene.shapes()[hit.shape as usize].light {
-                Some(i) => scene.lights()[i as usize].le(hit.ns, -w, hit.uv),
+        let le = match scene.intersect_deferred(&si.spawn_ray(w)) {
+            Some(hit) => match scene.shapes()[hit.shape() as usize].light {
+                Some(i) => {
+                    let hit = hit.interaction();
+                    scene.lights()[i as usize].le(hit.ns, -w, hit.uv)
+                }
                 None => Rgb::ZERO,
             },
             None => scene.infinite_lights().iter().map(|&i| scene.lights()[i as usize].le_escaped(si.p, w)).sum(),
