@@ -99,7 +99,7 @@ impl DirectIntegrator {
             // Only an emitter's surface interaction is needed.
             match scene.intersect_deferred(&si.spawn_ray(wi)) {
                 Some(hit) => {
-                    if let Some(i) = scene.shapes()[hit.shape() as usize].light {
+                    if let Some(i) = hit.light() {
                         let hit = hit.interaction();
                         let e = scene.lights()[i as usize].le(hit.ns, -wi, hit.uv);
                         if e != Rgb::ZERO {

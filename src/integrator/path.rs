@@ -124,7 +124,7 @@ impl PathIntegrator {
         }
         w = frame.to_world(w).normalize();
         let le = match scene.intersect_deferred(&si.spawn_ray(w)) {
-            Some(hit) => match scene.shapes()[hit.shape() as usize].light {
+            Some(hit) => match hit.light() {
                 Some(i) => {
                     let hit = hit.interaction();
                     scene.lights()[i as usize].le(hit.ns, -w, hit.uv)
@@ -177,7 +177,7 @@ impl PathIntegrator {
                         covered |= depth == 0;
                         // At the path's last vertex only emission counts: the surface
                         // interaction of a shape that does not emit is not needed.
-                        if depth + 1 >= max_depth && scene.shapes()[hit.shape() as usize].light.is_none() {
+                        if depth + 1 >= max_depth && hit.light().is_none() {
                             break;
                         }
                         Some(hit.interaction())

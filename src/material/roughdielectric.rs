@@ -156,6 +156,7 @@ impl RoughDielectric {
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 }
+
 /// Density of `wi` (solid angle) given the microfacet normal `m`'s density `pdf_m` and the
 /// Fresnel reflectance `f` at `wo·m`: a reflection (probability F, Jacobian 1 / (4 |wo·m|)) or a
 /// refraction (probability 1 − F, Jacobian e² |wi·m| / (wo·m + e wi·m)², `e` the index ratio

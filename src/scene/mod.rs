@@ -71,17 +71,13 @@ impl DeferredHit<'_> {
     /// Index of the shape hit (into [`Scene::shapes`]).
     #[inline]
     pub fn shape(&self) -> u32 {
-        let s = self.scene;
-        let r = match self.kind {
-            HitKind::Block(_, b, lane) => s.blocks[b as usize].id[lane],
-            HitKind::Triangle(_, k) => s.prims[k as usize].r,
-            HitKind::Sphere(r)
-            | HitKind::Disk(_, r)
-            | HitKind::Cylinder(_, r)
-            | HitKind::SdfVoxel(r)
-            | HitKind::Curve(_, r) => r,
-        };
-        s.refs[r as usize].shape
+        self.scene.refs[self.scene.prim_ref(self.kind) as usize].shape
+    }
+
+    /// The light the shape hit carries (index into [`Scene::lights`]), if it emits.
+    #[inline]
+    pub fn light(&self) -> Option<u32> {
+        self.scene.shapes[self.shape() as usize].light
     }
 
     /// The surface interaction at the hit, as [`Scene::intersect`] returns it.
@@ -355,16 +351,25 @@ impl Scene {
     #[inline]
     pub fn intersect_hit(&self, ray: &Ray) -> Option<RayHit> {
         let (t, kind) = self.closest(ray)?;
-        let (prim, barycentrics) = match kind {
-            HitKind::Block(h, b, lane) => (self.blocks[b as usize].id[lane], Vec2::new(h.b1, h.b2)),
-            HitKind::Triangle(h, k) => (self.prims[k as usize].r, Vec2::new(h.b1, h.b2)),
+        let barycentrics = match kind {
+            HitKind::Block(h, ..) | HitKind::Triangle(h, _) => Vec2::new(h.b1, h.b2),
+            _ => Vec2::ZERO,
+        };
+        Some(RayHit { t, prim: self.prim_ref(kind), barycentrics })
+    }
+
+    /// The index into `refs` of the primitive a hit names.
+    #[inline]
+    fn prim_ref(&self, kind: HitKind) -> u32 {
+        match kind {
+            HitKind::Block(_, b, lane) => self.blocks[b as usize].id[lane],
+            HitKind::Triangle(_, k) => self.prims[k as usize].r,
             HitKind::Sphere(r)
             | HitKind::Disk(_, r)
             | HitKind::Cylinder(_, r)
             | HitKind::SdfVoxel(r)
-            | HitKind::Curve(_, r) => (r, Vec2::ZERO),
-        };
-        Some(RayHit { t, prim, barycentrics })
+            | HitKind::Curve(_, r) => r,
+        }
     }
 
     /// Shape index and, for a triangle, its index in the mesh (0 for analytic shapes) of
