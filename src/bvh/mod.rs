@@ -10,6 +10,7 @@
 mod build;
 mod slab;
 
+use crate::math::simd::Avx;
 use crate::math::{Bounds3, Ray, Vec3};
 use slab::{Slab4x2, SlabTest};
 
@@ -195,7 +196,7 @@ impl Bvh {
         let (mut child, mut count) = (0u32, 0u32);
         loop {
             if count > 0 {
-                leaf.visit(child, count, &mut t_max);
+                leaf.visit(child, count, &mut t_max, r.avx());
             } else {
                 // Interior children index `nodes` (built together), and unused slots (index
                 // u32::MAX) are never entered by a traceable ray; indexing checks it anyway.
@@ -317,7 +318,7 @@ impl Bvh {
             // SAFETY: slot `sp` was written before `sp` was incremented past it.
             let (child, count) = unsafe { stack[sp].assume_init() };
             if count > 0 {
-                if leaf.hit(child, count, t_max) {
+                if leaf.hit(child, count, t_max, r.avx()) {
                     return true;
                 }
                 continue;
@@ -353,8 +354,9 @@ impl Bvh {
 /// so that both compiled traversals (AVX and portable) inline it; a closure, compiled once for
 /// both, stays a call.
 pub trait ClosestLeaf {
-    /// Intersects one leaf's primitives within `(0, t_max)`.
-    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32);
+    /// Intersects one leaf's primitives within `(0, t_max)`. `avx` is the AVX token where the
+    /// traversal runs compiled for AVX: the leaf test can use AVX then, inlined.
+    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32, avx: Option<Avx>);
 }
 
 /// A closure as a [`ClosestLeaf`].
@@ -362,7 +364,7 @@ pub struct ClosestLeafFn<F>(pub F);
 
 impl<F: FnMut(u32, u32, &mut f32)> ClosestLeaf for ClosestLeafFn<F> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32) {
+    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32, _: Option<Avx>) {
         (self.0)(first, count, t_max)
     }
 }
@@ -370,8 +372,9 @@ impl<F: FnMut(u32, u32, &mut f32)> ClosestLeaf for ClosestLeafFn<F> {
 /// The leaf work of [`Bvh::any_hit_visit`]: whether one of a leaf's primitives is hit within
 /// `(0, t_max)`, and a cache hint for a leaf that waits on the stack.
 pub trait AnyLeaf {
-    /// Whether a primitive of the leaf `first .. first + count` is hit within `(0, t_max)`.
-    fn hit(&mut self, first: u32, count: u32, t_max: f32) -> bool;
+    /// Whether a primitive of the leaf `first .. first + count` is hit within `(0, t_max)`
+    /// (`avx`: as in [`ClosestLeaf::visit`]).
+    fn hit(&mut self, first: u32, count: u32, t_max: f32, avx: Option<Avx>) -> bool;
     /// Asks the cache for the leaf's data ahead of its visit (a hint).
     fn prefetch(&self, first: u32, count: u32);
 }
@@ -381,7 +384,7 @@ pub struct AnyLeafFns<F, P>(pub F, pub P);
 
 impl<F: FnMut(u32, u32, f32) -> bool, P: Fn(u32, u32)> AnyLeaf for AnyLeafFns<F, P> {
     #[inline(always)]
-    fn hit(&mut self, first: u32, count: u32, t_max: f32) -> bool {
+    fn hit(&mut self, first: u32, count: u32, t_max: f32, _: Option<Avx>) -> bool {
         (self.0)(first, count, t_max)
     }
     #[inline(always)]
@@ -407,9 +410,13 @@ pub fn prefetch<T>(p: *const T, bytes: usize) {
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
         let p = p as *const i8;
-        for line in (0..bytes).step_by(64) {
+        // A plain counted loop (an iterator's `step_by` stays a loop of ~10 instructions per
+        // line; this one unrolls into the prefetches when `bytes` is a constant).
+        let mut line = 0;
+        while line < bytes {
             // SAFETY: prefetch instructions do not access memory architecturally and never fault.
             unsafe { _mm_prefetch(p.wrapping_add(line), _MM_HINT_T0) };
+            line += 64;
         }
     }
     #[cfg(not(target_arch = "x86_64"))]

@@ -12,6 +12,7 @@
 
 use super::{Node8, WIDTH};
 use crate::math::float::gamma;
+use crate::math::simd::Avx;
 use crate::math::Ray;
 use glam::Vec4;
 
@@ -20,6 +21,8 @@ pub(super) trait SlabTest {
     /// Bit mask of the children hit within `(0, t_max)` (bit k: slot k) and their entry
     /// distances.
     fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; WIDTH]);
+    /// The AVX token where this test runs in AVX code (leaf tests may then use AVX too).
+    fn avx(&self) -> Option<Avx>;
 }
 
 /// The far-distance enlargement `1 + 2γ₃` (round-off of the three slab distances).
@@ -62,6 +65,11 @@ impl Slab4x2 {
 }
 
 impl SlabTest for Slab4x2 {
+    #[inline(always)]
+    fn avx(&self) -> Option<Avx> {
+        None
+    }
+
     #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; WIDTH]) {
         let b = &node.bounds;
@@ -110,6 +118,12 @@ impl Slab8 {
 
 #[cfg(target_arch = "x86_64")]
 impl SlabTest for Slab8 {
+    #[inline(always)]
+    fn avx(&self) -> Option<Avx> {
+        // SAFETY: a `Slab8` exists only where the CPU has AVX (`Slab8::new` is unsafe).
+        Some(unsafe { Avx::new_unchecked() })
+    }
+
     /// The AVX intrinsics here inline into the traversal compiled for AVX (this function is
     /// always inlined into it; a `#[target_feature]` function of its own would stay a call).
     #[inline(always)]

@@ -16,7 +16,7 @@ pub mod shape;
 pub mod sphere;
 pub mod subdivision;
 pub mod triangle;
-pub mod triangle4;
+pub mod triangle8;
 
 pub use curve::{CurveSet, Curves};
 pub use cylinder::Cylinder;

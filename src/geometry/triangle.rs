@@ -14,7 +14,7 @@ use std::ops::{Add, Mul};
 
 /// Per-ray data of the watertight test, computed once per ray: the permutation `(kx, ky, kz)`
 /// that makes the ray's largest direction component z, the shear that makes it point along
-/// +z, and the permuted origin (also splatted for the four lanes of [`super::triangle4`]).
+/// +z, and the permuted origin.
 /// Scalar and SIMD tests evaluate the same expressions, so they agree bit for bit.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPrecomp {
@@ -24,9 +24,6 @@ pub struct RayPrecomp {
     pub(crate) op: [f32; 3],
     /// Shear `(Sx, Sy)` = `(d[kx] / d[kz], d[ky] / d[kz])` and scale `Sz = 1 / d[kz]`.
     pub(crate) s: [f32; 3],
-    /// `op` and `s` splatted over four lanes.
-    pub(crate) op4: [Vec4; 3],
-    pub(crate) s4: [Vec4; 3],
 }
 
 impl RayPrecomp {
@@ -49,7 +46,7 @@ impl RayPrecomp {
         let o = ray.o.to_array();
         let op = [o[kx], o[ky], o[kz]];
         let s = [d[kx] * sz, d[ky] * sz, sz];
-        RayPrecomp { k: [kx, ky, kz], op, s, op4: op.map(Vec4::splat), s4: s.map(Vec4::splat) }
+        RayPrecomp { k: [kx, ky, kz], op, s }
     }
 
     /// Vertex `v` in the ray's frame: relative to the origin, permuted, sheared (x, y) and

@@ -13,6 +13,7 @@ pub mod float;
 pub mod frame;
 pub mod quadrature;
 pub mod ray;
+pub mod simd;
 pub mod special;
 pub mod spectrum;
 pub mod transform;

@@ -5,7 +5,7 @@ use super::BuildError;
 use super::{LeafPrim, PrimRef, Primitive, Scene, Shape, TRIANGLE_BLOCKS};
 use crate::bvh::Bvh;
 use crate::camera::Camera;
-use crate::geometry::triangle4::Triangle4;
+use crate::geometry::triangle8::{Triangle8, LANES};
 use crate::geometry::Geometry;
 use crate::light::{Light, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
@@ -160,7 +160,7 @@ impl SceneBuilder {
         }
         let mut bvh = Bvh::build(&bounds, &super::bvh_options(bounds.len()));
         let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[k as usize]).collect();
-        // Leaves of triangles only become blocks of four; the others keep a primitive list.
+        // Leaves of triangles only become blocks of eight; the others keep a primitive list.
         let (mut blocks, mut prims) = (Vec::new(), Vec::new());
         let geometries = &self.geometries;
         let primitive = |k: u32| {
@@ -185,7 +185,7 @@ impl SceneBuilder {
                 .collect();
             if let Some(tris) = tris {
                 let start = blocks.len() as u32;
-                blocks.extend(tris.chunks(4).map(Triangle4::new));
+                blocks.extend(tris.chunks(LANES).map(Triangle8::new));
                 return (start, (blocks.len() as u32 - start) | TRIANGLE_BLOCKS);
             }
             let start = prims.len() as u32;

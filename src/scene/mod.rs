@@ -12,7 +12,8 @@ pub use error::BuildError;
 use crate::bvh::{prefetch, BuildOptions, Bvh};
 use crate::camera::Camera;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
-use crate::geometry::triangle4::Triangle4;
+use crate::geometry::triangle8::Triangle8;
+use crate::math::simd::Avx;
 use crate::geometry::{Geometry, Sphere, SurfaceInteraction};
 use crate::light::{Light, LightSampleContext, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
@@ -33,11 +34,11 @@ pub struct Shape {
     pub exterior: Option<u32>,
 }
 
-/// How scenes build their BVH: SAH with leaves charged per block of four triangles (the
-/// [`Triangle4`] test), at most eight primitives per leaf. The traversal cost (per binary node,
-/// relative to one block test) depends on the scene's size, see [`bvh_options`].
+/// How large scenes build their BVH: SAH with leaves charged per block of eight triangles (the
+/// [`Triangle8`] test), at most eight primitives per leaf, and a traversal cost (per binary
+/// node) of one block test. Small scenes charge differently, see [`bvh_options`].
 pub const BVH_OPTIONS: BuildOptions =
-    BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0, leaf_group: 4 };
+    BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0, leaf_group: 8 };
 
 /// Scenes with at most this many primitives count as cache-resident: their triangle blocks and
 /// nodes take at most about 200 bytes per primitive (a block of one triangle is 160 bytes), 400 KB,
@@ -46,13 +47,17 @@ pub const SMALL_SCENE_PRIMITIVES: usize = 2048;
 
 /// BVH options for a scene of `primitives` primitives. A small scene stays in cache, so a node
 /// visit costs only its arithmetic, about 0.3 block tests per binary level (one 8-wide node
-/// replaces about three binary levels; its slab test is about a third of a block test), and the SAH separates
-/// big triangles into tight leaves (Cornell box: 11 % fewer instructions per sample than with
-/// 1.0). A large scene is bound by memory latency: every node visited is a dependent cache miss,
-/// so fewer, fuller leaves win (100k-triangle mesh: 10–15 % fewer rays/s with 0.3).
+/// replaces about three binary levels; its slab test is about a third of a block test), and the
+/// SAH separates big triangles into tight leaves (Cornell box: 11 % fewer instructions per
+/// sample than with 1.0), charged per four triangles: charged per eight, leaves of big triangles
+/// grow (the `textures` scene 20 % slower, `veach_mis` 16 %). A large scene is bound by memory
+/// latency: every node visited is a dependent cache miss, so fewer, fuller leaves win
+/// (100k-triangle mesh: 10–15 % fewer rays/s with 0.3; charged per eight triangles instead of
+/// four, shadow rays +3 % at 100k and +13 % at 1M triangles, and 67 instead of 85 bytes per
+/// triangle).
 pub fn bvh_options(primitives: usize) -> BuildOptions {
     if primitives <= SMALL_SCENE_PRIMITIVES {
-        BuildOptions { traversal_cost: 0.3, ..BVH_OPTIONS }
+        BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..BVH_OPTIONS }
     } else {
         BVH_OPTIONS
     }
@@ -99,15 +104,37 @@ struct LeafTest<'a> {
 
 impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
     #[inline(always)]
-    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32) {
-        self.scene.closest_in_leaf(self.ray, self.pre, first, count, t_max, &mut self.best)
+    /// The closest hit within `(0, t_max)` among the primitives of a leaf (`first`, `count` as
+    /// the BVH stores them): lowers `t_max` and records it in `best`.
+    fn visit(&mut self, first: u32, count: u32, t_max: &mut f32, avx: Option<Avx>) {
+        let (scene, pre) = (self.scene, self.pre);
+        if count & TRIANGLE_BLOCKS != 0 {
+            for b in first..first + (count & !TRIANGLE_BLOCKS) {
+                // SAFETY: leaf payloads index `blocks` (built together).
+                let block = unsafe { scene.blocks.get_unchecked(b as usize) };
+                if let Some((lane, h)) = block_intersect(block, pre, *t_max, avx) {
+                    *t_max = h.t;
+                    self.best = Some((h.t, HitKind::Block(h, b, lane)));
+                    // The surface interaction starts from the triangle's reference: its cache
+                    // miss in a large mesh overlaps the rest of the traversal.
+                    prefetch(scene.refs.as_ptr().wrapping_add(block.id[lane] as usize), size_of::<PrimRef>());
+                }
+            }
+            return;
+        }
+        for k in first..first + count {
+            if let Some((t, kind)) = scene.intersect_prim(k, self.ray, pre, *t_max) {
+                *t_max = t;
+                self.best = Some((t, kind));
+            }
+        }
     }
 }
 
 impl crate::bvh::AnyLeaf for LeafTest<'_> {
     #[inline(always)]
-    fn hit(&mut self, first: u32, count: u32, t_max: f32) -> bool {
-        self.scene.occluded_in_leaf(self.ray, self.pre, first, count, t_max)
+    fn hit(&mut self, first: u32, count: u32, t_max: f32, avx: Option<Avx>) -> bool {
+        self.scene.occluded_in_leaf(self.ray, self.pre, first, count, t_max, avx)
     }
     #[inline(always)]
     fn prefetch(&self, first: u32, count: u32) {
@@ -115,7 +142,29 @@ impl crate::bvh::AnyLeaf for LeafTest<'_> {
     }
 }
 
-/// Leaf payload flag: the leaf holds `count & !TRIANGLE_BLOCKS` [`Triangle4`] blocks from
+/// A block's closest hit, in AVX where the traversal runs in AVX code.
+#[inline(always)]
+fn block_intersect(block: &Triangle8, pre: &RayPrecomp, t_max: f32, avx: Option<Avx>) -> Option<(usize, TriangleHit)> {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = avx {
+        return block.intersect_avx(avx, pre, t_max);
+    }
+    let _ = avx;
+    block.intersect(pre, t_max)
+}
+
+/// Whether a block blocks the ray, in AVX where the traversal runs in AVX code.
+#[inline(always)]
+fn block_occludes(block: &Triangle8, pre: &RayPrecomp, t_max: f32, avx: Option<Avx>) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = avx {
+        return block.occludes_avx(avx, pre, t_max);
+    }
+    let _ = avx;
+    block.occludes(pre, t_max)
+}
+
+/// Leaf payload flag: the leaf holds `count & !TRIANGLE_BLOCKS` [`Triangle8`] blocks from
 /// `Scene::blocks[first]`; without it, `count` primitives from `Scene::prims[first]`.
 const TRIANGLE_BLOCKS: u32 = 1 << 31;
 
@@ -190,8 +239,8 @@ pub struct Scene {
     camera_medium: Option<u32>,
     shape_labels: Vec<(String, Option<crate::props::Loc>)>,
     bvh: Bvh,
-    /// Triangles of all-triangle leaves, four per block.
-    blocks: Vec<Triangle4>,
+    /// Triangles of all-triangle leaves, eight per block.
+    blocks: Vec<Triangle8>,
     /// Primitives of the other leaves.
     prims: Vec<LeafPrim>,
     /// Every primitive's shape and index, in BVH order.
@@ -271,7 +320,7 @@ impl Scene {
     /// primitive data (triangle blocks, mixed primitives, primitive references).
     pub fn accel_memory_bytes(&self) -> usize {
         self.bvh.memory_bytes()
-            + self.blocks.len() * size_of::<Triangle4>()
+            + self.blocks.len() * size_of::<Triangle8>()
             + self.prims.len() * size_of::<LeafPrim>()
             + self.refs.len() * size_of::<PrimRef>()
     }
@@ -388,40 +437,6 @@ impl Scene {
         leaf.best
     }
 
-    /// The closest hit within `(0, t_max)` among the primitives of a leaf (`first`, `count` as
-    /// the BVH stores them): lowers `t_max` and records it in `best`.
-    #[inline(always)]
-    fn closest_in_leaf(
-        &self,
-        ray: &Ray,
-        pre: &RayPrecomp,
-        first: u32,
-        count: u32,
-        t_max: &mut f32,
-        best: &mut Option<(f32, HitKind)>,
-    ) {
-        if count & TRIANGLE_BLOCKS != 0 {
-            for b in first..first + (count & !TRIANGLE_BLOCKS) {
-                // SAFETY: leaf payloads index `blocks` (built together).
-                let block = unsafe { self.blocks.get_unchecked(b as usize) };
-                if let Some((lane, h)) = block.intersect(pre, *t_max) {
-                    *t_max = h.t;
-                    *best = Some((h.t, HitKind::Block(h, b, lane)));
-                    // The surface interaction starts from the triangle's reference: its cache
-                    // miss in a large mesh overlaps the rest of the traversal.
-                    prefetch(self.refs.as_ptr().wrapping_add(block.id[lane] as usize), size_of::<PrimRef>());
-                }
-            }
-            return;
-        }
-        for k in first..first + count {
-            if let Some((t, kind)) = self.intersect_prim(k, ray, pre, *t_max) {
-                *t_max = t;
-                *best = Some((t, kind));
-            }
-        }
-    }
-
     /// Intersects primitive `k` of a mixed leaf (`Scene::prims[k]`) within `(0, t_max)`.
     #[inline]
     fn intersect_prim(&self, k: u32, ray: &Ray, pre: &RayPrecomp, t_max: f32) -> Option<(f32, HitKind)> {
@@ -532,12 +547,20 @@ impl Scene {
 
     /// Whether a primitive of a leaf blocks the ray within `(0, t_max)`.
     #[inline(always)]
-    fn occluded_in_leaf(&self, ray: &Ray, pre: &RayPrecomp, first: u32, count: u32, t_max: f32) -> bool {
+    fn occluded_in_leaf(
+        &self,
+        ray: &Ray,
+        pre: &RayPrecomp,
+        first: u32,
+        count: u32,
+        t_max: f32,
+        avx: Option<Avx>,
+    ) -> bool {
         // Plain loops: an iterator's `any` would stay a call inside the traversal.
         if count & TRIANGLE_BLOCKS != 0 {
             for b in first..first + (count & !TRIANGLE_BLOCKS) {
                 // SAFETY: leaf payloads index `blocks` (built together).
-                if unsafe { self.blocks.get_unchecked(b as usize) }.occludes(pre, t_max) {
+                if block_occludes(unsafe { self.blocks.get_unchecked(b as usize) }, pre, t_max, avx) {
                     return true;
                 }
             }
@@ -556,7 +579,7 @@ impl Scene {
     fn prefetch_leaf(&self, first: u32, count: u32) {
         if count & TRIANGLE_BLOCKS != 0 {
             let n = (count & !TRIANGLE_BLOCKS).min(2) as usize;
-            prefetch(self.blocks.as_ptr().wrapping_add(first as usize), n * size_of::<Triangle4>());
+            prefetch(self.blocks.as_ptr().wrapping_add(first as usize), n * size_of::<Triangle8>());
         } else {
             prefetch(self.prims.as_ptr().wrapping_add(first as usize), count.min(2) as usize * size_of::<LeafPrim>());
         }
