@@ -438,14 +438,24 @@ impl Scene {
     }
 
     /// Intersects primitive `k` of a mixed leaf (`Scene::prims[k]`) within `(0, t_max)`.
-    #[inline]
+    /// Triangles and spheres are tested inline in the traversal, the other shapes by a call.
+    #[inline(always)]
     fn intersect_prim(&self, k: u32, ray: &Ray, pre: &RayPrecomp, t_max: f32) -> Option<(f32, HitKind)> {
         // SAFETY: leaf payloads index `prims` (built together).
         let lp = unsafe { self.prims.get_unchecked(k as usize) };
-        let geometry = || &self.geometries[self.refs[lp.r as usize].shape as usize];
         match &lp.prim {
             Primitive::Triangle(p) => intersect_triangle(pre, p, t_max).map(|h| (h.t, HitKind::Triangle(h, k))),
             Primitive::Sphere(s) => s.intersect(ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
+            _ => self.intersect_other(lp, ray, t_max),
+        }
+    }
+
+    /// [`Scene::intersect_prim`] for the shapes whose test is too long to inline.
+    #[inline(never)]
+    fn intersect_other(&self, lp: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, HitKind)> {
+        let geometry = || &self.geometries[self.refs[lp.r as usize].shape as usize];
+        match &lp.prim {
+            Primitive::Triangle(_) | Primitive::Sphere(_) => None,
             Primitive::Disk => match geometry() {
                 Geometry::Disk(d) => d.intersect(ray, t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
                 _ => None,
