@@ -381,7 +381,12 @@ impl LightBvh {
         if self.nodes.is_empty() {
             return None;
         }
-        let mut u = if p_inf > 0.0 { ((u - p_inf) / (1.0 - p_inf)).min(crate::math::ONE_MINUS_EPSILON) } else { u };
+        // u walks down the tree as the interval [lo, hi) of [0, 1) that the node covers (the
+        // first child the first p0 of it): the choice at a node compares u with the children's
+        // importances by multiplication, so the divisions that give p0 and the interval run
+        // beside the next node's importances instead of before them (u is not rescaled, which
+        // would put two divisions per level on the chain of dependent operations).
+        let (mut lo, mut hi) = (p_inf, 1.0f32);
         let mut pmf = 1.0 - p_inf;
         let mut index = 0usize;
         loop {
@@ -398,13 +403,18 @@ impl LightBvh {
             if i0 == 0.0 && i1 == 0.0 {
                 return None;
             }
-            let p0 = i0 / (i0 + i1);
-            if u < p0 {
-                u = (u / p0).min(crate::math::ONE_MINUS_EPSILON);
+            let total = i0 + i1;
+            // The same p0 as `pmf` computes, so that the two agree to the last bit.
+            let p0 = i0 / total;
+            let split = lo + (hi - lo) * p0;
+            // First child: u in the first i0 / total of [lo, hi); a zero-importance child is
+            // never chosen.
+            if i1 == 0.0 || (i0 > 0.0 && (u - lo) * total < (hi - lo) * i0) {
+                hi = split.max(lo);
                 pmf *= p0;
                 index = c0;
             } else {
-                u = ((u - p0) / (1.0 - p0)).min(crate::math::ONE_MINUS_EPSILON);
+                lo = split.min(hi);
                 pmf *= 1.0 - p0;
                 index = c1;
             }
