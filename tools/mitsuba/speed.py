@@ -14,7 +14,9 @@ generation; `apt-get install libllvm19` and point DRJIT_LIBLLVM_PATH at it):
 Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every validation scene
 (tools/mitsuba/references.py) at the settings `neumann validate` uses (--res, default 128).
 --depths 1,2,3,8 adds the Cornell box at 512², 64 spp at each of those maximum depths: where the
-ratio changes with depth tells camera rays and direct light (depth ≤ 2) from bounces."""
+ratio changes with depth tells camera rays and direct light (depth ≤ 2) from bounces.
+--neumann BIN (repeatable) times these neumann binaries instead of target/release/neumann, each
+in its own column with its ratio, interleaved run by run: a before and an after in one run."""
 import argparse
 import os
 import subprocess
@@ -45,6 +47,8 @@ def main():
     parser.add_argument("--res", type=int, default=128, help="film size of the validation scenes")
     parser.add_argument("--runs", type=int, default=2, help="timed runs of each renderer (the best counts)")
     parser.add_argument("--depths", default="", help="also the Cornell box at these max_depth values (comma-separated)")
+    parser.add_argument("--neumann", action="append", default=[],
+                        help="a neumann binary to time (repeatable; default: target/release/neumann)")
     parser.add_argument("scenes", nargs="*", help="scene names (default: all)")
     opts = parser.parse_args()
     res, runs, args = opts.res, opts.runs, opts.scenes
@@ -55,22 +59,31 @@ def main():
     if args:
         jobs = [j for j in jobs if j[0] in args]
     jobs += [("cbox", 512, 64, {"max_depth": d}) for d in opts.depths.split(",") if d]
-    neumann = os.path.join("target", "release", "neumann")
-    print(f"{'scene':<18} {'res':>5} {'spp':>5} {'depth':>5}  {'neumann M/s':>11}  {'Mitsuba M/s':>11}  ratio")
+    binaries = opts.neumann or [os.path.join("target", "release", "neumann")]
+    labels = [f"neumann M/s" if len(binaries) == 1 else f"#{k + 1} M/s" for k in range(len(binaries))]
+    for k, b in enumerate(binaries):
+        if len(binaries) > 1:
+            print(f"#{k + 1}: {b}")
+    columns = "".join(f"  {label:>11}  ratio" for label in labels)
+    print(f"{'scene':<18} {'res':>5} {'spp':>5} {'depth':>5}  {'Mitsuba M/s':>11}{columns}")
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
         for name, r, spp, extra in jobs:
             params = dict(res=str(r), spp=str(spp), **extra)
             scene = f"scenes/{name}.xml"
-            n_cmd = [neumann, "render", scene, "-o", out] + [f"-D{k}={v}" for k, v in params.items()]
+            n_cmds = [[b, "render", scene, "-o", out] + [f"-D{k}={v}" for k, v in params.items()] for b in binaries]
             m_cmd = [sys.executable, "-c", MITSUBA_ONE, scene, out] + [f"{k}={v}" for k, v in params.items()]
             timed(m_cmd)  # warm-up: fills Dr.Jit's kernel cache
-            t_n = min(timed(n_cmd) for _ in range(runs))
-            t_m = min(timed(m_cmd) for _ in range(runs))
+            t_n = [float("inf")] * len(binaries)
+            t_m = float("inf")
+            for _ in range(runs):
+                for k, cmd in enumerate(n_cmds):
+                    t_n[k] = min(t_n[k], timed(cmd))
+                t_m = min(t_m, timed(m_cmd))
             samples = r * r * spp
             depth = extra.get("max_depth", "")
-            print(f"{name:<18} {r:>5} {spp:>5} {depth:>5}  {samples / t_n / 1e6:>11.3f}  {samples / t_m / 1e6:>11.3f}  {t_m / t_n:.2f}",
-                  flush=True)
+            cells = "".join(f"  {samples / t / 1e6:>11.3f}  {t_m / t:5.2f}" for t in t_n)
+            print(f"{name:<18} {r:>5} {spp:>5} {depth:>5}  {samples / t_m / 1e6:>11.3f}{cells}", flush=True)
 
 
 if __name__ == "__main__":
