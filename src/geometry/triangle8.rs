@@ -172,6 +172,18 @@ pub(crate) trait Lanes: Lane + Sub<Output = Self> {
     fn lane(self, k: usize) -> f32;
 }
 
+/// The comparisons of [`Lanes`], forwarded to the lane type's own.
+macro_rules! forward_compare {
+    ($ty:ty, $mask:ty, $($name:ident),*) => {$(
+        #[inline(always)]
+        fn $name(self, o: $ty) -> $mask {
+            <$ty>::$name(self, o)
+        }
+    )*};
+}
+
+/// [`Lanes`] for a lane type whose methods have the trait's names, with the few that differ
+/// given as closures.
 macro_rules! forward_lanes {
     ($ty:ty, $mask:ty, $isa:ty, $n:expr, $splat:expr, $load:expr, $lane:expr) => {
         impl Lanes for $ty {
@@ -186,26 +198,7 @@ macro_rules! forward_lanes {
             fn load(isa: $isa, row: &[f32; LANES], part: usize) -> $ty {
                 $load(isa, row, part)
             }
-            #[inline(always)]
-            fn cmpeq(self, o: $ty) -> $mask {
-                <$ty>::cmpeq(self, o)
-            }
-            #[inline(always)]
-            fn cmpge(self, o: $ty) -> $mask {
-                <$ty>::cmpge(self, o)
-            }
-            #[inline(always)]
-            fn cmple(self, o: $ty) -> $mask {
-                <$ty>::cmple(self, o)
-            }
-            #[inline(always)]
-            fn cmpgt(self, o: $ty) -> $mask {
-                <$ty>::cmpgt(self, o)
-            }
-            #[inline(always)]
-            fn cmplt(self, o: $ty) -> $mask {
-                <$ty>::cmplt(self, o)
-            }
+            forward_compare!($ty, $mask, cmpeq, cmpge, cmple, cmpgt, cmplt);
             #[inline(always)]
             fn any(m: $mask) -> bool {
                 m.any()

@@ -40,6 +40,18 @@ impl Avx {
     }
 }
 
+/// The ordered (false where either lane is NaN) comparisons of [`F32x8`], one per predicate.
+#[cfg(target_arch = "x86_64")]
+macro_rules! compare {
+    ($($(#[$doc:meta])* $name:ident $predicate:ident;)*) => {$(
+        $(#[$doc])*
+        #[inline(always)]
+        pub fn $name(self, o: F32x8) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<$predicate>(self.0, o.0) })
+        }
+    )*};
+}
+
 /// Eight `f32` lanes in an AVX register.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug)]
@@ -109,34 +121,17 @@ impl F32x8 {
         }
     }
 
-    /// Lanes where `self == o`.
-    #[inline(always)]
-    pub fn cmpeq(self, o: F32x8) -> M8 {
-        M8(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, o.0) })
-    }
-
-    /// Lanes where `self >= o`.
-    #[inline(always)]
-    pub fn cmpge(self, o: F32x8) -> M8 {
-        M8(unsafe { _mm256_cmp_ps::<_CMP_GE_OQ>(self.0, o.0) })
-    }
-
-    /// Lanes where `self <= o`.
-    #[inline(always)]
-    pub fn cmple(self, o: F32x8) -> M8 {
-        M8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0) })
-    }
-
-    /// Lanes where `self > o`.
-    #[inline(always)]
-    pub fn cmpgt(self, o: F32x8) -> M8 {
-        M8(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, o.0) })
-    }
-
-    /// Lanes where `self < o`.
-    #[inline(always)]
-    pub fn cmplt(self, o: F32x8) -> M8 {
-        M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, o.0) })
+    compare! {
+        /// Lanes where `self == o`.
+        cmpeq _CMP_EQ_OQ;
+        /// Lanes where `self >= o`.
+        cmpge _CMP_GE_OQ;
+        /// Lanes where `self <= o`.
+        cmple _CMP_LE_OQ;
+        /// Lanes where `self > o`.
+        cmpgt _CMP_GT_OQ;
+        /// Lanes where `self < o`.
+        cmplt _CMP_LT_OQ;
     }
 
     /// Lane-wise `m ? a : b`.
