@@ -41,8 +41,8 @@ pub const BVH_OPTIONS: BuildOptions =
     BuildOptions { max_leaf: 8, bins: 16, parallel_threshold: 4096, traversal_cost: 1.0, leaf_group: 8 };
 
 /// Scenes with at most this many primitives count as cache-resident: their triangle blocks and
-/// nodes take at most about 200 bytes per primitive (a block of one triangle is 160 bytes), 400 KB,
-/// within a 1 MiB L2 cache.
+/// nodes take at most about 360 bytes per primitive (a block of one triangle is 320 bytes),
+/// 740 KB, within a 1 MiB L2 cache.
 pub const SMALL_SCENE_PRIMITIVES: usize = 2048;
 
 /// BVH options for a scene of `primitives` primitives. A small scene stays in cache, so a node
@@ -103,9 +103,9 @@ struct LeafTest<'a> {
 }
 
 impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
-    #[inline(always)]
     /// The closest hit within `(0, t_max)` among the primitives of a leaf (`first`, `count` as
     /// the BVH stores them): lowers `t_max` and records it in `best`.
+    #[inline(always)]
     fn visit(&mut self, first: u32, count: u32, t_max: &mut f32, avx: Option<Avx>) {
         let (scene, pre) = (self.scene, self.pre);
         if count & TRIANGLE_BLOCKS != 0 {
