@@ -22,8 +22,9 @@ pub const LANES: usize = 8;
 type Rows = [[[f32; LANES]; 3]; 3];
 
 /// Up to eight triangles in structure-of-arrays form, `v[vertex][axis][lane]` holding that
-/// coordinate of the lane's triangle, and a caller-chosen id per lane. Blocks with fewer than
-/// eight triangles repeat their last triangle (and id), so every lane is a real triangle.
+/// coordinate of the lane's triangle, and a caller-chosen id per lane, distinct within the
+/// block. Blocks with fewer than eight triangles repeat their last triangle (and id), so every
+/// lane is a real triangle, and a repeated id marks the padding.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct Triangle8 {
@@ -33,12 +34,18 @@ pub struct Triangle8 {
 }
 
 impl Triangle8 {
-    /// Packs 1 to 8 triangles with their ids.
+    /// Packs 1 to 8 triangles with their ids (distinct: the tests skip padding by its id).
     pub fn new(tris: &[([Vec3; 3], u32)]) -> Triangle8 {
         assert!((1..=LANES).contains(&tris.len()), "a Triangle8 holds 1 to 8 triangles");
+        assert!(
+            tris.iter().enumerate().all(|(i, a)| tris[..i].iter().all(|b| b.1 != a.1)),
+            "the triangles of a Triangle8 need distinct ids"
+        );
         let lane = |k: usize| tris[k.min(tris.len() - 1)];
         Triangle8 {
-            v: std::array::from_fn(|vertex| std::array::from_fn(|axis| std::array::from_fn(|k| lane(k).0[vertex][axis]))),
+            v: std::array::from_fn(|vertex| {
+                std::array::from_fn(|axis| std::array::from_fn(|k| lane(k).0[vertex][axis]))
+            }),
             id: std::array::from_fn(|k| lane(k).1),
         }
     }
@@ -57,6 +64,30 @@ impl Triangle8 {
     #[inline(always)]
     fn upper_half_padding(&self) -> bool {
         self.id[4] == self.id[3]
+    }
+
+    /// [`Triangle8::intersect_avx`] where the caller holds the AVX token (the BVH's AVX
+    /// traversal), else [`Triangle8::intersect`].
+    #[inline(always)]
+    pub fn intersect_with(&self, avx: Option<Avx>, r: &RayPrecomp, t_max: f32) -> Option<(usize, TriangleHit)> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = avx {
+            return self.intersect_avx(avx, r, t_max);
+        }
+        let _ = avx;
+        self.intersect(r, t_max)
+    }
+
+    /// [`Triangle8::occludes_avx`] where the caller holds the AVX token, else
+    /// [`Triangle8::occludes`].
+    #[inline(always)]
+    pub fn occludes_with(&self, avx: Option<Avx>, r: &RayPrecomp, t_max: f32) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = avx {
+            return self.occludes_avx(avx, r, t_max);
+        }
+        let _ = avx;
+        self.occludes(r, t_max)
     }
 
     /// The closest hit among the eight triangles within `(0, t_max)`: lane and hit. Two SSE
@@ -133,7 +164,12 @@ impl Triangle8 {
     /// The closest hit among `lanes` by the scalar test (an edge function was exactly zero);
     /// the lowest lane among equal distances, as the SIMD reduction picks.
     #[cold]
-    fn scalar_closest(&self, lanes: std::ops::Range<usize>, r: &RayPrecomp, t_max: f32) -> Option<(usize, TriangleHit)> {
+    fn scalar_closest(
+        &self,
+        lanes: std::ops::Range<usize>,
+        r: &RayPrecomp,
+        t_max: f32,
+    ) -> Option<(usize, TriangleHit)> {
         let mut best: Option<(usize, TriangleHit)> = None;
         for k in lanes {
             if let Some(h) = intersect_triangle(r, &self.triangle(k), t_max) {
@@ -283,7 +319,15 @@ struct Candidates<L: Lanes> {
 /// Vertex `vertex` of the lanes in the ray's frame: relative to the origin `o`, permuted by
 /// `k`, sheared (x, y) and scaled (z) by `s`.
 #[inline(always)]
-fn to_ray_frame<L: Lanes>(isa: L::Isa, v: &Rows, part: usize, vertex: usize, k: [usize; 3], o: [L; 3], s: [L; 3]) -> (L, L, L) {
+fn to_ray_frame<L: Lanes>(
+    isa: L::Isa,
+    v: &Rows,
+    part: usize,
+    vertex: usize,
+    k: [usize; 3],
+    o: [L; 3],
+    s: [L; 3],
+) -> (L, L, L) {
     let v = &v[vertex];
     let c = |axis: usize| L::load(isa, &v[axis], part);
     let (x, y, z) = (c(k[0]) - o[0], c(k[1]) - o[1], c(k[2]) - o[2]);
@@ -324,15 +368,8 @@ fn edges<L: Lanes, R>(
     if !L::any(valid) {
         return Outcome::Miss;
     }
-    let c = Candidates {
-        valid,
-        det,
-        t_scaled,
-        e: [e0, e1, e2],
-        x: [p0x, p1x, p2x],
-        y: [p0y, p1y, p2y],
-        z: [z0, z1, z2],
-    };
+    let c =
+        Candidates { valid, det, t_scaled, e: [e0, e1, e2], x: [p0x, p1x, p2x], y: [p0y, p1y, p2y], z: [z0, z1, z2] };
     match finish(c) {
         Some(found) => Outcome::Hit(found),
         None => Outcome::Miss,
@@ -444,7 +481,8 @@ mod tests {
         let tri = [Vec3::new(-1.0, -1.0, -1.0), Vec3::new(1.0, -1.0, 1.0), Vec3::new(0.0, 1.0, 0.0)];
         let far = [tri[0] + Vec3::X * 50.0, tri[1] + Vec3::X * 50.0, tri[2] + Vec3::X * 50.0];
         // The triangle alone, and in the upper half of a full block.
-        for block in [Triangle8::new(&[(tri, 0)]), Triangle8::new(&[(far, 1), (far, 2), (far, 3), (far, 4), (tri, 5)])] {
+        for block in [Triangle8::new(&[(tri, 0)]), Triangle8::new(&[(far, 1), (far, 2), (far, 3), (far, 4), (tri, 5)])]
+        {
             for (h, hit) in [(1e-8f32, false), (1e-7, false), (1e-4, true), (1.0, true)] {
                 let pre = RayPrecomp::new(&Ray::new(Vec3::new(0.0, 0.0, h), -Vec3::Z));
                 assert_eq!(intersect_triangle(&pre, &tri, f32::INFINITY).is_some(), hit, "scalar at {h}");

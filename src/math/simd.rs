@@ -238,8 +238,14 @@ mod tests {
                 (x.cmple(y), [xa[0].cmple(ya[0]), xa[1].cmple(ya[1])]),
                 (x.cmpgt(y), [xa[0].cmpgt(ya[0]), xa[1].cmpgt(ya[1])]),
                 (x.cmplt(y), [xa[0].cmplt(ya[0]), xa[1].cmplt(ya[1])]),
-                (x.cmplt(y) & x.cmpgt(y), [xa[0].cmplt(ya[0]) & xa[0].cmpgt(ya[0]), xa[1].cmplt(ya[1]) & xa[1].cmpgt(ya[1])]),
-                (x.cmplt(y) | x.cmpeq(y), [xa[0].cmplt(ya[0]) | xa[0].cmpeq(ya[0]), xa[1].cmplt(ya[1]) | xa[1].cmpeq(ya[1])]),
+                (
+                    x.cmplt(y) & x.cmpgt(y),
+                    [xa[0].cmplt(ya[0]) & xa[0].cmpgt(ya[0]), xa[1].cmplt(ya[1]) & xa[1].cmpgt(ya[1])],
+                ),
+                (
+                    x.cmplt(y) | x.cmpeq(y),
+                    [xa[0].cmplt(ya[0]) | xa[0].cmpeq(ya[0]), xa[1].cmplt(ya[1]) | xa[1].cmpeq(ya[1])],
+                ),
             ];
             for (m, [m0, m1]) in masks {
                 assert_eq!(m.bitmask(), m0.bitmask() | m1.bitmask() << 4, "round {round}");

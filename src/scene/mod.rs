@@ -53,8 +53,8 @@ pub const SMALL_SCENE_PRIMITIVES: usize = 2048;
 /// grow (the `textures` scene 20 % slower, `veach_mis` 16 %). A large scene is bound by memory
 /// latency: every node visited is a dependent cache miss, so fewer, fuller leaves win
 /// (100k-triangle mesh: 10–15 % fewer rays/s with 0.3; charged per eight triangles instead of
-/// four, shadow rays +3 % at 100k and +13 % at 1M triangles, and 67 instead of 85 bytes per
-/// triangle).
+/// four, shadow rays +3 % at 100k and +13 % at 1M triangles, and 67 bytes per triangle instead
+/// of 85).
 pub fn bvh_options(primitives: usize) -> BuildOptions {
     if primitives <= SMALL_SCENE_PRIMITIVES {
         BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..BVH_OPTIONS }
@@ -112,7 +112,7 @@ impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
             for b in first..first + (count & !TRIANGLE_BLOCKS) {
                 // SAFETY: leaf payloads index `blocks` (built together).
                 let block = unsafe { scene.blocks.get_unchecked(b as usize) };
-                if let Some((lane, h)) = block_intersect(block, pre, *t_max, avx) {
+                if let Some((lane, h)) = block.intersect_with(avx, pre, *t_max) {
                     *t_max = h.t;
                     self.best = Some((h.t, HitKind::Block(h, b, lane)));
                     // The surface interaction starts from the triangle's reference: its cache
@@ -140,28 +140,6 @@ impl crate::bvh::AnyLeaf for LeafTest<'_> {
     fn prefetch(&self, first: u32, count: u32) {
         self.scene.prefetch_leaf(first, count)
     }
-}
-
-/// A block's closest hit, in AVX where the traversal runs in AVX code.
-#[inline(always)]
-fn block_intersect(block: &Triangle8, pre: &RayPrecomp, t_max: f32, avx: Option<Avx>) -> Option<(usize, TriangleHit)> {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = avx {
-        return block.intersect_avx(avx, pre, t_max);
-    }
-    let _ = avx;
-    block.intersect(pre, t_max)
-}
-
-/// Whether a block blocks the ray, in AVX where the traversal runs in AVX code.
-#[inline(always)]
-fn block_occludes(block: &Triangle8, pre: &RayPrecomp, t_max: f32, avx: Option<Avx>) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = avx {
-        return block.occludes_avx(avx, pre, t_max);
-    }
-    let _ = avx;
-    block.occludes(pre, t_max)
 }
 
 /// Leaf payload flag: the leaf holds `count & !TRIANGLE_BLOCKS` [`Triangle8`] blocks from
@@ -455,6 +433,7 @@ impl Scene {
     fn intersect_other(&self, lp: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, HitKind)> {
         let geometry = || &self.geometries[self.refs[lp.r as usize].shape as usize];
         match &lp.prim {
+            // Tested inline by `intersect_prim`, never sent here.
             Primitive::Triangle(_) | Primitive::Sphere(_) => None,
             Primitive::Disk => match geometry() {
                 Geometry::Disk(d) => d.intersect(ray, t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
@@ -570,7 +549,7 @@ impl Scene {
         if count & TRIANGLE_BLOCKS != 0 {
             for b in first..first + (count & !TRIANGLE_BLOCKS) {
                 // SAFETY: leaf payloads index `blocks` (built together).
-                if block_occludes(unsafe { self.blocks.get_unchecked(b as usize) }, pre, t_max, avx) {
+                if unsafe { self.blocks.get_unchecked(b as usize) }.occludes_with(avx, pre, t_max) {
                     return true;
                 }
             }
