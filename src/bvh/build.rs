@@ -66,7 +66,7 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     let bounds = match &root {
         BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
     };
-    Bvh { nodes, order: items.iter().map(|it| it.index).collect(), bounds, avx: avx_detected() }
+    Bvh { nodes: nodes.into(), order: items.iter().map(|it| it.index).collect(), bounds, avx: avx_detected() }
 }
 
 /// Whether this CPU runs the AVX slab test.

@@ -2,12 +2,16 @@
 //! with one SIMD slab test per node (AVX when the CPU has it, chosen at run time; two 4-wide
 //! SSE halves otherwise); closest-hit and any-hit traversal.
 //!
+//! Nodes live in a [`HugeArray`] (memory advised as 2 MiB pages: incoherent rays through a
+//! large tree then miss the TLB far less often).
+//!
 //! The BVH knows only primitive bounds; the caller intersects primitives in leaves through a
 //! closure, so one BVH serves triangles, spheres and disks alike (and, later, instances). After
 //! the build, [`Bvh::order`] lists primitive indices in leaf order: callers store their
 //! primitive data in that order so a leaf's primitives are contiguous in memory.
 
 mod build;
+mod huge;
 mod slab;
 
 use crate::math::simd::Avx;
@@ -15,6 +19,7 @@ use crate::math::{Bounds3, Ray, Vec3};
 use slab::{Slab4x2, SlabTest};
 
 pub use build::BuildOptions;
+pub use huge::HugeArray;
 
 /// Children per node.
 pub const WIDTH: usize = 8;
@@ -61,7 +66,7 @@ impl Node8 {
 /// A bounding volume hierarchy over primitives given by their bounds.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node8>,
+    nodes: HugeArray<Node8>,
     order: Vec<u32>,
     bounds: Bounds3,
     /// Whether this CPU runs the AVX slab test (detected at build time).
@@ -107,7 +112,7 @@ impl Bvh {
     /// Lets a caller replace primitive ranges by its own packed blocks; [`Bvh::stats`] reads the
     /// counts, so take statistics before.
     pub fn remap_leaves(&mut self, mut f: impl FnMut(u32, u32) -> (u32, u32)) {
-        for node in &mut self.nodes {
+        for node in self.nodes.iter_mut() {
             for slot in 0..WIDTH {
                 if node.valid(slot) && node.count[slot] > 0 {
                     let (child, count) = f(node.child[slot], node.count[slot]);
@@ -213,9 +218,7 @@ impl Bvh {
                     mask &= mask - 1;
                     if mask == 0 {
                         let (near, far) = if t_near[a] <= t_near[b] { (a, b) } else { (b, a) };
-                        if node.count[far] == 0 {
-                            prefetch(self.nodes.as_ptr().wrapping_add(node.child[far] as usize), size_of::<Node8>());
-                        }
+                        self.prefetch_closest(node.child[far], node.count[far], &leaf);
                         stack[sp].write((node.child[far], node.count[far], t_near[far]));
                         sp += 1;
                         (child, count) = (node.child[near], node.count[near]);
@@ -247,9 +250,7 @@ impl Bvh {
                     // SAFETY: written above.
                     let nearest = unsafe { stack[sp].assume_init() };
                     let next = pushed[pushed.len() - 2];
-                    if next.1 == 0 {
-                        prefetch(self.nodes.as_ptr().wrapping_add(next.0 as usize), size_of::<Node8>());
-                    }
+                    self.prefetch_closest(next.0, next.1, &leaf);
                     (child, count) = (nearest.0, nearest.1);
                     continue;
                 }
@@ -267,6 +268,17 @@ impl Bvh {
                     break;
                 }
             }
+        }
+    }
+
+    /// Prefetches a postponed child of the closest-hit traversal: an interior node's cache
+    /// lines, or the leaf's data.
+    #[inline(always)]
+    fn prefetch_closest(&self, child: u32, count: u32, leaf: &impl ClosestLeaf) {
+        if count == 0 {
+            prefetch(self.nodes.as_ptr().wrapping_add(child as usize), size_of::<Node8>());
+        } else {
+            leaf.prefetch(child, count);
         }
     }
 
@@ -357,6 +369,11 @@ pub trait ClosestLeaf {
     /// Intersects one leaf's primitives within `(0, t_max)`. `avx` is the AVX token where the
     /// traversal runs compiled for AVX: the leaf test can use AVX then, inlined.
     fn visit(&mut self, first: u32, count: u32, t_max: &mut f32, avx: Option<Avx>);
+    /// Asks the cache for a postponed leaf's data ahead of its visit (a hint; by default none).
+    #[inline(always)]
+    fn prefetch(&self, first: u32, count: u32) {
+        let _ = (first, count);
+    }
 }
 
 /// A closure as a [`ClosestLeaf`].

@@ -40,8 +40,9 @@ impl RayPrecomp {
         let x_wins = x_beats_y && a.x > a.z;
         let y_wins = !x_beats_y && a.y > a.z;
         let kz = 2 - 2 * x_wins as usize - y_wins as usize;
-        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
-        let (kx, ky) = if d[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
+        // (kx, ky, kz) for each kz, in cyclic order and swapped.
+        const PERMUTATIONS: [[usize; 3]; 6] = [[1, 2, 0], [2, 1, 0], [2, 0, 1], [0, 2, 1], [0, 1, 2], [1, 0, 2]];
+        let [kx, ky, kz] = PERMUTATIONS[2 * kz + usize::from(d[kz] < 0.0)];
         let sz = 1.0 / d[kz];
         let o = ray.o.to_array();
         let op = [o[kx], o[ky], o[kz]];

@@ -224,9 +224,9 @@ impl SceneBuilder {
             camera_medium: self.camera_medium,
             shape_labels: self.shape_labels,
             bvh,
-            blocks,
-            prims,
-            refs,
+            blocks: blocks.into(),
+            prims: prims.into(),
+            refs: refs.into(),
             camera,
         })
     }

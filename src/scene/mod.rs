@@ -9,7 +9,7 @@ mod error;
 pub use builder::SceneBuilder;
 pub use error::BuildError;
 
-use crate::bvh::{prefetch, BuildOptions, Bvh};
+use crate::bvh::{prefetch, BuildOptions, Bvh, HugeArray};
 use crate::camera::Camera;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
 use crate::geometry::triangle8::Triangle8;
@@ -129,6 +129,10 @@ impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
             }
         }
     }
+    #[inline(always)]
+    fn prefetch(&self, first: u32, count: u32) {
+        self.scene.prefetch_leaf(first, count)
+    }
 }
 
 impl crate::bvh::AnyLeaf for LeafTest<'_> {
@@ -217,12 +221,13 @@ pub struct Scene {
     camera_medium: Option<u32>,
     shape_labels: Vec<(String, Option<crate::props::Loc>)>,
     bvh: Bvh,
-    /// Triangles of all-triangle leaves, eight per block.
-    blocks: Vec<Triangle8>,
+    /// Triangles of all-triangle leaves, eight per block. This and the next two arrays, like
+    /// the BVH's nodes, are [`HugeArray`]s: where large, backed by 2 MiB pages.
+    blocks: HugeArray<Triangle8>,
     /// Primitives of the other leaves.
-    prims: Vec<LeafPrim>,
+    prims: HugeArray<LeafPrim>,
     /// Every primitive's shape and index, in BVH order.
-    refs: Vec<PrimRef>,
+    refs: HugeArray<PrimRef>,
     camera: Camera,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
     needs_dpdv: bool,
