@@ -48,6 +48,9 @@ pub enum Filter {
         stddev: f32,
         /// Support half-width (pixels; Mitsuba's is 4σ).
         radius: f32,
+        /// `exp(-r² / 2σ²)`, the shift that makes the filter reach 0 at the radius (computed
+        /// once: it is the same for every weight).
+        floor: f32,
     },
     /// Mitchell–Netravali cubic with parameters `b`, `c` (Mitsuba's `mitchell`: ⅓, ⅓;
     /// `catmullrom`: 0, ½) stretched so that its support `[-2, 2]` spans `[-stretch, stretch]`
@@ -79,8 +82,8 @@ impl std::fmt::Display for Filter {
             Filter::Box { radius } if *radius == 0.5 => write!(f, "box"),
             Filter::Box { radius } => write!(f, "box, radius {radius}"),
             Filter::Tent { radius } => write!(f, "tent, radius {radius}"),
-            Filter::Gaussian { stddev, radius } if *radius == 4.0 * stddev => write!(f, "gaussian, stddev {stddev}"),
-            Filter::Gaussian { stddev, radius } => write!(f, "gaussian, stddev {stddev}, radius {radius}"),
+            Filter::Gaussian { stddev, radius, .. } if *radius == 4.0 * stddev => write!(f, "gaussian, stddev {stddev}"),
+            Filter::Gaussian { stddev, radius, .. } => write!(f, "gaussian, stddev {stddev}, radius {radius}"),
             Filter::Cubic { b, c, radius, stretch } if *stretch == 2.0 => {
                 write!(f, "cubic, B {b}, C {c}, radius {radius}")
             }
@@ -121,7 +124,8 @@ impl Filter {
     /// A Gaussian of standard deviation `stddev` cut at `radius` (pixels, `0 < r ≤ MAX_RADIUS`;
     /// pbrt-v4's `gaussian`).
     pub fn gaussian_cut(stddev: f32, radius: f32) -> Option<Filter> {
-        (stddev > 0.0 && radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Gaussian { stddev, radius })
+        let floor = (-1.0 / (2.0 * stddev * stddev) * radius * radius).exp();
+        (stddev > 0.0 && radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Gaussian { stddev, radius, floor })
     }
 
     /// pbrt-v4's `sinc` (windowed sinc, τ `tau`, cut at `radius`; both in pixels, τ > 0,
@@ -150,11 +154,11 @@ impl Filter {
         match self {
             Filter::Box { radius } => f32::from(x.abs() <= *radius),
             Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
-            Filter::Gaussian { stddev, radius } => {
+            Filter::Gaussian { stddev, radius, floor } => {
                 if x.abs() <= *radius {
-                    // exp(-r² / 2σ²): the shift that makes f reach 0 at the radius (exp(-8) at 4σ).
+                    // `floor`: the shift that makes f reach 0 at the radius (exp(-8) at 4σ).
                     let s = -1.0 / (2.0 * stddev * stddev);
-                    ((s * x * x).exp() - (s * radius * radius).exp()).max(0.0)
+                    ((s * x * x).exp() - floor).max(0.0)
                 } else {
                     0.0
                 }

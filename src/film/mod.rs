@@ -49,6 +49,23 @@ struct Acc {
     alpha: f64,
 }
 
+impl Acc {
+    /// Adds a sample of radiance `l` and coverage `alpha` with filter weight `w`.
+    #[inline(always)]
+    fn add(&mut self, w: f64, l: [f64; 3], alpha: Option<f64>) {
+        for (c, l) in l.into_iter().enumerate() {
+            let wv = w * l;
+            self.sum[c] += wv;
+            self.wl2[c] += wv * l;
+        }
+        self.w += w;
+        self.w2 += w * w;
+        if let Some(alpha) = alpha {
+            self.alpha += w * alpha;
+        }
+    }
+}
+
 /// Per-pixel sums shared by tiles and the film: weighted radiance and the sums its variance
 /// needs, sample counts and, optionally, the Neumann-series terms.
 #[derive(Clone, Debug)]
@@ -107,17 +124,7 @@ impl Pixels {
             }
             h[3] += w;
         }
-        let a = &mut self.acc[i];
-        for c in 0..3 {
-            let wv = w * l[c] as f64;
-            a.sum[c] += wv;
-            a.wl2[c] += wv * l[c] as f64;
-        }
-        a.w += w;
-        a.w2 += w * w;
-        if let Some(alpha) = alpha {
-            a.alpha += w * alpha as f64;
-        }
+        self.acc[i].add(w, l.to_array().map(f64::from), alpha.map(f64::from));
         if self.term_count > 0 {
             let base = i * self.term_count;
             for (k, t) in terms.iter().take(self.term_count).enumerate() {
@@ -257,6 +264,16 @@ impl TileBuffer {
         }
         let (width, height) = (self.width as i64, self.height as i64);
         let px = &mut self.px;
+        if px.term_count == 0 && px.aov_count == 0 && (!sample.half || px.half.is_empty()) {
+            // Radiance and coverage only (the common case): the same sums as `Pixels::put`,
+            // with the sample's conversions and checks made once for the whole footprint.
+            let (l, alpha) = (sample.l.to_array().map(f64::from), sample.alpha.map(f64::from));
+            let acc = &mut px.acc;
+            filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
+                acc[(y * width + x) as usize].add(w as f64, l, alpha);
+            });
+            return;
+        }
         filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
             px.put((y * width + x) as usize, w as f64, &sample);
         });
@@ -700,6 +717,30 @@ mod tests {
         assert!(mixed > 1.0 && mixed < 5.0, "{mixed}");
         assert_eq!(film.total_samples(), 3);
         assert_eq!(film.spp_range(), (0, 1));
+    }
+
+    /// A splat of radiance and coverage alone (the lean path) adds the same bits to every
+    /// pixel's sums as one that also records AOVs (the general path), for each filter.
+    #[test]
+    fn lean_and_general_splats_agree() {
+        let mut rng = crate::sampling::Pcg32::new(8, 1);
+        for filter in [Filter::gaussian(0.5).unwrap(), Filter::Tent { radius: 1.5 }, Filter::BOX] {
+            let mut lean = TileBuffer::new(0, 0, 7, 5);
+            let mut general = TileBuffer::new(0, 0, 7, 5).with_aovs(1);
+            for k in 0..200 {
+                let px = [k % 7, k % 5];
+                let off = Vec2::new(rng.next_f32(), rng.next_f32());
+                let l = Rgb::new(rng.next_f32(), 3.0 * rng.next_f32(), 0.1);
+                let alpha = (k % 3 != 0).then_some(rng.next_f32());
+                lean.put(px, off, &filter, FilmSample { l, alpha, ..Default::default() });
+                general.put(px, off, &filter, FilmSample { l, alpha, aovs: &[1.0], ..Default::default() });
+            }
+            for (a, b) in lean.px.acc.iter().zip(&general.px.acc) {
+                let bits = |a: &Acc| [a.sum, a.wl2, [a.w, a.w2, a.alpha]].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(a), bits(b), "{filter:?}");
+            }
+            assert!(general.px.aovs.iter().any(|&v| v > 0.0));
+        }
     }
 
     /// The variance estimate: with unit weights the sample variance of the mean `s²/n`; with
