@@ -82,7 +82,9 @@ impl std::fmt::Display for Filter {
             Filter::Box { radius } if *radius == 0.5 => write!(f, "box"),
             Filter::Box { radius } => write!(f, "box, radius {radius}"),
             Filter::Tent { radius } => write!(f, "tent, radius {radius}"),
-            Filter::Gaussian { stddev, radius, .. } if *radius == 4.0 * stddev => write!(f, "gaussian, stddev {stddev}"),
+            Filter::Gaussian { stddev, radius, .. } if *radius == 4.0 * stddev => {
+                write!(f, "gaussian, stddev {stddev}")
+            }
             Filter::Gaussian { stddev, radius, .. } => write!(f, "gaussian, stddev {stddev}, radius {radius}"),
             Filter::Cubic { b, c, radius, stretch } if *stretch == 2.0 => {
                 write!(f, "cubic, B {b}, C {c}, radius {radius}")

@@ -736,7 +736,9 @@ mod tests {
                 general.put(px, off, &filter, FilmSample { l, alpha, aovs: &[1.0], ..Default::default() });
             }
             for (a, b) in lean.px.acc.iter().zip(&general.px.acc) {
-                let bits = |a: &Acc| [a.sum, a.wl2, [a.w, a.w2, a.alpha]].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                let bits = |a: &Acc| {
+                    [a.sum, a.wl2, [a.w, a.w2, a.alpha]].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                };
                 assert_eq!(bits(a), bits(b), "{filter:?}");
             }
             assert!(general.px.aovs.iter().any(|&v| v > 0.0));
