@@ -35,7 +35,8 @@ impl<T: Copy> HugeArray<T> {
     pub fn from_slice(items: &[T]) -> HugeArray<T> {
         let bytes = size_of_val(items);
         if bytes == 0 {
-            return HugeArray::default();
+            // Nothing to allocate (no items, or zero-sized ones): a dangling, aligned pointer.
+            return HugeArray { ptr: NonNull::dangling(), len: items.len(), layout: None };
         }
         let huge = bytes >= HUGE_PAGE;
         let align = if huge { HUGE_PAGE.max(align_of::<T>()) } else { align_of::<T>() };
@@ -154,6 +155,7 @@ mod tests {
             assert_eq!(a.len(), n);
             assert!(a.iter().all(|l| *l == Line([n as u8; 64])));
         }
+        assert_eq!(HugeArray::from_slice(&[(); 5]).len(), 5, "zero-sized items keep their count");
         let empty: HugeArray<Line> = HugeArray::default();
         assert!(empty.is_empty() && !empty.huge());
         assert_eq!(format!("{:?}", HugeArray::from_slice(&[1u8, 2])), "[1, 2]");
