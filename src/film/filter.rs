@@ -126,8 +126,10 @@ impl Filter {
     /// A Gaussian of standard deviation `stddev` cut at `radius` (pixels, `0 < r ≤ MAX_RADIUS`;
     /// pbrt-v4's `gaussian`).
     pub fn gaussian_cut(stddev: f32, radius: f32) -> Option<Filter> {
-        let floor = (-1.0 / (2.0 * stddev * stddev) * radius * radius).exp();
-        (stddev > 0.0 && radius > 0.0 && radius <= MAX_RADIUS).then_some(Filter::Gaussian { stddev, radius, floor })
+        (stddev > 0.0 && radius > 0.0 && radius <= MAX_RADIUS).then(|| {
+            let floor = (-1.0 / (2.0 * stddev * stddev) * radius * radius).exp();
+            Filter::Gaussian { stddev, radius, floor }
+        })
     }
 
     /// pbrt-v4's `sinc` (windowed sinc, τ `tau`, cut at `radius`; both in pixels, τ > 0,

@@ -66,6 +66,19 @@ impl Acc {
     }
 }
 
+/// A sample prepared for [`Pixels::put`] (by [`Pixels::splat`]): radiance and coverage in
+/// f64, and whether the half buffer, terms or AOVs take it too.
+struct Splat<'a> {
+    l: [f64; 3],
+    alpha: Option<f64>,
+    /// The half buffer is kept and takes this sample.
+    half: bool,
+    terms: &'a [Rgb],
+    aovs: &'a [f32],
+    /// Anything beyond radiance and coverage is recorded (half buffer, terms or AOVs).
+    extra: bool,
+}
+
 /// Per-pixel sums shared by tiles and the film: weighted radiance and the sums its variance
 /// needs, sample counts and, optionally, the Neumann-series terms.
 #[derive(Clone, Debug)]
@@ -113,21 +126,41 @@ impl Pixels {
         self.term_count = count;
     }
 
+    /// `sample` as the pixel sums take it: converted and checked once, for every pixel of its
+    /// footprint.
+    fn splat<'a>(&self, sample: &FilmSample<'a>) -> Splat<'a> {
+        let half = sample.half && !self.half.is_empty();
+        Splat {
+            l: sample.l.to_array().map(f64::from),
+            alpha: sample.alpha.map(f64::from),
+            half,
+            terms: sample.terms,
+            aovs: sample.aovs,
+            extra: half || self.term_count > 0 || self.aov_count > 0,
+        }
+    }
+
     /// Adds `w L` (and `w a`, `w T`, `w v`) to pixel `i`, and to its half buffer if `half`.
-    #[inline]
-    fn put(&mut self, i: usize, w: f64, sample: &FilmSample) {
-        let FilmSample { l, alpha, terms, aovs, half } = *sample;
-        if half && !self.half.is_empty() {
+    #[inline(always)]
+    fn put(&mut self, i: usize, w: f64, s: &Splat) {
+        self.acc[i].add(w, s.l, s.alpha);
+        if s.extra {
+            self.put_extra(i, w, s);
+        }
+    }
+
+    /// The half buffer's, the terms' and the AOVs' part of [`Pixels::put`].
+    fn put_extra(&mut self, i: usize, w: f64, s: &Splat) {
+        if s.half {
             let h = &mut self.half[i];
-            for c in 0..3 {
-                h[c] += w * l[c] as f64;
+            for (h, l) in h.iter_mut().zip(s.l) {
+                *h += w * l;
             }
             h[3] += w;
         }
-        self.acc[i].add(w, l.to_array().map(f64::from), alpha.map(f64::from));
         if self.term_count > 0 {
             let base = i * self.term_count;
-            for (k, t) in terms.iter().take(self.term_count).enumerate() {
+            for (k, t) in s.terms.iter().take(self.term_count).enumerate() {
                 for c in 0..3 {
                     self.terms[base + k][c] += w * t[c] as f64;
                 }
@@ -135,7 +168,7 @@ impl Pixels {
         }
         if self.aov_count > 0 {
             let out = &mut self.aovs[i * self.aov_count..(i + 1) * self.aov_count];
-            for (o, &v) in out.iter_mut().zip(aovs) {
+            for (o, &v) in out.iter_mut().zip(s.aovs) {
                 // A non-finite value is dropped alone (counted as 0), not the whole sample.
                 if v.is_finite() {
                     *o += w * v as f64;
@@ -257,25 +290,16 @@ impl TileBuffer {
             return;
         }
         let terms = if sample.terms.iter().all(|t| t.is_finite()) { sample.terms } else { &[] };
-        let sample = FilmSample { terms, ..sample };
+        // Converted and checked once for the whole footprint.
+        let splat = self.px.splat(&FilmSample { terms, ..sample });
         if filter.is_pixel_box() {
-            self.px.put(own, 1.0, &sample);
+            self.px.put(own, 1.0, &splat);
             return;
         }
         let (width, height) = (self.width as i64, self.height as i64);
         let px = &mut self.px;
-        if px.term_count == 0 && px.aov_count == 0 && (!sample.half || px.half.is_empty()) {
-            // Radiance and coverage only (the common case): the same sums as `Pixels::put`,
-            // with the sample's conversions and checks made once for the whole footprint.
-            let (l, alpha) = (sample.l.to_array().map(f64::from), sample.alpha.map(f64::from));
-            let acc = &mut px.acc;
-            filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
-                acc[(y * width + x) as usize].add(w as f64, l, alpha);
-            });
-            return;
-        }
         filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
-            px.put((y * width + x) as usize, w as f64, &sample);
+            px.put((y * width + x) as usize, w as f64, &splat);
         });
     }
 
@@ -719,8 +743,8 @@ mod tests {
         assert_eq!(film.spp_range(), (0, 1));
     }
 
-    /// A splat of radiance and coverage alone (the lean path) adds the same bits to every
-    /// pixel's sums as one that also records AOVs (the general path), for each filter.
+    /// A splat of radiance and coverage alone adds the same bits to every pixel's sums as one
+    /// that also records AOVs (through `Pixels::put_extra`), for each filter.
     #[test]
     fn lean_and_general_splats_agree() {
         let mut rng = crate::sampling::Pcg32::new(8, 1);
