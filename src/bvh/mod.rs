@@ -224,34 +224,36 @@ impl Bvh {
                         (child, count) = (node.child[near], node.count[near]);
                         continue;
                     }
-                    // Three or more: push all, sort them farthest first, continue with the nearest.
-                    let base = sp;
-                    for slot in [a, b] {
-                        stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
-                        sp += 1;
-                    }
+                    // Three or more: sort them farthest first by a key of the entry distance
+                    // (never negative or NaN, so its bits order as integers) above the slot
+                    // (reversed: among equal distances the lower slot goes deeper), push them
+                    // in that order, and continue with the nearest.
+                    let key = |slot: usize| u64::from(t_near[slot].to_bits()) << 32 | (7 - slot) as u64;
+                    let mut keys = [0u64; WIDTH];
+                    (keys[0], keys[1]) = (key(a), key(b));
+                    let mut n = 2;
                     while mask != 0 {
-                        let slot = mask.trailing_zeros() as usize;
+                        keys[n] = key(mask.trailing_zeros() as usize);
                         mask &= mask - 1;
-                        stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
-                        sp += 1;
+                        n += 1;
                     }
-                    // SAFETY: slots base..sp were just written.
-                    let pushed =
-                        unsafe { &mut *(&mut stack[base..sp] as *mut [std::mem::MaybeUninit<Entry>] as *mut [Entry]) };
-                    for i in 1..pushed.len() {
+                    for i in 1..n {
+                        let k = keys[i];
                         let mut j = i;
-                        while j > 0 && pushed[j - 1].2 < pushed[j].2 {
-                            pushed.swap(j - 1, j);
+                        while j > 0 && keys[j - 1] < k {
+                            keys[j] = keys[j - 1];
                             j -= 1;
                         }
+                        keys[j] = k;
                     }
-                    sp -= 1;
-                    // SAFETY: written above.
-                    let nearest = unsafe { stack[sp].assume_init() };
-                    let next = pushed[pushed.len() - 2];
-                    self.prefetch_closest(next.0, next.1, &leaf);
-                    (child, count) = (nearest.0, nearest.1);
+                    for &k in &keys[..n - 1] {
+                        let slot = 7 - (k & 7) as usize;
+                        stack[sp].write((node.child[slot], node.count[slot], t_near[slot]));
+                        sp += 1;
+                    }
+                    let (nearest, next) = (7 - (keys[n - 1] & 7) as usize, 7 - (keys[n - 2] & 7) as usize);
+                    self.prefetch_closest(node.child[next], node.count[next], &leaf);
+                    (child, count) = (node.child[nearest], node.count[nearest]);
                     continue;
                 }
             }

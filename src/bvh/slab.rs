@@ -30,16 +30,27 @@ fn far_scale() -> f32 {
     1.0 + 2.0 * gamma(3)
 }
 
-/// Per axis, the row of [`Node8::bounds`] holding the plane the ray enters through (`near`)
-/// and leaves through (`far`).
+/// Per axis, the byte offset in [`Node8::bounds`] of the row holding the plane the ray enters
+/// through (`near`) and leaves through (`far`). Byte offsets, not row numbers: the traversal
+/// then loads a row at `bounds + offset` without scaling the row number at every node.
 fn planes(ray: &Ray) -> ([usize; 3], [usize; 3]) {
     let inv = ray.d.recip();
     // Bit a set: the ray goes down axis a, so it enters through the upper plane.
     let neg = inv.cmplt(crate::math::Vec3::ZERO).bitmask() as usize;
+    let row = size_of::<[f32; WIDTH]>();
     (
-        [3 * (neg & 1), 1 + 3 * (neg >> 1 & 1), 2 + 3 * (neg >> 2)],
-        [3 - 3 * (neg & 1), 4 - 3 * (neg >> 1 & 1), 5 - 3 * (neg >> 2)],
+        [3 * (neg & 1), 1 + 3 * (neg >> 1 & 1), 2 + 3 * (neg >> 2)].map(|r| r * row),
+        [3 - 3 * (neg & 1), 4 - 3 * (neg >> 1 & 1), 5 - 3 * (neg >> 2)].map(|r| r * row),
     )
+}
+
+/// Lanes `first .. first + n` of the row of `node`'s bounds at byte offset `offset` (an offset
+/// from [`planes`]). Safety: `offset` is one of `planes`' and `first + n ≤ WIDTH`.
+#[inline(always)]
+unsafe fn row_at(node: &Node8, offset: usize, first: usize) -> *const f32 {
+    // SAFETY: `planes` gives offsets of the six rows of `bounds`; the caller keeps `first` within
+    // the row.
+    unsafe { (node.bounds.as_ptr() as *const u8).add(offset).cast::<f32>().add(first) }
 }
 
 /// The test in two 4-wide halves (glam's `Vec4`: SSE on x86-64).
@@ -72,12 +83,11 @@ impl SlabTest for Slab4x2 {
 
     #[inline(always)]
     fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; WIDTH]) {
-        let b = &node.bounds;
         let mut mask = 0;
         let mut t_out = [0.0; WIDTH];
         for half in 0..2 {
-            // SAFETY: the plane rows are below 6 (`planes`), and 4 · half + 4 ≤ WIDTH.
-            let row = |r: usize| Vec4::from_slice(unsafe { b.get_unchecked(r).get_unchecked(4 * half..4 * half + 4) });
+            // SAFETY: the offsets come from `planes`, and 4 · half + 4 ≤ WIDTH.
+            let row = |r: usize| Vec4::from_slice(unsafe { std::slice::from_raw_parts(row_at(node, r, 4 * half), 4) });
             let tn = |a: usize| (row(self.near[a]) - self.o[a]) * self.inv_d[a];
             let tf = |a: usize| (row(self.far[a]) - self.o[a]) * self.inv_d[a];
             let t_near = tn(0).max(tn(1)).max(tn(2)).max(Vec4::ZERO);
@@ -130,9 +140,9 @@ impl SlabTest for Slab8 {
     fn test(&self, node: &Node8, t_max: f32) -> (u32, [f32; WIDTH]) {
         use std::arch::x86_64::*;
         // SAFETY: a `Slab8` exists only where the CPU has AVX (`Slab8::new` is unsafe); the
-        // plane rows are below 6 (`planes`); loads and stores are unaligned ones of 8 floats.
+        // offsets come from `planes`; loads and stores are unaligned ones of 8 floats.
         unsafe {
-            let row = |k: usize| _mm256_loadu_ps(node.bounds.get_unchecked(k).as_ptr());
+            let row = |k: usize| _mm256_loadu_ps(row_at(node, k, 0));
             let tn = |a: usize| _mm256_mul_ps(_mm256_sub_ps(row(self.near[a]), self.o[a]), self.inv_d[a]);
             let tf = |a: usize| _mm256_mul_ps(_mm256_sub_ps(row(self.far[a]), self.o[a]), self.inv_d[a]);
             let t_near = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(tn(0), tn(1)), tn(2)), _mm256_setzero_ps());

@@ -200,6 +200,8 @@ pub(crate) trait Lanes: Lane + Sub<Output = Self> {
     fn cmple(self, o: Self) -> Self::Mask;
     fn cmpgt(self, o: Self) -> Self::Mask;
     fn cmplt(self, o: Self) -> Self::Mask;
+    fn cmpne(self, o: Self) -> Self::Mask;
+    fn min(self, o: Self) -> Self;
     fn any(m: Self::Mask) -> bool;
     fn bitmask(m: Self::Mask) -> u32;
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
@@ -234,7 +236,11 @@ macro_rules! forward_lanes {
             fn load(isa: $isa, row: &[f32; LANES], part: usize) -> $ty {
                 $load(isa, row, part)
             }
-            forward_compare!($ty, $mask, cmpeq, cmpge, cmple, cmpgt, cmplt);
+            forward_compare!($ty, $mask, cmpeq, cmpge, cmple, cmpgt, cmplt, cmpne);
+            #[inline(always)]
+            fn min(self, o: $ty) -> $ty {
+                <$ty>::min(self, o)
+            }
             #[inline(always)]
             fn any(m: $mask) -> bool {
                 m.any()
@@ -357,13 +363,17 @@ fn edges<L: Lanes, R>(
     if L::any(e0.cmpeq(zero) | e1.cmpeq(zero) | e2.cmpeq(zero)) {
         return Outcome::Scalar;
     }
-    let inside =
-        (e0.cmpge(zero) & e1.cmpge(zero) & e2.cmpge(zero)) | (e0.cmple(zero) & e1.cmple(zero) & e2.cmple(zero));
+    // No edge function is zero here, so the scalar test's "all ≥ 0 or all ≤ 0" is "the
+    // smallest > 0 or the largest < 0".
+    let inside = e0.min(e1).min(e2).cmpgt(zero) | Lane::max(Lane::max(e0, e1), e2).cmplt(zero);
     let det = e0 + e1 + e2;
     let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
-    let bound = L::splat(isa, t_max) * det;
-    let in_range = (det.cmpgt(zero) & t_scaled.cmpgt(zero) & t_scaled.cmple(bound))
-        | (det.cmplt(zero) & t_scaled.cmplt(zero) & t_scaled.cmpge(bound));
+    // The scalar test's `0 < t_scaled ≤ t_max · det` for det > 0 and `t_max · det ≤ t_scaled <
+    // 0` for det < 0, in one: `t_scaled` between 0 and `t_max · det` and not 0. (An inside lane
+    // has det ≠ 0: three nonzero edge functions of one sign; a negative `t_max`, which would
+    // swap the bounds, is taken as 0.)
+    let bound = L::splat(isa, t_max.max(0.0)) * det;
+    let in_range = t_scaled.cmpge(bound.min(zero)) & t_scaled.cmple(Lane::max(bound, zero)) & t_scaled.cmpne(zero);
     let valid = inside & in_range;
     if !L::any(valid) {
         return Outcome::Miss;

@@ -132,6 +132,8 @@ impl F32x8 {
         cmpgt _CMP_GT_OQ;
         /// Lanes where `self < o`.
         cmplt _CMP_LT_OQ;
+        /// Lanes where `self != o` (true where either is NaN, as SSE's `cmpneq`).
+        cmpne _CMP_NEQ_UQ;
     }
 
     /// Lane-wise `m ? a : b`.
@@ -238,6 +240,7 @@ mod tests {
                 (x.cmple(y), [xa[0].cmple(ya[0]), xa[1].cmple(ya[1])]),
                 (x.cmpgt(y), [xa[0].cmpgt(ya[0]), xa[1].cmpgt(ya[1])]),
                 (x.cmplt(y), [xa[0].cmplt(ya[0]), xa[1].cmplt(ya[1])]),
+                (x.cmpne(y), [xa[0].cmpne(ya[0]), xa[1].cmpne(ya[1])]),
                 (
                     x.cmplt(y) & x.cmpgt(y),
                     [xa[0].cmplt(ya[0]) & xa[0].cmpgt(ya[0]), xa[1].cmplt(ya[1]) & xa[1].cmpgt(ya[1])],

@@ -571,11 +571,18 @@ impl Scene {
     /// Prefetches a leaf's data (at most its first two triangle blocks or primitives).
     #[inline(always)]
     fn prefetch_leaf(&self, first: u32, count: u32) {
+        // Constant sizes, so that each prefetch unrolls (a leaf holds at least one item).
+        #[inline(always)]
+        fn first_two<T>(p: *const T, count: u32) {
+            prefetch(p, size_of::<T>());
+            if count > 1 {
+                prefetch(p.wrapping_add(1), size_of::<T>());
+            }
+        }
         if count & TRIANGLE_BLOCKS != 0 {
-            let n = (count & !TRIANGLE_BLOCKS).min(2) as usize;
-            prefetch(self.blocks.as_ptr().wrapping_add(first as usize), n * size_of::<Triangle8>());
+            first_two(self.blocks.as_ptr().wrapping_add(first as usize), count & !TRIANGLE_BLOCKS);
         } else {
-            prefetch(self.prims.as_ptr().wrapping_add(first as usize), count.min(2) as usize * size_of::<LeafPrim>());
+            first_two(self.prims.as_ptr().wrapping_add(first as usize), count);
         }
     }
 }
