@@ -1,6 +1,6 @@
-//! Bounding volume hierarchy: binned SAH build (parallel), collapsed into 8-wide nodes tested
-//! with one SIMD slab test per node (AVX when the CPU has it, chosen at run time; two 4-wide
-//! SSE halves otherwise); closest-hit and any-hit traversal.
+//! Bounding volume hierarchy: binned SAH build (parallel), collapsed SAH-optimally into 8-wide
+//! nodes tested with one SIMD slab test per node (AVX when the CPU has it, chosen at run time;
+//! two 4-wide SSE halves otherwise); closest-hit and any-hit traversal.
 //!
 //! Nodes live in a [`HugeArray`] (memory advised as 2 MiB pages: incoherent rays through a
 //! large tree then miss the TLB far less often).
