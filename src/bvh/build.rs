@@ -472,4 +472,22 @@ mod tests {
             assert!(fill > 4.0, "{n}: {fill} children per node");
         }
     }
+
+    /// Trees of one, two and a few primitives (a root that is one leaf, a root whose children
+    /// are all leaves) collapse into nodes that hold every primitive once.
+    #[test]
+    fn tiny_trees_collapse() {
+        for n in [1, 2, 3, 9, 17] {
+            let bvh = build(&boxes(n, 7), &BuildOptions::default());
+            let mut covered = vec![0u32; n];
+            for node in bvh.nodes.iter() {
+                for slot in (0..WIDTH).filter(|&s| node.valid(s) && node.count[s] > 0) {
+                    for k in node.child[slot]..node.child[slot] + node.count[slot] {
+                        covered[k as usize] += 1;
+                    }
+                }
+            }
+            assert!(covered.iter().all(|&c| c == 1), "{n}: {covered:?}");
+        }
+    }
 }
