@@ -283,8 +283,9 @@ fn collapse(root: &BuildNode, binary_nodes: usize, opts: &BuildOptions) -> (Vec<
             cost[n] = [area * blocks(b.count); WIDTH];
             continue;
         };
-        // dist[j - 1]: the best split of j slots between l and r.
-        let mut dist = [(f32::INFINITY, 0u8); WIDTH];
+        // dist[j - 1]: the best split of j slots between l and r (one slot to the left where no
+        // cost compares, as with areas that overflow: every split must give each side a slot).
+        let mut dist = [(f32::INFINITY, 1u8); WIDTH];
         for j in 2..=WIDTH {
             for k in 1..j {
                 let c = cost[l][k - 1] + cost[r][j - k - 1];
@@ -296,7 +297,9 @@ fn collapse(root: &BuildNode, binary_nodes: usize, opts: &BuildOptions) -> (Vec<
         let as_node = area * node_cost + dist[WIDTH - 1].0;
         open[n] = dist[WIDTH - 1].1;
         let as_leaf = if b.count as usize <= opts.max_leaf { area * blocks(b.count) } else { f32::INFINITY };
-        leaf[n] = as_leaf <= as_node;
+        // Never a leaf above `max_leaf` primitives, even where costs do not compare (areas that
+        // overflow to infinity or NaN).
+        leaf[n] = b.count as usize <= opts.max_leaf && as_node.partial_cmp(&as_leaf) != Some(std::cmp::Ordering::Less);
         cost[n][0] = as_leaf.min(as_node);
         for i in 2..=WIDTH {
             (cost[n][i - 1], how[n][i - 1]) = if dist[i - 1].0 < cost[n][i - 2] {
@@ -489,5 +492,30 @@ mod tests {
             }
             assert!(covered.iter().all(|&c| c == 1), "{n}: {covered:?}");
         }
+    }
+
+    /// Boxes near the largest finite coordinates, whose areas overflow to infinity or NaN (no
+    /// cost compares), still collapse into a tree of nodes (not one leaf of everything) that
+    /// holds every primitive once, in leaves of at most `max_leaf`.
+    #[test]
+    fn overflowing_areas_collapse() {
+        let mut bounds = boxes(300, 3);
+        for (i, b) in bounds.iter_mut().enumerate().filter(|(i, _)| i % 3 == 0) {
+            let big = Vec3::new(3.0e38, if i % 2 == 0 { 0.0 } else { -3.0e38 }, 1.0);
+            *b = Bounds3::new(-big, big);
+        }
+        let bvh = build(&bounds, &BuildOptions::default());
+        let mut covered = vec![0u32; bounds.len()];
+        for node in bvh.nodes.iter() {
+            for slot in (0..WIDTH).filter(|&s| node.valid(s) && node.count[s] > 0) {
+                for k in node.child[slot]..node.child[slot] + node.count[slot] {
+                    covered[k as usize] += 1;
+                }
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1));
+        let largest = bvh.nodes.iter().flat_map(|n| n.count).max().unwrap();
+        assert!(largest as usize <= BuildOptions::default().max_leaf, "a leaf of {largest} primitives");
+        assert!(bvh.nodes.len() > 5, "{} nodes", bvh.nodes.len());
     }
 }
