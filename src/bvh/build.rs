@@ -390,6 +390,19 @@ mod tests {
             .collect()
     }
 
+    /// Whether each of the `n` primitives lies in exactly one leaf of `nodes`.
+    fn each_in_one_leaf(nodes: &[Node8], n: usize) -> bool {
+        let mut covered = vec![0u32; n];
+        for node in nodes {
+            for slot in (0..WIDTH).filter(|&s| node.valid(s) && node.count[s] > 0) {
+                for k in node.child[slot]..node.child[slot] + node.count[slot] {
+                    covered[k as usize] += 1;
+                }
+            }
+        }
+        covered.iter().all(|&c| c == 1)
+    }
+
     /// Cost and node count of the greedy collapse (Wald et al. 2008: open the interior child of
     /// largest area until eight), in the dynamic program's cost model.
     fn greedy_cost(node: &BuildNode, node_cost: f32, group: u32) -> (f32, usize) {
@@ -436,12 +449,11 @@ mod tests {
             (500, BuildOptions::default()),
         ] {
             let bounds = boxes(n, n as u64);
-            let items: Vec<Item> = bounds
+            let mut items: Vec<Item> = bounds
                 .iter()
                 .enumerate()
                 .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 })
                 .collect();
-            let mut items = items;
             let (root, count) = build_rec(&mut items, 0, 0, &opts);
             let (nodes, cost) = collapse(&root, count, &opts);
             let group = opts.leaf_group.max(1) as u32;
@@ -450,7 +462,6 @@ mod tests {
                 BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
             };
             let mut total = root_bounds.surface_area() * node_cost;
-            let mut covered = vec![0u32; n];
             let mut children = 0;
             for node in &nodes {
                 for slot in (0..WIDTH).filter(|&s| node.valid(s)) {
@@ -458,16 +469,13 @@ mod tests {
                     let area = node.child_bounds(slot).surface_area();
                     if node.count[slot] > 0 {
                         total += area * node.count[slot].div_ceil(group) as f32;
-                        for k in node.child[slot]..node.child[slot] + node.count[slot] {
-                            covered[k as usize] += 1;
-                        }
                     } else {
                         total += area * node_cost;
                     }
                 }
             }
             assert!((total - cost).abs() <= 1e-4 * cost, "{n}: written {total}, costed {cost}");
-            assert!(covered.iter().all(|&c| c == 1), "{n}: every primitive in exactly one leaf");
+            assert!(each_in_one_leaf(&nodes, n), "{n}: every primitive in exactly one leaf");
             let fill = children as f32 / nodes.len() as f32;
             let (greedy, greedy_nodes) = greedy_cost(&root, node_cost, group);
             assert!(cost <= greedy * (1.0 + 1e-5), "{n}: optimal {cost} above greedy {greedy}");
@@ -482,15 +490,7 @@ mod tests {
     fn tiny_trees_collapse() {
         for n in [1, 2, 3, 9, 17] {
             let bvh = build(&boxes(n, 7), &BuildOptions::default());
-            let mut covered = vec![0u32; n];
-            for node in bvh.nodes.iter() {
-                for slot in (0..WIDTH).filter(|&s| node.valid(s) && node.count[s] > 0) {
-                    for k in node.child[slot]..node.child[slot] + node.count[slot] {
-                        covered[k as usize] += 1;
-                    }
-                }
-            }
-            assert!(covered.iter().all(|&c| c == 1), "{n}: {covered:?}");
+            assert!(each_in_one_leaf(&bvh.nodes, n), "{n}");
         }
     }
 
@@ -505,15 +505,7 @@ mod tests {
             *b = Bounds3::new(-big, big);
         }
         let bvh = build(&bounds, &BuildOptions::default());
-        let mut covered = vec![0u32; bounds.len()];
-        for node in bvh.nodes.iter() {
-            for slot in (0..WIDTH).filter(|&s| node.valid(s) && node.count[s] > 0) {
-                for k in node.child[slot]..node.child[slot] + node.count[slot] {
-                    covered[k as usize] += 1;
-                }
-            }
-        }
-        assert!(covered.iter().all(|&c| c == 1));
+        assert!(each_in_one_leaf(&bvh.nodes, bounds.len()));
         let largest = bvh.nodes.iter().flat_map(|n| n.count).max().unwrap();
         assert!(largest as usize <= BuildOptions::default().max_leaf, "a leaf of {largest} primitives");
         assert!(bvh.nodes.len() > 5, "{} nodes", bvh.nodes.len());
