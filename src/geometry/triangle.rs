@@ -28,7 +28,7 @@ pub struct RayPrecomp {
 
 impl RayPrecomp {
     /// Precomputes the permutation and shear for `ray`.
-    #[inline]
+    #[inline(always)]
     pub fn new(ray: &Ray) -> RayPrecomp {
         let d = ray.d.to_array();
         let a = ray.d.abs();
