@@ -12,6 +12,12 @@
 //! probability proportional to its importance; the pmf of a light is the product of the choices
 //! on its path (recorded as a bit trail, so [`LightBvh::pmf`] retraces it for MIS).
 //!
+//! The binary tree the build makes is walked two levels at a time: each node of the walked tree
+//! holds a binary node's two children and their (up to four) children, and evaluates the six
+//! importances in two SSE evaluations side by side before making the two binary choices, so
+//! that the second level's square roots and divisions do not wait for the first choice. The
+//! probabilities are the binary walk's to the last bit (tested against it).
+//!
 //! Lights at infinity (environments, directional light) have no bounds: they are chosen apart,
 //! each with probability `1 / (n_infinite + 1)`, and the BVH gets the remaining `1 / (n + 1)`
 //! (as in pbrt-v4). Lights of zero power are never chosen.
@@ -22,7 +28,7 @@
 
 use super::Light;
 use crate::geometry::Geometry;
-use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, PI};
+use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, Vec4, PI};
 
 /// Spatial and directional bounds of a set of emitters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,9 +158,8 @@ impl NodeBounds {
         }
     }
 
-    /// See [`LightBounds::importance`]. Inlined, so that the two children's evaluations in
-    /// [`LightBvh::sample`] interleave.
-    #[inline(always)]
+    /// See [`LightBounds::importance`]; [`WideBounds::importance`] is the same for four at once.
+    #[inline]
     fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
         #[inline(always)]
@@ -210,6 +215,99 @@ impl NodeBounds {
     }
 }
 
+/// Lanes of one SSE evaluation of importances.
+const WIDTH: usize = 4;
+
+/// The [`NodeBounds`] of up to four nodes, lane `k` for node `k`, so that one SSE evaluation
+/// gives all their importances (the same operations in the same order as
+/// [`NodeBounds::importance`], lane by lane: the same bits). Unused lanes have importance 0.
+#[derive(Clone, Copy, Debug)]
+struct WideBounds {
+    center: [Vec4; 3],
+    radius: Vec4,
+    w: [Vec4; 3],
+    phi: Vec4,
+    cos_theta_o: Vec4,
+    sin_theta_o: Vec4,
+    cos_theta_e: Vec4,
+}
+
+/// Lane-wise square root (exact, as the scalar one).
+#[inline(always)]
+fn sqrt4(x: Vec4) -> Vec4 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        // SAFETY: SSE is part of x86_64.
+        Vec4::from(unsafe { std::arch::x86_64::_mm_sqrt_ps(x.into()) })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        Vec4::new(x.x.sqrt(), x.y.sqrt(), x.z.sqrt(), x.w.sqrt())
+    }
+}
+
+/// `safe_sqrt` lane by lane (`max` returns its second operand for a NaN lane, as `f32::max`
+/// returns the number).
+#[inline(always)]
+fn safe_sqrt4(x: Vec4) -> Vec4 {
+    sqrt4(x.max(Vec4::ZERO))
+}
+
+impl WideBounds {
+    /// Lanes for `children` (at most [`WIDTH`]); lanes of `None` or beyond can never be chosen
+    /// (their emission spread `cos θ_e = 2` puts every point outside it).
+    fn new(children: &[Option<NodeBounds>]) -> WideBounds {
+        let lane = |f: &dyn Fn(&NodeBounds) -> f32, unused: f32| {
+            Vec4::from_array(std::array::from_fn(|k| children.get(k).copied().flatten().as_ref().map_or(unused, f)))
+        };
+        WideBounds {
+            center: [lane(&|b| b.center.x, 0.0), lane(&|b| b.center.y, 0.0), lane(&|b| b.center.z, 0.0)],
+            radius: lane(&|b| b.radius, 1.0),
+            w: [lane(&|b| b.w.x, 0.0), lane(&|b| b.w.y, 0.0), lane(&|b| b.w.z, 1.0)],
+            phi: lane(&|b| b.phi, 0.0),
+            cos_theta_o: lane(&|b| b.cos_theta_o, 1.0),
+            sin_theta_o: lane(&|b| b.sin_theta_o, 0.0),
+            cos_theta_e: lane(&|b| b.cos_theta_e, 2.0),
+        }
+    }
+
+    /// [`NodeBounds::importance`] of each child at `p` with unit normal `n` (zero in a medium).
+    #[inline(always)]
+    fn importance(&self, p: Vec3, n: Vec3) -> [f32; WIDTH] {
+        // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
+        #[inline(always)]
+        fn cos_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
+            Vec4::select(cos_a.cmpgt(cos_b), Vec4::ONE, cos_a * cos_b + sin_a * sin_b)
+        }
+        #[inline(always)]
+        fn sin_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
+            Vec4::select(cos_a.cmpgt(cos_b), Vec4::ZERO, sin_a * cos_b - cos_a * sin_b)
+        }
+        let d =
+            [Vec4::splat(p.x) - self.center[0], Vec4::splat(p.y) - self.center[1], Vec4::splat(p.z) - self.center[2]];
+        let dist2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        let d2 = dist2.max(self.radius);
+        let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), Vec4::ONE / sqrt4(dist2), Vec4::ZERO);
+        let wi = [d[0] * inv_dist, d[1] * inv_dist, d[2] * inv_dist];
+        let cos_w = self.w[0] * wi[0] + self.w[1] * wi[1] + self.w[2] * wi[2];
+        let sin_w = safe_sqrt4(Vec4::ONE - cos_w * cos_w);
+        let inside = dist2.cmple(self.radius * self.radius);
+        let sin_b_out = (self.radius * inv_dist).min(Vec4::ONE);
+        let sin_b = Vec4::select(inside, Vec4::ZERO, sin_b_out);
+        let cos_b = Vec4::select(inside, Vec4::NEG_ONE, safe_sqrt4(Vec4::ONE - sin_b_out * sin_b_out));
+        let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
+        let mut importance = self.phi * cos_p / d2;
+        if n != Vec3::ZERO {
+            let cos_i = (wi[0] * n.x + wi[1] * n.y + wi[2] * n.z).abs();
+            let sin_i = safe_sqrt4(Vec4::ONE - cos_i * cos_i);
+            importance *= cos_sub(sin_i, cos_i, sin_b, cos_b);
+        }
+        Vec4::select(cos_p.cmplt(self.cos_theta_e), Vec4::ZERO, importance.max(Vec4::ZERO)).to_array()
+    }
+}
+
 /// Buckets per axis of the light BVH's split search.
 const BUCKETS: usize = 12;
 
@@ -219,20 +317,42 @@ fn bucket(b: &LightBounds, axis: usize, lo: f32, hi: f32) -> usize {
     (((b.bounds.centroid()[axis] - lo) / (hi - lo) * BUCKETS as f32) as usize).min(BUCKETS - 1)
 }
 
-/// A node: its bounds, and either its second child (the first follows it) or its light.
+/// A node of the binary tree the build makes (then collapsed into [`WideNode`]s): its bounds,
+/// and either its second child (the first follows it) or its light.
 #[derive(Clone, Copy, Debug)]
-struct Node {
-    bounds: NodeBounds,
+struct BinaryNode {
+    bounds: LightBounds,
     /// Second child's index (interior) or the light's index (leaf).
     child_or_light: u32,
     leaf: bool,
 }
 
+/// Two levels of the binary tree as sampling walks them: a binary node's two children (lanes 0
+/// and 1 of `children`) and, for each child that is not a light, its two children (lanes `2k`
+/// and `2k + 1` of `grandchildren` for child `k`). Both sets of importances are evaluated at once
+/// (two SSE evaluations side by side), then the two binary choices are made from them as the
+/// binary walk makes them, so that the walk is half as deep and gives the binary tree's
+/// probabilities to the last bit.
+#[derive(Clone, Copy, Debug)]
+struct WideNode {
+    children: WideBounds,
+    grandchildren: WideBounds,
+    /// Child `k`'s light, where bit `k` of `lights` is set (else its children are below).
+    child: [u32; 2],
+    /// Grandchild `j`: a node's index, or a light's index where bit `2 + j` of `lights` is set.
+    grandchild: [u32; 4],
+    /// Which children (bits 0, 1) and grandchildren (bits 2 to 5) are lights.
+    lights: u8,
+}
+
 /// The light BVH over a scene's bounded lights, with the scene's lights at infinity beside it.
 #[derive(Clone, Debug)]
 pub struct LightBvh {
-    nodes: Vec<Node>,
-    /// Per light: its path from the root (bit k set: the second child at depth k), or
+    /// The tree (root first); empty when it holds fewer than two lights.
+    nodes: Vec<WideNode>,
+    /// The one bounded light, when there is exactly one (no tree to walk).
+    lone: Option<u32>,
+    /// Per light: its path from the root (two bits per level: the child taken), or
     /// `NOT_IN_TREE`.
     trails: Vec<u64>,
     /// Lights at infinity, chosen apart.
@@ -247,7 +367,8 @@ pub struct LightBvh {
 /// Trail of a light that the tree does not hold.
 const NOT_IN_TREE: u64 = u64::MAX;
 
-/// Deepest path a trail can record (the build falls back to median splits below it).
+/// Deepest path of the binary build (the build falls back to median splits below it): its
+/// collapse into wide nodes is at most 31 levels deep, whose trails fit in 62 bits.
 const MAX_DEPTH: u32 = 62;
 
 impl LightBvh {
@@ -269,104 +390,81 @@ impl LightBvh {
         }
         let mut bvh = LightBvh {
             nodes: Vec::new(),
+            lone: None,
             trails: vec![NOT_IN_TREE; lights.len()],
             infinite,
             is_infinite,
             p_infinite: 0.0,
         };
-        if !items.is_empty() {
-            let n = items.len();
-            bvh.build(&mut items, 0, n, 0, 0);
+        match items.len() {
+            0 => {}
+            1 => {
+                bvh.lone = Some(items[0].0);
+                bvh.trails[items[0].0 as usize] = 0;
+            }
+            n => {
+                let mut binary = Vec::with_capacity(2 * n - 1);
+                build(&mut binary, &mut items, 0, n, 0);
+                bvh.collapse(&binary, 0, 0, 0);
+            }
         }
-        let (n_inf, tree) = (bvh.infinite.len() as u32, u32::from(!bvh.nodes.is_empty()));
+        let (n_inf, tree) = (bvh.infinite.len() as u32, u32::from(!bvh.nodes.is_empty() || bvh.lone.is_some()));
         bvh.p_infinite = if n_inf + tree == 0 { 0.0 } else { n_inf as f32 / (n_inf + tree) as f32 };
         bvh
     }
 
-    /// Number of tree nodes.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
+    /// Writes the wide node of binary interior node `b` (and its subtree) at binary depth
+    /// `depth` with path `trail` (bit `k` set: the second child at depth `k`); returns its index.
+    fn collapse(&mut self, binary: &[BinaryNode], b: usize, trail: u64, depth: u32) -> u32 {
+        let second = |c: usize| binary[c].child_or_light as usize;
+        let children = [b + 1, second(b)];
+        let mut grandchildren = [None; 4];
+        for (k, &c) in children.iter().enumerate() {
+            if !binary[c].leaf {
+                (grandchildren[2 * k], grandchildren[2 * k + 1]) = (Some(c + 1), Some(second(c)));
+            }
+        }
+        let lanes = |nodes: &[Option<usize>]| {
+            let bounds: Vec<Option<NodeBounds>> =
+                nodes.iter().map(|c| c.map(|c| NodeBounds::new(&binary[c].bounds))).collect();
+            WideBounds::new(&bounds)
+        };
+        let index = self.nodes.len();
+        self.nodes.push(WideNode {
+            children: lanes(&children.map(Some)),
+            grandchildren: lanes(&grandchildren),
+            child: [0; 2],
+            grandchild: [0; 4],
+            lights: 0,
+        });
+        for (k, &c) in children.iter().enumerate() {
+            let trail = trail | (k as u64) << depth;
+            if binary[c].leaf {
+                let light = binary[c].child_or_light;
+                self.trails[light as usize] = trail;
+                self.nodes[index].child[k] = light;
+                self.nodes[index].lights |= 1 << k;
+                continue;
+            }
+            for j in 0..2 {
+                let g = grandchildren[2 * k + j].expect("an interior child has two children");
+                let trail = trail | (j as u64) << (depth + 1);
+                let reference = if binary[g].leaf {
+                    self.nodes[index].lights |= 1 << (2 + 2 * k + j);
+                    self.trails[binary[g].child_or_light as usize] = trail;
+                    binary[g].child_or_light
+                } else {
+                    self.collapse(binary, g, trail, depth + 2)
+                };
+                self.nodes[index].grandchild[2 * k + j] = reference;
+            }
+        }
+        index as u32
     }
 
-    /// Builds the subtree of `items[start..end]` at `depth` with path `trail`; returns its bounds.
-    fn build(
-        &mut self,
-        items: &mut [(u32, LightBounds)],
-        start: usize,
-        end: usize,
-        trail: u64,
-        depth: u32,
-    ) -> LightBounds {
-        if end - start == 1 {
-            let (light, b) = items[start];
-            self.nodes.push(Node { bounds: NodeBounds::new(&b), child_or_light: light, leaf: true });
-            self.trails[light as usize] = trail;
-            return b;
-        }
-        let mut bounds = Bounds3::EMPTY;
-        let mut centroids = Bounds3::EMPTY;
-        for (_, b) in &items[start..end] {
-            bounds = bounds.union(&b.bounds);
-            centroids = centroids.union_point(b.bounds.centroid());
-        }
-        let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
-        if depth < MAX_DEPTH {
-            for axis in 0..3 {
-                let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
-                if hi <= lo {
-                    continue;
-                }
-                let bucket_of = |b: &LightBounds| bucket(b, axis, lo, hi);
-                let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
-                for (_, b) in &items[start..end] {
-                    let k = bucket_of(b);
-                    buckets[k] = Some(match buckets[k] {
-                        Some(acc) => LightBounds::union(&acc, b),
-                        None => *b,
-                    });
-                }
-                let merge = |range: &[Option<LightBounds>]| {
-                    range
-                        .iter()
-                        .flatten()
-                        .fold(None, |acc: Option<LightBounds>, b| Some(acc.map_or(*b, |a| LightBounds::union(&a, b))))
-                };
-                for split in 0..BUCKETS - 1 {
-                    let (Some(b0), Some(b1)) = (merge(&buckets[..=split]), merge(&buckets[split + 1..])) else {
-                        continue;
-                    };
-                    let cost = b0.cost(&bounds, axis) + b1.cost(&bounds, axis);
-                    if cost.is_finite() && best.is_none_or(|(c, _, _)| cost < c) {
-                        best = Some((cost, axis, split));
-                    }
-                }
-            }
-        }
-        let mut mid = (start + end) / 2;
-        if let Some((_, axis, split)) = best {
-            let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
-            let slice = &mut items[start..end];
-            let mut k = 0;
-            for i in 0..slice.len() {
-                let b = bucket(&slice[i].1, axis, lo, hi);
-                if b <= split {
-                    slice.swap(i, k);
-                    k += 1;
-                }
-            }
-            if k > 0 && k < slice.len() {
-                mid = start + k;
-            }
-        }
-        let index = self.nodes.len();
-        // Placeholder; filled in once both children are built.
-        self.nodes.push(Node { bounds: NodeBounds::new(&items[start].1), child_or_light: 0, leaf: false });
-        let b0 = self.build(items, start, mid, trail, depth + 1);
-        let second = self.nodes.len() as u32;
-        let b1 = self.build(items, mid, end, trail | (1u64 << depth), depth + 1);
-        let b = LightBounds::union(&b0, &b1);
-        self.nodes[index] = Node { bounds: NodeBounds::new(&b), child_or_light: second, leaf: false };
-        b
+    /// Number of (wide) tree nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
     }
 
     /// Chooses a light for shading point `p` with unit normal `n` (zero in a medium): the
@@ -378,6 +476,11 @@ impl LightBvh {
             let k = ((u / p_inf * self.infinite.len() as f32) as usize).min(self.infinite.len() - 1);
             return Some((self.infinite[k], p_inf / self.infinite.len() as f32));
         }
+        if let Some(light) = self.lone {
+            // A lone light is returned without testing it: its pmf is the same everywhere, and
+            // where it cannot reach, its sample_li or the BSDF gives nothing.
+            return Some((light, 1.0 - p_inf));
+        }
         if self.nodes.is_empty() {
             return None;
         }
@@ -386,38 +489,21 @@ impl LightBvh {
         // importances by multiplication, so the divisions that give p0 and the interval run
         // beside the next node's importances instead of before them (u is not rescaled, which
         // would put two divisions per level on the chain of dependent operations).
-        let (mut lo, mut hi) = (p_inf, 1.0f32);
-        let mut pmf = 1.0 - p_inf;
+        let mut walk = Walk { lo: p_inf, hi: 1.0, pmf: 1.0 - p_inf };
         let mut index = 0usize;
         loop {
             let node = &self.nodes[index];
-            if node.leaf {
-                // A leaf reached through a split has positive importance. A lone light (the
-                // root) is returned without testing it: its pmf is the same everywhere, and
-                // where it cannot reach, its sample_li or the BSDF gives nothing.
-                return Some((node.child_or_light, pmf));
+            // Both levels' importances at once: the second does not wait for the first choice.
+            let (ic, ig) = (node.children.importance(p, n), node.grandchildren.importance(p, n));
+            let k = walk.choose(u, ic[0], ic[1])?;
+            if node.lights >> k & 1 == 1 {
+                return Some((node.child[k], walk.pmf));
             }
-            let (c0, c1) = (index + 1, node.child_or_light as usize);
-            let i0 = self.nodes[c0].bounds.importance(p, n);
-            let i1 = self.nodes[c1].bounds.importance(p, n);
-            if i0 == 0.0 && i1 == 0.0 {
-                return None;
+            let g = 2 * k + walk.choose(u, ig[2 * k], ig[2 * k + 1])?;
+            if node.lights >> (2 + g) & 1 == 1 {
+                return Some((node.grandchild[g], walk.pmf));
             }
-            let total = i0 + i1;
-            // The same p0 as `pmf` computes, so that the two agree to the last bit.
-            let p0 = i0 / total;
-            let split = lo + (hi - lo) * p0;
-            // First child: u in the first i0 / total of [lo, hi); a zero-importance child is
-            // never chosen.
-            if i1 == 0.0 || (i0 > 0.0 && (u - lo) * total < (hi - lo) * i0) {
-                hi = split.max(lo);
-                pmf *= p0;
-                index = c0;
-            } else {
-                lo = split.min(hi);
-                pmf *= 1.0 - p0;
-                index = c1;
-            }
+            index = node.grandchild[g] as usize;
         }
     }
 
@@ -432,28 +518,156 @@ impl LightBvh {
         if trail == NOT_IN_TREE {
             return 0.0;
         }
+        if self.lone.is_some() {
+            return 1.0 - p_inf;
+        }
         let mut trail = trail;
         let mut pmf = 1.0 - p_inf;
         let mut index = 0usize;
         loop {
             let node = &self.nodes[index];
-            if node.leaf {
+            let (ic, ig) = (node.children.importance(p, n), node.grandchildren.importance(p, n));
+            let Some(k) = follow(&mut pmf, &mut trail, ic[0], ic[1]) else { return 0.0 };
+            if node.lights >> k & 1 == 1 {
                 return pmf;
             }
-            let (c0, c1) = (index + 1, node.child_or_light as usize);
-            let i0 = self.nodes[c0].bounds.importance(p, n);
-            let i1 = self.nodes[c1].bounds.importance(p, n);
-            if i0 == 0.0 && i1 == 0.0 {
-                return 0.0;
+            let Some(j) = follow(&mut pmf, &mut trail, ig[2 * k], ig[2 * k + 1]) else { return 0.0 };
+            let g = 2 * k + j;
+            if node.lights >> (2 + g) & 1 == 1 {
+                return pmf;
             }
-            // The same arithmetic as `sample`, so that the two agree to the last bit.
-            let p0 = i0 / (i0 + i1);
-            let second = trail & 1 == 1;
-            pmf *= if second { 1.0 - p0 } else { p0 };
-            index = if second { c1 } else { c0 };
-            trail >>= 1;
+            index = node.grandchild[g] as usize;
         }
     }
+}
+
+/// The state of [`LightBvh::sample`]'s walk: the interval `[lo, hi)` of `[0, 1)` that the
+/// node reached covers, and the probability of reaching it.
+struct Walk {
+    lo: f32,
+    hi: f32,
+    pmf: f32,
+}
+
+impl Walk {
+    /// One binary choice between importances `i0` and `i1` for `u`: 1 if the second is taken,
+    /// `None` where neither can be.
+    #[inline(always)]
+    fn choose(&mut self, u: f32, i0: f32, i1: f32) -> Option<usize> {
+        if i0 == 0.0 && i1 == 0.0 {
+            return None;
+        }
+        let total = i0 + i1;
+        // The same p0 as `pmf` computes, so that the two agree to the last bit.
+        let p0 = i0 / total;
+        let split = self.lo + (self.hi - self.lo) * p0;
+        // First child: u in the first i0 / total of [lo, hi); a zero-importance child is never
+        // chosen.
+        if i1 == 0.0 || (i0 > 0.0 && (u - self.lo) * total < (self.hi - self.lo) * i0) {
+            self.hi = split.max(self.lo);
+            self.pmf *= p0;
+            Some(0)
+        } else {
+            self.lo = split.min(self.hi);
+            self.pmf *= 1.0 - p0;
+            Some(1)
+        }
+    }
+}
+
+/// [`Walk::choose`] retraced for [`LightBvh::pmf`]: the child that bit 0 of `trail` names
+/// (shifted out), its probability multiplied into `pmf`; `None` where neither can be chosen.
+#[inline(always)]
+fn follow(pmf: &mut f32, trail: &mut u64, i0: f32, i1: f32) -> Option<usize> {
+    if i0 == 0.0 && i1 == 0.0 {
+        return None;
+    }
+    // The same arithmetic as `sample`, so that the two agree to the last bit.
+    let p0 = i0 / (i0 + i1);
+    let second = (*trail & 1) as usize;
+    *pmf *= if second == 1 { 1.0 - p0 } else { p0 };
+    *trail >>= 1;
+    Some(second)
+}
+
+/// Builds the binary subtree of `items[start..end]` at `depth` into `nodes` (its root first, each
+/// interior node's first child after it); returns its bounds.
+fn build(
+    nodes: &mut Vec<BinaryNode>,
+    items: &mut [(u32, LightBounds)],
+    start: usize,
+    end: usize,
+    depth: u32,
+) -> LightBounds {
+    if end - start == 1 {
+        let (light, bounds) = items[start];
+        nodes.push(BinaryNode { bounds, child_or_light: light, leaf: true });
+        return bounds;
+    }
+    let mut bounds = Bounds3::EMPTY;
+    let mut centroids = Bounds3::EMPTY;
+    for (_, b) in &items[start..end] {
+        bounds = bounds.union(&b.bounds);
+        centroids = centroids.union_point(b.bounds.centroid());
+    }
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
+    if depth < MAX_DEPTH {
+        for axis in 0..3 {
+            let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
+            if hi <= lo {
+                continue;
+            }
+            let bucket_of = |b: &LightBounds| bucket(b, axis, lo, hi);
+            let mut buckets: [Option<LightBounds>; BUCKETS] = [None; BUCKETS];
+            for (_, b) in &items[start..end] {
+                let k = bucket_of(b);
+                buckets[k] = Some(match buckets[k] {
+                    Some(acc) => LightBounds::union(&acc, b),
+                    None => *b,
+                });
+            }
+            let merge = |range: &[Option<LightBounds>]| {
+                range
+                    .iter()
+                    .flatten()
+                    .fold(None, |acc: Option<LightBounds>, b| Some(acc.map_or(*b, |a| LightBounds::union(&a, b))))
+            };
+            for split in 0..BUCKETS - 1 {
+                let (Some(b0), Some(b1)) = (merge(&buckets[..=split]), merge(&buckets[split + 1..])) else {
+                    continue;
+                };
+                let cost = b0.cost(&bounds, axis) + b1.cost(&bounds, axis);
+                if cost.is_finite() && best.is_none_or(|(c, _, _)| cost < c) {
+                    best = Some((cost, axis, split));
+                }
+            }
+        }
+    }
+    let mut mid = (start + end) / 2;
+    if let Some((_, axis, split)) = best {
+        let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
+        let slice = &mut items[start..end];
+        let mut k = 0;
+        for i in 0..slice.len() {
+            let b = bucket(&slice[i].1, axis, lo, hi);
+            if b <= split {
+                slice.swap(i, k);
+                k += 1;
+            }
+        }
+        if k > 0 && k < slice.len() {
+            mid = start + k;
+        }
+    }
+    let index = nodes.len();
+    // Placeholder; filled in once both children are built.
+    nodes.push(BinaryNode { bounds: items[start].1, child_or_light: 0, leaf: false });
+    let b0 = build(nodes, items, start, mid, depth + 1);
+    let second = nodes.len() as u32;
+    let b1 = build(nodes, items, mid, end, depth + 1);
+    let bounds = LightBounds::union(&b0, &b1);
+    nodes[index] = BinaryNode { bounds, child_or_light: second, leaf: false };
+    bounds
 }
 
 #[cfg(test)]
@@ -530,6 +744,94 @@ mod tests {
         (lights, shapes)
     }
 
+    /// The reference: pbrt-v4's walk of the binary tree that [`LightBvh::new`] builds, one
+    /// scalar importance at a time. Returns the binary tree's nodes and, per light, the pmf at
+    /// `(p, n)` computed root to leaf with the same arithmetic as the walk.
+    fn binary_reference(lights: &[Light], shapes: &[Geometry]) -> (Vec<BinaryNode>, f32) {
+        let bvh = LightBvh::new(lights, shapes);
+        let mut items: Vec<(u32, LightBounds)> = (0..lights.len() as u32)
+            .filter(|&i| !bvh.is_infinite[i as usize])
+            .filter_map(|i| Some((i, LightBounds::of(&lights[i as usize], shapes)?)))
+            .collect();
+        let mut nodes = Vec::new();
+        let n = items.len();
+        build(&mut nodes, &mut items, 0, n, 0);
+        (nodes, bvh.p_infinite)
+    }
+
+    /// [`LightBvh::sample`] by the reference's binary walk.
+    fn sample_binary(nodes: &[BinaryNode], p_inf: f32, p: Vec3, n: Vec3, u: f32) -> Option<(u32, f32)> {
+        let mut walk = Walk { lo: p_inf, hi: 1.0, pmf: 1.0 - p_inf };
+        let mut index = 0;
+        while !nodes[index].leaf {
+            let (c0, c1) = (index + 1, nodes[index].child_or_light as usize);
+            let second = walk.choose(u, nodes[c0].bounds.importance(p, n), nodes[c1].bounds.importance(p, n))?;
+            index = if second == 1 { c1 } else { c0 };
+        }
+        Some((nodes[index].child_or_light, walk.pmf))
+    }
+
+    /// [`LightBvh::pmf`] of every light by the reference's binary walk (0 for lights it does
+    /// not hold).
+    fn pmf_binary(nodes: &[BinaryNode], p_inf: f32, p: Vec3, n: Vec3, count: usize) -> Vec<f32> {
+        let mut out = vec![0.0; count];
+        let mut stack = vec![(0usize, 1.0 - p_inf)];
+        while let Some((index, pmf)) = stack.pop() {
+            if nodes[index].leaf {
+                out[nodes[index].child_or_light as usize] = pmf;
+                continue;
+            }
+            let (c0, c1) = (index + 1, nodes[index].child_or_light as usize);
+            let (i0, i1) = (nodes[c0].bounds.importance(p, n), nodes[c1].bounds.importance(p, n));
+            if i0 == 0.0 && i1 == 0.0 {
+                continue;
+            }
+            let p0 = i0 / (i0 + i1);
+            stack.extend([(c0, pmf * p0), (c1, pmf * (1.0 - p0))]);
+        }
+        out
+    }
+
+    /// The wide walk is the binary walk: the same light and probability for every `u`, and the
+    /// same pmf for every light, bit for bit, at points near and far, with and without a normal,
+    /// for trees of two to fifty lights (odd and even levels end in lights).
+    #[test]
+    fn wide_walk_is_the_binary_walk() {
+        let (all, shapes) = many_lights(4);
+        let mut rng = Pcg32::new(11, 5);
+        let mut chosen = 0;
+        for count in [2, 3, 4, 5, 7, 12, all.len()] {
+            let lights = &all[all.len() - count..];
+            let bvh = LightBvh::new(lights, &shapes);
+            let (nodes, p_inf) = binary_reference(lights, &shapes);
+            let mut contexts = contexts();
+            contexts.extend((0..20).map(|_| {
+                let p = Vec3::new(12.0 * rng.next_f32() - 6.0, 6.0 * rng.next_f32() - 1.0, 12.0 * rng.next_f32() - 6.0);
+                (p, if rng.next_f32() < 0.2 { Vec3::ZERO } else { sample_uniform_sphere(u2(&mut rng)).value })
+            }));
+            for (p, n) in contexts {
+                let pmf = pmf_binary(&nodes, p_inf, p, n, lights.len());
+                for (i, &expected) in pmf.iter().enumerate() {
+                    if !bvh.is_infinite[i] {
+                        assert_eq!(bvh.pmf(p, n, i as u32).to_bits(), expected.to_bits(), "{count} lights: light {i}");
+                    }
+                }
+                for k in 0..200 {
+                    let u = p_inf + (1.0 - p_inf) * (k as f32 + rng.next_f32()) / 200.0;
+                    let got = bvh.sample(p, n, u.min(1.0 - f32::EPSILON / 2.0));
+                    let expected = sample_binary(&nodes, p_inf, p, n, u.min(1.0 - f32::EPSILON / 2.0));
+                    assert_eq!(
+                        got.map(|(i, q)| (i, q.to_bits())),
+                        expected.map(|(i, q)| (i, q.to_bits())),
+                        "{count} lights"
+                    );
+                    chosen += usize::from(got.is_some());
+                }
+            }
+        }
+        assert!(chosen > 20_000, "{chosen} lights chosen");
+    }
+
     fn contexts() -> Vec<(Vec3, Vec3)> {
         let mut rng = Pcg32::new(3, 3);
         let mut out = vec![(Vec3::new(0.3, -0.2, 0.1), Vec3::Y), (Vec3::new(2.0, 1.0, 0.5), Vec3::ZERO)];
@@ -547,7 +849,6 @@ mod tests {
     fn selection_follows_the_pmf() {
         let (lights, shapes) = many_lights(1);
         let bvh = LightBvh::new(&lights, &shapes);
-        assert!(bvh.node_count() == 2 * (lights.len() - 1) - 1, "one leaf per bounded light");
         for (k, &(p, n)) in contexts().iter().enumerate() {
             // Below 1 where a node's bound is positive but both children's are zero: then no
             // light is chosen (pbrt-v4 likewise), which the χ² test's extra cell checks.
@@ -566,6 +867,31 @@ mod tests {
             );
             assert!(out.passed(), "context {k}: {out}");
         }
+    }
+
+    /// Four importances at once are the scalar ones, bit for bit, at points far, near and inside
+    /// the bounds, with and without a normal; unused lanes are zero.
+    #[test]
+    fn wide_importance_is_the_scalar_one() {
+        let (lights, shapes) = many_lights(3);
+        let bounds: Vec<LightBounds> = lights.iter().filter_map(|l| LightBounds::of(l, &shapes)).collect();
+        let mut rng = Pcg32::new(5, 2);
+        let mut positive = 0;
+        for chunk in bounds.chunks(3) {
+            let wide = WideBounds::new(&chunk.iter().map(|b| Some(NodeBounds::new(b))).collect::<Vec<_>>());
+            for _ in 0..2000 {
+                let scale = [0.1, 1.0, 10.0][rng.next_u32() as usize % 3];
+                let p = chunk[0].bounds.centroid() + scale * sample_uniform_sphere(u2(&mut rng)).value;
+                let n = if rng.next_f32() < 0.2 { Vec3::ZERO } else { sample_uniform_sphere(u2(&mut rng)).value };
+                let got = wide.importance(p, n);
+                for (k, b) in chunk.iter().enumerate() {
+                    assert_eq!(got[k].to_bits(), b.importance(p, n).to_bits(), "lane {k} at {p}, n {n}");
+                    positive += usize::from(got[k] > 0.0);
+                }
+                assert!(got[chunk.len()..].iter().all(|&i| i == 0.0));
+            }
+        }
+        assert!(positive > 10_000, "{positive} positive importances");
     }
 
     /// With two lights the tree is one split, and the pmf is the ratio of importances, computed
