@@ -94,7 +94,8 @@ pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<T
         return None;
     }
     let det = e0 + e1 + e2;
-    if det == 0.0 {
+    // Zero (degenerate or edge-on), or NaN (a non-finite vertex): no hit, as the SIMD tests.
+    if det == 0.0 || det.is_nan() {
         return None;
     }
     let t_scaled = e0 * z0 + e1 * z1 + e2 * z2;
@@ -106,8 +107,10 @@ pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<T
     }
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
-    // Conservative check that t is really positive (pbrt-v4 §6.8.7).
-    if t <= t_error_bound([p0x, p1x, p2x], [p0y, p1y, p2y], [z0, z1, z2], [e0, e1, e2], inv_det) {
+    // Conservative check that t is really positive (pbrt-v4 §6.8.7), and finite (an infinite
+    // vertex can make it NaN or infinite: no hit, as the SIMD tests).
+    let bound = t_error_bound([p0x, p1x, p2x], [p0y, p1y, p2y], [z0, z1, z2], [e0, e1, e2], inv_det);
+    if !(t > bound && t < f32::INFINITY) {
         return None;
     }
     Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
@@ -197,6 +200,35 @@ mod tests {
         // Both windings hit.
         let flipped = [tri[0], tri[2], tri[1]];
         assert!(intersect_triangle(&RayPrecomp::new(&ray), &flipped, f32::INFINITY).is_some());
+    }
+
+    /// A vertex with a NaN or infinite coordinate gives no hit (never a hit at a NaN distance),
+    /// for a ray through the triangle's finite part and one through its middle.
+    #[test]
+    fn non_finite_vertices_give_no_hit() {
+        let finite = [Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)];
+        let rays =
+            [Ray::new(Vec3::ZERO, Vec3::Z), Ray::new(Vec3::new(0.1, -0.5, 0.0), Vec3::new(0.0, 0.1, 1.0).normalize())];
+        for ray in rays {
+            let pre = RayPrecomp::new(&ray);
+            assert!(intersect_triangle(&pre, &finite, f32::INFINITY).is_some());
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                for vertex in 0..3 {
+                    for axis in 0..3 {
+                        let mut tri = finite;
+                        tri[vertex][axis] = bad;
+                        let hit = intersect_triangle(&pre, &tri, f32::INFINITY);
+                        assert!(hit.is_none_or(|h| h.t.is_finite() && h.t > 0.0), "{tri:?}: {hit:?}");
+                        // The SIMD block tests (four lanes, and eight where the CPU has AVX) agree.
+                        let block = crate::geometry::triangle8::Triangle8::new(&[(tri, 0)]);
+                        for avx in [None, crate::math::simd::Avx::detect()] {
+                            let simd = block.intersect_with(avx, &pre, f32::INFINITY).map(|(_, h)| h);
+                            assert_eq!(simd, hit, "{tri:?}, AVX {}", avx.is_some());
+                        }
+                    }
+                }
+            }
+        }
     }
 
     #[test]
