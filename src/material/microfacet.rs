@@ -18,7 +18,7 @@
 //!   equivalent roughness `α = √(2/(n+2))` (Walter et al. 2007). It samples `D(m) cos θ_m`, not
 //!   the visible normals.
 
-use crate::math::special::{erf, erfinv};
+use crate::math::special::{erf, erfinv, exp};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{safe_sqrt, Rgb, Vec2, Vec3, INV_PI, PI};
 use crate::props::{Obj, Result as PropResult};
@@ -89,7 +89,7 @@ impl Microfacet {
             }
             MicrofacetType::Beckmann => {
                 let e = ((m.x / au).powi(2) + (m.y / av).powi(2)) / cos2;
-                (-e).exp() / (PI * au * av * cos2 * cos2)
+                exp(-e) / (PI * au * av * cos2 * cos2)
             }
             MicrofacetType::BlinnPhong(n) => (n + 2.0) * 0.5 * INV_PI * m.z.powf(n),
         };
@@ -112,7 +112,7 @@ impl Microfacet {
             MicrofacetType::Ggx => 0.5 * (-1.0 + (1.0 + tan2_alpha2).sqrt()),
             MicrofacetType::Beckmann | MicrofacetType::BlinnPhong(_) => {
                 let a = 1.0 / tan2_alpha2.sqrt();
-                0.5 * (erf(a) - 1.0) + (-a * a).exp() * INV_SQRT_PI / (2.0 * a)
+                0.5 * (erf(a) - 1.0) + exp(-a * a) * INV_SQRT_PI / (2.0 * a)
             }
         }
     }
@@ -213,13 +213,13 @@ fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
     let theta_i = cos_theta_i.acos();
     let fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i));
     let mut b = c - (1.0 + c) * (1.0 - sample_x).powf(fit);
-    let normalization = 1.0 / (1.0 + c + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
+    let normalization = 1.0 / (1.0 + c + INV_SQRT_PI * tan_theta_i * exp(-cot_theta_i * cot_theta_i));
     for _ in 0..20 {
         if !(b >= a && b <= c) {
             b = 0.5 * (a + c);
         }
         let inv_erf = erfinv(b);
-        let value = normalization * (1.0 + b + INV_SQRT_PI * tan_theta_i * (-inv_erf * inv_erf).exp()) - sample_x;
+        let value = normalization * (1.0 + b + INV_SQRT_PI * tan_theta_i * exp(-inv_erf * inv_erf)) - sample_x;
         let derivative = normalization * (1.0 - inv_erf * tan_theta_i);
         if value.abs() < 1e-6 {
             // Converged at b, whose inverse is at hand.

@@ -1,5 +1,6 @@
 //! Special functions: the error function and its inverse (single precision), used by the
-//! Beckmann microfacet distribution.
+//! Beckmann microfacet distribution, and an exponential without the C library's slow path for
+//! underflow.
 
 /// The error function `erf(x) = 2/√π ∫₀ˣ e^(-t²) dt`, from the Chebyshev-fitted complementary
 /// error function of Numerical Recipes (relative error < 1.2·10⁻⁷): the polynomial and the
@@ -16,9 +17,26 @@ pub fn erf(x: f32) -> f32 {
                     + t * (-0.186_288_06
                         + t * (0.278_868_07
                             + t * (-1.135_203_98 + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let erfc = t * (poly as f32).exp() as f64;
+    let erfc = t * exp(poly as f32) as f64;
     let r = 1.0 - erfc;
     (if x >= 0.0 { r } else { -r }) as f32
+}
+
+/// Below this, `eˣ` in single precision is +0: glibc's `expf` threshold `-0x1.9fe368p6`
+/// (`e^x` under half the least subnormal, rounded to zero).
+const EXP_UNDERFLOW: f32 = f32::from_bits(0xc2cf_f1b4);
+
+/// `eˣ` as [`f32::exp`] computes it, returning +0 directly where the result underflows: the C
+/// library's `expf` takes an error path there (it sets `errno`), which costs as much as many
+/// ordinary calls. Microfacet distributions, Smith masking and `erf` take exponentials of large
+/// negative arguments all the time (smooth surfaces: `e^(-1/α²…)`).
+#[inline]
+pub fn exp(x: f32) -> f32 {
+    if x < EXP_UNDERFLOW {
+        0.0
+    } else {
+        x.exp()
+    }
 }
 
 /// The inverse error function on (-1, 1) (Giles, "Approximating the erfinv function", 2010;
@@ -63,12 +81,34 @@ pub fn erfinv(x: f32) -> f32 {
     let y = p * x;
     // Newton: erf(y) - x = 0, erf'(y) = 2/√π e^(-y²).
     let err = erf(y) - x;
-    y - err / (std::f32::consts::FRAC_2_SQRT_PI * (-y * y).exp())
+    y - err / (std::f32::consts::FRAC_2_SQRT_PI * exp(-y * y))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `exp` is `f32::exp`, bit for bit, on a sweep of the whole range (through the underflow
+    /// threshold, with the special values).
+    #[test]
+    fn exp_is_the_library_exp() {
+        let mut x = -200.0f32;
+        let mut underflowed = 0;
+        while x < 100.0 {
+            assert_eq!(exp(x).to_bits(), x.exp().to_bits(), "{x}");
+            underflowed += usize::from(exp(x) == 0.0);
+            x += 1e-3;
+        }
+        assert!(underflowed > 90_000, "{underflowed} zeros");
+        for bits in EXP_UNDERFLOW.to_bits() - 1000..EXP_UNDERFLOW.to_bits() + 1000 {
+            let x = f32::from_bits(bits);
+            assert_eq!(exp(x).to_bits(), x.exp().to_bits(), "{x}");
+        }
+        for x in [f32::NEG_INFINITY, f32::INFINITY, f32::MIN, f32::MAX, -0.0, 0.0] {
+            assert_eq!(exp(x).to_bits(), x.exp().to_bits(), "{x}");
+        }
+        assert!(exp(f32::NAN).is_nan());
+    }
 
     #[test]
     fn erf_reference_values() {

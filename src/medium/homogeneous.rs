@@ -10,6 +10,7 @@
 //! channels, Miller et al. 2019's spectral MIS), so every channel's estimate stays unbiased.
 
 use super::FreeFlight;
+use crate::math::special::exp;
 use crate::math::Rgb;
 use crate::sampling::sample_exponential;
 
@@ -33,7 +34,7 @@ impl Homogeneous {
                 f32::from(self.sigma_t.z == 0.0),
             );
         }
-        Rgb::new((-self.sigma_t.x * t).exp(), (-self.sigma_t.y * t).exp(), (-self.sigma_t.z * t).exp())
+        Rgb::new(exp(-self.sigma_t.x * t), exp(-self.sigma_t.y * t), exp(-self.sigma_t.z * t))
     }
 
     /// Samples the distance to the next interaction along a ray with unit direction, up to
