@@ -446,8 +446,7 @@ impl LightBvh {
                 self.nodes[index].lights |= 1 << k;
                 continue;
             }
-            for j in 0..2 {
-                let g = grandchildren[2 * k + j].expect("an interior child has two children");
+            for (j, g) in [c + 1, second(c)].into_iter().enumerate() {
                 let trail = trail | (j as u64) << (depth + 1);
                 let reference = if binary[g].leaf {
                     self.nodes[index].lights |= 1 << (2 + 2 * k + j);
