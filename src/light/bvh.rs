@@ -352,8 +352,8 @@ pub struct LightBvh {
     nodes: Vec<WideNode>,
     /// The one bounded light, when there is exactly one (no tree to walk).
     lone: Option<u32>,
-    /// Per light: its path from the root (two bits per level: the child taken), or
-    /// `NOT_IN_TREE`.
+    /// Per light: its path from the root of the binary tree (bit k set: the second child at
+    /// depth k), or `NOT_IN_TREE`.
     trails: Vec<u64>,
     /// Lights at infinity, chosen apart.
     infinite: Vec<u32>,
@@ -367,8 +367,7 @@ pub struct LightBvh {
 /// Trail of a light that the tree does not hold.
 const NOT_IN_TREE: u64 = u64::MAX;
 
-/// Deepest path of the binary build (the build falls back to median splits below it): its
-/// collapse into wide nodes is at most 31 levels deep, whose trails fit in 62 bits.
+/// Deepest path a trail can record (the build falls back to median splits below it).
 const MAX_DEPTH: u32 = 62;
 
 impl LightBvh {
