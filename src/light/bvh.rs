@@ -367,8 +367,9 @@ pub struct LightBvh {
 /// Trail of a light that the tree does not hold.
 const NOT_IN_TREE: u64 = u64::MAX;
 
-/// Deepest path a trail can record (the build falls back to median splits below it).
-const MAX_DEPTH: u32 = 62;
+/// Deepest leaf a trail can record (one bit per level): the build keeps every leaf at most this
+/// deep (see [`build`]).
+const MAX_DEPTH: u32 = 64;
 
 impl LightBvh {
     /// Builds the tree over `lights` (on `shapes`).
@@ -403,7 +404,7 @@ impl LightBvh {
             }
             n => {
                 let mut binary = Vec::with_capacity(2 * n - 1);
-                build(&mut binary, &mut items, 0, n, 0);
+                build(&mut binary, &mut items, 0, n, 0, MAX_DEPTH);
                 bvh.collapse(&binary, 0, 0, 0);
             }
         }
@@ -589,13 +590,18 @@ fn follow(pmf: &mut f32, trail: &mut u64, i0: f32, i1: f32) -> Option<usize> {
 }
 
 /// Builds the binary subtree of `items[start..end]` at `depth` into `nodes` (its root first, each
-/// interior node's first child after it); returns its bounds.
+/// interior node's first child after it); returns its bounds. No leaf is deeper than
+/// `max_depth` (given `depth + ⌈log₂ count⌉ ≤ max_depth`, true at the root for any count up to
+/// 2⁶⁴): the SAH may split off as little as one light, so it splits a node only where a child of
+/// all but one of its lights could still be halved down to single lights within the bound; below
+/// that, median splits halve the count at each level.
 fn build(
     nodes: &mut Vec<BinaryNode>,
     items: &mut [(u32, LightBounds)],
     start: usize,
     end: usize,
     depth: u32,
+    max_depth: u32,
 ) -> LightBounds {
     if end - start == 1 {
         let (light, bounds) = items[start];
@@ -609,7 +615,9 @@ fn build(
         centroids = centroids.union_point(b.bounds.centroid());
     }
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
-    if depth < MAX_DEPTH {
+                                                      // ⌈log₂ x⌉ for x ≥ 1.
+    let ceil_log2 = |x: usize| usize::BITS - (x - 1).leading_zeros();
+    if depth + 1 + ceil_log2(end - start - 1) <= max_depth {
         for axis in 0..3 {
             let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
             if hi <= lo {
@@ -660,9 +668,9 @@ fn build(
     let index = nodes.len();
     // Placeholder; filled in once both children are built.
     nodes.push(BinaryNode { bounds: items[start].1, child_or_light: 0, leaf: false });
-    let b0 = build(nodes, items, start, mid, depth + 1);
+    let b0 = build(nodes, items, start, mid, depth + 1, max_depth);
     let second = nodes.len() as u32;
-    let b1 = build(nodes, items, mid, end, depth + 1);
+    let b1 = build(nodes, items, mid, end, depth + 1, max_depth);
     let bounds = LightBounds::union(&b0, &b1);
     nodes[index] = BinaryNode { bounds, child_or_light: second, leaf: false };
     bounds
@@ -753,7 +761,7 @@ mod tests {
             .collect();
         let mut nodes = Vec::new();
         let n = items.len();
-        build(&mut nodes, &mut items, 0, n, 0);
+        build(&mut nodes, &mut items, 0, n, 0, MAX_DEPTH);
         (nodes, bvh.p_infinite)
     }
 
@@ -890,6 +898,45 @@ mod tests {
             }
         }
         assert!(positive > 10_000, "{positive} positive importances");
+    }
+
+    /// The build keeps every leaf within the depth bound (a trail has one bit per level), where
+    /// the SAH alone would go deeper: 45 lights under bounds from ⌈log₂ 45⌉ = 6 up; the tree
+    /// still holds each light once.
+    #[test]
+    fn builds_keep_leaves_within_the_depth_bound() {
+        let (lights, shapes) = many_lights(6);
+        let items: Vec<(u32, LightBounds)> = (0..lights.len() as u32)
+            .filter_map(|i| Some((i, LightBounds::of(&lights[i as usize], &shapes)?)))
+            .collect();
+        let n = items.len();
+        let depths = |max_depth: u32| {
+            let mut nodes = Vec::new();
+            build(&mut nodes, &mut items.clone(), 0, n, 0, max_depth);
+            let mut depth = vec![0u32; nodes.len()];
+            let mut leaves = Vec::new();
+            for i in 0..nodes.len() {
+                if nodes[i].leaf {
+                    leaves.push((nodes[i].child_or_light, depth[i]));
+                } else {
+                    depth[i + 1] = depth[i] + 1;
+                    depth[nodes[i].child_or_light as usize] = depth[i] + 1;
+                }
+            }
+            leaves.sort();
+            leaves
+        };
+        let unbounded = depths(MAX_DEPTH);
+        let deepest = unbounded.iter().map(|l| l.1).max().unwrap();
+        assert!(deepest > 7, "the SAH tree is {deepest} deep: no test of the bound");
+        for max_depth in 6..deepest {
+            let leaves = depths(max_depth);
+            assert!(leaves.iter().all(|l| l.1 <= max_depth), "bound {max_depth}: {leaves:?}");
+            assert_eq!(
+                leaves.iter().map(|l| l.0).collect::<Vec<_>>(),
+                unbounded.iter().map(|l| l.0).collect::<Vec<_>>()
+            );
+        }
     }
 
     /// With two lights the tree is one split, and the pmf is the ratio of importances, computed
