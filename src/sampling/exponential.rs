@@ -19,7 +19,7 @@ pub fn exponential_pdf(x: f32, a: f32) -> f32 {
     if x < 0.0 {
         0.0
     } else {
-        a * (-a * x).exp()
+        a * crate::math::special::exp(-a * x)
     }
 }
 
