@@ -39,9 +39,12 @@ pub fn exp(x: f32) -> f32 {
     }
 }
 
-/// The inverse error function on (-1, 1) (Giles, "Approximating the erfinv function", 2010;
-/// single-precision polynomial fit), refined by one Newton step on [`erf`] (the correction
-/// is small, so `f32` suffices for it).
+/// The inverse error function on (-1, 1) clamped to ±(1 − 10⁻⁷): Giles' single-precision
+/// polynomial fit ("Approximating the erfinv function", 2010; Mitsuba's `dr::erfinv`), one
+/// logarithm and a polynomial. The exact erf of the result lies within 10⁻⁷ of x (measured
+/// 0.86·10⁻⁷ over erf's range up to erf(3)). A Newton step on [`erf`] does not improve it: it
+/// measured 1.12·10⁻⁷, [`erf`]'s own error, at the price of an `erf` and an exponential.
+#[inline]
 pub fn erfinv(x: f32) -> f32 {
     let x = x.clamp(-1.0 + 1e-7, 1.0 - 1e-7);
     let mut w = -((1.0 - x) * (1.0 + x)).ln();
@@ -78,10 +81,7 @@ pub fn erfinv(x: f32) -> f32 {
         }
         p
     };
-    let y = p * x;
-    // Newton: erf(y) - x = 0, erf'(y) = 2/√π e^(-y²).
-    let err = erf(y) - x;
-    y - err / (std::f32::consts::FRAC_2_SQRT_PI * exp(-y * y))
+    p * x
 }
 
 #[cfg(test)]
@@ -134,9 +134,10 @@ mod tests {
         sum * 2.0 / std::f64::consts::PI.sqrt()
     }
 
-    /// Over a dense grid of (-4, 4): erf within 1.5·10⁻⁷ of the series, and erfinv inverts the
-    /// series' erf to within 1.5·10⁻⁷ (about one ulp of the values near ±1 it inverts). Both
-    /// measure 1.1·10⁻⁷ (with the exponentials in `f64`: 0.86·10⁻⁷).
+    /// Over a dense grid of (-4, 4): erf within 1.5·10⁻⁷ of the series (measured 1.1·10⁻⁷), and
+    /// erfinv inverts the series' erf to within 10⁻⁷ (about one ulp of the values near ±1 it
+    /// inverts; measured 0.86·10⁻⁷, where the fit with a Newton step on `erf` measured
+    /// 1.12·10⁻⁷).
     #[test]
     fn erf_and_erfinv_against_the_series() {
         let (mut worst_erf, mut worst_inv) = (0.0f64, 0.0f64);
@@ -151,7 +152,7 @@ mod tests {
             }
         }
         assert!(worst_erf < 1.5e-7, "erf: {worst_erf:e}");
-        assert!(worst_inv < 1.5e-7, "erfinv: {worst_inv:e}");
+        assert!(worst_inv < 1e-7, "erfinv: {worst_inv:e}");
     }
 
     #[test]
