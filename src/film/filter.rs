@@ -19,6 +19,7 @@
 //! The last three have negative lobes: samples add negative weights to some pixels, and the
 //! ratio `Σ f L / Σ f` still has the right expectation (Mitsuba's handling).
 
+use crate::math::special::{exp4, exp_lanes};
 use crate::math::Vec2;
 use crate::props::{Obj, Result as PropResult};
 
@@ -160,9 +161,10 @@ impl Filter {
             Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
             Filter::Gaussian { stddev, radius, floor } => {
                 if x.abs() <= *radius {
-                    // `floor`: the shift that makes f reach 0 at the radius (exp(-8) at 4σ).
+                    // `floor`: the shift that makes f reach 0 at the radius (exp(-8) at 4σ); the
+                    // exponential as `Filter::gaussian_row` computes it (the same bits).
                     let s = -1.0 / (2.0 * stddev * stddev);
-                    ((s * x * x).exp() - floor).max(0.0)
+                    (exp_lanes([(s * x * x).max(-86.0)])[0] - floor).max(0.0)
                 } else {
                     0.0
                 }
@@ -196,6 +198,37 @@ impl Filter {
 }
 
 impl Filter {
+    /// `out[k] = f₁(d₀ + k + ½ − offset)`: the 1D filter values at the centres of consecutive
+    /// pixels `d₀ + k` seen from a sample at `offset` (pixels).
+    #[inline]
+    fn row(&self, d0: i64, offset: f32, out: &mut [f32]) {
+        if let Filter::Gaussian { .. } = self {
+            return self.gaussian_row(d0, offset, out);
+        }
+        for (k, w) in out.iter_mut().enumerate() {
+            *w = self.eval_1d((d0 + k as i64) as f32 + 0.5 - offset);
+        }
+    }
+
+    /// [`Filter::row`] of the Gaussian, `max(e^(−x²/2σ²) − e^(−r²/2σ²), 0)` within the radius
+    /// and 0 beyond (as [`Filter::eval_1d`], bit for bit): four exponentials at a time ([`exp4`]; a footprint takes one or two
+    /// rows of four per axis, where one call of the C library's `expf` per pixel offset took
+    /// a tenth of the time of scenes with small bright lights).
+    #[inline]
+    fn gaussian_row(&self, d0: i64, offset: f32, out: &mut [f32]) {
+        let Filter::Gaussian { stddev, radius, floor } = *self else { return };
+        let s = -1.0 / (2.0 * stddev * stddev);
+        for (c, chunk) in out.chunks_mut(4).enumerate() {
+            let x: [f32; 4] = std::array::from_fn(|j| (d0 + (4 * c + j) as i64) as f32 + 0.5 - offset);
+            // s x² ∈ [−8, 0] within the radius (4σ for Mitsuba's; a cut Gaussian's radius may be
+            // wider, but f reaches 0 where s x² < −87 anyway); lanes beyond the radius get 0.
+            let e = exp4(x.map(|x| if x.abs() <= radius { (s * x * x).max(-86.0) } else { 0.0 }));
+            for (j, w) in chunk.iter_mut().enumerate() {
+                *w = if x[j].abs() <= radius { (e[j] - floor).max(0.0) } else { 0.0 };
+            }
+        }
+    }
+
     /// Visits the footprint of a sample at `origin + offset` (pixel units; pixel `k` spans
     /// `[k, k + 1)`): every pixel whose centre lies within the radius, clipped to the inclusive
     /// range `lo ..= hi`, row by row, as `visit(x, y, w)` with the separable weight
@@ -217,12 +250,12 @@ impl Filter {
         let d0y = ((offset.y - r - 0.5).ceil() as i64).max(lo[1] - origin[1]);
         let d1y = ((offset.y + r - 0.5).floor() as i64).min(hi[1] - origin[1]);
         const MAX: usize = 2 * MAX_BORDER as usize + 2;
-        let mut wx = [0.0f32; MAX];
-        for d in d0x..=d1x {
-            wx[(d - d0x) as usize] = self.eval_1d(d as f32 + 0.5 - offset.x);
-        }
+        let (mut wx, mut wy) = ([0.0f32; MAX], [0.0f32; MAX]);
+        let (nx, ny) = ((d1x - d0x + 1).max(0) as usize, (d1y - d0y + 1).max(0) as usize);
+        self.row(d0x, offset.x, &mut wx[..nx]);
+        self.row(d0y, offset.y, &mut wy[..ny]);
         for dy in d0y..=d1y {
-            let wy = self.eval_1d(dy as f32 + 0.5 - offset.y);
+            let wy = wy[(dy - d0y) as usize];
             if wy == 0.0 {
                 continue;
             }
@@ -298,6 +331,32 @@ impl Filter {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The Gaussian's rows (four exponentials at a time) are `eval_1d` at each pixel, bit for
+    /// bit, and within 2·10⁻⁷ of the formula in `f64`, over sub-pixel offsets and radii.
+    #[test]
+    fn gaussian_rows_are_eval_1d() {
+        for (stddev, radius) in [(0.5f32, 2.0f32), (0.3, 1.2), (1.5, 6.0), (0.5, 16.5)] {
+            let g = Filter::gaussian_cut(stddev, radius).unwrap();
+            for i in 0..50 {
+                let offset = i as f32 / 50.0;
+                let d0 = -(radius.ceil() as i64) - 1;
+                let mut row = [0.0f32; 36];
+                g.row(d0, offset, &mut row);
+                for (k, &w) in row.iter().enumerate() {
+                    let x = (d0 + k as i64) as f32 + 0.5 - offset;
+                    assert_eq!(w.to_bits(), g.eval_1d(x).to_bits(), "σ {stddev}, x {x}");
+                    let s = -1.0 / (2.0 * stddev as f64 * stddev as f64);
+                    let exact = if x.abs() <= radius {
+                        ((s * x as f64 * x as f64).exp() - (s * radius as f64 * radius as f64).exp()).max(0.0)
+                    } else {
+                        0.0
+                    };
+                    assert!((w as f64 - exact).abs() < 2e-7, "σ {stddev}, x {x}: {w} vs {exact}");
+                }
+            }
+        }
+    }
 
     #[test]
     fn shapes_radii_and_borders() {
