@@ -95,20 +95,25 @@ impl Sphere {
     /// Closest intersection in `(0, t_max)`.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<SphereHit> {
+        // a t² + 2 h t + c = 0 with h = d·(o − centre): t = (−h ± √(h² − a c)) / a.
         let oc = ray.o - self.center;
         let a = ray.d.length_squared();
-        let b = 2.0 * ray.d.dot(oc);
-        let c = oc.length_squared() - self.radius * self.radius;
-        // Discriminant as 4a (r - |f|)(r + |f|), f = oc - (b / 2a) d: no cancellation in b² - 4ac.
-        let f = oc - (b / (2.0 * a)) * ray.d;
-        let len = f.length();
-        let disc = 4.0 * a * (self.radius + len) * (self.radius - len);
+        // One division by a, beside the dot products (a, h and c do not wait for each other).
+        let inv_a = 1.0 / a;
+        let h = ray.d.dot(oc);
+        let r2 = self.radius * self.radius;
+        let c = oc.length_squared() - r2;
+        // h² − a c = a (r² − |f|²), f = oc − (h / a) d the centre's offset from the ray's closest
+        // approach: no cancellation between h² and a c (Haines et al., Ray Tracing Gems, ch. 7).
+        let f = oc - (h * inv_a) * ray.d;
+        let disc = a * (r2 - f.length_squared());
         if disc < 0.0 {
             return None;
         }
         let root = disc.sqrt();
-        let q = if b < 0.0 { -0.5 * (b - root) } else { -0.5 * (b + root) };
-        let (mut t0, mut t1) = (q / a, c / q);
+        // q = −(h + sign(h) √disc): the root of larger magnitude, then the other as c / q.
+        let q = if h < 0.0 { root - h } else { -(h + root) };
+        let (mut t0, mut t1) = (q * inv_a, c / q);
         if t0 > t1 {
             std::mem::swap(&mut t0, &mut t1);
         }
@@ -373,6 +378,37 @@ mod tests {
         assert!((s.intersect(&inside, f32::INFINITY).unwrap().t - 1.0).abs() < 1e-6);
         assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::X), f32::INFINITY).is_none());
         assert!(s.intersect(&Ray::new(Vec3::ZERO, Vec3::Z), 3.0).is_none());
+    }
+
+    /// Small spheres far away (where b² − 4ac cancels catastrophically): the distance within
+    /// 10⁻⁶ of the exact `f64` root relative to the distance, and rays that pass the sphere
+    /// by 1 % of its radius (beyond or within) miss or hit as they should.
+    #[test]
+    fn small_far_spheres_are_hit_precisely() {
+        let mut rng = crate::sampling::Pcg32::new(7, 7);
+        for &(radius, dist) in &[(1e-3f32, 1e4f32), (0.01, 100.0), (1.0, 1e3), (0.05, 30.0)] {
+            let s = Sphere::new(Vec3::new(0.3, -0.2, dist), radius, false);
+            for _ in 0..2000 {
+                // Aim at the centre offset sideways by a fraction of the radius.
+                let k = 1.02 * rng.next_f32();
+                let phi = 2.0 * std::f32::consts::PI * rng.next_f32();
+                let target = s.center + Vec3::new(phi.cos(), phi.sin(), 0.0) * (k * radius);
+                let ray = Ray::new(Vec3::ZERO, target.normalize());
+                let hit = s.intersect(&ray, f32::INFINITY);
+                // The exact answer in f64 for this (rounded) ray.
+                let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
+                let oc = o - s.center.as_dvec3();
+                let (a, h, c) = (d.dot(d), d.dot(oc), oc.dot(oc) - (radius as f64).powi(2));
+                let disc = h * h - a * c;
+                if k < 0.99 {
+                    let exact = (-h - disc.sqrt()) / a;
+                    let t = hit.expect("a ray aimed inside the sphere hits it").t as f64;
+                    assert!((t - exact).abs() <= 1e-6 * exact, "r {radius}, k {k}: {t} vs {exact}");
+                } else if k > 1.01 {
+                    assert!(hit.is_none(), "r {radius}, k {k}: a ray passing outside hit at {:?}", hit.map(|h| h.t));
+                }
+            }
+        }
     }
 
     #[test]
