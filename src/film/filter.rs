@@ -211,9 +211,10 @@ impl Filter {
     }
 
     /// [`Filter::row`] of the Gaussian, `max(e^(−x²/2σ²) − e^(−r²/2σ²), 0)` within the radius
-    /// and 0 beyond (as [`Filter::eval_1d`], bit for bit): four exponentials at a time ([`exp4`]; a footprint takes one or two
-    /// rows of four per axis, where one call of the C library's `expf` per pixel offset took
-    /// a tenth of the time of scenes with small bright lights).
+    /// and 0 beyond (as [`Filter::eval_1d`], bit for bit): four exponentials at a time
+    /// ([`exp4`]; a footprint takes one or two rows of four per axis, where one call of the C
+    /// library's `expf` per pixel offset took a tenth of the time of scenes with small bright
+    /// lights).
     #[inline]
     fn gaussian_row(&self, d0: i64, offset: f32, out: &mut [f32]) {
         let Filter::Gaussian { stddev, radius, floor } = *self else { return };

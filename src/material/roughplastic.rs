@@ -17,14 +17,14 @@
 //! (1.49), `ext_ior`, `distribution` (beckmann, ggx), `alpha` (0.1), `nonlinear` (false).
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use crate::math::quadrature::gauss_legendre;
 use super::microfacet::{Microfacet, MicrofacetType};
 use super::plastic::{coated_diffuse_albedo, specular_sampling_weight};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
-use crate::texture::Texture;
+use crate::math::quadrature::gauss_legendre;
 use crate::math::{Rgb, Vec2, Vec3, INV_PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::sample_cosine_hemisphere_malley;
+use crate::texture::Texture;
 
 const TABLE: usize = 64;
 
@@ -72,7 +72,7 @@ fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32) -> (f32, f32) {
             let (f, cos_t, _, eta_ti) = fresnel_dielectric(wo.dot(m), eta);
             // D G |wo·m| / (cos θₒ p(m)): for visible normals (p = G1(wo) |wo·m| D / cos θₒ) the
             // masking of the scattered direction, G1(w, m), as Mitsuba evaluates it (without
-            // D, G and the density again: the table costs a third of what it did).
+            // D, G and the density again: the tables take a quarter less time).
             let ratio = |w: Vec3| {
                 if visible {
                     distribution.g1(w, m)

@@ -1,6 +1,7 @@
 //! Special functions: the error function and its inverse (single precision), used by the
-//! Beckmann microfacet distribution, and an exponential without the C library's slow path for
-//! underflow.
+//! Beckmann microfacet distribution, an exponential without the C library's slow path for
+//! underflow, and an exponential of several lanes at once (SIMD) for batches such as a
+//! reconstruction filter's weights.
 
 /// The error function `erf(x) = 2/√π ∫₀ˣ e^(-t²) dt`, from the Chebyshev-fitted complementary
 /// error function of Numerical Recipes (relative error < 1.2·10⁻⁷): the polynomial and the
@@ -40,9 +41,9 @@ pub fn exp(x: f32) -> f32 {
 }
 
 /// `eˣ` lane by lane for arguments in (-87, 88) (where `eˣ` and the `2ⁿ` below are normal
-/// floats; the caller guarantees it; [`exp4`] for four lanes in one SIMD register): Cephes' `expf`, `eˣ = 2ⁿ eʳ` with `n = round(x / ln 2)`,
-/// `r = x − n ln 2` in two exact parts and a degree-7 polynomial for `eʳ` on `|r| ≤ ln 2 / 2`;
-/// within 1 ulp of the correctly rounded value. Branch-free and without calls: in SIMD lanes
+/// floats; the caller guarantees it; [`exp4`] for four lanes in one SIMD register): Cephes'
+/// `expf`, `eˣ = 2ⁿ eʳ` with `n = round(x / ln 2)`, `r = x − n ln 2` in two exact parts and a
+/// degree-7 polynomial for `eʳ` on `|r| ≤ ln 2 / 2`; within 1 ulp of the correctly rounded value. Branch-free and without calls: in SIMD lanes
 /// several exponentials cost about what one call of the C library's costs (a single one, on a
 /// chain of dependent operations, is faster through [`exp`]: the library's table-driven `expf`
 /// has the shorter latency).
