@@ -19,7 +19,7 @@
 //! The last three have negative lobes: samples add negative weights to some pixels, and the
 //! ratio `Σ f L / Σ f` still has the right expectation (Mitsuba's handling).
 
-use crate::math::special::{exp4, exp_lanes};
+use crate::math::special::exp4;
 use crate::math::Vec2;
 use crate::props::{Obj, Result as PropResult};
 
@@ -159,16 +159,7 @@ impl Filter {
         match self {
             Filter::Box { radius } => f32::from(x.abs() <= *radius),
             Filter::Tent { radius } => (1.0 - x.abs() / radius).max(0.0),
-            Filter::Gaussian { stddev, radius, floor } => {
-                if x.abs() <= *radius {
-                    // `floor`: the shift that makes f reach 0 at the radius (exp(-8) at 4σ); the
-                    // exponential as `Filter::gaussian_row` computes it (the same bits).
-                    let s = -1.0 / (2.0 * stddev * stddev);
-                    (exp_lanes([(s * x * x).max(-86.0)])[0] - floor).max(0.0)
-                } else {
-                    0.0
-                }
-            }
+            Filter::Gaussian { stddev, radius, floor } => gaussian4(*stddev, *radius, *floor, [x; 4])[0],
             Filter::Cubic { b, c, radius, stretch } => {
                 if x.abs() >= radius.min(*stretch) {
                     return 0.0;
@@ -218,15 +209,9 @@ impl Filter {
     #[inline]
     fn gaussian_row(&self, d0: i64, offset: f32, out: &mut [f32]) {
         let Filter::Gaussian { stddev, radius, floor } = *self else { return };
-        let s = -1.0 / (2.0 * stddev * stddev);
         for (c, chunk) in out.chunks_mut(4).enumerate() {
             let x: [f32; 4] = std::array::from_fn(|j| (d0 + (4 * c + j) as i64) as f32 + 0.5 - offset);
-            // s x² ∈ [−8, 0] within the radius (4σ for Mitsuba's; a cut Gaussian's radius may be
-            // wider, but f reaches 0 where s x² < −87 anyway); lanes beyond the radius get 0.
-            let e = exp4(x.map(|x| if x.abs() <= radius { (s * x * x).max(-86.0) } else { 0.0 }));
-            for (j, w) in chunk.iter_mut().enumerate() {
-                *w = if x[j].abs() <= radius { (e[j] - floor).max(0.0) } else { 0.0 };
-            }
+            chunk.copy_from_slice(&gaussian4(stddev, radius, floor, x)[..chunk.len()]);
         }
     }
 
@@ -268,6 +253,18 @@ impl Filter {
             }
         }
     }
+}
+
+/// The Gaussian of standard deviation `stddev` (pixels) cut at `radius` at four offsets `x`:
+/// `max(e^(−x²/2σ²) − floor, 0)` within the radius (`floor` the shift that makes it reach 0
+/// there, e^(−8) at 4σ), 0 beyond, the exponentials in one SIMD register ([`exp4`]). `s x²` lies
+/// in [−8, 0] within Mitsuba's 4σ; a cut Gaussian's radius may be wider, but the weight is 0 to
+/// within 10⁻³⁷ where `s x² < −86`, so the argument is clamped there, inside `exp4`'s range.
+#[inline]
+fn gaussian4(stddev: f32, radius: f32, floor: f32, x: [f32; 4]) -> [f32; 4] {
+    let s = -1.0 / (2.0 * stddev * stddev);
+    let e = exp4(x.map(|x| if x.abs() <= radius { (s * x * x).max(-86.0) } else { 0.0 }));
+    std::array::from_fn(|j| if x[j].abs() <= radius { (e[j] - floor).max(0.0) } else { 0.0 })
 }
 
 /// Every reconstruction-filter plugin by its (Mitsuba) name.

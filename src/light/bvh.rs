@@ -614,9 +614,9 @@ fn build(
         bounds = bounds.union(&b.bounds);
         centroids = centroids.union_point(b.bounds.centroid());
     }
-    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
-                                                      // ⌈log₂ x⌉ for x ≥ 1.
+    // ⌈log₂ x⌉ for x ≥ 1.
     let ceil_log2 = |x: usize| usize::BITS - (x - 1).leading_zeros();
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, last bucket of side 0)
     if depth + 1 + ceil_log2(end - start - 1) <= max_depth {
         for axis in 0..3 {
             let (lo, hi) = (centroids.min[axis], centroids.max[axis]);
