@@ -139,13 +139,21 @@ impl Microfacet {
     pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
         match self.kind {
             MicrofacetType::BlinnPhong(_) => self.d(m) * m.z.max(0.0),
-            _ => {
-                if wi.z <= 0.0 {
-                    return 0.0;
-                }
-                self.g1(wi, m) * wi.dot(m).max(0.0) * self.d(m) / wi.z
-            }
+            _ => self.visible_pdf(wi, m, || 1.0 / (1.0 + self.lambda(wi))),
         }
+    }
+
+    /// The visible normal density `G1(wi, m) max(0, wi·m) D(m) / cos θᵢ` with `G1(wi, ·)` where
+    /// `wi` sees the front of `m` given by `g1_front` (it does not depend on `m`: `1 / (1 + Λ(wi))`,
+    /// which [`Microfacet::sample_grid`] computes once per direction).
+    #[inline(always)]
+    fn visible_pdf(&self, wi: Vec3, m: Vec3, g1_front: impl FnOnce() -> f32) -> f32 {
+        if wi.z <= 0.0 {
+            return 0.0;
+        }
+        // As `g1`: zero where `wi` sees the back of `m` or of the macro-surface.
+        let g1 = if wi.dot(m) * wi.z <= 0.0 { 0.0 } else { g1_front() };
+        g1 * wi.dot(m).max(0.0) * self.d(m) / wi.z
     }
 
     /// Samples a microfacet normal for the direction `wi` (local, z > 0) from `u ∈ [0,1)²`:
@@ -186,53 +194,144 @@ impl Microfacet {
     /// by inverting its CDF in x (Newton–bisection on `erf`) and y (`erfinv`), then rotate and
     /// unstretch.
     fn sample_beckmann_visible(&self, wi: Vec3, u: Vec2) -> Vec3 {
+        let (slopes, cos_phi, sin_phi) = self.beckmann_view(wi);
+        let (sx, sy) = slopes.combine(slopes.x(u.x), slopes.y(u.y));
+        self.beckmann_normal(cos_phi, sin_phi, sx, sy)
+    }
+
+    /// What Beckmann visible-normal sampling for `wi` computes before it looks at `u`: the
+    /// slope sampler of the stretched direction, and that direction's azimuth (cos φ, sin φ).
+    #[inline(always)]
+    fn beckmann_view(&self, wi: Vec3) -> (BeckmannSlopes, f32, f32) {
         let ws = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
-        let (sx, sy) = beckmann_sample_slopes(ws.z, u);
         let xy = (ws.x * ws.x + ws.y * ws.y).sqrt();
         let (cos_phi, sin_phi) = if xy > 0.0 { (ws.x / xy, ws.y / xy) } else { (1.0, 0.0) };
+        (BeckmannSlopes::new(ws.z), cos_phi, sin_phi)
+    }
+
+    /// The microfacet normal of stretched slopes `(sx, sy)` sampled in the frame of azimuth φ:
+    /// rotated by φ, then unstretched.
+    #[inline(always)]
+    fn beckmann_normal(&self, cos_phi: f32, sin_phi: f32, sx: f32, sy: f32) -> Vec3 {
         let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
         Vec3::new(-rx * self.alpha_u, -ry * self.alpha_v, 1.0).normalize()
     }
+
+    /// Calls `f(i, j, s)` for every `i < ux.len()`, `j < uy.len()` (row by row) with the sample
+    /// `s` that [`Microfacet::sample`] gives for `wi` and `u = (ux[i], uy[j])`, bit for bit: a
+    /// product grid of random numbers, as quadrature over visible normals uses. For Beckmann
+    /// the work that depends on one coordinate only is done once per coordinate (the Newton
+    /// inversion of the x slope per `ux[i]`, the y slope per `uy[j]`, and `G1(wi)` of the
+    /// density), which leaves a normalization and the density's `D(m)` per sample.
+    pub fn sample_grid(&self, wi: Vec3, ux: &[f32], uy: &[f32], mut f: impl FnMut(usize, usize, Sample<Vec3>)) {
+        if self.kind != MicrofacetType::Beckmann {
+            for (i, &x) in ux.iter().enumerate() {
+                for (j, &y) in uy.iter().enumerate() {
+                    f(i, j, self.sample(wi, Vec2::new(x, y)));
+                }
+            }
+            return;
+        }
+        let (slopes, cos_phi, sin_phi) = self.beckmann_view(wi);
+        let xs: Vec<f32> = ux.iter().map(|&u| slopes.x(u)).collect();
+        let ys: Vec<(f32, f32)> = uy.iter().map(|&u| slopes.y(u)).collect();
+        let g1_front = 1.0 / (1.0 + self.lambda(wi));
+        for (i, &x) in xs.iter().enumerate() {
+            for (j, &y) in ys.iter().enumerate() {
+                let (sx, sy) = slopes.combine(x, y);
+                let m = self.beckmann_normal(cos_phi, sin_phi, sx, sy);
+                f(i, j, Sample::solid_angle(m, self.visible_pdf(wi, m, || g1_front)));
+            }
+        }
+    }
 }
 
-/// Slopes of visible Beckmann microfacets (α = 1) seen at `cos θᵢ`, from `u`.
-fn beckmann_sample_slopes(cos_theta_i: f32, u: Vec2) -> (f32, f32) {
-    if cos_theta_i > 0.9999 {
-        // Normal incidence: the slope distribution is a 2D Gaussian.
-        let r = safe_sqrt(-(-u.x).ln_1p());
-        let (s, c) = crate::math::sin_cos_2pi(u.y);
-        return (r * c, r * s);
+/// Jakob's sampling of the slopes of visible Beckmann microfacets (α = 1) seen at `cos θᵢ`,
+/// split by random number: the x slope depends on `u.x` alone (the inversion of its CDF), the
+/// y slope on `u.y` alone; at normal incidence (a 2D Gaussian, sampled in polar form) the
+/// radius on `u.x` and the direction on `u.y`. [`BeckmannSlopes::combine`] makes the pair.
+#[derive(Clone, Copy, Debug)]
+struct BeckmannSlopes {
+    /// Normal incidence (`cos θᵢ > 0.9999`): polar sampling of the Gaussian.
+    normal: bool,
+    tan_theta_i: f32,
+    /// `erf(cot θᵢ)`: the CDF's upper end in `b = erf(x)`.
+    c: f32,
+    /// Exponent of the initial guess's fit.
+    fit: f32,
+    /// `1 / (1 + c + tan θᵢ e^(-cot² θᵢ) / √π)`: the CDF's normalization.
+    normalization: f32,
+}
+
+impl BeckmannSlopes {
+    #[inline(always)]
+    fn new(cos_theta_i: f32) -> BeckmannSlopes {
+        if cos_theta_i > 0.9999 {
+            return BeckmannSlopes { normal: true, tan_theta_i: 0.0, c: 0.0, fit: 0.0, normalization: 0.0 };
+        }
+        let sin_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i);
+        let tan_theta_i = sin_theta_i / cos_theta_i;
+        let cot_theta_i = 1.0 / tan_theta_i;
+        let c = erf(cot_theta_i);
+        let theta_i = cos_theta_i.acos();
+        let fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i));
+        let normalization = 1.0 / (1.0 + c + INV_SQRT_PI * tan_theta_i * exp(-cot_theta_i * cot_theta_i));
+        BeckmannSlopes { normal: false, tan_theta_i, c, fit, normalization }
     }
-    let sin_theta_i = safe_sqrt(1.0 - cos_theta_i * cos_theta_i);
-    let tan_theta_i = sin_theta_i / cos_theta_i;
-    let cot_theta_i = 1.0 / tan_theta_i;
-    // The CDF of the x slope, F(x) ∝ 1 + erf(x) + tan θᵢ e^(-x²)/√π over (-∞, cot θᵢ], inverted by
-    // a safeguarded Newton iteration on b = erf(x) ∈ (a, c).
-    let (mut a, mut c) = (-1.0f32, erf(cot_theta_i));
-    let sample_x = u.x.max(1e-6);
-    let theta_i = cos_theta_i.acos();
-    let fit = 1.0 + theta_i * (-0.876 + theta_i * (0.4265 - 0.0594 * theta_i));
-    let mut b = c - (1.0 + c) * (1.0 - sample_x).powf(fit);
-    let normalization = 1.0 / (1.0 + c + INV_SQRT_PI * tan_theta_i * exp(-cot_theta_i * cot_theta_i));
-    for _ in 0..20 {
-        if !(b >= a && b <= c) {
-            b = 0.5 * (a + c);
+
+    /// The part of `u.x`: the x slope, or at normal incidence the radius.
+    #[inline(always)]
+    fn x(&self, ux: f32) -> f32 {
+        if self.normal {
+            return safe_sqrt(-(-ux).ln_1p());
         }
-        let inv_erf = erfinv(b);
-        let value = normalization * (1.0 + b + INV_SQRT_PI * tan_theta_i * exp(-inv_erf * inv_erf)) - sample_x;
-        let derivative = normalization * (1.0 - inv_erf * tan_theta_i);
-        if value.abs() < 1e-6 {
-            // Converged at b, whose inverse is at hand.
-            return (inv_erf, erfinv(2.0 * u.y.max(1e-6) - 1.0));
+        // The CDF of the x slope, F(x) ∝ 1 + erf(x) + tan θᵢ e^(-x²)/√π over (-∞, cot θᵢ],
+        // inverted by a safeguarded Newton iteration on b = erf(x) ∈ (a, c).
+        let (tan_theta_i, normalization) = (self.tan_theta_i, self.normalization);
+        let (mut a, mut c) = (-1.0f32, self.c);
+        let sample_x = ux.max(1e-6);
+        let mut b = c - (1.0 + c) * (1.0 - sample_x).powf(self.fit);
+        for _ in 0..20 {
+            if !(b >= a && b <= c) {
+                b = 0.5 * (a + c);
+            }
+            let inv_erf = erfinv(b);
+            let value = normalization * (1.0 + b + INV_SQRT_PI * tan_theta_i * exp(-inv_erf * inv_erf)) - sample_x;
+            let derivative = normalization * (1.0 - inv_erf * tan_theta_i);
+            if value.abs() < 1e-6 {
+                // Converged at b, whose inverse is at hand.
+                return inv_erf;
+            }
+            if value > 0.0 {
+                c = b;
+            } else {
+                a = b;
+            }
+            b -= value / derivative;
         }
-        if value > 0.0 {
-            c = b;
+        erfinv(b)
+    }
+
+    /// The part of `u.y`: the y slope (second entry unused), or at normal incidence the
+    /// direction `(sin 2πu, cos 2πu)`.
+    #[inline(always)]
+    fn y(&self, uy: f32) -> (f32, f32) {
+        if self.normal {
+            crate::math::sin_cos_2pi(uy)
         } else {
-            a = b;
+            (erfinv(2.0 * uy.max(1e-6) - 1.0), 0.0)
         }
-        b -= value / derivative;
     }
-    (erfinv(b), erfinv(2.0 * u.y.max(1e-6) - 1.0))
+
+    /// The slopes `(x, y)` from the two parts.
+    #[inline(always)]
+    fn combine(&self, x: f32, y: (f32, f32)) -> (f32, f32) {
+        if self.normal {
+            (x * y.1, x * y.0)
+        } else {
+            (x, y.0)
+        }
+    }
 }
 
 /// The microfacet distribution of a rough surface whose roughness may vary over it (Mitsuba's
@@ -399,6 +498,37 @@ mod tests {
                 assert!((s.pdf - md.pdf(wi, s.value)).abs() <= 1e-4 * s.pdf.max(1.0));
             }
         }
+    }
+
+    #[test]
+    fn sample_grid_is_sample_bit_for_bit() {
+        // Grids with nodes near 0 and 1, over directions at normal incidence (Beckmann's polar
+        // branch), in the xz-plane (the coating tables' case), grazing, and off the plane.
+        let us: Vec<f32> = [1e-7, 0.01, 0.2, 0.5, 0.73, 0.999, 1.0 - 1e-7].to_vec();
+        let vs: Vec<f32> = [0.0, 0.05, 0.31, 0.5, 0.5001, 0.97].to_vec();
+        let mut dirs = incident();
+        dirs.extend([
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(1.0, 0.0, 1e-4).normalize(),
+            Vec3::new(0.01, 0.0, 1.0).normalize(),
+        ]);
+        let mut ds = distributions();
+        ds.extend([
+            Microfacet::new(MicrofacetType::Beckmann, 0.02, 0.02),
+            Microfacet::new(MicrofacetType::Beckmann, 1.5, 1.5),
+        ]);
+        let mut seen = 0;
+        for md in ds {
+            for &wi in &dirs {
+                md.sample_grid(wi, &us, &vs, |i, j, s| {
+                    let t = md.sample(wi, Vec2::new(us[i], vs[j]));
+                    let bits = |s: &Sample<Vec3>| (s.value.to_array().map(f32::to_bits), s.pdf.to_bits());
+                    assert_eq!(bits(&s), bits(&t), "{md:?}, wi {wi}, u ({}, {})", us[i], vs[j]);
+                    seen += 1;
+                });
+            }
+        }
+        assert_eq!(seen, 8 * 6 * us.len() * vs.len());
     }
 
     #[test]

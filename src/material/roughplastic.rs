@@ -59,40 +59,38 @@ fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32) -> (f32, f32) {
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let n = if eta > 1.0 { 32 } else { 128 };
     let (nodes, weights) = gauss_legendre(n);
+    let u: Vec<f32> = nodes.iter().map(|&x| (0.5 * x + 0.5) as f32).collect();
     let visible = distribution.samples_visible_normals();
     let (mut r, mut t) = (0.0f64, 0.0f64);
-    for (&xi, &wi_) in nodes.iter().zip(&weights) {
-        for (&xj, &wj) in nodes.iter().zip(&weights) {
-            let u = Vec2::new((0.5 * xi + 0.5) as f32, (0.5 * xj + 0.5) as f32);
-            let m = distribution.sample(wo, u);
-            if m.pdf <= 0.0 || m.pdf.is_nan() {
-                continue;
+    // The n × n product rule's normals, with the work of one coordinate done once per node.
+    distribution.sample_grid(wo, &u, &u, |i, j, m| {
+        if m.pdf <= 0.0 || m.pdf.is_nan() {
+            return;
+        }
+        let m = m.value;
+        let (f, cos_t, _, eta_ti) = fresnel_dielectric(wo.dot(m), eta);
+        // D G |wo·m| / (cos θₒ p(m)): for visible normals (p = G1(wo) |wo·m| D / cos θₒ) the
+        // masking of the scattered direction, G1(w, m), as Mitsuba evaluates it (without
+        // D, G and the density again: the tables take a quarter less time).
+        let ratio = |w: Vec3| {
+            if visible {
+                distribution.g1(w, m)
+            } else {
+                distribution.d(m) * distribution.g(wo, w, m) * wo.dot(m).abs() / (wo.z * distribution.pdf(wo, m))
             }
-            let m = m.value;
-            let (f, cos_t, _, eta_ti) = fresnel_dielectric(wo.dot(m), eta);
-            // D G |wo·m| / (cos θₒ p(m)): for visible normals (p = G1(wo) |wo·m| D / cos θₒ) the
-            // masking of the scattered direction, G1(w, m), as Mitsuba evaluates it (without
-            // D, G and the density again: the tables take a quarter less time).
-            let ratio = |w: Vec3| {
-                if visible {
-                    distribution.g1(w, m)
-                } else {
-                    distribution.d(m) * distribution.g(wo, w, m) * wo.dot(m).abs() / (wo.z * distribution.pdf(wo, m))
-                }
-            };
-            let weight = wi_ * wj * 0.25;
-            let wr = reflect_about(wo, m);
-            if wr.z > 0.0 {
-                r += weight * (f * ratio(wr)) as f64;
-            }
-            if f < 1.0 {
-                let wt = refract_about(wo, m, cos_t, eta_ti);
-                if wt.z < 0.0 {
-                    t += weight * ((1.0 - f) * ratio(wt)) as f64;
-                }
+        };
+        let weight = weights[i] * weights[j] * 0.25;
+        let wr = reflect_about(wo, m);
+        if wr.z > 0.0 {
+            r += weight * (f * ratio(wr)) as f64;
+        }
+        if f < 1.0 {
+            let wt = refract_about(wo, m, cos_t, eta_ti);
+            if wt.z < 0.0 {
+                t += weight * ((1.0 - f) * ratio(wt)) as f64;
             }
         }
-    }
+    });
     (r as f32, t as f32)
 }
 
