@@ -176,18 +176,9 @@ impl Microfacet {
     /// Heitz 2018: sample the visible hemisphere of the stretched (α = 1) configuration as a
     /// disk warped toward the projected hemisphere, then unstretch.
     fn sample_ggx_visible(&self, wi: Vec3, u: Vec2) -> Vec3 {
-        let vh = Vec3::new(self.alpha_u * wi.x, self.alpha_v * wi.y, wi.z).normalize();
-        let lensq = vh.x * vh.x + vh.y * vh.y;
-        let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
-        let t2 = vh.cross(t1);
-        let r = u.x.sqrt();
+        let view = GgxView::new(self, wi);
         let phi = 2.0 * PI * u.y;
-        let p1 = r * phi.cos();
-        let mut p2 = r * phi.sin();
-        let s = 0.5 * (1.0 + vh.z);
-        p2 = (1.0 - s) * safe_sqrt(1.0 - p1 * p1) + s * p2;
-        let nh = t1 * p1 + t2 * p2 + vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2);
-        Vec3::new(self.alpha_u * nh.x, self.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
+        view.normal(self, u.x.sqrt(), (phi.cos(), phi.sin()))
     }
 
     /// Jakob 2014: sample the slope distribution of the stretched configuration seen from `wi`
@@ -219,30 +210,92 @@ impl Microfacet {
 
     /// Calls `f(i, j, s)` for every `i < ux.len()`, `j < uy.len()` (row by row) with the sample
     /// `s` that [`Microfacet::sample`] gives for `wi` and `u = (ux[i], uy[j])`, bit for bit: a
-    /// product grid of random numbers, as quadrature over visible normals uses. For Beckmann
-    /// the work that depends on one coordinate only is done once per coordinate (the Newton
-    /// inversion of the x slope per `ux[i]`, the y slope per `uy[j]`, and `G1(wi)` of the
-    /// density), which leaves a normalization and the density's `D(m)` per sample.
+    /// product grid of random numbers, as quadrature over visible normals uses. The work that
+    /// depends on one coordinate only is done once per coordinate: for Beckmann the Newton
+    /// inversion of the x slope per `ux[i]` and the y slope per `uy[j]`, for GGX the disk
+    /// radius and angle; and `G1(wi)` of the density once. What remains per sample is the
+    /// normal's normalization and the density's `D(m)`.
     pub fn sample_grid(&self, wi: Vec3, ux: &[f32], uy: &[f32], mut f: impl FnMut(usize, usize, Sample<Vec3>)) {
-        if self.kind != MicrofacetType::Beckmann {
-            for (i, &x) in ux.iter().enumerate() {
-                for (j, &y) in uy.iter().enumerate() {
-                    f(i, j, self.sample(wi, Vec2::new(x, y)));
+        match self.kind {
+            MicrofacetType::Beckmann => {
+                let (slopes, cos_phi, sin_phi) = self.beckmann_view(wi);
+                let xs: Vec<f32> = ux.iter().map(|&u| slopes.x(u)).collect();
+                let ys: Vec<(f32, f32)> = uy.iter().map(|&u| slopes.y(u)).collect();
+                self.visible_grid(wi, &xs, &ys, f, |x, y| {
+                    let (sx, sy) = slopes.combine(x, y);
+                    self.beckmann_normal(cos_phi, sin_phi, sx, sy)
+                });
+            }
+            MicrofacetType::Ggx => {
+                let view = GgxView::new(self, wi);
+                let rs: Vec<f32> = ux.iter().map(|&u| u.sqrt()).collect();
+                let angles: Vec<(f32, f32)> = uy
+                    .iter()
+                    .map(|&u| {
+                        let phi = 2.0 * PI * u;
+                        (phi.cos(), phi.sin())
+                    })
+                    .collect();
+                self.visible_grid(wi, &rs, &angles, f, |r, angle| view.normal(self, r, angle));
+            }
+            MicrofacetType::BlinnPhong(_) => {
+                for (i, &x) in ux.iter().enumerate() {
+                    for (j, &y) in uy.iter().enumerate() {
+                        f(i, j, self.sample(wi, Vec2::new(x, y)));
+                    }
                 }
             }
-            return;
         }
-        let (slopes, cos_phi, sin_phi) = self.beckmann_view(wi);
-        let xs: Vec<f32> = ux.iter().map(|&u| slopes.x(u)).collect();
-        let ys: Vec<(f32, f32)> = uy.iter().map(|&u| slopes.y(u)).collect();
+    }
+
+    /// [`Microfacet::sample_grid`] of visible normals from the per-coordinate parts `xs`, `ys`
+    /// that `normal` combines.
+    #[inline(always)]
+    fn visible_grid<X: Copy, Y: Copy>(
+        &self,
+        wi: Vec3,
+        xs: &[X],
+        ys: &[Y],
+        mut f: impl FnMut(usize, usize, Sample<Vec3>),
+        normal: impl Fn(X, Y) -> Vec3,
+    ) {
         let g1_front = 1.0 / (1.0 + self.lambda(wi));
         for (i, &x) in xs.iter().enumerate() {
             for (j, &y) in ys.iter().enumerate() {
-                let (sx, sy) = slopes.combine(x, y);
-                let m = self.beckmann_normal(cos_phi, sin_phi, sx, sy);
+                let m = normal(x, y);
                 f(i, j, Sample::solid_angle(m, self.visible_pdf(wi, m, || g1_front)));
             }
         }
+    }
+}
+
+/// What GGX visible-normal sampling (Heitz 2018) for one direction computes before it looks at
+/// `u`: the stretched direction `vh`, the frame `(t1, t2)` around it, and the warp's blend `s`.
+#[derive(Clone, Copy, Debug)]
+struct GgxView {
+    vh: Vec3,
+    t1: Vec3,
+    t2: Vec3,
+    s: f32,
+}
+
+impl GgxView {
+    #[inline(always)]
+    fn new(md: &Microfacet, wi: Vec3) -> GgxView {
+        let vh = Vec3::new(md.alpha_u * wi.x, md.alpha_v * wi.y, wi.z).normalize();
+        let lensq = vh.x * vh.x + vh.y * vh.y;
+        let t1 = if lensq > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / lensq.sqrt() } else { Vec3::X };
+        GgxView { vh, t1, t2: vh.cross(t1), s: 0.5 * (1.0 + vh.z) }
+    }
+
+    /// The normal of the disk point at radius `r = √u.x` and angle `(cos, sin)` of `2π u.y`:
+    /// warped toward the projected hemisphere, lifted onto it, unstretched.
+    #[inline(always)]
+    fn normal(&self, md: &Microfacet, r: f32, (cos_phi, sin_phi): (f32, f32)) -> Vec3 {
+        let p1 = r * cos_phi;
+        let p2 = (1.0 - self.s) * safe_sqrt(1.0 - p1 * p1) + self.s * (r * sin_phi);
+        let nh = self.t1 * p1 + self.t2 * p2 + self.vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2);
+        Vec3::new(md.alpha_u * nh.x, md.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
     }
 }
 
