@@ -20,7 +20,7 @@
 //! ratio `Σ f L / Σ f` still has the right expectation (Mitsuba's handling).
 
 use crate::math::special::exp4;
-use crate::math::Vec2;
+use crate::math::{ceil, floor, Vec2};
 use crate::props::{Obj, Result as PropResult};
 
 /// Largest border (pixels beyond a tile) a filter footprint may need: radii up to
@@ -231,10 +231,10 @@ impl Filter {
         mut visit: impl FnMut(i64, i64, f32),
     ) {
         let r = self.radius();
-        let d0x = ((offset.x - r - 0.5).ceil() as i64).max(lo[0] - origin[0]);
-        let d1x = ((offset.x + r - 0.5).floor() as i64).min(hi[0] - origin[0]);
-        let d0y = ((offset.y - r - 0.5).ceil() as i64).max(lo[1] - origin[1]);
-        let d1y = ((offset.y + r - 0.5).floor() as i64).min(hi[1] - origin[1]);
+        let d0x = (ceil(offset.x - r - 0.5) as i64).max(lo[0] - origin[0]);
+        let d1x = (floor(offset.x + r - 0.5) as i64).min(hi[0] - origin[0]);
+        let d0y = (ceil(offset.y - r - 0.5) as i64).max(lo[1] - origin[1]);
+        let d1y = (floor(offset.y + r - 0.5) as i64).min(hi[1] - origin[1]);
         const MAX: usize = 2 * MAX_BORDER as usize + 2;
         let (mut wx, mut wy) = ([0.0f32; MAX], [0.0f32; MAX]);
         let (nx, ny) = ((d1x - d0x + 1).max(0) as usize, (d1y - d0y + 1).max(0) as usize);

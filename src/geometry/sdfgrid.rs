@@ -311,8 +311,8 @@ impl SdfGrid {
         // The point is where the root finder stopped, within its tolerance along the ray, not
         // reprojected onto the level set.
         let voxel_extent = self.to_world.apply_vector(self.voxel_size()).abs().max_element();
-        let p_error = Vec3::splat(SOLVE_EPSILON * ray.d.length() + 1e-5 * voxel_extent)
-            + p.abs() * (32.0 * f32::EPSILON);
+        let p_error =
+            Vec3::splat(SOLVE_EPSILON * ray.d.length() + 1e-5 * voxel_extent) + p.abs() * (32.0 * f32::EPSILON);
         (p, p_error, ng, ns)
     }
 
@@ -330,7 +330,7 @@ impl SdfGrid {
         let v = [0, 1, 2].map(|a| scaled[a].round() as i64 - 1);
         let mut uvw = [0, 1, 2].map(|a| scaled[a] - v[a] as f32 - 0.5);
         // The cell holding p, and p in it.
-        let cell = [0, 1, 2].map(|a| (scaled[a].floor() as i64).clamp(0, n[a] - 2));
+        let cell = [0, 1, 2].map(|a| (crate::math::floor(scaled[a]) as i64).clamp(0, n[a] - 2));
         let w = [0, 1, 2].map(|a| scaled[a] - cell[a] as f32);
         // The interpolant on the sample plane `q` across axis `a`, at p along the other two.
         let plane = |a: usize, q: i64| {
@@ -389,7 +389,7 @@ impl SdfGrid {
     fn value_at(&self, p: Vec3) -> f32 {
         let res = self.resolution();
         let g = (p * res).clamp(Vec3::ZERO, res);
-        let cell = g.floor().min(res - Vec3::ONE);
+        let cell = g.map(crate::math::floor).min(res - Vec3::ONE);
         let base = (cell.z as usize * self.res[1] + cell.y as usize) * self.res[0] + cell.x as usize;
         trilerp(&self.corners(base), g - cell)
     }
@@ -407,7 +407,8 @@ fn voxel_cubic(f: &[f32; 8], o: Vec3, d: Vec3) -> Cubic {
     let k5 = f[5] - f[4] - k1;
     let k6 = f[6] - f[4] - k2;
     let k7 = (f[7] - f[6] - f[5] + f[4]) - k3;
-    let c0 = k0 + k1 * o.x + k2 * o.y + k4 * o.z + k3 * o.x * o.y + k5 * o.x * o.z + k6 * o.y * o.z + k7 * o.x * o.y * o.z;
+    let c0 =
+        k0 + k1 * o.x + k2 * o.y + k4 * o.z + k3 * o.x * o.y + k5 * o.x * o.z + k6 * o.y * o.z + k7 * o.x * o.y * o.z;
     let c1 = k1 * d.x
         + k2 * d.y
         + k4 * d.z
@@ -415,10 +416,8 @@ fn voxel_cubic(f: &[f32; 8], o: Vec3, d: Vec3) -> Cubic {
         + k5 * (o.x * d.z + o.z * d.x)
         + k6 * (o.y * d.z + o.z * d.y)
         + k7 * (d.x * o.y * o.z + o.x * d.y * o.z + o.x * o.y * d.z);
-    let c2 = k3 * d.x * d.y
-        + k5 * d.x * d.z
-        + k6 * d.y * d.z
-        + k7 * (d.x * d.y * o.z + d.x * o.y * d.z + o.x * d.y * d.z);
+    let c2 =
+        k3 * d.x * d.y + k5 * d.x * d.z + k6 * d.y * d.z + k7 * (d.x * d.y * o.z + d.x * o.y * d.z + o.x * d.y * d.z);
     let c3 = k7 * d.x * d.y * d.z;
     Cubic([c0, c1, c2, c3])
 }

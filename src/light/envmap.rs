@@ -269,7 +269,7 @@ impl EnvMap {
     fn lookup(&self, uv: Vec2) -> Rgb {
         let (w, h) = (self.image.width as i64, self.image.height as i64);
         let mut u = uv.x - self.half_texel();
-        u -= u.floor();
+        u -= crate::math::floor(u);
         let x = u * w as f32;
         let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
         let (i, j) = ((x as i64).min(w - 1), (y as i64).min(h - 2));
@@ -285,7 +285,7 @@ impl EnvMap {
     #[inline]
     fn to_grid(&self, uv: Vec2) -> Vec2 {
         let mut u = uv.x - self.half_texel();
-        u -= u.floor();
+        u -= crate::math::floor(u);
         Vec2::new(u.min(crate::math::ONE_MINUS_EPSILON), uv.y)
     }
 

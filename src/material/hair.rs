@@ -219,7 +219,7 @@ fn sample_trimmed_logistic(u: f32, s: f32) -> f32 {
 fn np(dphi: f32, p: usize, s: f32, gamma_o: f32, gamma_t: f32) -> f32 {
     let mut d = dphi - phi(p, gamma_o, gamma_t);
     // Into [−π, π].
-    d -= (2.0 * PI) * ((d + PI) / (2.0 * PI)).floor();
+    d -= (2.0 * PI) * crate::math::floor((d + PI) / (2.0 * PI));
     trimmed_logistic(d, s)
 }
 

@@ -93,12 +93,12 @@ impl Grid {
         let w = self.wrap;
         match self.filter {
             GridFilter::Nearest => {
-                let i = [0, 1, 2].map(|a| w.apply((p[a] * res[a] as f32).floor() as i64, res[a]));
+                let i = [0, 1, 2].map(|a| w.apply(crate::math::floor(p[a] * res[a] as f32) as i64, res[a]));
                 self.texel(i)
             }
             GridFilter::Trilinear => {
                 let x = [0, 1, 2].map(|a| p[a] * res[a] as f32 - 0.5);
-                let i0 = x.map(|v| v.floor());
+                let i0 = x.map(crate::math::floor);
                 let f = [0, 1, 2].map(|a| x[a] - i0[a]);
                 let lo = [0, 1, 2].map(|a| w.apply(i0[a] as i64, res[a]));
                 let hi = [0, 1, 2].map(|a| w.apply(i0[a] as i64 + 1, res[a]));
@@ -229,7 +229,8 @@ pub fn volume_param(
 /// lie in [0, 1] whatever the parameter (larger extinctions take `scale`, a float, or a
 /// `constvolume`).
 pub fn constant_param(o: &Obj, name: &str, default: f32, kind: SpectrumKind) -> Result<Rgb> {
-    let kind = if matches!(o.get(name).map(|p| &p.value), Some(Value::Rgb(_))) { SpectrumKind::Reflectance } else { kind };
+    let kind =
+        if matches!(o.get(name).map(|p| &p.value), Some(Value::Rgb(_))) { SpectrumKind::Reflectance } else { kind };
     o.rgb(name, Rgb::splat(default), kind)
 }
 

@@ -15,7 +15,7 @@
 use crate::geometry::mesh::MeshPoint;
 use crate::image::{Image, ImageSource};
 use crate::math::spectrum::SpectrumKind;
-use crate::math::{Mat3, Rgb, Vec2, Vec3};
+use crate::math::{floor, Mat3, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use std::sync::Arc;
 
@@ -187,7 +187,7 @@ impl Texture {
     #[inline]
     fn checker_cell0(to_uv: &Mat3, uv: Vec2) -> bool {
         let p = to_uv.transform_point2(uv);
-        let (fu, fv) = (p.x - p.x.floor(), p.y - p.y.floor());
+        let (fu, fv) = (p.x - floor(p.x), p.y - floor(p.y));
         (fu > 0.5) == (fv > 0.5)
     }
 }
@@ -206,22 +206,44 @@ impl From<Rgb> for Texture {
 
 impl Bitmap {
     fn texel(&self, x: i64, y: i64) -> Rgb {
-        let (w, h) = (self.image.width as i64, self.image.height as i64);
-        if self.wrap[0] == Wrap::OctahedralSphere || self.wrap[1] == Wrap::OctahedralSphere {
+        if self.octahedral() {
             return self.octahedral_texel(x, y);
         }
-        let wrap = |i: i64, n: i64, axis: usize| match self.wrap[axis] {
+        self.wrapped_texel(self.wrap_index(x, 0), self.wrap_index(y, 1))
+    }
+
+    /// Whether either axis wraps octahedrally (which couples the axes: [`Bitmap::octahedral_texel`]).
+    #[inline]
+    fn octahedral(&self) -> bool {
+        self.wrap[0] == Wrap::OctahedralSphere || self.wrap[1] == Wrap::OctahedralSphere
+    }
+
+    /// Texel index `i` along `axis` after that axis's wrap (not octahedral): `None` outside a
+    /// black border. Indices inside the image are their own wrap in every mode.
+    #[inline]
+    fn wrap_index(&self, i: i64, axis: usize) -> Option<i64> {
+        let n = if axis == 0 { self.image.width } else { self.image.height } as i64;
+        if (0..n).contains(&i) {
+            return Some(i);
+        }
+        match self.wrap[axis] {
             Wrap::Repeat => Some(i.rem_euclid(n)),
             Wrap::Clamp => Some(i.clamp(0, n - 1)),
             Wrap::Mirror => {
                 let m = i.rem_euclid(2 * n);
                 Some(if m < n { m } else { 2 * n - 1 - m })
             }
-            Wrap::Black => (0..n).contains(&i).then_some(i),
-            Wrap::OctahedralSphere => unreachable!("handled for both axes above"),
-        };
+            Wrap::Black => None,
+            // Not reached (octahedral images take `octahedral_texel`): the nearest texel.
+            Wrap::OctahedralSphere => Some(i.clamp(0, n - 1)),
+        }
+    }
+
+    /// The texel at wrapped indices, black where either is outside a black border.
+    #[inline]
+    fn wrapped_texel(&self, x: Option<i64>, y: Option<i64>) -> Rgb {
         // Row 0 of the image is its top: v = 0.
-        match (wrap(x, w, 0), wrap(y, h, 1)) {
+        match (x, y) {
             (Some(i), Some(j)) => self.image.get(i, j),
             _ => Rgb::ZERO,
         }
@@ -251,7 +273,7 @@ impl Bitmap {
     #[inline]
     fn bilinear_cell(&self, uv: Vec2) -> (i64, i64, f32, f32) {
         let (x, y) = (uv.x * self.image.width as f32 - 0.5, uv.y * self.image.height as f32 - 0.5);
-        let (x0, y0) = (x.floor(), y.floor());
+        let (x0, y0) = (floor(x), floor(y));
         (x0 as i64, y0 as i64, x - x0, y - y0)
     }
 
@@ -260,14 +282,19 @@ impl Bitmap {
         match self.filter {
             Filter::Nearest => {
                 let (w, h) = (self.image.width as f32, self.image.height as f32);
-                self.texel((uv.x * w).floor() as i64, (uv.y * h).floor() as i64)
+                self.texel(floor(uv.x * w) as i64, floor(uv.y * h) as i64)
             }
             Filter::Bilinear => {
                 let (x0, y0, fx, fy) = self.bilinear_cell(uv);
-                self.texel(x0, y0) * ((1.0 - fx) * (1.0 - fy))
-                    + self.texel(x0 + 1, y0) * (fx * (1.0 - fy))
-                    + self.texel(x0, y0 + 1) * ((1.0 - fx) * fy)
-                    + self.texel(x0 + 1, y0 + 1) * (fx * fy)
+                let [t00, t10, t01, t11] = if self.octahedral() {
+                    [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| self.octahedral_texel(x0 + dx, y0 + dy))
+                } else {
+                    // Each axis wrapped once for the two texels along it.
+                    let (xa, xb) = (self.wrap_index(x0, 0), self.wrap_index(x0 + 1, 0));
+                    let (ya, yb) = (self.wrap_index(y0, 1), self.wrap_index(y0 + 1, 1));
+                    [(xa, ya), (xb, ya), (xa, yb), (xb, yb)].map(|(x, y)| self.wrapped_texel(x, y))
+                };
+                t00 * ((1.0 - fx) * (1.0 - fy)) + t10 * (fx * (1.0 - fy)) + t01 * ((1.0 - fx) * fy) + t11 * (fx * fy)
             }
         }
     }
@@ -814,6 +841,28 @@ mod tests {
         assert_eq!(octa.eval(Vec2::new(-0.25, 0.25)), Rgb::ONE, "(−1, 0) → (1, 1)");
         assert_eq!(octa.eval(Vec2::new(0.75, -0.25)), Rgb::Z, "(1, −1) → (0, 1)");
         assert_eq!(octa.eval(Vec2::new(0.75, 0.25)), Rgb::Y, "inside");
+    }
+
+    /// Bilinear lookups wrap each axis once for both texels along it: the same value as the
+    /// four texels looked up one by one, in every wrap mode, inside, across and far beyond the
+    /// edges.
+    #[test]
+    fn bilinear_is_the_weighted_texels_in_every_wrap() {
+        let modes = [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror, Wrap::Black];
+        let mut wraps: Vec<[Wrap; 2]> = modes.iter().flat_map(|&a| modes.map(|b| [a, b])).collect();
+        wraps.push([Wrap::OctahedralSphere; 2]);
+        for wrap in wraps {
+            let b = Bitmap { image: image(), filter: Filter::Bilinear, wrap };
+            for k in 0..400 {
+                let uv = Vec2::new(-3.1 + 0.0173 * k as f32, 2.7 - 0.0139 * k as f32);
+                let (x0, y0, fx, fy) = b.bilinear_cell(uv);
+                let expected = b.texel(x0, y0) * ((1.0 - fx) * (1.0 - fy))
+                    + b.texel(x0 + 1, y0) * (fx * (1.0 - fy))
+                    + b.texel(x0, y0 + 1) * ((1.0 - fx) * fy)
+                    + b.texel(x0 + 1, y0 + 1) * (fx * fy);
+                assert_eq!(b.eval(uv), expected, "{wrap:?} at {uv}");
+            }
+        }
     }
 
     #[test]

@@ -63,7 +63,7 @@ pub fn noise(p: Vec3) -> f32 {
     if !p.is_finite() {
         return 0.0;
     }
-    let c = p.floor();
+    let c = p.map(crate::math::floor);
     let d = p - c;
     let (ix, iy, iz) = ((c.x as i64 & 255) as usize, (c.y as i64 & 255) as usize, (c.z as i64 & 255) as usize);
     let w = |ox: usize, oy: usize, oz: usize| {

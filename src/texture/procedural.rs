@@ -140,7 +140,7 @@ pub enum Procedural {
 /// holds a dot where the noise at its centre is positive, of radius 0.35, its centre shifted by
 /// up to 0.15 along each axis by two more noise lookups.
 pub fn in_polka_dot(st: Vec2) -> bool {
-    let (sc, tc) = ((st.x + 0.5).floor(), (st.y + 0.5).floor());
+    let (sc, tc) = (crate::math::floor(st.x + 0.5), crate::math::floor(st.y + 0.5));
     if noise(Vec3::new(sc + 0.5, tc + 0.5, 0.5)) <= 0.0 {
         return false;
     }
@@ -177,7 +177,7 @@ fn bezier(c: [Rgb; 4], t: f32) -> Rgb {
 pub fn marble_colour(t: f32) -> Rgb {
     let segments = MARBLE.len() - 3;
     let x = t.clamp(0.0, 1.0) * segments as f32;
-    let first = (x.floor() as usize).min(segments - 1);
+    let first = (crate::math::floor(x) as usize).min(segments - 1);
     let c = |i: usize| Rgb::from_array(MARBLE[first + i]);
     1.5 * bezier([c(0), c(1), c(2), c(3)], x - first as f32)
 }
@@ -192,7 +192,7 @@ impl Procedural {
             }
             Procedural::PolkaDots => Rgb::splat(if in_polka_dot(st) { 1.0 } else { 0.0 }),
             Procedural::Checker3d { from_world } => {
-                let q = from_world.transform_point3(p).floor();
+                let q = from_world.transform_point3(p).map(crate::math::floor);
                 let odd = (q.x as i64 + q.y as i64 + q.z as i64).rem_euclid(2) == 1;
                 Rgb::splat(if odd { 1.0 } else { 0.0 })
             }
@@ -235,7 +235,7 @@ impl Procedural {
         // The R2/R3 low-discrepancy sequences (Roberts): deterministic and even.
         let (g2, g3) = (1.324_718_f32, 1.220_744_f32);
         let (a2, a3) = ([1.0 / g2, 1.0 / (g2 * g2)], [1.0 / g3, 1.0 / (g3 * g3), 1.0 / (g3 * g3 * g3)]);
-        let frac = |x: f32| x - x.floor();
+        let frac = |x: f32| x - crate::math::floor(x);
         (0..N)
             .map(|i| {
                 let k = i as f32 + 0.5;
@@ -445,7 +445,7 @@ mod tests {
                 if in_polka_dot(st) {
                     inside += 1;
                     // Inside a dot means within 0.35 + 0.15 of the cell centre.
-                    let c = (st + Vec2::splat(0.5)).floor();
+                    let c = (st + Vec2::splat(0.5)).map(crate::math::floor);
                     assert!((st - c).length() < 0.5 + 1e-4, "{st}");
                 }
             }
