@@ -84,6 +84,29 @@ pub fn ceil(x: f32) -> f32 {
     }
 }
 
+/// `x.round()` (half away from zero) inlined, exact as `round` for every input (see [`floor`]).
+#[inline(always)]
+pub fn round(x: f32) -> f32 {
+    if x.is_nan() {
+        // Quieted, as the library's.
+        return x + x;
+    }
+    if x.abs() >= 8_388_608.0 || x == 0.0 {
+        return x;
+    }
+    let t = x as i32 as f32;
+    // The fraction `x - t` is exact; `x + 0.5` rounded would not be (0.49999997 + 0.5 is 1).
+    let d = x - t;
+    let r = if d >= 0.5 {
+        t + 1.0
+    } else if d <= -0.5 {
+        t - 1.0
+    } else {
+        t
+    };
+    r.copysign(x)
+}
+
 /// `acos` with its argument clamped to `[-1, 1]`.
 #[inline]
 pub fn safe_acos(x: f32) -> f32 {
@@ -135,8 +158,8 @@ mod tests {
     }
 
     #[test]
-    fn floor_and_ceil_are_the_library_ones_bit_for_bit() {
-        let mut special = vec![0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0];
+    fn floor_ceil_and_round_are_the_library_ones_bit_for_bit() {
+        let mut special = vec![0.0f32, -0.0, 0.5, -0.5, 1.5, -2.5, 0.499_999_97, -0.499_999_97, 1.0, -1.0, 8_388_607.5, -8_388_607.5, 8_388_608.0];
         special.extend([-8_388_609.0, 1e30, -1e30, f32::MIN_POSITIVE, -f32::MIN_POSITIVE, 1e-45, -1e-45]);
         special.extend([f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 0.999_999_94, -0.999_999_94, 2.0e9, -2.0e9]);
         // Every special value, and a sweep over all exponents (every 97th bit pattern).
@@ -144,6 +167,7 @@ mod tests {
         for x in special.into_iter().chain(sweep) {
             assert_eq!(floor(x).to_bits(), x.floor().to_bits(), "floor({x:e})");
             assert_eq!(ceil(x).to_bits(), x.ceil().to_bits(), "ceil({x:e})");
+            assert_eq!(round(x).to_bits(), x.round().to_bits(), "round({x:e})");
         }
     }
 

@@ -24,7 +24,7 @@ pub fn sin_cos_quarter(x: f32) -> (f32, f32) {
 /// and cosine come from [`sin_cos_quarter`] and are rotated by `q` quarter turns.
 #[inline(always)]
 pub fn sin_cos_2pi(u: f32) -> (f32, f32) {
-    let q = (4.0 * u).round();
+    let q = super::round(4.0 * u);
     let (s, c) = sin_cos_quarter(TAU * (u - 0.25 * q));
     match q as i32 & 3 {
         0 => (s, c),
