@@ -11,6 +11,7 @@
 use super::trace::{self, Mis, MisHeuristic, PrevVertex};
 use super::{Integrator, RadianceSample};
 use crate::light::LightSampleContext;
+use crate::material::TextureMemo;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
@@ -73,7 +74,9 @@ impl DirectIntegrator {
         let bsdf = &scene.bsdfs()[shape.bsdf as usize];
         let frame = si.frame();
         let wo_local = frame.to_local(wo);
-        let ctx = scene.bsdf_context(&si);
+        // Textures and normal maps looked up once for this vertex's BSDF calls.
+        let memo = TextureMemo::default();
+        let ctx = scene.bsdf_context(&si).with_memo(&memo);
         let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
         let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();

@@ -17,7 +17,7 @@
 use super::trace::{self, Mis, PathSettings, PrevVertex};
 use super::{Integrator, RadianceSample};
 use crate::light::LightSampleContext;
-use crate::material::{Bsdf, BsdfContext};
+use crate::material::{Bsdf, BsdfContext, TextureMemo};
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_hemisphere, sample_uniform_sphere, Sampler};
 use crate::scene::Scene;
@@ -210,7 +210,9 @@ impl PathIntegrator {
             let bsdf = &scene.bsdfs()[shape.bsdf as usize];
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
-            let ctx = scene.bsdf_context(&si);
+            // Textures and normal maps looked up once for this vertex's BSDF calls.
+            let memo = TextureMemo::default();
+            let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
 

@@ -30,6 +30,7 @@ use crate::light::Light;
 use crate::math::float::offset_ray_origin;
 use crate::math::{luminance, Ray, Rgb, Vec2, Vec3};
 use crate::sampling::Pcg32;
+use crate::material::TextureMemo;
 use crate::scene::Scene;
 
 /// The light tracer's settings: `max_depth` counts segments with the camera connection,
@@ -108,7 +109,9 @@ impl LightTracer {
             let frame = si.frame();
             let w_prev = -ray.d;
             let wo = frame.to_local(w_prev);
-            let ctx = scene.bsdf_context(&si);
+            // Textures and normal maps looked up once for this vertex's BSDF calls.
+            let memo = TextureMemo::default();
+            let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let (u_lens, u_lobe, u_bsdf, u_rr) = (u2(), u2().x, u2(), u2().x);
 
             // Connect this vertex to the camera.

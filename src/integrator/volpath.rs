@@ -22,7 +22,7 @@ use super::trace::{self, Mis, PathSettings, PrevVertex};
 use super::{Integrator, RadianceSample};
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::LightSampleContext;
-use crate::material::Bsdf;
+use crate::material::{Bsdf, TextureMemo};
 use crate::math::float::offset_ray_origin;
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::medium::{FreeFlight, Medium};
@@ -222,7 +222,9 @@ impl Integrator for VolPathIntegrator {
             }
             let frame: Frame = si.frame();
             let wo_local = frame.to_local(wo);
-            let ctx = scene.bsdf_context(&si);
+            // Textures and normal maps looked up once for this vertex's BSDF calls.
+            let memo = TextureMemo::default();
+            let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());

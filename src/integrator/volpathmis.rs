@@ -30,7 +30,7 @@ use super::volpath::medium_after;
 use super::{Integrator, RadianceSample};
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::{LightSample, LightSampleContext};
-use crate::material::Bsdf;
+use crate::material::{Bsdf, TextureMemo};
 use crate::math::float::offset_ray_origin;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::medium::Medium;
@@ -356,7 +356,9 @@ impl Integrator for VolPathMisIntegrator {
             }
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
-            let ctx = scene.bsdf_context(&si);
+            // Textures and normal maps looked up once for this vertex's BSDF calls.
+            let memo = TextureMemo::default();
+            let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             if !bsdf.is_delta() {
                 let origin = ShadowOrigin::Surface(si, wo);

@@ -417,7 +417,7 @@ mod tests {
     }
 
     fn at(v: f32) -> BsdfContext<'static> {
-        BsdfContext { uv: Vec2::new(0.3, v), mesh: None, si: None }
+        BsdfContext { uv: Vec2::new(0.3, v), mesh: None, si: None, memo: None }
     }
 
     fn directions() -> Vec<Vec3> {

@@ -15,6 +15,7 @@ mod diffusetransmission;
 pub mod hair;
 pub mod fresnel;
 pub mod layered;
+mod memo;
 pub mod microfacet;
 mod perturbed;
 mod plastic;
@@ -32,6 +33,7 @@ pub use diffuse::Diffuse;
 pub use diffusetransmission::DiffuseTransmission;
 pub use hair::Hair;
 pub use layered::Layered;
+pub use memo::TextureMemo;
 pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
 pub use pplastic::PPlastic;
@@ -53,26 +55,52 @@ pub struct BsdfContext<'a> {
     pub mesh: Option<crate::geometry::mesh::MeshPoint<'a>>,
     /// The surface interaction, for BSDFs that perturb the shading frame (bump maps).
     pub si: Option<&'a crate::geometry::SurfaceInteraction>,
+    /// Where lookups made at this point are kept for the next call of the BSDF here (see
+    /// [`TextureMemo`]); none: every call looks up again.
+    pub memo: Option<&'a TextureMemo>,
 }
 
-impl BsdfContext<'_> {
+impl<'a> BsdfContext<'a> {
+    /// This context with its lookups remembered in `memo` (one memo per shading point: a
+    /// context whose point differs needs its own).
+    #[inline]
+    pub fn with_memo(self, memo: &'a TextureMemo) -> BsdfContext<'a> {
+        BsdfContext { memo: Some(memo), ..self }
+    }
+
     /// The texture `t` here. A constant (most parameters of most scenes) is read without
     /// building the lookup point or calling the general evaluation.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, t: &crate::texture::Texture) -> Rgb {
         match t {
             crate::texture::Texture::Constant(c) => *c,
-            _ => t.eval_at(&self.point()),
+            _ => self.lookup(t),
+        }
+    }
+
+    /// [`BsdfContext::eval`] of a texture that is not a constant: remembered in the memo.
+    fn lookup(&self, t: &crate::texture::Texture) -> Rgb {
+        match self.memo {
+            Some(memo) => Rgb::from(memo.get_or(t, memo::Lookup::Color, || t.eval_at(&self.point()).into())),
+            None => t.eval_at(&self.point()),
         }
     }
 
     /// The texture `t` here as a scalar ([`crate::texture::Texture::eval_scalar`]; a constant
     /// read directly, as in [`BsdfContext::eval`]).
-    #[inline]
+    #[inline(always)]
     pub fn scalar(&self, t: &crate::texture::Texture) -> f32 {
         match t {
             crate::texture::Texture::Constant(c) => crate::math::luminance(*c),
-            _ => t.eval_scalar(&self.point()),
+            _ => self.lookup_scalar(t),
+        }
+    }
+
+    /// [`BsdfContext::scalar`] of a texture that is not a constant: remembered in the memo.
+    fn lookup_scalar(&self, t: &crate::texture::Texture) -> f32 {
+        match self.memo {
+            Some(memo) => memo.get_or(t, memo::Lookup::Scalar, || [t.eval_scalar(&self.point()), 0.0, 0.0])[0],
+            None => t.eval_scalar(&self.point()),
         }
     }
 

@@ -29,6 +29,7 @@
 //!   of Estevez et al. 2019 (the bump-terminator fix), `2 / (1 + √(1 + α² tan²θᵢ))` with
 //!   `α² = min(tan²θₙ / 8, 1)`, θᵢ and θₙ measured from the original normal.
 
+use super::memo::Lookup;
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{Frame, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
@@ -162,7 +163,12 @@ impl Perturbed {
     /// The perturbed shading frame at `ctx` for the viewer at `wo` (local coordinates).
     #[inline]
     pub fn frame(&self, ctx: &BsdfContext, wo: Vec3) -> Frame {
-        perturbed_frame(self.perturbation.normal(ctx), wo, self.flip_invalid_normals)
+        // The normal is the same for every call at this point (the frame depends on `wo`).
+        let n = match ctx.memo {
+            Some(memo) => Vec3::from(memo.get_or(self, Lookup::Normal, || self.perturbation.normal(ctx).into())),
+            None => self.perturbation.normal(ctx),
+        };
+        perturbed_frame(n, wo, self.flip_invalid_normals)
     }
 
     #[inline]
@@ -313,6 +319,53 @@ mod tests {
         }
     }
 
+    /// A memo (one per shading point) changes no value: a bump map over rough plastic with a
+    /// textured albedo, sampled, evaluated and its density taken at many points and directions,
+    /// gives the same bits with a memo as without, and the memo keeps the lookups (a second
+    /// round of calls reads them back).
+    #[test]
+    fn a_memo_changes_no_value() {
+        use crate::material::microfacet::{Microfacet, MicrofacetType};
+        use crate::material::{RoughPlastic, TextureMemo};
+        let plastic = RoughPlastic::new(
+            Microfacet::new(MicrofacetType::Beckmann, 0.3, 0.3),
+            ramp(glam::Mat3::IDENTITY),
+            Rgb::ONE,
+            1.5,
+            false,
+        );
+        let bump = Bsdf::Perturbed(Perturbed {
+            perturbation: Perturbation::BumpMap { height: ramp(glam::Mat3::from_scale(Vec2::splat(3.0))), scale: 0.2 },
+            bsdf: Arc::new(Bsdf::RoughPlastic(plastic)),
+            flip_invalid_normals: true,
+            shadowing: true,
+        });
+        let bits = |c: Rgb| c.to_array().map(f32::to_bits);
+        for k in 0..50 {
+            let si = flat_hit(Vec2::new(0.02 * k as f32, 0.5));
+            let plain = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
+            let memo = TextureMemo::default();
+            let kept = plain.with_memo(&memo);
+            let wo = Vec3::new(0.3 - 0.01 * k as f32, 0.2, 0.8).normalize();
+            for round in 0..2 {
+                let u = Vec2::new(0.37, 0.01 + 0.019 * k as f32);
+                let (a, b) = (bump.sample(&plain, wo, 0.4, u), bump.sample(&kept, wo, 0.4, u));
+                assert_eq!(
+                    a.map(|s| (bits(s.wi), s.pdf.to_bits(), bits(s.weight))),
+                    b.map(|s| (bits(s.wi), s.pdf.to_bits(), bits(s.weight))),
+                    "k {k}, round {round}"
+                );
+                let wi = Vec3::new(-0.4, 0.1 * k as f32 / 50.0, 0.9).normalize();
+                assert_eq!(bits(bump.eval(&plain, wo, wi)), bits(bump.eval(&kept, wo, wi)), "k {k}, round {round}");
+                assert_eq!(
+                    bump.pdf(&plain, wo, wi).to_bits(),
+                    bump.pdf(&kept, wo, wi).to_bits(),
+                    "k {k}, round {round}"
+                );
+            }
+        }
+    }
+
     /// A bump map's normal on a flat surface with `∂p/∂u = (2, 0, 0)`, `∂p/∂v = (0, 2, 0)`: a
     /// height slope `g` along u (scale included) tilts it to `(−g/2, 0, 1)`, normalized; flipping
     /// the geometric normal's side flips the result back onto it.
@@ -321,12 +374,12 @@ mod tests {
         // Slope of the height field along u: 1, times scale 0.3.
         let bump = perturbed(Perturbation::BumpMap { height: ramp(glam::Mat3::IDENTITY), scale: 0.3 });
         let si = flat_hit(Vec2::new(0.5, 0.5));
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
         let n = bump.frame(&ctx, Vec3::Z).n;
         let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();
         assert!((n - expected).length() < 1e-5, "{n} vs {expected}");
         let below = crate::geometry::SurfaceInteraction { ng: -Vec3::Z, ..si };
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&below) };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&below), memo: None };
         assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
 
@@ -338,7 +391,7 @@ mod tests {
     fn displacement_tilts_by_its_forward_difference() {
         let displaced = |displacement: Texture| perturbed(Perturbation::Displacement { displacement });
         let si = flat_hit(Vec2::new(0.5, 0.4));
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si) };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
         let along_u = displaced(ramp(glam::Mat3::IDENTITY).times(Texture::Constant(Rgb::splat(0.3))));
         let n = along_u.frame(&ctx, Vec3::Z).n;
         let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();

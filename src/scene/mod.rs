@@ -357,7 +357,7 @@ impl Scene {
             }
             _ => None,
         };
-        crate::material::BsdfContext { uv: si.uv, mesh, si: Some(si) }
+        crate::material::BsdfContext { uv: si.uv, mesh, si: Some(si), memo: None }
     }
 
     /// The closest surface hit along `ray` within `(0, ray.t_max)`.
