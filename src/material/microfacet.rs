@@ -112,7 +112,13 @@ impl Microfacet {
             MicrofacetType::Ggx => 0.5 * (-1.0 + (1.0 + tan2_alpha2).sqrt()),
             MicrofacetType::Beckmann | MicrofacetType::BlinnPhong(_) => {
                 let a = 1.0 / tan2_alpha2.sqrt();
-                0.5 * (erf(a) - 1.0) + exp(-a * a) * INV_SQRT_PI / (2.0 * a)
+                // From a = 4 on, erf(a) is 1 in single precision and Λ under 2⁻²⁵: every use,
+                // 1 / (1 + Λ), is exactly 1 either way (tested), without the erf and the
+                // exponential. Smooth surfaces seen away from grazing are all there.
+                if a >= BECKMANN_LAMBDA_ZERO {
+                    return 0.0;
+                }
+                beckmann_lambda(a)
             }
         }
     }
@@ -297,6 +303,16 @@ impl GgxView {
         let nh = self.t1 * p1 + self.t2 * p2 + self.vh * safe_sqrt(1.0 - p1 * p1 - p2 * p2);
         Vec3::new(md.alpha_u * nh.x, md.alpha_v * nh.y, nh.z.max(1e-6)).normalize()
     }
+}
+
+/// Where [`Microfacet::lambda`] of Beckmann stops evaluating: `1 / (1 + Λ(a))` is exactly 1 from
+/// here on.
+const BECKMANN_LAMBDA_ZERO: f32 = 4.0;
+
+/// Beckmann's Smith `Λ` at `a = 1 / (α tan θ)`: `(erf(a) − 1) / 2 + e^(−a²) / (2a√π)`.
+#[inline]
+fn beckmann_lambda(a: f32) -> f32 {
+    0.5 * (erf(a) - 1.0) + exp(-a * a) * INV_SQRT_PI / (2.0 * a)
 }
 
 /// Jakob's sampling of the slopes of visible Beckmann microfacets (α = 1) seen at `cos θᵢ`,
@@ -582,6 +598,22 @@ mod tests {
             }
         }
         assert_eq!(seen, 8 * 6 * us.len() * vs.len());
+    }
+
+    /// Λ's shortcut changes no bit of G1: from a = 4 on (every 61st float up to ∞), the full
+    /// formula's `1 / (1 + Λ)` is exactly 1, and just below 4 it is not yet.
+    #[test]
+    fn beckmann_lambda_vanishes_from_four_on() {
+        let g1 = |a: f32| 1.0 / (1.0 + beckmann_lambda(a));
+        let first = BECKMANN_LAMBDA_ZERO.to_bits();
+        for bits in (first..f32::INFINITY.to_bits()).step_by(61).chain([first, f32::INFINITY.to_bits() - 1]) {
+            let a = f32::from_bits(bits);
+            assert_eq!(g1(a), 1.0, "a = {a:e}");
+        }
+        assert!(g1(3.0) < 1.0, "the shortcut starts where Λ still matters below it");
+        let md = Microfacet::new(MicrofacetType::Beckmann, 0.1, 0.1);
+        let w = Vec3::new(0.2, 0.0, 1.0).normalize();
+        assert_eq!(md.g1(w, Vec3::Z), 1.0);
     }
 
     #[test]
