@@ -29,7 +29,7 @@ pub(crate) enum Lookup {
     Normal = 2,
 }
 
-/// The first [`SLOTS`] lookups made at one shading point (later ones are not remembered, but
+/// The first four lookups (`SLOTS`) made at one shading point (later ones are not remembered, but
 /// still correct). Create one per path vertex, next to its [`super::BsdfContext`].
 #[derive(Debug)]
 pub struct TextureMemo {
