@@ -48,14 +48,28 @@ pub struct RoughPlastic {
     specular_weight: f32,
 }
 
+/// Which albedos [`coating_albedos`] sums (the tables need one each; the other stays 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Albedos {
+    /// `R` alone (the internal reflectance).
+    Reflected,
+    /// `T` alone (the external transmittance).
+    Transmitted,
+    /// Both.
+    #[cfg(test)]
+    Both,
+}
+
 /// The reflected and transmitted albedos `(R, T)` of a rough dielectric interface (relative
 /// index `eta`) lit at incidence `mu`: `∫ F D G |wo·m| / (cos θₒ) dω_m` over microfacet normals,
 /// with `(1 − F)` and the refracted direction for `T` (for visible-normal sampling the weight of
 /// a sampled normal is `F G1(w, m)`, w the scattered direction). Mitsuba's `eval_reflectance` and
 /// `eval_transmittance`: visible normals sampled at the nodes of an `n × n` Gauss–Legendre rule
 /// (`n` = 32 from outside, `η > 1`; 128 from inside, where total internal reflection makes the
-/// integrand rough). `R + T < 1`: single scattering loses what the masking removes.
-fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32) -> (f32, f32) {
+/// integrand rough). `R + T < 1`: single scattering loses what the masking removes. Only the
+/// albedos `which` names are summed (the other is 0).
+fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32, which: Albedos) -> (f32, f32) {
+    let (want_r, want_t) = (which != Albedos::Transmitted, which != Albedos::Reflected);
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let n = if eta > 1.0 { 32 } else { 128 };
     let (nodes, weights) = gauss_legendre(n);
@@ -81,10 +95,10 @@ fn coating_albedos(distribution: &Microfacet, eta: f32, mu: f32) -> (f32, f32) {
         };
         let weight = weights[i] * weights[j] * 0.25;
         let wr = reflect_about(wo, m);
-        if wr.z > 0.0 {
+        if want_r && wr.z > 0.0 {
             r += weight * (f * ratio(wr)) as f64;
         }
-        if f < 1.0 {
+        if want_t && f < 1.0 {
             let wt = refract_about(wo, m, cos_t, eta_ti);
             if wt.z < 0.0 {
                 t += weight * ((1.0 - f) * ratio(wt)) as f64;
@@ -116,10 +130,13 @@ fn coating_tables(distribution: Microfacet, eta: f32) -> std::sync::Arc<(Vec<f32
         return t.clone();
     }
     let mu = |k: usize| (k as f32 / (TABLE - 1) as f32).max(1e-6);
-    let external: Vec<f32> = (0..TABLE).into_par_iter().map(|k| coating_albedos(&distribution, eta, mu(k)).1).collect();
+    let external: Vec<f32> = (0..TABLE)
+        .into_par_iter()
+        .map(|k| coating_albedos(&distribution, eta, mu(k), Albedos::Transmitted).1)
+        .collect();
     let internal: f64 = (0..TABLE)
         .into_par_iter()
-        .map(|k| (coating_albedos(&distribution, 1.0 / eta, mu(k)).0 * mu(k)) as f64)
+        .map(|k| (coating_albedos(&distribution, 1.0 / eta, mu(k), Albedos::Reflected).0 * mu(k)) as f64)
         .sum::<f64>();
     let tables = Arc::new((external, (2.0 * internal / TABLE as f64).clamp(0.0, 1.0) as f32));
     cache.lock().unwrap_or_else(|e| e.into_inner()).insert(key, tables.clone());
@@ -241,9 +258,9 @@ mod tests {
         // of the integral, and masking takes a little more).
         assert!((p.internal_reflectance - 0.55).abs() < 0.02, "{}", p.internal_reflectance);
         // Single scattering loses energy: R + T < 1 at grazing angles, ≈ 1 near the normal.
-        let (r, t) = coating_albedos(&p.distribution, 1.49, 1.0);
+        let (r, t) = coating_albedos(&p.distribution, 1.49, 1.0, Albedos::Both);
         assert!((r + t - 1.0).abs() < 0.01 && r + t <= 1.0 + 1e-4, "{r} + {t}");
-        let (r, t) = coating_albedos(&p.distribution, 1.49, 0.1);
+        let (r, t) = coating_albedos(&p.distribution, 1.49, 0.1, Albedos::Both);
         assert!(r + t < 0.99, "{r} + {t}");
     }
 }
