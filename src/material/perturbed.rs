@@ -164,10 +164,15 @@ impl Perturbed {
     #[inline]
     pub fn frame(&self, ctx: &BsdfContext, wo: Vec3) -> Frame {
         // The normal is the same for every call at this point (the frame depends on `wo`).
-        let n = match ctx.memo {
-            Some(memo) => Vec3::from(memo.get_or(self, Lookup::Normal, || self.perturbation.normal(ctx).into())),
-            None => self.perturbation.normal(ctx),
-        };
+        let n =
+            match ctx.memo {
+                // Computed without the memo: the map's own lookup would take a second slot for
+                // what the normal's entry already holds.
+                Some(memo) => Vec3::from(memo.get_or(self, Lookup::Normal, || {
+                    self.perturbation.normal(&BsdfContext { memo: None, ..*ctx }).into()
+                })),
+                None => self.perturbation.normal(ctx),
+            };
         perturbed_frame(n, wo, self.flip_invalid_normals)
     }
 
