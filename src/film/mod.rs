@@ -34,32 +34,42 @@ use crate::props::{Obj, Result as PropResult, SceneError};
 use filter::Filter;
 
 /// One pixel's filter-weighted sums (f64), kept together so that a splat touches one cache
-/// line or two per pixel.
+/// line or two per pixel. The radiance sums and the weight sum form one group of four, their
+/// squares another, so that a splat adds each group with one SIMD operation (two of SSE2).
 #[derive(Clone, Copy, Debug, Default)]
 struct Acc {
-    /// `Σ w L`.
-    sum: [f64; 3],
-    /// `Σ w L²`.
-    wl2: [f64; 3],
-    /// `Σ w`.
-    w: f64,
-    /// `Σ w²`.
-    w2: f64,
+    /// `(Σ w L_r, Σ w L_g, Σ w L_b, Σ w)`.
+    sum: [f64; 4],
+    /// `(Σ w L_r², Σ w L_g², Σ w L_b², Σ w²)`.
+    wl2: [f64; 4],
     /// `Σ w a` (coverage).
     alpha: f64,
 }
 
 impl Acc {
-    /// Adds a sample of radiance `l` and coverage `alpha` with filter weight `w`.
+    /// `Σ w`.
     #[inline(always)]
-    fn add(&mut self, w: f64, l: [f64; 3], alpha: Option<f64>) {
-        for (c, l) in l.into_iter().enumerate() {
-            let wv = w * l;
-            self.sum[c] += wv;
-            self.wl2[c] += wv * l;
+    fn w(&self) -> f64 {
+        self.sum[3]
+    }
+
+    /// `Σ w²`.
+    #[inline(always)]
+    fn w2(&self) -> f64 {
+        self.wl2[3]
+    }
+
+    /// Adds a sample with filter weight `w`: `x = (L, 1)` is its radiance with a 1 for the
+    /// weight sum, `alpha` its coverage. The same products and sums as channel by channel
+    /// (`w·1 = w` exactly), in lanes.
+    #[inline(always)]
+    fn add(&mut self, w: f64, x: [f64; 4], alpha: Option<f64>) {
+        let wx = x.map(|v| w * v);
+        let y = [x[0], x[1], x[2], w];
+        for k in 0..4 {
+            self.sum[k] += wx[k];
+            self.wl2[k] += wx[k] * y[k];
         }
-        self.w += w;
-        self.w2 += w * w;
         if let Some(alpha) = alpha {
             self.alpha += w * alpha;
         }
@@ -69,7 +79,8 @@ impl Acc {
 /// A sample prepared for [`Pixels::put`] (by [`Pixels::splat`]): radiance and coverage in
 /// f64, and whether the half buffer, terms or AOVs take it too.
 struct Splat<'a> {
-    l: [f64; 3],
+    /// The radiance, and a 1 (the weight sum's factor; see [`Acc::add`]).
+    l: [f64; 4],
     alpha: Option<f64>,
     /// The half buffer is kept and takes this sample.
     half: bool,
@@ -131,7 +142,7 @@ impl Pixels {
     fn splat<'a>(&self, sample: &FilmSample<'a>) -> Splat<'a> {
         let half = sample.half && !self.half.is_empty();
         Splat {
-            l: sample.l.to_array().map(f64::from),
+            l: [f64::from(sample.l.x), f64::from(sample.l.y), f64::from(sample.l.z), 1.0],
             alpha: sample.alpha.map(f64::from),
             half,
             terms: sample.terms,
@@ -149,14 +160,45 @@ impl Pixels {
         }
     }
 
+    /// Adds `s` to every pixel of its footprint through `filter` (a sample at `origin + offset`
+    /// in a buffer of `size` pixels; see [`Filter::footprint`]). Without a half buffer, terms
+    /// or AOVs to take it, the loop adds radiance and coverage alone.
+    #[inline(always)]
+    fn splat_footprint(&mut self, filter: &Filter, origin: [i64; 2], offset: Vec2, size: [i64; 2], s: &Splat) {
+        let hi = [size[0] - 1, size[1] - 1];
+        if s.extra {
+            filter.footprint(origin, offset, [0, 0], hi, |x, y, w| self.put((y * size[0] + x) as usize, w as f64, s));
+        } else {
+            let acc = &mut self.acc;
+            filter.footprint(origin, offset, [0, 0], hi, |x, y, w| {
+                acc[(y * size[0] + x) as usize].add(w as f64, s.l, s.alpha)
+            });
+        }
+    }
+
+    /// [`Pixels::splat_footprint`] compiled for AVX: each group of four sums of
+    /// [`Acc::add`] in one register. Safety: the CPU must have AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn splat_footprint_avx(
+        &mut self,
+        filter: &Filter,
+        origin: [i64; 2],
+        offset: Vec2,
+        size: [i64; 2],
+        s: &Splat,
+    ) {
+        self.splat_footprint(filter, origin, offset, size, s)
+    }
+
     /// The half buffer's, the terms' and the AOVs' part of [`Pixels::put`].
     fn put_extra(&mut self, i: usize, w: f64, s: &Splat) {
         if s.half {
             let h = &mut self.half[i];
+            // (L, 1): the weight sum in h[3] (w·1 = w exactly).
             for (h, l) in h.iter_mut().zip(s.l) {
                 *h += w * l;
             }
-            h[3] += w;
         }
         if self.term_count > 0 {
             let base = i * self.term_count;
@@ -180,12 +222,10 @@ impl Pixels {
     /// Adds pixel `j` of `other` to pixel `i`.
     fn add_from(&mut self, i: usize, other: &Pixels, j: usize) {
         let (a, b) = (&mut self.acc[i], &other.acc[j]);
-        for c in 0..3 {
+        for c in 0..4 {
             a.sum[c] += b.sum[c];
             a.wl2[c] += b.wl2[c];
         }
-        a.w += b.w;
-        a.w2 += b.w2;
         a.alpha += b.alpha;
         self.count[i] += other.count[j];
         if !self.half.is_empty() && !other.half.is_empty() {
@@ -282,6 +322,13 @@ impl TileBuffer {
     /// taken in it).
     #[inline]
     pub fn put(&mut self, pixel: [u32; 2], offset: Vec2, filter: &Filter, sample: FilmSample) {
+        self.put_with(crate::math::simd::Avx::detect().is_some(), pixel, offset, filter, sample)
+    }
+
+    /// [`TileBuffer::put`], its footprint splatted by the AVX loop if `avx` (which the CPU must
+    /// then have) or by the portable one.
+    #[inline(always)]
+    fn put_with(&mut self, avx: bool, pixel: [u32; 2], offset: Vec2, filter: &Filter, sample: FilmSample) {
         let (lx, ly) = ((pixel[0] - self.x0) as i64, (pixel[1] - self.y0) as i64);
         let own = ly as usize * self.width as usize + lx as usize;
         self.px.count[own] += 1;
@@ -296,11 +343,13 @@ impl TileBuffer {
             self.px.put(own, 1.0, &splat);
             return;
         }
-        let (width, height) = (self.width as i64, self.height as i64);
-        let px = &mut self.px;
-        filter.footprint([lx, ly], offset, [0, 0], [width - 1, height - 1], |x, y, w| {
-            px.put((y * width + x) as usize, w as f64, &splat);
-        });
+        let (origin, width, height) = ([lx, ly], self.width as i64, self.height as i64);
+        #[cfg(target_arch = "x86_64")]
+        if avx {
+            // SAFETY: the caller checked that this CPU has AVX.
+            return unsafe { self.px.splat_footprint_avx(filter, origin, offset, [width, height], &splat) };
+        }
+        self.px.splat_footprint(filter, origin, offset, [width, height], &splat);
     }
 
     /// Adds a radiance sample with unit weight to pixel `(x, y)` alone (image coordinates,
@@ -355,7 +404,7 @@ impl Film {
             .enumerate()
             .map(|(k, name)| {
                 let values = (self.px.acc.iter().enumerate())
-                    .map(|(i, a)| if a.w > 0.0 { (self.px.aovs[i * n + k] / a.w) as f32 } else { 0.0 })
+                    .map(|(i, a)| if a.w() > 0.0 { (self.px.aovs[i * n + k] / a.w()) as f32 } else { 0.0 })
                     .map(|v| if v.is_finite() { v } else { 0.0 })
                     .collect();
                 (name.clone(), values)
@@ -380,10 +429,10 @@ impl Film {
             return None;
         }
         let err = |(a, h): (&Acc, &[f64; 4])| {
-            if a.w <= 0.0 || h[3] <= 0.0 {
+            if a.w() <= 0.0 || h[3] <= 0.0 {
                 return f32::INFINITY;
             }
-            let i = [a.sum[0] / a.w, a.sum[1] / a.w, a.sum[2] / a.w];
+            let i = [a.sum[0] / a.w(), a.sum[1] / a.w(), a.sum[2] / a.w()];
             let diff: f64 = (0..3).map(|c| (i[c] - h[c] / h[3]).abs()).sum();
             let norm = (i[0] + i[1] + i[2]).max(0.0).sqrt();
             (diff / (1e-4 + norm)) as f32
@@ -399,8 +448,8 @@ impl Film {
             return None;
         }
         let px = self.px.acc.iter().zip(&self.px.half).map(|(a, h)| {
-            let w = a.w - h[3];
-            if w <= 1e-12 * a.w.max(1e-300) {
+            let w = a.w() - h[3];
+            if w <= 1e-12 * a.w().max(1e-300) {
                 return Rgb::ZERO;
             }
             let c = Rgb::new(((a.sum[0] - h[0]) / w) as f32, ((a.sum[1] - h[1]) / w) as f32, ((a.sum[2] - h[2]) / w) as f32);
@@ -432,7 +481,7 @@ impl Film {
             .iter()
             .enumerate()
             .map(|(i, a)| {
-                let w = a.w;
+                let w = a.w();
                 let s = self.px.terms[i * self.px.term_count + k];
                 if w > 0.0 {
                     Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32) / w as f32
@@ -495,8 +544,8 @@ impl Film {
                 a.sum[c] += x;
                 a.wl2[c] += x * x;
             }
-            a.w += 1.0;
-            a.w2 += 1.0;
+            a.sum[3] += 1.0;
+            a.wl2[3] += 1.0;
             self.px.count[i] += 1;
         }
         self.px.dropped += dropped;
@@ -531,7 +580,7 @@ impl Film {
         self.px
             .acc
             .iter()
-            .map(|a| (&a.sum, a.w))
+            .map(|a| (&a.sum, a.w()))
             .map(|(s, w)| if w > 0.0 { Rgb::new(s[0] as f32, s[1] as f32, s[2] as f32) / w as f32 } else { Rgb::ZERO })
             .map(|c| if c.is_finite() { c } else { Rgb::ZERO })
             .collect()
@@ -540,7 +589,7 @@ impl Film {
     /// Per-pixel coverage (alpha): the fraction of the pixel's samples whose camera ray hit a
     /// surface, if the renderer recorded it (0 otherwise).
     pub fn alpha(&self) -> Vec<f32> {
-        self.px.acc.iter().map(|a| if a.w > 0.0 { (a.alpha / a.w) as f32 } else { 0.0 }).collect()
+        self.px.acc.iter().map(|a| if a.w() > 0.0 { (a.alpha / a.w()) as f32 } else { 0.0 }).collect()
     }
 
     /// Mean over all pixels and channels of the image, and the standard error of that mean
@@ -564,7 +613,7 @@ impl Film {
             .acc
             .iter()
             .map(|a| {
-                let (w, w2) = (a.w, a.w2);
+                let (w, w2) = (a.w(), a.w2());
                 if w <= 0.0 || w2 <= 0.0 {
                     return Rgb::ZERO;
                 }
@@ -744,13 +793,16 @@ mod tests {
     }
 
     /// A splat of radiance and coverage alone adds the same bits to every pixel's sums as one
-    /// that also records AOVs (through `Pixels::put_extra`), for each filter.
+    /// that also records AOVs (through `Pixels::put_extra`), and the AVX loop the same as the
+    /// portable one, for each filter.
     #[test]
     fn lean_and_general_splats_agree() {
         let mut rng = crate::sampling::Pcg32::new(8, 1);
         for filter in [Filter::gaussian(0.5).unwrap(), Filter::Tent { radius: 1.5 }, Filter::BOX] {
             let mut lean = TileBuffer::new(0, 0, 7, 5);
             let mut general = TileBuffer::new(0, 0, 7, 5).with_aovs(1);
+            // The portable loop, where the others run the AVX one on a CPU that has it.
+            let mut portable = TileBuffer::new(0, 0, 7, 5);
             for k in 0..200 {
                 let px = [k % 7, k % 5];
                 let off = Vec2::new(rng.next_f32(), rng.next_f32());
@@ -758,13 +810,15 @@ mod tests {
                 let alpha = (k % 3 != 0).then_some(rng.next_f32());
                 lean.put(px, off, &filter, FilmSample { l, alpha, ..Default::default() });
                 general.put(px, off, &filter, FilmSample { l, alpha, aovs: &[1.0], ..Default::default() });
+                portable.put_with(false, px, off, &filter, FilmSample { l, alpha, ..Default::default() });
             }
-            for (a, b) in lean.px.acc.iter().zip(&general.px.acc) {
-                let bits = |a: &Acc| {
-                    [a.sum, a.wl2, [a.w, a.w2, a.alpha]].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>()
-                };
+            let bits =
+                |a: &Acc| [&a.sum[..], &a.wl2[..], &[a.alpha]].concat().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            for ((a, b), c) in lean.px.acc.iter().zip(&general.px.acc).zip(&portable.px.acc) {
                 assert_eq!(bits(a), bits(b), "{filter:?}");
+                assert_eq!(bits(a), bits(c), "{filter:?}");
             }
+            assert!(lean.px.acc.iter().all(|a| a.w() > 0.0), "every pixel reached");
             assert!(general.px.aovs.iter().any(|&v| v > 0.0));
         }
     }

@@ -151,7 +151,7 @@ impl Film {
     /// (see the module documentation).
     fn part_channels(&self, alpha: bool) -> Vec<(String, Vec<f32>)> {
         let mean = |f: &dyn Fn(&Acc) -> f64| -> Vec<f32> {
-            self.px.acc.iter().map(|a| if a.w > 0.0 { (f(a) / a.w) as f32 } else { 0.0 }).collect()
+            self.px.acc.iter().map(|a| if a.w() > 0.0 { (f(a) / a.w()) as f32 } else { 0.0 }).collect()
         };
         let mut out = Vec::new();
         for (c, name) in ["R", "G", "B"].iter().enumerate() {
@@ -161,8 +161,8 @@ impl Film {
             out.push(("A".into(), mean(&|a| a.alpha)));
         }
         out.extend(self.aov_channels());
-        out.push(("weight".into(), self.px.acc.iter().map(|a| a.w as f32).collect()));
-        out.push(("weight2".into(), self.px.acc.iter().map(|a| a.w2 as f32).collect()));
+        out.push(("weight".into(), self.px.acc.iter().map(|a| a.w() as f32).collect()));
+        out.push(("weight2".into(), self.px.acc.iter().map(|a| a.w2() as f32).collect()));
         for (c, name) in ["moment2.R", "moment2.G", "moment2.B"].iter().enumerate() {
             out.push((name.to_string(), mean(&|a| a.wl2[c])));
         }
@@ -406,8 +406,8 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             a.sum[c] = finite(rgb[c][i])? * wt;
             a.wl2[c] = finite(m2[c][i])? * wt;
         }
-        a.w = wt;
-        a.w2 = finite(weight2[i])?;
+        a.sum[3] = wt;
+        a.wl2[3] = finite(weight2[i])?;
         a.alpha = match &alpha {
             Some(v) => finite(v[i])? * wt,
             None => 0.0,

@@ -40,7 +40,9 @@ impl Film {
             out.extend(name.as_bytes());
         }
         for (a, c) in px.acc.iter().zip(&px.count) {
-            for v in a.sum.iter().chain(&a.wl2).chain(&[a.w, a.w2, a.alpha]) {
+            // Written as before the sums were grouped with their weights: R G B sums, R G B squares,
+            // weight, squared weight, coverage.
+            for v in a.sum[..3].iter().chain(&a.wl2[..3]).chain(&[a.w(), a.w2(), a.alpha]) {
                 out.extend(v.to_le_bytes());
             }
             out.extend(c.to_le_bytes());
@@ -81,7 +83,7 @@ impl Film {
             for v in &mut f {
                 *v = r.f64()?;
             }
-            film.px.acc[i] = Acc { sum: [f[0], f[1], f[2]], wl2: [f[3], f[4], f[5]], w: f[6], w2: f[7], alpha: f[8] };
+            film.px.acc[i] = Acc { sum: [f[0], f[1], f[2], f[6]], wl2: [f[3], f[4], f[5], f[7]], alpha: f[8] };
             film.px.count[i] = r.u32()?;
         }
         for t in film.px.terms.iter_mut().flatten() {
