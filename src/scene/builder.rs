@@ -142,8 +142,8 @@ impl SceneBuilder {
                 }
             }
         }
-        // Hits read the triangles' normals from the cache (no cross product and square root on
-        // the path's critical chain).
+        // Hits in a small scene read the triangles' normals from this cache (no cross product,
+        // square root and division on the path's critical chain; see `Scene::interaction`).
         for g in &mut self.geometries {
             if let Geometry::Mesh(m) = g {
                 m.prepare_normals();
@@ -212,6 +212,7 @@ impl SceneBuilder {
         let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);
         Ok(Scene {
             needs_dpdv,
+            cached_normals: refs.len() <= super::SMALL_SCENE_PRIMITIVES,
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,

@@ -231,6 +231,10 @@ pub struct Scene {
     camera: Camera,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
     needs_dpdv: bool,
+    /// Whether hits on triangles read the mesh's cached face normals: in a cache-resident
+    /// scene (at most [`SMALL_SCENE_PRIMITIVES`]); a larger one computes them from the vertices
+    /// at hand, the same bits without a likely cache miss.
+    cached_normals: bool,
 }
 
 impl Scene {
@@ -486,9 +490,10 @@ impl Scene {
         let r = self.refs[r as usize];
         let Geometry::Mesh(m) = &self.geometries[r.shape as usize] else { unreachable!("triangles belong to meshes") };
         let i = r.index as usize;
-        // From the vertices at hand (the ones the mesh's cached normals were computed from, so
-        // the same bits): a cached normal is a cache miss in a large mesh.
-        let ng = m.normal_of(&p);
+        // A small scene's cached normal is a load from cache; in a large mesh it is likely a
+        // miss, and the vertices at hand (the ones it was computed from: the same bits) give it
+        // by a cross product and a normalization instead.
+        let ng = if self.cached_normals { m.face_normal(i) } else { m.normal_of(&p) };
         let crate::geometry::mesh::MeshSurface { ns, uv, dpdu, dpdv } =
             m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, self.needs_dpdv);
         SurfaceInteraction {
