@@ -189,14 +189,15 @@ impl Filter {
 }
 
 impl Filter {
-    /// `out[k] = f₁(d₀ + k + ½ − offset)`: the 1D filter values at the centres of consecutive
-    /// pixels `d₀ + k` seen from a sample at `offset` (pixels).
+    /// `out[k] = f₁(d₀ + k + ½ − offset)` for `k < n` (`n ≤ MAX_ROW`): the 1D filter values at
+    /// the centres of consecutive pixels `d₀ + k` seen from a sample at `offset` (pixels). The
+    /// entries from `n` to the next multiple of four may be overwritten too.
     #[inline(always)]
-    fn row(&self, d0: i64, offset: f32, out: &mut [f32]) {
+    fn row(&self, d0: i64, offset: f32, out: &mut [f32; ROW], n: usize) {
         if let Filter::Gaussian { .. } = self {
-            return self.gaussian_row(d0, offset, out);
+            return self.gaussian_row(d0, offset, out, n);
         }
-        for (k, w) in out.iter_mut().enumerate() {
+        for (k, w) in out[..n].iter_mut().enumerate() {
             *w = self.eval_1d((d0 + k as i64) as f32 + 0.5 - offset);
         }
     }
@@ -205,13 +206,13 @@ impl Filter {
     /// and 0 beyond (as [`Filter::eval_1d`], bit for bit): four exponentials at a time
     /// ([`exp4`]; a footprint takes one or two rows of four per axis, where one call of the C
     /// library's `expf` per pixel offset took a tenth of the time of scenes with small bright
-    /// lights).
+    /// lights), stored four at a time (a copy of `n mod 4` values was a call of `memcpy`).
     #[inline(always)]
-    fn gaussian_row(&self, d0: i64, offset: f32, out: &mut [f32]) {
+    fn gaussian_row(&self, d0: i64, offset: f32, out: &mut [f32; ROW], n: usize) {
         let Filter::Gaussian { stddev, radius, floor } = *self else { return };
-        for (c, chunk) in out.chunks_mut(4).enumerate() {
+        for c in 0..n.div_ceil(4) {
             let x: [f32; 4] = std::array::from_fn(|j| (d0 + (4 * c + j) as i64) as f32 + 0.5 - offset);
-            chunk.copy_from_slice(&gaussian4(stddev, radius, floor, x)[..chunk.len()]);
+            out[4 * c..4 * c + 4].copy_from_slice(&gaussian4(stddev, radius, floor, x));
         }
     }
 
@@ -230,28 +231,66 @@ impl Filter {
         hi: [i64; 2],
         mut visit: impl FnMut(i64, i64, f32),
     ) {
-        let r = self.radius();
-        let d0x = (ceil(offset.x - r - 0.5) as i64).max(lo[0] - origin[0]);
-        let d1x = (floor(offset.x + r - 0.5) as i64).min(hi[0] - origin[0]);
-        let d0y = (ceil(offset.y - r - 0.5) as i64).max(lo[1] - origin[1]);
-        let d1y = (floor(offset.y + r - 0.5) as i64).min(hi[1] - origin[1]);
-        const MAX: usize = 2 * MAX_BORDER as usize + 2;
-        let (mut wx, mut wy) = ([0.0f32; MAX], [0.0f32; MAX]);
-        let (nx, ny) = ((d1x - d0x + 1).max(0) as usize, (d1y - d0y + 1).max(0) as usize);
-        self.row(d0x, offset.x, &mut wx[..nx]);
-        self.row(d0y, offset.y, &mut wy[..ny]);
-        let (x0, y0) = (origin[0] + d0x, origin[1] + d0y);
-        for (j, &wy) in wy[..ny].iter().enumerate() {
-            if wy == 0.0 {
-                continue;
-            }
-            for (i, &wx) in wx[..nx].iter().enumerate() {
+        self.footprint_rows(origin, offset, lo, hi, |x0, y, wy, wx| {
+            for (i, &wx) in wx.iter().enumerate() {
                 let w = wy * wx;
                 if w != 0.0 {
-                    visit(x0 + i as i64, y0 + j as i64, w);
+                    visit(x0 + i as i64, y, w);
                 }
             }
+        });
+    }
+
+    /// [`Filter::footprint`] a row at a time: `visit_row(x₀, y, f₁(y), f₁(x))` for each row `y`
+    /// whose weight is not zero (top to bottom), `f₁(x)` the weights of the pixels `x₀, x₀ + 1,
+    /// …` (some may be zero); pixel `(x, y)`'s weight is the product `f₁(y) · f₁(x)` (in `f32`).
+    #[inline(always)]
+    pub fn footprint_rows(
+        &self,
+        origin: [i64; 2],
+        offset: Vec2,
+        lo: [i64; 2],
+        hi: [i64; 2],
+        mut visit_row: impl FnMut(i64, i64, f32, &[f32]),
+    ) {
+        let r = self.radius();
+        let (d0x, d1x) = ceil_floor(offset.x - r - 0.5, offset.x + r - 0.5);
+        let (d0y, d1y) = ceil_floor(offset.y - r - 0.5, offset.y + r - 0.5);
+        let (d0x, d1x) = (d0x.max(lo[0] - origin[0]), d1x.min(hi[0] - origin[0]));
+        let (d0y, d1y) = (d0y.max(lo[1] - origin[1]), d1y.min(hi[1] - origin[1]));
+        let (mut wx, mut wy) = ([0.0f32; ROW], [0.0f32; ROW]);
+        let (nx, ny) = ((d1x - d0x + 1).max(0) as usize, (d1y - d0y + 1).max(0) as usize);
+        self.row(d0x, offset.x, &mut wx, nx);
+        self.row(d0y, offset.y, &mut wy, ny);
+        let (x0, y0) = (origin[0] + d0x, origin[1] + d0y);
+        for (j, &wy) in wy[..ny].iter().enumerate() {
+            if wy != 0.0 {
+                visit_row(x0, y0 + j as i64, wy, &wx[..nx]);
+            }
         }
+    }
+}
+
+/// Most pixels a footprint spans along an axis: `2 r + 1` for the largest radius.
+const MAX_ROW: usize = 2 * MAX_BORDER as usize + 2;
+
+/// A row buffer's length: [`MAX_ROW`] rounded up to whole groups of four.
+const ROW: usize = MAX_ROW.div_ceil(4) * 4;
+
+/// `(⌈a⌉, ⌊b⌋)` as integers, as `ceil(a) as i64` and `floor(b) as i64` give them: where both
+/// lie within ±2²² (a footprint's span, always), by truncating conversions corrected by one,
+/// without the saturating conversions' checks for NaN and range.
+#[inline(always)]
+fn ceil_floor(a: f32, b: f32) -> (i64, i64) {
+    const EXACT: f32 = 4_194_304.0;
+    if a.abs() < EXACT && b.abs() < EXACT {
+        // SAFETY: both are finite and well inside i32's range (checked just above; false for NaN).
+        let (ta, tb) = unsafe { (a.to_int_unchecked::<i32>(), b.to_int_unchecked::<i32>()) };
+        // Truncation rounds toward zero (exactly representable back below 2²⁴): one up where
+        // that fell below `a`, one down where it rose above `b`.
+        (i64::from(ta + i32::from((ta as f32) < a)), i64::from(tb - i32::from((tb as f32) > b)))
+    } else {
+        (ceil(a) as i64, floor(b) as i64)
     }
 }
 
@@ -262,6 +301,32 @@ impl Filter {
 /// within 10⁻³⁷ where `s x² < −86`, so the argument is clamped there, inside `exp4`'s range.
 #[inline]
 fn gaussian4(stddev: f32, radius: f32, floor: f32, x: [f32; 4]) -> [f32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of every x86-64 CPU (the target's baseline), and the unaligned load
+    // and store access the sixteen bytes of a four-f32 array.
+    unsafe {
+        use std::arch::x86_64::*;
+        // The lanes of `gaussian4_lanes`, operation for operation: |x| by clearing the sign,
+        // `<=` false for NaN as in the scalar test, `maxps` returning its second operand (the
+        // clamp) for a NaN first one as `f32::max` does.
+        let s = -1.0 / (2.0 * stddev * stddev);
+        let xv = _mm_loadu_ps(x.as_ptr());
+        let inside = _mm_cmple_ps(_mm_andnot_ps(_mm_set1_ps(-0.0), xv), _mm_set1_ps(radius));
+        let arg = _mm_max_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(s), xv), xv), _mm_set1_ps(-86.0));
+        let e = crate::math::special::exp4_sse(_mm_and_ps(inside, arg));
+        let w = _mm_and_ps(inside, _mm_max_ps(_mm_sub_ps(e, _mm_set1_ps(floor)), _mm_setzero_ps()));
+        let mut out = [0.0f32; 4];
+        _mm_storeu_ps(out.as_mut_ptr(), w);
+        out
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    gaussian4_lanes(stddev, radius, floor, x)
+}
+
+/// [`gaussian4`] lane by lane (the portable version, and the SSE one's reference).
+#[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+#[inline]
+fn gaussian4_lanes(stddev: f32, radius: f32, floor: f32, x: [f32; 4]) -> [f32; 4] {
     let s = -1.0 / (2.0 * stddev * stddev);
     let e = exp4(x.map(|x| if x.abs() <= radius { (s * x * x).max(-86.0) } else { 0.0 }));
     std::array::from_fn(|j| if x[j].abs() <= radius { (e[j] - floor).max(0.0) } else { 0.0 })
@@ -330,6 +395,42 @@ impl Filter {
 mod tests {
     use super::*;
 
+    /// The footprint's integer span is the library's ceiling and floor, converted: at
+    /// integers, halves, ±0, either side of the fast path's limit, NaN and ±∞.
+    #[test]
+    fn ceil_floor_is_the_libraries() {
+        let mut rng = crate::sampling::Pcg32::new(3, 9);
+        let mut values = vec![0.0f32, -0.0, 0.5, -0.5, 1.0, -1.0, 2.5, -2.5, 1e-30, -1e-30, f32::NAN, f32::INFINITY];
+        values.extend([f32::NEG_INFINITY, 4_194_304.0, -4_194_304.0, 4_194_303.5, -4_194_303.5, 1e12, -1e12]);
+        values.extend([(1.0f32).next_up(), (1.0f32).next_down(), (-1.0f32).next_up(), (-1.0f32).next_down()]);
+        values.extend((0..2000).map(|_| (rng.next_f32() - 0.5) * 40.0));
+        values.extend((0..200).map(|k| k as f32 / 4.0 - 25.0));
+        for &a in &values {
+            for b in [a, -a, 0.3] {
+                assert_eq!(ceil_floor(a, b), (a.ceil() as i64, b.floor() as i64), "{a} {b}");
+            }
+        }
+    }
+
+    /// The SSE Gaussian gives the bits of the lane-by-lane one: inside, outside and exactly at
+    /// the radius, at ±0, and for NaN and infinite offsets.
+    #[test]
+    fn gaussian_lanes_are_the_scalar_formula() {
+        let mut rng = crate::sampling::Pcg32::new(5, 2);
+        for (stddev, radius) in [(0.5f32, 2.0f32), (0.3, 1.2), (1.5, 6.0), (0.5, 16.5), (0.01, 16.5)] {
+            let Filter::Gaussian { floor, .. } = Filter::gaussian_cut(stddev, radius).unwrap() else { unreachable!() };
+            let edges = [0.0, -0.0, radius, -radius, radius.next_up(), f32::NAN, f32::INFINITY, 1e30];
+            for k in 0..4000 {
+                let x: [f32; 4] = std::array::from_fn(|j| match k {
+                    0..=1 => edges[4 * k + j],
+                    _ => (rng.next_f32() - 0.5) * 2.4 * radius,
+                });
+                let (a, b) = (gaussian4(stddev, radius, floor, x), gaussian4_lanes(stddev, radius, floor, x));
+                assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "σ {stddev}, r {radius}, x {x:?}");
+            }
+        }
+    }
+
     /// The Gaussian's rows (four exponentials at a time) are `eval_1d` at each pixel, bit for
     /// bit, and within 2·10⁻⁷ of the formula in `f64`, over sub-pixel offsets and radii.
     #[test]
@@ -339,9 +440,9 @@ mod tests {
             for i in 0..50 {
                 let offset = i as f32 / 50.0;
                 let d0 = -(radius.ceil() as i64) - 1;
-                let mut row = [0.0f32; 36];
-                g.row(d0, offset, &mut row);
-                for (k, &w) in row.iter().enumerate() {
+                let mut row = [0.0f32; ROW];
+                g.row(d0, offset, &mut row, MAX_ROW);
+                for (k, &w) in row[..MAX_ROW].iter().enumerate() {
                     let x = (d0 + k as i64) as f32 + 0.5 - offset;
                     assert_eq!(w.to_bits(), g.eval_1d(x).to_bits(), "σ {stddev}, x {x}");
                     let s = -1.0 / (2.0 * stddev as f64 * stddev as f64);

@@ -170,8 +170,14 @@ impl Pixels {
             filter.footprint(origin, offset, [0, 0], hi, |x, y, w| self.put((y * size[0] + x) as usize, w as f64, s));
         } else {
             let acc = &mut self.acc;
-            filter.footprint(origin, offset, [0, 0], hi, |x, y, w| {
-                acc[(y * size[0] + x) as usize].add(w as f64, s.l, s.alpha)
+            filter.footprint_rows(origin, offset, [0, 0], hi, |x0, y, wy, wx| {
+                let start = (y * size[0] + x0) as usize;
+                for (a, &wx) in acc[start..start + wx.len()].iter_mut().zip(wx) {
+                    let w = wy * wx;
+                    if w != 0.0 {
+                        a.add(w as f64, s.l, s.alpha);
+                    }
+                }
             });
         }
     }

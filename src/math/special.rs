@@ -76,8 +76,22 @@ pub fn exp4(x: [f32; 4]) -> [f32; 4] {
     // and store access the sixteen bytes of a four-f32 array.
     unsafe {
         use std::arch::x86_64::*;
+        let mut out = [0.0f32; 4];
+        _mm_storeu_ps(out.as_mut_ptr(), exp4_sse(_mm_loadu_ps(x.as_ptr())));
+        out
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    exp_lanes(x)
+}
+
+/// [`exp4`] on a register, for callers that keep their lanes in one.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub fn exp4_sse(x: std::arch::x86_64::__m128) -> std::arch::x86_64::__m128 {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of every x86-64 CPU (the target's baseline).
+    unsafe {
         let v = |c: f32| _mm_set1_ps(c);
-        let x = _mm_loadu_ps(x.as_ptr());
         let shifted = _mm_add_ps(_mm_mul_ps(x, v(std::f32::consts::LOG2_E)), v(EXP_SHIFT));
         let n = _mm_sub_ps(shifted, v(EXP_SHIFT));
         let r = _mm_sub_ps(_mm_sub_ps(x, _mm_mul_ps(n, v(LN2_HI))), _mm_mul_ps(n, v(LN2_LO)));
@@ -88,12 +102,8 @@ pub fn exp4(x: [f32; 4]) -> [f32; 4] {
         let e_r = _mm_add_ps(_mm_add_ps(_mm_mul_ps(p, _mm_mul_ps(r, r)), r), v(1.0));
         let bits = _mm_sub_epi32(_mm_castps_si128(shifted), _mm_set1_epi32(EXP_SHIFT.to_bits() as i32));
         let two_n = _mm_castsi128_ps(_mm_slli_epi32::<23>(_mm_add_epi32(bits, _mm_set1_epi32(127))));
-        let mut out = [0.0f32; 4];
-        _mm_storeu_ps(out.as_mut_ptr(), _mm_mul_ps(e_r, two_n));
-        out
+        _mm_mul_ps(e_r, two_n)
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    exp_lanes(x)
 }
 
 /// Round to nearest by adding and subtracting 1.5·2²³ (exact for |x| < 2²²).
