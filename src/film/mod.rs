@@ -334,6 +334,7 @@ impl TileBuffer {
     /// [`TileBuffer::put`], its footprint splatted by the AVX loop if `avx` (which the CPU must
     /// then have) or by the portable one.
     #[inline(always)]
+    #[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
     fn put_with(&mut self, avx: bool, pixel: [u32; 2], offset: Vec2, filter: &Filter, sample: FilmSample) {
         let (lx, ly) = ((pixel[0] - self.x0) as i64, (pixel[1] - self.y0) as i64);
         let own = ly as usize * self.width as usize + lx as usize;
