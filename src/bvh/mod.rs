@@ -12,6 +12,7 @@
 
 mod build;
 mod huge;
+pub mod presplit;
 mod slab;
 
 use crate::math::simd::Avx;

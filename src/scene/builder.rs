@@ -13,6 +13,10 @@ use crate::math::{Rgb, Vec3};
 use crate::sampling::AliasTable;
 use crate::texture::Texture;
 
+/// Extra BVH references for split triangles, relative to the primitive count
+/// ([`crate::bvh::presplit`]): Karras and Aila's 30 %.
+pub const PRESPLIT_BUDGET: f32 = 0.3;
+
 /// Collects the parts of a scene.
 #[derive(Debug, Default)]
 pub struct SceneBuilder {
@@ -158,11 +162,20 @@ impl SceneBuilder {
                 bounds.push(g.primitive_bounds(i));
             }
         }
-        let mut bvh = Bvh::build(&bounds, &super::bvh_options(bounds.len()));
-        let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[k as usize]).collect();
+        let geometries = &self.geometries;
+        let triangle = |k: usize| {
+            let r = refs[k];
+            match &geometries[r.shape as usize] {
+                Geometry::Mesh(m) => Some(m.triangle(r.index as usize)),
+                _ => None,
+            }
+        };
+        let pieces = crate::bvh::presplit::presplit(&bounds, triangle, PRESPLIT_BUDGET);
+        let piece_bounds: Vec<_> = pieces.iter().map(|p| p.bounds).collect();
+        let mut bvh = Bvh::build(&piece_bounds, &super::bvh_options(bounds.len()));
+        let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[pieces[k as usize].prim as usize]).collect();
         // Leaves of triangles only become blocks of eight; the others keep a primitive list.
         let (mut blocks, mut prims) = (Vec::new(), Vec::new());
-        let geometries = &self.geometries;
         let primitive = |k: u32| {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
@@ -212,7 +225,7 @@ impl SceneBuilder {
         let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);
         Ok(Scene {
             needs_dpdv,
-            cached_normals: refs.len() <= super::SMALL_SCENE_PRIMITIVES,
+            cached_normals: bounds.len() <= super::SMALL_SCENE_PRIMITIVES,
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,
@@ -228,6 +241,7 @@ impl SceneBuilder {
             blocks: blocks.into(),
             prims: prims.into(),
             refs: refs.into(),
+            primitives: bounds.len(),
             camera,
         })
     }

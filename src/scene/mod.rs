@@ -226,8 +226,11 @@ pub struct Scene {
     blocks: HugeArray<Triangle8>,
     /// Primitives of the other leaves.
     prims: HugeArray<LeafPrim>,
-    /// Every primitive's shape and index, in BVH order.
+    /// The shape and index of the primitive at each leaf position, in BVH order (a split
+    /// triangle, [`crate::bvh::presplit`], at several).
     refs: HugeArray<PrimRef>,
+    /// Primitives (each counted once, however many references it has).
+    primitives: usize,
     camera: Camera,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
     needs_dpdv: bool,
@@ -314,7 +317,7 @@ impl Scene {
 
     /// Number of primitives (triangles, spheres, disks).
     pub fn primitive_count(&self) -> usize {
-        self.refs.len()
+        self.primitives
     }
 
     /// Chooses a light for next-event estimation at `ctx` with the scene's light sampler: the
@@ -703,7 +706,8 @@ mod tests {
     }
 
     /// A triangle soup with spheres among the triangles: leaves of triangles only (SIMD blocks)
-    /// and mixed leaves (primitive lists) both occur, and both answer like brute force.
+    /// and mixed leaves (primitive lists) both occur, and both answer like brute force, with the
+    /// soup's slivers pre-split into several references each.
     #[test]
     fn intersect_and_occluded_match_brute_force() {
         // Below and above SMALL_SCENE_PRIMITIVES: both BVH cost models.
@@ -720,7 +724,13 @@ mod tests {
         let mut indices = Vec::new();
         for i in 0..triangles {
             let c = v(&mut rng, 8.0);
-            positions.extend([c + v(&mut rng, size), c + v(&mut rng, size), c + v(&mut rng, size)]);
+            if i % 10 == 0 {
+                // A long thin sliver across the soup: pre-split into several references.
+                let (d, w) = (v(&mut rng, 6.0), v(&mut rng, 0.05));
+                positions.extend([c - d, c + d, c + d + w]);
+            } else {
+                positions.extend([c + v(&mut rng, size), c + v(&mut rng, size), c + v(&mut rng, size)]);
+            }
             indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
         }
         let mesh = TriangleMesh::new(positions, vec![], vec![], indices).unwrap();
@@ -737,6 +747,7 @@ mod tests {
         b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1).unwrap());
         let scene = b.build().unwrap();
         assert_eq!(scene.primitive_count() > SMALL_SCENE_PRIMITIVES, triangles > 2000);
+        assert!(scene.refs.len() > scene.primitive_count() + triangles as usize / 20, "slivers are split");
         assert!(!scene.blocks.is_empty(), "no triangle-only leaves");
         assert!(scene.prims.iter().any(|p| matches!(p.prim, Primitive::Triangle(_))), "no mixed leaves");
         let mut hits = 0;
