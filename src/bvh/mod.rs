@@ -448,7 +448,7 @@ pub fn prefetch<T>(p: *const T, bytes: usize) {
 type Entry = (u32, u32, f32);
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::geometry::triangle::{intersect_triangle, RayPrecomp};
     use crate::sampling::Pcg32;
@@ -485,8 +485,10 @@ mod tests {
         for &a in &bad {
             for &b in &bad {
                 for t_max in [f32::NAN, f32::INFINITY, 1e30, 5.0] {
-                    let rays =
-                        [Ray::new(Vec3::new(a, 0.2, b), Vec3::new(1.0, 0.0, 0.0)), Ray::new(Vec3::splat(-1.0), Vec3::new(a, b, 1.0))];
+                    let rays = [
+                        Ray::new(Vec3::new(a, 0.2, b), Vec3::new(1.0, 0.0, 0.0)),
+                        Ray::new(Vec3::splat(-1.0), Vec3::new(a, b, 1.0)),
+                    ];
                     for ray in rays {
                         bvh.closest_hit(&ray, t_max, |first, count, _| {
                             assert!((first + count) as usize <= bounds.len());
@@ -522,46 +524,50 @@ mod tests {
         for _ in 0..2000 {
             let o = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 30.0 - 15.0;
             let d = crate::sampling::sample_uniform_sphere(crate::testkit::u2(&mut rng)).value;
-            let ray = Ray::new(o, d);
-            let pre = RayPrecomp::new(&ray);
-            let brute = tris
-                .iter()
-                .filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY))
-                .map(|h| h.t)
-                .fold(f32::INFINITY, f32::min);
-            let mut best = f32::INFINITY;
-            bvh.closest_hit(&ray, f32::INFINITY, |first, count, t_max| {
-                for k in first..first + count {
-                    if let Some(h) = intersect_triangle(&pre, &ordered[k as usize], *t_max) {
-                        *t_max = h.t;
-                        best = h.t;
-                    }
+            traces_like_brute_force(bvh, tris, &ordered, &Ray::new(o, d));
+        }
+        let s = bvh.stats();
+        assert!(s.leaves > 5000 / 8 && s.max_depth < 64, "{s:?}");
+    }
+
+    /// Checks one ray against a BVH whose leaf position `k` holds triangle `ordered[k]` (of the
+    /// soup `tris`): the closest hit is the brute-force one, no shadow ray stops short of it,
+    /// and one just beyond it is blocked. Returns the hit distance (infinite for a miss).
+    pub(crate) fn traces_like_brute_force(bvh: &Bvh, tris: &[[Vec3; 3]], ordered: &[[Vec3; 3]], ray: &Ray) -> f32 {
+        let pre = RayPrecomp::new(ray);
+        let brute = tris
+            .iter()
+            .filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY))
+            .map(|h| h.t)
+            .fold(f32::INFINITY, f32::min);
+        let mut best = f32::INFINITY;
+        bvh.closest_hit(ray, f32::INFINITY, |first, count, t_max| {
+            for k in first..first + count {
+                if let Some(h) = intersect_triangle(&pre, &ordered[k as usize], *t_max) {
+                    *t_max = h.t;
+                    best = h.t;
                 }
-            });
-            assert_eq!(best, brute);
-            let limit = if brute.is_finite() { brute * 0.999 } else { 1e30 };
-            let any = bvh.any_hit(
-                &ray,
+            }
+        });
+        assert_eq!(best, brute);
+        let blocked = |limit: f32| {
+            bvh.any_hit(
+                ray,
                 limit,
                 |first, count, t_max| {
                     (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
                 },
                 |_, _| {},
-            );
-            assert!(!any, "any-hit found something before the closest hit");
-            if brute.is_finite() {
-                assert!(bvh.any_hit(
-                    &ray,
-                    brute * 1.001,
-                    |first, count, t_max| {
-                        (first..first + count).any(|k| intersect_triangle(&pre, &ordered[k as usize], t_max).is_some())
-                    },
-                    |_, _| {},
-                ));
-            }
+            )
+        };
+        assert!(
+            !blocked(if brute.is_finite() { brute * 0.999 } else { 1e30 }),
+            "any-hit found something before the closest hit"
+        );
+        if brute.is_finite() {
+            assert!(blocked(brute * 1.001));
         }
-        let s = bvh.stats();
-        assert!(s.leaves > 5000 / 8 && s.max_depth < 64, "{s:?}");
+        brute
     }
 
     #[test]

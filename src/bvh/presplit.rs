@@ -201,7 +201,6 @@ fn clip(poly: &[Vec3], axis: usize, pos: f32) -> (Vec<Vec3>, Vec<Vec3>) {
 mod tests {
     use super::*;
     use crate::bvh::{BuildOptions, Bvh};
-    use crate::geometry::triangle::{intersect_triangle, RayPrecomp};
     use crate::math::Ray;
     use crate::sampling::Pcg32;
 
@@ -315,7 +314,7 @@ mod tests {
         let (whole, split) = (Bvh::build(&bounds, &opts), Bvh::build(&ref_bounds, &opts));
         let (c0, c1) = (whole.stats().sah_cost, split.stats().sah_cost);
         assert!(c1 < 0.8 * c0, "SAH cost {c0} unsplit, {c1} split");
-        let prim: Vec<u32> = split.order().iter().map(|&k| refs[k as usize].prim).collect();
+        let ordered: Vec<[Vec3; 3]> = split.order().iter().map(|&k| tris[refs[k as usize].prim as usize]).collect();
         let mut rng = Pcg32::new(4, 0);
         let mut hits = 0;
         for _ in 0..3000 {
@@ -324,37 +323,7 @@ mod tests {
             let t = tris[(rng.next_f32() * tris.len() as f32) as usize % tris.len()];
             let (a, b) = (rng.next_f32() * 0.5, rng.next_f32() * 0.5);
             let ray = Ray::new(o, (t[0] + (t[1] - t[0]) * a + (t[2] - t[0]) * b - o).normalize());
-            let pre = RayPrecomp::new(&ray);
-            let brute = tris
-                .iter()
-                .filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY))
-                .map(|h| h.t)
-                .fold(f32::INFINITY, f32::min);
-            let mut best = f32::INFINITY;
-            split.closest_hit(&ray, f32::INFINITY, |first, count, t_max| {
-                for k in first..first + count {
-                    if let Some(h) = intersect_triangle(&pre, &tris[prim[k as usize] as usize], *t_max) {
-                        *t_max = h.t;
-                        best = h.t;
-                    }
-                }
-            });
-            assert_eq!(best, brute);
-            hits += usize::from(brute.is_finite());
-            let blocked = |limit: f32| {
-                split.any_hit(
-                    &ray,
-                    limit,
-                    |first, count, t_max| {
-                        (first..first + count)
-                            .any(|k| intersect_triangle(&pre, &tris[prim[k as usize] as usize], t_max).is_some())
-                    },
-                    |_, _| {},
-                )
-            };
-            if brute.is_finite() {
-                assert!(!blocked(brute * 0.999) && blocked(brute * 1.001));
-            }
+            hits += usize::from(crate::bvh::tests::traces_like_brute_force(&split, &tris, &ordered, &ray).is_finite());
         }
         assert!(hits > 2000, "{hits} rays hit");
     }
