@@ -34,7 +34,8 @@ pub fn presplit(bounds: &[Bounds3], triangle: impl Fn(usize) -> Option<[Vec3; 3]
     let scene =
         bounds.iter().filter(|b| b.min.is_finite() && b.max.is_finite()).fold(Bounds3::EMPTY, |a, b| a.union(b));
     let extra = (budget.max(0.0) * bounds.len() as f32) as usize;
-    if extra == 0 || scene.surface_area().is_nan() || scene.surface_area() <= 0.0 {
+    // (A scene whose box area overflows is left whole too: the priorities would not compare.)
+    if extra == 0 || !scene.surface_area().is_finite() || scene.surface_area() <= 0.0 {
         return (0..bounds.len()).map(whole).collect();
     }
     let grid = Grid { lo: scene.min, inv: scene.diagonal().recip() };
@@ -53,7 +54,14 @@ pub fn presplit(bounds: &[Bounds3], triangle: impl Fn(usize) -> Option<[Vec3; 3]
                 return 0.0;
             }
             let level = grid.plane(&b, b.max_extent()).map_or(24, |(_, level)| level);
-            (wasted * (-(level as f32)).exp2()).cbrt()
+            // Finite within a finite scene box; checked all the same (an infinite priority would
+            // stall the bisection below).
+            let p = (wasted * (-(level as f32)).exp2()).cbrt();
+            if p.is_finite() {
+                p
+            } else {
+                0.0
+            }
         })
         .collect();
     let total: f64 = priority.iter().map(|&p| f64::from(p)).sum();
@@ -72,7 +80,11 @@ pub fn presplit(bounds: &[Bounds3], triangle: impl Fn(usize) -> Option<[Vec3; 3]
         // used(lo) ≤ extra (⌊D pᵢ⌋ ≤ D pᵢ, summing to the budget); doubling reaches a scale
         // beyond it (the caps alone exceed the budget).
         let (mut lo, mut hi) = (extra as f64 / total, extra as f64 / total);
-        while used(hi) <= extra as u64 {
+        // (At most 2000 doublings: f64's whole range, whatever the priorities.)
+        for _ in 0..2000 {
+            if used(hi) > extra as u64 {
+                break;
+            }
             hi *= 2.0;
         }
         for _ in 0..40 {
@@ -281,6 +293,43 @@ mod tests {
         // (A few pieces end early: planes that only cut a piece's round-off margin.)
         assert!(of_sliver > MAX_SPLITS as usize * 9 / 10, "{of_sliver} pieces");
         assert_eq!(refs.len(), tris.len() + of_sliver - 1);
+    }
+
+    /// Hostile coordinates (a scene box whose area overflows, NaN and infinite vertices,
+    /// degenerate triangles) neither hang nor panic, and every primitive keeps a reference.
+    #[test]
+    fn hostile_triangles_are_safe() {
+        let (nan, inf) = (f32::NAN, f32::INFINITY);
+        let huge = 1e30;
+        let soups: [Vec<[Vec3; 3]>; 3] = [
+            vec![
+                [Vec3::ZERO, Vec3::splat(huge), Vec3::new(huge, 0.0, 1.0)],
+                // Collinear: no area, a box whose area overflows.
+                [Vec3::ZERO, Vec3::splat(1e20), Vec3::splat(2e20)],
+                [Vec3::ZERO, Vec3::X, Vec3::Y],
+                [Vec3::splat(-huge), Vec3::ZERO, Vec3::new(0.0, huge, 0.0)],
+            ],
+            vec![
+                [Vec3::ZERO, Vec3::splat(nan), Vec3::X],
+                [Vec3::ZERO, Vec3::new(inf, 0.0, 0.0), Vec3::Y],
+                [Vec3::ZERO, Vec3::new(4.0, 3.0, 2.0), Vec3::new(0.01, 0.0, 0.0)],
+            ],
+            // Collinear and repeated vertices, long and tilted.
+            vec![
+                [Vec3::ZERO, Vec3::splat(5.0), Vec3::splat(10.0)],
+                [Vec3::splat(3.0); 3],
+                [Vec3::new(-5.0, 0.0, 1.0), Vec3::new(5.0, 7.0, -3.0), Vec3::new(5.0, 7.01, -3.0)],
+            ],
+        ];
+        for tris in soups {
+            let bounds: Vec<Bounds3> = tris.iter().map(bounds_of).collect();
+            for budget in [10.0, 100.0] {
+                let refs = presplit(&bounds, |i| Some(tris[i]), budget);
+                for i in 0..tris.len() {
+                    assert!(refs.iter().any(|r| r.prim == i as u32), "primitive {i} lost");
+                }
+            }
+        }
     }
 
     /// A finely tessellated surface wastes no box area worth splitting: it is left as it is.
