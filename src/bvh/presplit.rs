@@ -306,6 +306,9 @@ mod tests {
                 [Vec3::ZERO, Vec3::splat(huge), Vec3::new(huge, 0.0, 1.0)],
                 // Collinear: no area, a box whose area overflows.
                 [Vec3::ZERO, Vec3::splat(1e20), Vec3::splat(2e20)],
+                // Nearly collinear: a finite area in a box whose area overflows (an infinite
+                // priority, which stalled the bisection before it was guarded).
+                [Vec3::ZERO, Vec3::splat(1e19), Vec3::new(1e19, 1e19, 1.0001e19)],
                 [Vec3::ZERO, Vec3::X, Vec3::Y],
                 [Vec3::splat(-huge), Vec3::ZERO, Vec3::new(0.0, huge, 0.0)],
             ],
