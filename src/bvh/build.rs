@@ -49,7 +49,7 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
     // at the origin: every node box stays finite, which the traversal's slab test relies on
     // (its own intersection test then finds no hit).
     let sane = |b: &Bounds3| {
-        if b.min.is_finite() && b.max.is_finite() {
+        if b.is_finite() {
             *b
         } else {
             Bounds3::from_point(Vec3::ZERO)

@@ -38,6 +38,12 @@ impl Bounds3 {
         self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
     }
 
+    /// Whether both corners are finite (no NaN or infinite coordinate).
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.min.is_finite() && self.max.is_finite()
+    }
+
     /// Smallest box holding both.
     #[inline]
     pub fn union(&self, o: &Bounds3) -> Bounds3 {
