@@ -216,18 +216,36 @@ impl Microfacet {
 
     /// Calls `f(i, j, s)` for every `i < ux.len()`, `j < uy.len()` (row by row) with the sample
     /// `s` that [`Microfacet::sample`] gives for `wi` and `u = (ux[i], uy[j])`, bit for bit: a
-    /// product grid of random numbers, as quadrature over visible normals uses. The work that
-    /// depends on one coordinate only is done once per coordinate: for Beckmann the Newton
-    /// inversion of the x slope per `ux[i]` and the y slope per `uy[j]`, for GGX the disk
-    /// radius and angle; and `G1(wi)` of the density once. What remains per sample is the
-    /// normal's normalization and the density's `D(m)`.
+    /// product grid of random numbers, as quadrature over visible normals uses. The normals come
+    /// from [`Microfacet::sample_grid_normals`]; `G1(wi)` of the density is computed once.
     pub fn sample_grid(&self, wi: Vec3, ux: &[f32], uy: &[f32], mut f: impl FnMut(usize, usize, Sample<Vec3>)) {
+        if let MicrofacetType::BlinnPhong(_) = self.kind {
+            for (i, &x) in ux.iter().enumerate() {
+                for (j, &y) in uy.iter().enumerate() {
+                    f(i, j, self.sample(wi, Vec2::new(x, y)));
+                }
+            }
+            return;
+        }
+        let g1_front = 1.0 / (1.0 + self.lambda(wi));
+        self.sample_grid_normals(wi, ux, uy, |i, j, m| {
+            f(i, j, Sample::solid_angle(m, self.visible_pdf(wi, m, || g1_front)));
+        });
+    }
+
+    /// [`Microfacet::sample_grid`]'s normals alone, without their density (what Mitsuba's
+    /// `eval_reflectance` quadrature uses: it never looks at the density, whose `D(m)` costs an
+    /// exponential per Beckmann normal). The work that depends on one coordinate only is done
+    /// once per coordinate: for Beckmann the Newton inversion of the x slope per `ux[i]` and the
+    /// y slope per `uy[j]`, for GGX the disk radius and angle; what remains per normal is its
+    /// normalization.
+    pub fn sample_grid_normals(&self, wi: Vec3, ux: &[f32], uy: &[f32], mut f: impl FnMut(usize, usize, Vec3)) {
         match self.kind {
             MicrofacetType::Beckmann => {
                 let (slopes, cos_phi, sin_phi) = self.beckmann_view(wi);
                 let xs: Vec<f32> = ux.iter().map(|&u| slopes.x(u)).collect();
                 let ys: Vec<(f32, f32)> = uy.iter().map(|&u| slopes.y(u)).collect();
-                self.visible_grid(wi, &xs, &ys, f, |x, y| {
+                product_grid(&xs, &ys, f, |x, y| {
                     let (sx, sy) = slopes.combine(x, y);
                     self.beckmann_normal(cos_phi, sin_phi, sx, sy)
                 });
@@ -242,35 +260,30 @@ impl Microfacet {
                         (phi.cos(), phi.sin())
                     })
                     .collect();
-                self.visible_grid(wi, &rs, &angles, f, |r, angle| view.normal(self, r, angle));
+                product_grid(&rs, &angles, f, |r, angle| view.normal(self, r, angle));
             }
             MicrofacetType::BlinnPhong(_) => {
                 for (i, &x) in ux.iter().enumerate() {
                     for (j, &y) in uy.iter().enumerate() {
-                        f(i, j, self.sample(wi, Vec2::new(x, y)));
+                        f(i, j, self.sample(wi, Vec2::new(x, y)).value);
                     }
                 }
             }
         }
     }
+}
 
-    /// [`Microfacet::sample_grid`] of visible normals from the per-coordinate parts `xs`, `ys`
-    /// that `normal` combines.
-    #[inline(always)]
-    fn visible_grid<X: Copy, Y: Copy>(
-        &self,
-        wi: Vec3,
-        xs: &[X],
-        ys: &[Y],
-        mut f: impl FnMut(usize, usize, Sample<Vec3>),
-        normal: impl Fn(X, Y) -> Vec3,
-    ) {
-        let g1_front = 1.0 / (1.0 + self.lambda(wi));
-        for (i, &x) in xs.iter().enumerate() {
-            for (j, &y) in ys.iter().enumerate() {
-                let m = normal(x, y);
-                f(i, j, Sample::solid_angle(m, self.visible_pdf(wi, m, || g1_front)));
-            }
+/// Calls `f(i, j, normal(xs[i], ys[j]))` row by row: a product grid from per-coordinate parts.
+#[inline(always)]
+fn product_grid<X: Copy, Y: Copy>(
+    xs: &[X],
+    ys: &[Y],
+    mut f: impl FnMut(usize, usize, Vec3),
+    normal: impl Fn(X, Y) -> Vec3,
+) {
+    for (i, &x) in xs.iter().enumerate() {
+        for (j, &y) in ys.iter().enumerate() {
+            f(i, j, normal(x, y));
         }
     }
 }
@@ -569,6 +582,8 @@ mod tests {
         }
     }
 
+    /// `sample_grid` gives `sample`'s normal and density and `sample_grid_normals` its normal,
+    /// bit for bit, for every distribution.
     #[test]
     fn sample_grid_is_sample_bit_for_bit() {
         // Grids with nodes near 0 and 1, over directions at normal incidence (Beckmann's polar
@@ -595,9 +610,14 @@ mod tests {
                     assert_eq!(bits(&s), bits(&t), "{md:?}, wi {wi}, u ({}, {})", us[i], vs[j]);
                     seen += 1;
                 });
+                md.sample_grid_normals(wi, &us, &vs, |i, j, m| {
+                    let t = md.sample(wi, Vec2::new(us[i], vs[j])).value;
+                    assert_eq!(m.to_array().map(f32::to_bits), t.to_array().map(f32::to_bits), "{md:?}, wi {wi}");
+                    seen += 1;
+                });
             }
         }
-        assert_eq!(seen, 8 * 6 * us.len() * vs.len());
+        assert_eq!(seen, 2 * 8 * 6 * us.len() * vs.len());
     }
 
     /// Λ's shortcut changes no bit of G1: from a = 4 on (every 61st float up to ∞), the full
