@@ -14,9 +14,11 @@
 //!
 //! The binary tree the build makes is walked two levels at a time: each node of the walked tree
 //! holds a binary node's two children and their (up to four) children, and evaluates the six
-//! importances in two SSE evaluations side by side before making the two binary choices, so
+//! importances at once (one AVX evaluation of eight lanes where the CPU has AVX, chosen at run
+//! time; two SSE evaluations side by side otherwise) before making the two binary choices, so
 //! that the second level's square roots and divisions do not wait for the first choice. The
-//! probabilities are the binary walk's to the last bit (tested against it).
+//! probabilities are the binary walk's to the last bit (tested against it), and both
+//! evaluations give the same bits.
 //!
 //! Lights at infinity (environments, directional light) have no bounds: they are chosen apart,
 //! each with probability `1 / (n_infinite + 1)`, and the BVH gets the remaining `1 / (n + 1)`
@@ -28,6 +30,7 @@
 
 use super::Light;
 use crate::geometry::Geometry;
+use crate::math::simd::Avx;
 use crate::math::{safe_acos, safe_sqrt, Bounds3, DirectionCone, Vec3, Vec4, PI};
 
 /// Spatial and directional bounds of a set of emitters.
@@ -158,7 +161,7 @@ impl NodeBounds {
         }
     }
 
-    /// See [`LightBounds::importance`]; [`WideBounds::importance`] is the same for four at once.
+    /// See [`LightBounds::importance`]; [`WideBounds::importance`] is the same for eight at once.
     #[inline]
     fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
@@ -218,18 +221,24 @@ impl NodeBounds {
 /// Lanes of one SSE evaluation of importances.
 const WIDTH: usize = 4;
 
-/// The [`NodeBounds`] of up to four nodes, lane `k` for node `k`, so that one SSE evaluation
-/// gives all their importances (the same operations in the same order as
-/// [`NodeBounds::importance`], lane by lane: the same bits). Unused lanes have importance 0.
+/// Lanes of a [`WideBounds`]: two SSE evaluations, or one AVX evaluation.
+const LANES: usize = 2 * WIDTH;
+
+/// The [`NodeBounds`] of up to eight nodes, lane `k` for node `k`, so that SIMD evaluations give
+/// all their importances at once: two SSE evaluations of four lanes, or one AVX evaluation of
+/// eight where the CPU has AVX (the same operations in the same order as
+/// [`NodeBounds::importance`], lane by lane: the same bits either way). Unused lanes have
+/// importance 0.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 struct WideBounds {
-    center: [Vec4; 3],
-    radius: Vec4,
-    w: [Vec4; 3],
-    phi: Vec4,
-    cos_theta_o: Vec4,
-    sin_theta_o: Vec4,
-    cos_theta_e: Vec4,
+    center: [[f32; LANES]; 3],
+    radius: [f32; LANES],
+    w: [[f32; LANES]; 3],
+    phi: [f32; LANES],
+    cos_theta_o: [f32; LANES],
+    sin_theta_o: [f32; LANES],
+    cos_theta_e: [f32; LANES],
 }
 
 /// Lane-wise square root (exact, as the scalar one).
@@ -254,11 +263,12 @@ fn safe_sqrt4(x: Vec4) -> Vec4 {
 }
 
 impl WideBounds {
-    /// Lanes for `children` (at most [`WIDTH`]); lanes of `None` or beyond can never be chosen
+    /// Lanes for `nodes` (at most [`LANES`]); lanes of `None` or beyond can never be chosen
     /// (their emission spread `cos θ_e = 2` puts every point outside it).
-    fn new(children: &[Option<NodeBounds>]) -> WideBounds {
+    fn new(nodes: &[Option<NodeBounds>]) -> WideBounds {
+        assert!(nodes.len() <= LANES, "a wide bound holds at most {LANES} lanes");
         let lane = |f: &dyn Fn(&NodeBounds) -> f32, unused: f32| {
-            Vec4::from_array(std::array::from_fn(|k| children.get(k).copied().flatten().as_ref().map_or(unused, f)))
+            std::array::from_fn(|k| nodes.get(k).copied().flatten().as_ref().map_or(unused, f))
         };
         WideBounds {
             center: [lane(&|b| b.center.x, 0.0), lane(&|b| b.center.y, 0.0), lane(&|b| b.center.z, 0.0)],
@@ -271,9 +281,24 @@ impl WideBounds {
         }
     }
 
-    /// [`NodeBounds::importance`] of each child at `p` with unit normal `n` (zero in a medium).
+    /// [`NodeBounds::importance`] of every lane at `p` with unit normal `n` (zero in a medium),
+    /// in one AVX evaluation where `avx` is given, else in two SSE evaluations.
     #[inline(always)]
-    fn importance(&self, p: Vec3, n: Vec3) -> [f32; WIDTH] {
+    fn importance(&self, p: Vec3, n: Vec3, avx: Option<Avx>) -> [f32; LANES] {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = avx {
+            return self.importance_avx(avx, p, n);
+        }
+        let _ = avx;
+        let mut out = [0.0; LANES];
+        out[..WIDTH].copy_from_slice(&self.importance4(0, p, n));
+        out[WIDTH..].copy_from_slice(&self.importance4(WIDTH, p, n));
+        out
+    }
+
+    /// Lanes `first .. first + 4` of [`WideBounds::importance`] in one SSE evaluation.
+    #[inline(always)]
+    fn importance4(&self, first: usize, p: Vec3, n: Vec3) -> [f32; WIDTH] {
         // cos(a − b) and sin(a − b), clamped to the angle 0 when a < b.
         #[inline(always)]
         fn cos_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
@@ -283,28 +308,96 @@ impl WideBounds {
         fn sin_sub(sin_a: Vec4, cos_a: Vec4, sin_b: Vec4, cos_b: Vec4) -> Vec4 {
             Vec4::select(cos_a.cmpgt(cos_b), Vec4::ZERO, sin_a * cos_b - cos_a * sin_b)
         }
-        let d =
-            [Vec4::splat(p.x) - self.center[0], Vec4::splat(p.y) - self.center[1], Vec4::splat(p.z) - self.center[2]];
+        let v = |x: &[f32; LANES]| Vec4::from_slice(&x[first..first + WIDTH]);
+        let (radius, w) = (v(&self.radius), self.w.each_ref().map(v));
+        let (sin_theta_o, cos_theta_o) = (v(&self.sin_theta_o), v(&self.cos_theta_o));
+        let d = [
+            Vec4::splat(p.x) - v(&self.center[0]),
+            Vec4::splat(p.y) - v(&self.center[1]),
+            Vec4::splat(p.z) - v(&self.center[2]),
+        ];
         let dist2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        let d2 = dist2.max(self.radius);
+        let d2 = dist2.max(radius);
         let inv_dist = Vec4::select(dist2.cmpgt(Vec4::ZERO), Vec4::ONE / sqrt4(dist2), Vec4::ZERO);
         let wi = [d[0] * inv_dist, d[1] * inv_dist, d[2] * inv_dist];
-        let cos_w = self.w[0] * wi[0] + self.w[1] * wi[1] + self.w[2] * wi[2];
+        let cos_w = w[0] * wi[0] + w[1] * wi[1] + w[2] * wi[2];
         let sin_w = safe_sqrt4(Vec4::ONE - cos_w * cos_w);
-        let inside = dist2.cmple(self.radius * self.radius);
-        let sin_b_out = (self.radius * inv_dist).min(Vec4::ONE);
+        let inside = dist2.cmple(radius * radius);
+        let sin_b_out = (radius * inv_dist).min(Vec4::ONE);
         let sin_b = Vec4::select(inside, Vec4::ZERO, sin_b_out);
         let cos_b = Vec4::select(inside, Vec4::NEG_ONE, safe_sqrt4(Vec4::ONE - sin_b_out * sin_b_out));
-        let cos_x = cos_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
-        let sin_x = sin_sub(sin_w, cos_w, self.sin_theta_o, self.cos_theta_o);
+        let cos_x = cos_sub(sin_w, cos_w, sin_theta_o, cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, sin_theta_o, cos_theta_o);
         let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
-        let mut importance = self.phi * cos_p / d2;
+        let mut importance = v(&self.phi) * cos_p / d2;
         if n != Vec3::ZERO {
             let cos_i = (wi[0] * n.x + wi[1] * n.y + wi[2] * n.z).abs();
             let sin_i = safe_sqrt4(Vec4::ONE - cos_i * cos_i);
             importance *= cos_sub(sin_i, cos_i, sin_b, cos_b);
         }
-        Vec4::select(cos_p.cmplt(self.cos_theta_e), Vec4::ZERO, importance.max(Vec4::ZERO)).to_array()
+        Vec4::select(cos_p.cmplt(v(&self.cos_theta_e)), Vec4::ZERO, importance.max(Vec4::ZERO)).to_array()
+    }
+
+    /// [`WideBounds::importance`] in one AVX evaluation: [`WideBounds::importance4`]'s
+    /// operations on eight lanes (`maxps`/`minps` with the same operand order, comparisons that
+    /// are false for NaN alike, blends for its selects).
+    #[cfg(target_arch = "x86_64")]
+    #[inline]
+    fn importance_avx(&self, _: Avx, p: Vec3, n: Vec3) -> [f32; LANES] {
+        // SAFETY: the token proves the CPU has AVX.
+        unsafe { self.importance_avx_unchecked(p, n) }
+    }
+
+    /// Safety: the CPU must have AVX. (Its loads are aligned ones: `WideBounds` is aligned to
+    /// 32 bytes and each of its rows is 32 bytes long.)
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn importance_avx_unchecked(&self, p: Vec3, n: Vec3) -> [f32; LANES] {
+        use std::arch::x86_64::*;
+        let v = |x: &[f32; LANES]| _mm256_load_ps(x.as_ptr());
+        let (one, zero, splat) = (_mm256_set1_ps(1.0), _mm256_setzero_ps(), |x: f32| _mm256_set1_ps(x));
+        let (add, sub, mul) = (|a, b| _mm256_add_ps(a, b), |a, b| _mm256_sub_ps(a, b), |a, b| _mm256_mul_ps(a, b));
+        // Vec4::select(mask, a, b): a where the mask is set.
+        let select = |mask, a, b| _mm256_blendv_ps(b, a, mask);
+        let gt = |a, b| _mm256_cmp_ps::<_CMP_GT_OS>(a, b);
+        let safe_sqrt = |x| _mm256_sqrt_ps(_mm256_max_ps(x, zero));
+        let cos_sub =
+            |sin_a, cos_a, sin_b, cos_b| select(gt(cos_a, cos_b), one, add(mul(cos_a, cos_b), mul(sin_a, sin_b)));
+        let sin_sub =
+            |sin_a, cos_a, sin_b, cos_b| select(gt(cos_a, cos_b), zero, sub(mul(sin_a, cos_b), mul(cos_a, sin_b)));
+        let radius = v(&self.radius);
+        let w = self.w.each_ref().map(v);
+        let (sin_theta_o, cos_theta_o) = (v(&self.sin_theta_o), v(&self.cos_theta_o));
+        let d = [
+            sub(splat(p.x), v(&self.center[0])),
+            sub(splat(p.y), v(&self.center[1])),
+            sub(splat(p.z), v(&self.center[2])),
+        ];
+        let dist2 = add(add(mul(d[0], d[0]), mul(d[1], d[1])), mul(d[2], d[2]));
+        let d2 = _mm256_max_ps(dist2, radius);
+        let inv_dist = select(gt(dist2, zero), _mm256_div_ps(one, _mm256_sqrt_ps(dist2)), zero);
+        let wi = [mul(d[0], inv_dist), mul(d[1], inv_dist), mul(d[2], inv_dist)];
+        let cos_w = add(add(mul(w[0], wi[0]), mul(w[1], wi[1])), mul(w[2], wi[2]));
+        let sin_w = safe_sqrt(sub(one, mul(cos_w, cos_w)));
+        let inside = _mm256_cmp_ps::<_CMP_LE_OS>(dist2, mul(radius, radius));
+        let sin_b_out = _mm256_min_ps(mul(radius, inv_dist), one);
+        let sin_b = select(inside, zero, sin_b_out);
+        let cos_b = select(inside, splat(-1.0), safe_sqrt(sub(one, mul(sin_b_out, sin_b_out))));
+        let cos_x = cos_sub(sin_w, cos_w, sin_theta_o, cos_theta_o);
+        let sin_x = sin_sub(sin_w, cos_w, sin_theta_o, cos_theta_o);
+        let cos_p = cos_sub(sin_x, cos_x, sin_b, cos_b);
+        let mut importance = _mm256_div_ps(mul(v(&self.phi), cos_p), d2);
+        if n != Vec3::ZERO {
+            let dot = add(add(mul(wi[0], splat(n.x)), mul(wi[1], splat(n.y))), mul(wi[2], splat(n.z)));
+            let cos_i = _mm256_andnot_ps(splat(-0.0), dot);
+            let sin_i = safe_sqrt(sub(one, mul(cos_i, cos_i)));
+            importance = mul(importance, cos_sub(sin_i, cos_i, sin_b, cos_b));
+        }
+        let beyond = _mm256_cmp_ps::<_CMP_LT_OS>(cos_p, v(&self.cos_theta_e));
+        let out = select(beyond, zero, _mm256_max_ps(importance, zero));
+        let mut lanes = [0.0f32; LANES];
+        _mm256_storeu_ps(lanes.as_mut_ptr(), out);
+        lanes
     }
 }
 
@@ -328,15 +421,14 @@ struct BinaryNode {
 }
 
 /// Two levels of the binary tree as sampling walks them: a binary node's two children (lanes 0
-/// and 1 of `children`) and, for each child that is not a light, its two children (lanes `2k`
-/// and `2k + 1` of `grandchildren` for child `k`). Both sets of importances are evaluated at once
-/// (two SSE evaluations side by side), then the two binary choices are made from them as the
+/// and 1 of `bounds`) and, for each child that is not a light, its two children (lanes `4 + 2k`
+/// and `5 + 2k` for child `k`). All six importances are evaluated at once (one AVX evaluation, or
+/// two SSE evaluations side by side), then the two binary choices are made from them as the
 /// binary walk makes them, so that the walk is half as deep and gives the binary tree's
 /// probabilities to the last bit.
 #[derive(Clone, Copy, Debug)]
 struct WideNode {
-    children: WideBounds,
-    grandchildren: WideBounds,
+    bounds: WideBounds,
     /// Child `k`'s light, where bit `k` of `lights` is set (else its children are below).
     child: [u32; 2],
     /// Grandchild `j`: a node's index, or a light's index where bit `2 + j` of `lights` is set.
@@ -362,6 +454,8 @@ pub struct LightBvh {
     /// Probability of choosing among the lights at infinity, `n_inf / (n_inf + 1)` (or 1 without
     /// a tree).
     p_infinite: f32,
+    /// The AVX token where this CPU has AVX (one evaluation per node instead of two).
+    avx: Option<Avx>,
 }
 
 /// Trail of a light that the tree does not hold.
@@ -395,6 +489,7 @@ impl LightBvh {
             infinite,
             is_infinite,
             p_infinite: 0.0,
+            avx: Avx::detect(),
         };
         match items.len() {
             0 => {}
@@ -424,19 +519,14 @@ impl LightBvh {
                 (grandchildren[2 * k], grandchildren[2 * k + 1]) = (Some(c + 1), Some(second(c)));
             }
         }
-        let lanes = |nodes: &[Option<usize>]| {
-            let bounds: Vec<Option<NodeBounds>> =
-                nodes.iter().map(|c| c.map(|c| NodeBounds::new(&binary[c].bounds))).collect();
-            WideBounds::new(&bounds)
-        };
+        // Lanes 0 and 1 the children, 4 to 7 the grandchildren.
+        let lanes: Vec<Option<NodeBounds>> = [Some(children[0]), Some(children[1]), None, None]
+            .iter()
+            .chain(&grandchildren)
+            .map(|c| c.map(|c| NodeBounds::new(&binary[c].bounds)))
+            .collect();
         let index = self.nodes.len();
-        self.nodes.push(WideNode {
-            children: lanes(&children.map(Some)),
-            grandchildren: lanes(&grandchildren),
-            child: [0; 2],
-            grandchild: [0; 4],
-            lights: 0,
-        });
+        self.nodes.push(WideNode { bounds: WideBounds::new(&lanes), child: [0; 2], grandchild: [0; 4], lights: 0 });
         for (k, &c) in children.iter().enumerate() {
             let trail = trail | (k as u64) << depth;
             if binary[c].leaf {
@@ -493,7 +583,8 @@ impl LightBvh {
         loop {
             let node = &self.nodes[index];
             // Both levels' importances at once: the second does not wait for the first choice.
-            let (ic, ig) = (node.children.importance(p, n), node.grandchildren.importance(p, n));
+            let i = node.bounds.importance(p, n, self.avx);
+            let (ic, ig) = (&i[..WIDTH], &i[WIDTH..]);
             let k = walk.choose(u, ic[0], ic[1])?;
             if node.lights >> k & 1 == 1 {
                 return Some((node.child[k], walk.pmf));
@@ -525,7 +616,8 @@ impl LightBvh {
         let mut index = 0usize;
         loop {
             let node = &self.nodes[index];
-            let (ic, ig) = (node.children.importance(p, n), node.grandchildren.importance(p, n));
+            let i = node.bounds.importance(p, n, self.avx);
+            let (ic, ig) = (&i[..WIDTH], &i[WIDTH..]);
             let Some(k) = follow(&mut pmf, &mut trail, ic[0], ic[1]) else { return 0.0 };
             if node.lights >> k & 1 == 1 {
                 return pmf;
@@ -875,26 +967,37 @@ mod tests {
         }
     }
 
-    /// Four importances at once are the scalar ones, bit for bit, at points far, near and inside
-    /// the bounds, with and without a normal; unused lanes are zero.
+    /// Eight importances at once are the scalar ones, bit for bit, in two SSE evaluations and
+    /// in one AVX evaluation (where the CPU has it), at points far, near and inside the bounds,
+    /// with and without a normal, including a point at a bound's centre (distance 0) and NaN
+    /// points; unused lanes are zero.
     #[test]
     fn wide_importance_is_the_scalar_one() {
         let (lights, shapes) = many_lights(3);
         let bounds: Vec<LightBounds> = lights.iter().filter_map(|l| LightBounds::of(l, &shapes)).collect();
         let mut rng = Pcg32::new(5, 2);
         let mut positive = 0;
-        for chunk in bounds.chunks(3) {
+        let implementations = [None, Avx::detect()];
+        for (c, chunk) in bounds.chunks(7).enumerate() {
             let wide = WideBounds::new(&chunk.iter().map(|b| Some(NodeBounds::new(b))).collect::<Vec<_>>());
-            for _ in 0..2000 {
+            for t in 0..2000 {
                 let scale = [0.1, 1.0, 10.0][rng.next_u32() as usize % 3];
-                let p = chunk[0].bounds.centroid() + scale * sample_uniform_sphere(u2(&mut rng)).value;
-                let n = if rng.next_f32() < 0.2 { Vec3::ZERO } else { sample_uniform_sphere(u2(&mut rng)).value };
-                let got = wide.importance(p, n);
-                for (k, b) in chunk.iter().enumerate() {
-                    assert_eq!(got[k].to_bits(), b.importance(p, n).to_bits(), "lane {k} at {p}, n {n}");
-                    positive += usize::from(got[k] > 0.0);
+                let mut p = chunk[0].bounds.centroid() + scale * sample_uniform_sphere(u2(&mut rng)).value;
+                if t == 0 {
+                    p = NodeBounds::new(&chunk[c % chunk.len()]).center;
+                } else if t == 1 {
+                    p = Vec3::new(f32::NAN, 0.0, 1.0);
                 }
-                assert!(got[chunk.len()..].iter().all(|&i| i == 0.0));
+                let n = if rng.next_f32() < 0.2 { Vec3::ZERO } else { sample_uniform_sphere(u2(&mut rng)).value };
+                for avx in implementations {
+                    let got = wide.importance(p, n, avx);
+                    for (k, b) in chunk.iter().enumerate() {
+                        let expected = b.importance(p, n).to_bits();
+                        assert_eq!(got[k].to_bits(), expected, "lane {k} at {p}, n {n}, AVX {}", avx.is_some());
+                        positive += usize::from(got[k] > 0.0);
+                    }
+                    assert!(got[chunk.len()..].iter().all(|&i| i == 0.0));
+                }
             }
         }
         assert!(positive > 10_000, "{positive} positive importances");
