@@ -143,8 +143,27 @@ impl Sphere {
     /// partial spheres).
     #[inline]
     pub fn surface(&self, ray: &Ray, t: f32) -> (SurfacePoint, Vec2) {
-        let v = (ray.at(t) - self.center).normalize_or(Vec3::Z);
+        let v = self.hit_direction(ray, t);
         (self.point(v), self.uv_of_direction(v))
+    }
+
+    /// [`Sphere::surface`]'s point alone (no texture coordinates: an arctangent and an arc
+    /// cosine fewer).
+    #[inline]
+    pub fn surface_point(&self, ray: &Ray, t: f32) -> SurfacePoint {
+        self.point(self.hit_direction(ray, t))
+    }
+
+    /// [`Sphere::surface`]'s texture coordinates alone, the same bits.
+    #[inline]
+    pub fn surface_uv(&self, ray: &Ray, t: f32) -> Vec2 {
+        self.uv_of_direction(self.hit_direction(ray, t))
+    }
+
+    /// Unit direction from the centre to the hit at `ray.at(t)`.
+    #[inline(always)]
+    fn hit_direction(&self, ray: &Ray, t: f32) -> Vec3 {
+        (ray.at(t) - self.center).normalize_or(Vec3::Z)
     }
 
     /// (u, v) = (φ / 2π, θ / π) of the point in unit direction `v` from the centre (world),

@@ -247,7 +247,10 @@ impl Integrator for AovIntegrator {
                 }
                 AovKind::Depth => put(&[si.t * ray.d.length()]),
                 AovKind::Position => put(&[si.p.x, si.p.y, si.p.z]),
-                AovKind::Uv => put(&[si.uv.x, si.uv.y]),
+                AovKind::Uv => {
+                    let uv = scene.uv_at(ray, &si);
+                    put(&[uv.x, uv.y])
+                }
                 AovKind::GeoNormal => put(&[si.ng.x, si.ng.y, si.ng.z]),
                 AovKind::ShNormal => put(&[si.ns.x, si.ns.y, si.ns.z]),
                 AovKind::PrimIndex => put(&[si.prim as f32]),

@@ -553,6 +553,12 @@ impl Light {
         }
     }
 
+    /// Whether [`Light::le`] reads the surface's texture coordinates (an area light with a
+    /// radiance texture that is not constant).
+    pub fn reads_uv(&self) -> bool {
+        matches!(self, Light::Area { radiance, .. } if !matches!(radiance, Texture::Constant(_)))
+    }
+
     /// Radiance emitted from a surface point with shading normal `ns` and texture coordinates
     /// `uv` toward `wo` (world).
     #[inline]

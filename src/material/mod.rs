@@ -479,6 +479,24 @@ impl Bsdf {
         }
     }
 
+    /// Whether the BSDF (or one nested in it) reads the surface's texture coordinates: a
+    /// texture that is not constant, or hair (its offset across the fibre is `v`). Scenes where
+    /// no BSDF or emitter does skip them on spheres (the scene computes them on demand then).
+    pub fn reads_uv(&self) -> bool {
+        self.textures().iter().any(|t| !matches!(t, crate::texture::Texture::Constant(_))) || self.contains_hair()
+    }
+
+    /// Whether the BSDF is hair or holds one.
+    fn contains_hair(&self) -> bool {
+        match self {
+            Bsdf::Hair(_) => true,
+            Bsdf::Perturbed(p) => p.bsdf.contains_hair(),
+            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.contains_hair()),
+            Bsdf::Mask { bsdf, .. } => bsdf.contains_hair(),
+            _ => false,
+        }
+    }
+
     /// Whether the BSDF (or one nested in it) is a bump map, which reads `∂p/∂v` at hits.
     pub fn perturbs_with_height(&self) -> bool {
         match self {

@@ -223,8 +223,11 @@ impl SceneBuilder {
         let emission_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
         // ∂p/∂v is computed at hits only where a bump map reads it.
         let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);
+        // Texture coordinates on spheres only where a BSDF or an emitter reads them.
+        let needs_uv = self.bsdfs.iter().any(Bsdf::reads_uv) || self.lights.iter().any(Light::reads_uv);
         Ok(Scene {
             needs_dpdv,
+            needs_uv,
             cached_normals: bounds.len() <= super::SMALL_SCENE_PRIMITIVES,
             shapes: self.shapes,
             geometries: self.geometries,

@@ -234,6 +234,9 @@ pub struct Scene {
     camera: Camera,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
     needs_dpdv: bool,
+    /// Whether hits on spheres compute texture coordinates (some BSDF or emitter reads them;
+    /// zero otherwise, and [`Scene::uv_at`] gives them on demand).
+    needs_uv: bool,
     /// Whether hits on triangles read the mesh's cached face normals: in a cache-resident
     /// scene (at most [`SMALL_SCENE_PRIMITIVES`]); a larger one computes them from the vertices
     /// at hand, the same bits without a likely cache miss.
@@ -367,7 +370,18 @@ impl Scene {
         crate::material::BsdfContext { uv: si.uv, mesh, si: Some(si), memo: None }
     }
 
-    /// The closest surface hit along `ray` within `(0, ray.t_max)`.
+    /// Texture coordinates of `si`, the hit [`Scene::intersect`] gave for `ray`: `si.uv`, which
+    /// on spheres is zero in a scene where no BSDF or emitter reads texture coordinates (their
+    /// arctangent and arc cosine are skipped there), computed here then, the same bits.
+    pub fn uv_at(&self, ray: &Ray, si: &SurfaceInteraction) -> Vec2 {
+        match &self.geometries[si.shape as usize] {
+            Geometry::Sphere(s) if !self.needs_uv => s.surface_uv(ray, si.t),
+            _ => si.uv,
+        }
+    }
+
+    /// The closest surface hit along `ray` within `(0, ray.t_max)` (texture coordinates on
+    /// spheres only where the scene reads them: see [`Scene::uv_at`]).
     #[inline]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceInteraction> {
         let (t, kind) = self.closest(ray)?;
@@ -529,7 +543,7 @@ impl Scene {
         }
         let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
-                let surface = s.surface(ray, t);
+                let surface = if self.needs_uv { s.surface(ray, t) } else { (s.surface_point(ray, t), Vec2::ZERO) };
                 (surface, s.dpduv(surface.0.p, self.needs_dpdv))
             }
             (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpduv(q)),
@@ -674,6 +688,66 @@ mod tests {
             for (g, e) in got.iter().zip(expected) {
                 assert!((g - e).abs() < 1e-3 * e.abs().max(1.0), "case {k}: {got:?} vs {expected:?}");
             }
+        }
+    }
+
+    /// Hits on spheres skip texture coordinates only in scenes where nothing reads them (no
+    /// BSDF texture, hair or textured emitter): there `si.uv` is zero and [`Scene::uv_at`]
+    /// gives, bit for bit, what a scene that reads them has in `si.uv`; a textured BSDF, a
+    /// textured area light or hair makes the scene compute them.
+    #[test]
+    fn sphere_uv_only_where_read() {
+        use crate::geometry::Sphere;
+        use crate::texture::Texture;
+        let checker = Texture::Bitmap {
+            bitmap: crate::texture::Bitmap {
+                image: std::sync::Arc::new(crate::image::Image {
+                    width: 2,
+                    height: 1,
+                    pixels: vec![Rgb::ONE, Rgb::splat(0.2)],
+                }),
+                filter: crate::texture::Filter::Nearest,
+                wrap: [crate::texture::Wrap::Repeat; 2],
+            },
+            to_uv: crate::math::Mat3::IDENTITY,
+        };
+        // 0: plain; 1: a textured BSDF; 2: a textured emitter on the sphere; 3: hair.
+        let scene = |variant: usize| {
+            let mut b = SceneBuilder::new();
+            let bsdf = match variant {
+                1 => Bsdf::Diffuse(Diffuse { reflectance: checker.clone() }),
+                3 => Bsdf::Hair(Box::new(crate::material::Hair {
+                    colour: crate::material::hair::HairColour::Absorption(Texture::Constant(Rgb::splat(0.5))),
+                    eta: 1.55,
+                    beta_m: 0.3,
+                    beta_n: 0.3,
+                    alpha: 2.0,
+                })),
+                _ => Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))),
+            };
+            let m = b.add_bsdf(bsdf);
+            let emission = (variant == 2).then(|| checker.clone());
+            let sphere = Geometry::Sphere(Sphere::new(Vec3::new(0.3, -0.2, 0.1), 1.5, false));
+            b.add_shape_textured(sphere, m, emission, false);
+            b.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
+            b.build().unwrap()
+        };
+        let mut rng = Pcg32::new(3, 1);
+        let (plain, scenes) = (scene(0), [scene(1), scene(2), scene(3)]);
+        assert!(!plain.needs_uv && scenes.iter().all(|s| s.needs_uv));
+        for _ in 0..1000 {
+            let o = 5.0 * sample_uniform_sphere(glam::Vec2::new(rng.next_f32(), rng.next_f32())).value;
+            let ray = Ray::new(o, (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5 - o).normalize());
+            let si = plain.intersect(&ray).expect("every ray aims inside the sphere");
+            assert_eq!(si.uv, Vec2::ZERO);
+            let uv = plain.uv_at(&ray, &si);
+            for s in &scenes {
+                let with = s.intersect(&ray).unwrap();
+                assert_eq!(with.uv.to_array().map(f32::to_bits), uv.to_array().map(f32::to_bits));
+                assert_eq!(s.uv_at(&ray, &with), with.uv);
+                assert_eq!((with.p, with.ns, with.dpdu), (si.p, si.ns, si.dpdu));
+            }
+            assert!(uv.x > 0.0 || uv.y > 0.0);
         }
     }
 

@@ -176,7 +176,14 @@ Shape "cylinder" "float radius" 1 "float zmin" 1 "float zmax" -1 "float phimax" 
     for (k, area) in [(0, PI * 2.0 * 1.8), (1, PI / 2.0 * 0.5 * 3.0), (2, PI / 2.0 * 2.0)] {
         assert!((g[k].area() - area).abs() < 1e-4 * area, "shape {k}: {} vs {area}", g[k].area());
     }
-    let hit = |o: Vec3, d: Vec3| f.scene.intersect(&Ray::new(o, d));
+    // Hits with their texture coordinates (the scene reads none: `uv_at` gives them).
+    let hit = |o: Vec3, d: Vec3| {
+        let ray = Ray::new(o, d);
+        f.scene.intersect(&ray).map(|mut si| {
+            si.uv = f.scene.uv_at(&ray, &si);
+            si
+        })
+    };
     let close = |a: f32, b: f32| (a - b).abs() < 2e-4;
     // Sphere, from above at (1, 0.5): both crossings (z = ±1.66) are cut by zmax and zmin.
     assert!(hit(Vec3::new(1.0, 0.5, 5.0), -Vec3::Z).is_none());
@@ -1067,9 +1074,16 @@ fn quadrics_have_pbrts_uv() {
     use crate::math::{Ray, Vec3};
     let f = load("Camera \"perspective\"\nWorldBegin\nShape \"sphere\" \"float radius\" 2\nTranslate 10 0 0\nShape \"disk\" \"float radius\" 2\n").unwrap();
     // Down onto the sphere's +z pole from above, then at the equator along +x.
-    let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).unwrap();
+    // (The scene reads no texture coordinates: `uv_at` gives them on the sphere.)
+    let uv_at = |o: Vec3, d: Vec3| {
+        let ray = Ray::new(o, d);
+        let mut si = f.scene.intersect(&ray).unwrap();
+        si.uv = f.scene.uv_at(&ray, &si);
+        si
+    };
+    let si = uv_at(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z);
     assert!((si.uv.y - 1.0).abs() < 1e-4, "+z pole: v = 1 − θ/π = 1, got {}", si.uv);
-    let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, -5.0, 0.3), Vec3::Y)).unwrap();
+    let si = uv_at(Vec3::new(0.0, -5.0, 0.3), Vec3::Y);
     // φ = 3π/2 (−y), θ a little under π/2.
     assert!((si.uv.x - 0.75).abs() < 1e-3 && si.uv.y > 0.5, "{}", si.uv);
     let si = f.scene.intersect(&Ray::new(Vec3::new(10.0, 1.0, 5.0), -Vec3::Z)).unwrap();
