@@ -483,31 +483,28 @@ impl Bsdf {
     /// texture that is not constant, or hair (its offset across the fibre is `v`). Scenes where
     /// no BSDF or emitter does skip them on spheres (the scene computes them on demand then).
     pub fn reads_uv(&self) -> bool {
-        self.textures().iter().any(|t| !matches!(t, crate::texture::Texture::Constant(_))) || self.contains_hair()
-    }
-
-    /// Whether the BSDF is hair or holds one.
-    fn contains_hair(&self) -> bool {
-        match self {
-            Bsdf::Hair(_) => true,
-            Bsdf::Perturbed(p) => p.bsdf.contains_hair(),
-            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.contains_hair()),
-            Bsdf::Mask { bsdf, .. } => bsdf.contains_hair(),
-            _ => false,
-        }
+        self.textures().iter().any(|t| !matches!(t, crate::texture::Texture::Constant(_)))
+            || self.any_nested(&|b| matches!(b, Bsdf::Hair(_)))
     }
 
     /// Whether the BSDF (or one nested in it) is a bump map, which reads `∂p/∂v` at hits.
     pub fn perturbs_with_height(&self) -> bool {
-        match self {
-            Bsdf::Perturbed(p) => {
-                matches!(p.perturbation, Perturbation::BumpMap { .. } | Perturbation::Displacement { .. })
-                    || p.bsdf.perturbs_with_height()
+        self.any_nested(&|b| {
+            matches!(b, Bsdf::Perturbed(p)
+                if matches!(p.perturbation, Perturbation::BumpMap { .. } | Perturbation::Displacement { .. }))
+        })
+    }
+
+    /// Whether `f` holds for the BSDF or for one nested in it (under a normal or bump map, a
+    /// two-sided, blend or mask BSDF).
+    fn any_nested(&self, f: &impl Fn(&Bsdf) -> bool) -> bool {
+        f(self)
+            || match self {
+                Bsdf::Perturbed(p) => p.bsdf.any_nested(f),
+                Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.any_nested(f)),
+                Bsdf::Mask { bsdf, .. } => bsdf.any_nested(f),
+                _ => false,
             }
-            Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.perturbs_with_height()),
-            Bsdf::Mask { bsdf, .. } => bsdf.perturbs_with_height(),
-            _ => false,
-        }
     }
 
     /// Whether the BSDF has only delta lobes (light sampling is useless on it).
