@@ -136,7 +136,7 @@ impl Integrator for VolPathIntegrator {
                         beta *= weight;
                         let p = ray.at(t);
                         let wo = -ray.d;
-                        let phase = medium_ref.phase;
+                        let phase = &medium_ref.phase;
                         if depth + 1 >= max_depth || beta == Rgb::ZERO {
                             break;
                         }
@@ -152,8 +152,8 @@ impl Integrator for VolPathIntegrator {
                                     u_light,
                                     u_light2,
                                     &mis,
-                                    |wi| Rgb::splat(phase.eval(wo, wi)),
-                                    |wi| phase.eval(wo, wi),
+                                    |wi| Rgb::splat(phase.eval(p, wo, wi)),
+                                    |wi| phase.eval(p, wo, wi),
                                     |ls| {
                                         let (lp, ln) = (ls.p, ls.n);
                                         let target = if ln == Vec3::ZERO {
@@ -170,7 +170,7 @@ impl Integrator for VolPathIntegrator {
                                     },
                                 );
                         }
-                        let s = phase.sample(wo, sampler.next_2d());
+                        let s = phase.sample(p, wo, sampler.next_2d());
                         // Without emitter sampling, emission found by phase sampling counts in
                         // full, as after a specular bounce.
                         prev = Some(PrevVertex { ctx: light_ctx, pdf: s.pdf, delta: !nee });
@@ -287,7 +287,7 @@ mod tests {
         for phase in [PhaseFunction::Isotropic, PhaseFunction::HenyeyGreenstein { g: 0.6 }] {
             let mut b = SceneBuilder::new();
             let null = b.add_bsdf(Bsdf::Null);
-            let m = b.add_medium(Medium::homogeneous(Rgb::new(1.0, 2.0, 3.0), Rgb::ONE, phase).unwrap());
+            let m = b.add_medium(Medium::homogeneous(Rgb::new(1.0, 2.0, 3.0), Rgb::ONE, phase.clone()).unwrap());
             let s = b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
             b.set_shape_media(s, Some(m), None);
             b.add_constant_environment(Rgb::ONE);

@@ -282,7 +282,7 @@ impl Integrator for VolPathMisIntegrator {
                         break;
                     }
                     let wo = -ray.d;
-                    let phase = medium_ref.phase;
+                    let phase = &medium_ref.phase;
                     let ctx = LightSampleContext { p, n: Vec3::ZERO };
                     let nee = medium_ref.sample_emitters;
                     count_direct = !nee;
@@ -291,14 +291,14 @@ impl Integrator for VolPathMisIntegrator {
                         if let Some(mut lp) =
                             self.sample_light(scene, &ctx, &origin, medium, &path, channel, sampler, &mut rng)
                         {
-                            let value = phase.eval(wo, lp.sample.wi);
+                            let value = phase.eval(p, wo, lp.sample.wi);
                             lp.nee.update_scalar(1.0, Rgb::splat(value));
                             lp.uni.update_scalar(if lp.sample.delta { 0.0 } else { value }, Rgb::splat(value));
                             l += lp.nee.combined_weight(&lp.uni) * lp.li;
                         }
                     }
                     path_nee = path;
-                    let s = phase.sample(wo, sampler.next_2d());
+                    let s = phase.sample(p, wo, sampler.next_2d());
                     path.update_scalar(s.pdf, Rgb::splat(s.pdf));
                     path_nee.update_scalar(1.0, Rgb::splat(s.pdf));
                     ray = Ray::new(p, s.value);

@@ -186,7 +186,7 @@ pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] =
 
 /// What every medium plugin reads: one nested `<phase>` (isotropic if none; see
 /// [`PhaseFunction::from_props`]) and `sample_emitters` (true).
-fn common(o: &Obj, coefficients: Coefficients) -> PropResult<Medium> {
+fn common(o: &Obj, coefficients: Coefficients, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     o.check_children(&["phase"])?;
     let phases = o.nested("phase");
     if phases.len() > 1 {
@@ -194,7 +194,7 @@ fn common(o: &Obj, coefficients: Coefficients) -> PropResult<Medium> {
     }
     let phase = match phases.first() {
         None => PhaseFunction::Isotropic,
-        Some(p) => PhaseFunction::from_props(p)?,
+        Some(p) => PhaseFunction::from_props(p, files)?,
     };
     let sample_emitters = o.bool("sample_emitters", true)?;
     Ok(Medium { coefficients, phase, sample_emitters })
@@ -202,7 +202,7 @@ fn common(o: &Obj, coefficients: Coefficients) -> PropResult<Medium> {
 
 /// Mitsuba's `homogeneous`: `sigma_t` (1 m⁻¹) × `scale` (1), `albedo` (0.75), a `<phase>`,
 /// `sample_emitters`. An `<rgb>` value must lie in [0, 1] (Mitsuba reads it as a reflectance).
-fn homogeneous_from_props(o: &Obj, _files: &mut dyn VolumeSource) -> PropResult<Medium> {
+fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
     let sigma_t = volume::constant_param(o, "sigma_t", 1.0, SpectrumKind::Illuminant)? * scale;
     if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
@@ -212,11 +212,11 @@ fn homogeneous_from_props(o: &Obj, _files: &mut dyn VolumeSource) -> PropResult<
     if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
         return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
     }
-    common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }))
+    common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }), files)
 }
 
 /// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`.
 fn heterogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let h = Heterogeneous::from_props(o, files)?;
-    common(o, Coefficients::Heterogeneous(Box::new(h)))
+    common(o, Coefficients::Heterogeneous(Box::new(h)), files)
 }

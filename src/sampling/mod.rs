@@ -22,6 +22,7 @@
 //! | rejection sampling | [`rejection`] |
 //! | discrete by CDF + binary search; alias table | [`discrete`], [`alias`] |
 //! | piecewise-constant 1D and 2D (marginal/conditional) | [`piecewise1d`], [`piecewise2d`] |
+//! | piecewise-linear 1D (tabulated phase functions) | [`piecewise_linear`] |
 //! | MIS heuristics | [`mis`] |
 //! | PCG32, hashing, samplers (independent, stratified, Owen-scrambled Sobol) | [`rng`], [`hash`], [`sampler`] |
 
@@ -36,6 +37,7 @@ mod measure;
 pub mod mis;
 pub mod piecewise1d;
 pub mod piecewise2d;
+pub mod piecewise_linear;
 pub mod power;
 pub mod rejection;
 pub mod rng;
@@ -52,6 +54,7 @@ pub use measure::{area_to_solid_angle, solid_angle_to_area, Measure, Sample};
 pub use mis::{balance_heuristic, power_heuristic};
 pub use piecewise1d::PiecewiseConstant1D;
 pub use piecewise2d::PiecewiseConstant2D;
+pub use piecewise_linear::PiecewiseLinear1D;
 pub use power::*;
 pub use rejection::{sample_rejection, sample_uniform_disk_rejection, RejectionSample};
 pub use rng::{Pcg32, Stride};

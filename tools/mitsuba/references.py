@@ -69,6 +69,9 @@ SCENES = {
     # Spectral MIS (volpathmis): a three-channel extinction grid and a strongly chromatic
     # homogeneous sphere.
     "volpathmis": (8192, 64, {}, 1.5),
+    # Phase functions: Rayleigh, a table over the deflection cosine (tabphase), and a blend of
+    # a forward and a backward lobe weighted by a grid volume (blendphase), backlit.
+    "phase": (4096, 128, {}, 1.5),
 }
 SEEDS = 4
 

@@ -296,7 +296,7 @@ Shape "sphere"
          MediumInterface \"\" \"fog\"\nCamera \"perspective\"\nWorldBegin\n",
     )
     .unwrap();
-    assert_eq!(f.scene.media()[0].phase, crate::medium::PhaseFunction::HenyeyGreenstein { g: 0.5 });
+    assert!(matches!(f.scene.media()[0].phase, crate::medium::PhaseFunction::HenyeyGreenstein { g: 0.5 }));
     let e = err("WorldBegin\nAttribute \"meduim\" \"float g\" 0.5\n");
     assert!(e.contains("test.pbrt:2:1") && e.contains("the nearest is 'medium'"), "{e}");
 }

@@ -96,7 +96,8 @@ struct Stack {
     bottom: Interface,
     thickness: f32,
     albedo: Option<Rgb>,
-    phase: PhaseFunction,
+    /// The medium's Henyey–Greenstein asymmetry (see [`Stack::phase`]).
+    phase_g: f32,
     max_depth: u32,
     n_samples: u32,
 }
@@ -161,7 +162,7 @@ impl Layered {
             bottom,
             thickness: scalar(&self.thickness).max(f32::MIN_POSITIVE),
             albedo: self.albedo.as_ref().map(|a| ctx.eval(a)).filter(|a| a.max_element() > 0.0),
-            phase: PhaseFunction::HenyeyGreenstein { g: scalar(&self.g).clamp(-0.99, 0.99) },
+            phase_g: scalar(&self.g).clamp(-0.99, 0.99),
             max_depth: self.max_depth,
             n_samples: self.n_samples.max(1),
         }
@@ -236,6 +237,12 @@ impl Layered {
 }
 
 impl Stack {
+    /// The medium's phase function (Henyey–Greenstein, which reads no position).
+    #[inline]
+    fn phase(&self) -> PhaseFunction {
+        PhaseFunction::HenyeyGreenstein { g: self.phase_g }
+    }
+
     /// pbrt-v4's `LayeredBxDF::f` (no cosine), two-sided.
     fn f(&self, mut wo: Vec3, mut wi: Vec3, mode: Mode) -> Rgb {
         if wo.z < 0.0 {
@@ -288,11 +295,11 @@ impl Stack {
                             let wt = if exit.is_specular() {
                                 1.0
                             } else {
-                                power_heuristic(wis.pdf, self.phase.eval(-w, -wis.wi))
+                                power_heuristic(wis.pdf, self.phase().eval(Vec3::ZERO, -w, -wis.wi))
                             };
-                            f += beta * albedo * self.phase.eval(-w, -wis.wi) * wt * tr(zp - exit_z, wis.wi) * wis.f
+                            f += beta * albedo * self.phase().eval(Vec3::ZERO, -w, -wis.wi) * wt * tr(zp - exit_z, wis.wi) * wis.f
                                 / wis.pdf;
-                            let ps = self.phase.sample(-w, Vec2::new(uniform(r), uniform(r)));
+                            let ps = self.phase().sample(Vec3::ZERO, -w, Vec2::new(uniform(r), uniform(r)));
                             if ps.pdf == 0.0 || ps.value.z == 0.0 {
                                 continue;
                             }
@@ -407,7 +414,7 @@ impl Stack {
                         return None;
                     }
                     if 0.0 < zp && zp < self.thickness {
-                        let ps = self.phase.sample(-w, Vec2::new(uniform(r), uniform(r)));
+                        let ps = self.phase().sample(Vec3::ZERO, -w, Vec2::new(uniform(r), uniform(r)));
                         if ps.pdf == 0.0 || ps.value.z == 0.0 {
                             return None;
                         }
