@@ -246,6 +246,15 @@ impl Builder {
                 o.check_children(&["shape"])?;
                 return Ok(());
             }
+            "merge" => {
+                // Mitsuba merges the nested meshes that share a BSDF into one mesh to save
+                // memory: the same surfaces, the same image. neumann adds them one by one.
+                o.check_children(&["shape"])?;
+                for s in o.children.iter().filter(|c| c.tag == "shape") {
+                    self.shape(s, outer)?;
+                }
+                return Ok(());
+            }
             "instance" => {
                 o.check_children(&["shape"])?;
                 let groups: Vec<_> = o.children.iter().filter(|c| c.ty == "shapegroup").collect();
@@ -271,7 +280,7 @@ impl Builder {
         let flip = o.bool("flip_normals", false)?;
         let plugin = shape_plugin(&o.ty).ok_or_else(|| {
             let mut names: Vec<&str> = SHAPE_PLUGINS.iter().map(|p| p.0).collect();
-            names.extend(["shapegroup", "instance"]);
+            names.extend(["shapegroup", "instance", "merge"]);
             o.unknown_plugin(&names)
         })?;
         let geometry = plugin(o, &to_world, flip, self)?;

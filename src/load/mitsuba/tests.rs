@@ -72,6 +72,35 @@ fn shared_cornell_box_matches_the_builtin() {
     assert!(from_file.film.image() == from_builtin.film.image(), "cbox.xml and the built-in box differ");
 }
 
+/// Mitsuba's `merge` (nested shapes merged into one mesh per BSDF, to save memory) renders
+/// the same image as its shapes listed one by one, emitters and different BSDFs included; it
+/// takes shapes only.
+#[test]
+fn merge_renders_as_its_shapes() {
+    let red = r#"<bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>"#;
+    let shapes = r#"<shape type="rectangle"><ref id="red"/><transform name="to_world"><scale value="3"/><translate z="-1"/></transform></shape>
+        <shape type="cube"><ref id="red"/><transform name="to_world"><scale value="0.4"/><rotate y="1" angle="30"/></transform></shape>
+        <shape type="sphere"><point name="center" x="1" y="0.5" z="0"/><float name="radius" value="0.3"/><bsdf type="conductor"/></shape>
+        <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><translate z="2"/></transform>
+            <emitter type="area"><rgb name="radiance" value="8, 8, 8"/></emitter></shape>"#;
+    let plain = load(&scene(&format!("{red}{shapes}"))).unwrap();
+    let merged = load(&scene(&format!(r#"{red}<shape type="merge">{shapes}</shape>"#))).unwrap();
+    assert!(merged.warnings.is_empty(), "{:?}", merged.warnings);
+    assert_eq!(merged.scene.shapes().len(), 4);
+    assert_eq!(merged.scene.lights().len(), 1);
+    let settings = crate::render::RenderSettings { spp: 4, seed: 3, ..Default::default() };
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let a = crate::render::render_integrator(&plain.scene, &plain.integrator, &settings, &never).unwrap();
+    let b = crate::render::render_integrator(&merged.scene, &merged.integrator, &settings, &never).unwrap();
+    let mean = a.film.image().iter().map(|c| c.x + c.y + c.z).sum::<f32>() / a.film.image().len() as f32;
+    assert!(mean > 0.01, "a dark test image: {mean}");
+    assert!(a.film.image() == b.film.image(), "merge changed the image");
+    let e = err(&scene(r#"<shape type="merge"><bsdf type="diffuse"/><shape type="sphere"/></shape>"#));
+    assert!(e.contains("test.xml:") && e.contains("<bsdf> cannot be nested in shape 'merge'"), "{e}");
+    let e = err(&scene(r#"<shape type="mrege"/>"#));
+    assert!(e.contains("the nearest is 'merge'"), "{e}");
+}
+
 #[test]
 fn shared_scenes_load() {
     let spheres = load_scene_file(&shared("cbox_spheres.xml"), &[]).expect("cbox_spheres.xml loads");
