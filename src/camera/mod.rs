@@ -1,6 +1,6 @@
-//! Cameras: Mitsuba's `perspective` (pinhole), `thinlens` and `orthographic`; neumann's
-//! `spherical` (pbrt-v4's: every direction around a point, in an equirectangular or an
-//! equal-area image).
+//! Cameras: Mitsuba's `perspective` (pinhole), `thinlens`, `orthographic` and `radiancemeter`
+//! (one ray: the radiance arriving at a point from a direction); neumann's `spherical`
+//! (pbrt-v4's: every direction around a point, in an equirectangular or an equal-area image).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
@@ -28,6 +28,9 @@ pub enum CameraError {
     /// The thin lens's aperture or focus distance is invalid.
     #[error("need aperture_radius ≥ 0 and focus_distance > 0, got {0}, {1}")]
     Lens(f32, f32),
+    /// A radiance meter's film is not 1 × 1.
+    #[error("a radiancemeter measures one value: its film must be 1x1, got {0}x{1}")]
+    MeterFilm(u32, u32),
 }
 
 /// How camera space maps to rays.
@@ -41,6 +44,10 @@ pub enum Projection {
     /// Rays in every direction from the centre (pbrt-v4's `spherical`), laid out on the film
     /// by a [`SphericalMapping`] of its (u, v) = (x / width, y / height).
     Spherical(SphericalMapping),
+    /// Every ray starts at the origin and runs along +z (Mitsuba's `radiancemeter`): the 1 × 1
+    /// film measures the radiance arriving at that point from that direction (W m⁻² sr⁻¹),
+    /// whatever the film position.
+    Radiancemeter,
 }
 
 /// How a spherical camera lays the sphere of directions out on the film. With (u, v) the film
@@ -122,6 +129,13 @@ impl Camera {
         Ok(Camera { projection: Projection::Orthographic, ..c })
     }
 
+    /// Mitsuba's radiance meter placed by `to_world`: every ray starts at its origin along its
+    /// +z, unbounded; the film is 1 × 1.
+    pub fn radiancemeter(to_world: Transform) -> Camera {
+        let c = Camera::perspective(to_world, 90.0, FovAxis::X, 1, 1).expect("a valid 90° 1x1 camera");
+        Camera { projection: Projection::Radiancemeter, ..c }
+    }
+
     /// The projection.
     pub fn projection(&self) -> Projection {
         self.projection
@@ -130,6 +144,9 @@ impl Camera {
     /// The same camera on a `width × height` film: the field of view along its axis is kept, the
     /// other follows the new aspect ratio (orthographic: the width keeps its extent).
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
+        if self.projection == Projection::Radiancemeter && (width, height) != (1, 1) {
+            return Err(CameraError::MeterFilm(width, height));
+        }
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
         Ok(Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() })
     }
@@ -183,6 +200,10 @@ impl Camera {
             let d = self.to_world.apply_vector(d).normalize();
             let o = self.to_world.apply_point(Vec3::ZERO);
             return Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip);
+        }
+        if self.projection == Projection::Radiancemeter {
+            let o = self.to_world.apply_point(Vec3::ZERO);
+            return Ray::new(o, self.to_world.apply_vector(Vec3::Z).normalize());
         }
         if self.projection == Projection::Orthographic {
             // Mitsuba: the origin on the near plane, through to_world (which may scale it);
@@ -299,7 +320,7 @@ pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
 }
 
 /// Camera plugins by their (Mitsuba) names.
-pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic", "spherical"];
+pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic", "radiancemeter", "spherical"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -308,10 +329,15 @@ impl Camera {
     /// `far_clip` (10⁴), `focus_distance` (default `far_clip`: every projective camera of
     /// Mitsuba reads it; only the thin lens focuses); thin lens: `aperture_radius` (required).
     /// `orthographic`: `to_world` (its scale sets the extent: camera-space x ∈ [-1, 1] spans the
-    /// film's width), `near_clip`, `far_clip`, `focus_distance`.
+    /// film's width), `near_clip`, `far_clip`, `focus_distance`. `radiancemeter`: `to_world`
+    /// (rays from its origin along its +z), or else `origin` and `direction` (both; default the
+    /// world origin and +z), a 1 × 1 film.
     pub fn from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
         if !CAMERA_PLUGINS.contains(&o.ty.as_str()) {
             return Err(o.unknown_plugin(CAMERA_PLUGINS));
+        }
+        if o.ty == "radiancemeter" {
+            return Camera::radiancemeter_from_props(o, width, height);
         }
         let to_world = o.transform("to_world")?;
         // The shutter interval only matters for animated transforms, which neumann does not have.
@@ -345,6 +371,31 @@ impl Camera {
             camera = camera.with_thin_lens(r, focus).map_err(|e| o.error_at("aperture_radius", e.to_string()))?;
         }
         Ok(camera)
+    }
+}
+
+impl Camera {
+    /// Mitsuba's `radiancemeter` (see [`Camera::from_props`]): a `to_world` wins over `origin`
+    /// and `direction`, as in Mitsuba (which reads and ignores them then).
+    fn radiancemeter_from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
+        if (width, height) != (1, 1) {
+            return Err(o.error(CameraError::MeterFilm(width, height).to_string()));
+        }
+        let (origin, direction) = (o.point_opt("origin")?, o.point_opt("direction")?);
+        if o.get("to_world").is_some() {
+            return Ok(Camera::radiancemeter(o.transform("to_world")?));
+        }
+        let to_world = match (origin, direction) {
+            (None, None) => Transform::IDENTITY,
+            (Some(p), Some(d)) => {
+                let up = if d.normalize_or_zero().y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+                Transform::look_at(p, p + d, up).ok_or_else(|| {
+                    o.error_at("direction", format!("the direction must be a non-zero finite vector, got {d}"))
+                })?
+            }
+            _ => return Err(o.error("give both 'origin' and 'direction' (or a 'to_world')")),
+        };
+        Ok(Camera::radiancemeter(to_world))
     }
 }
 
