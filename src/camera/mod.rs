@@ -1,15 +1,19 @@
-//! Cameras: Mitsuba's `perspective` (pinhole), `thinlens`, `orthographic` and `radiancemeter`
-//! (one ray: the radiance arriving at a point from a direction); neumann's `spherical`
-//! (pbrt-v4's: every direction around a point, in an equirectangular or an equal-area image).
+//! Cameras: Mitsuba's `perspective` (pinhole), `thinlens`, `orthographic`, `radiancemeter`
+//! (one ray: the radiance arriving at a point from a direction) and `irradiancemeter` (the
+//! irradiance on a shape's surface, averaged over it); neumann's `spherical` (pbrt-v4's: every
+//! direction around a point, in an equirectangular or an equal-area image).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
 //! (width, height) at the bottom-right. The field of view applies to the axis given by
 //! [`FovAxis`].
 
-use crate::math::{Ray, Transform, Vec2, Vec3};
+use crate::geometry::Geometry;
+use crate::math::float::offset_ray_origin;
+use crate::math::{Frame, Ray, Transform, Vec2, Vec3, ONE_MINUS_EPSILON, PI};
 use crate::props::{Obj, Result as PropResult};
-use crate::sampling::sample_uniform_disk_concentric;
+use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_disk_concentric};
+use std::sync::Arc;
 
 pub use crate::props::fov::FovAxis;
 
@@ -28,9 +32,12 @@ pub enum CameraError {
     /// The thin lens's aperture or focus distance is invalid.
     #[error("need aperture_radius ≥ 0 and focus_distance > 0, got {0}, {1}")]
     Lens(f32, f32),
-    /// A radiance meter's film is not 1 × 1.
-    #[error("a radiancemeter measures one value: its film must be 1x1, got {0}x{1}")]
+    /// A radiance or irradiance meter's film is not 1 × 1.
+    #[error("a radiancemeter or irradiancemeter measures one value: its film must be 1x1, got {0}x{1}")]
     MeterFilm(u32, u32),
+    /// An irradiance meter's shape has no area to sample.
+    #[error("an irradiancemeter needs a shape with an area (a mesh, rectangle, disk, sphere or cylinder)")]
+    MeterShape,
 }
 
 /// How camera space maps to rays.
@@ -48,6 +55,11 @@ pub enum Projection {
     /// film measures the radiance arriving at that point from that direction (W m⁻² sr⁻¹),
     /// whatever the film position.
     Radiancemeter,
+    /// Mitsuba's `irradiancemeter`: each ray starts at a point uniform on a shape's surface
+    /// (from the film position, uniform over the 1 × 1 film) in a cosine-distributed direction
+    /// about its normal (from the lens sample), and carries the weight π: the film measures the
+    /// irradiance `E = ∫ L cos θ dω` (W m⁻²) averaged over the surface.
+    Irradiancemeter,
 }
 
 /// How a spherical camera lays the sphere of directions out on the film. With (u, v) the film
@@ -82,6 +94,8 @@ pub struct Camera {
     far_clip: f32,
     lens_radius: f32,
     focus_distance: f32,
+    /// The surface an irradiance meter measures (its area sampling prepared).
+    meter_shape: Option<Arc<Geometry>>,
 }
 
 impl Camera {
@@ -116,6 +130,7 @@ impl Camera {
             far_clip: 1e4,
             lens_radius: 0.0,
             focus_distance: 1.0,
+            meter_shape: None,
         })
     }
 
@@ -136,6 +151,29 @@ impl Camera {
         Camera { projection: Projection::Radiancemeter, ..c }
     }
 
+    /// Mitsuba's irradiance meter on the surface `shape` (world space; front side as its
+    /// normals face); the film is 1 × 1. An error for a shape without area (an SDF grid,
+    /// curves).
+    pub fn irradiancemeter(shape: &Geometry) -> Result<Camera, CameraError> {
+        let mut shape = shape.clone();
+        if !shape.prepare_sampling() {
+            return Err(CameraError::MeterShape);
+        }
+        let c = Camera::radiancemeter(Transform::IDENTITY);
+        Ok(Camera { projection: Projection::Irradiancemeter, meter_shape: Some(Arc::new(shape)), ..c })
+    }
+
+    /// The weight every camera ray's radiance carries: π for an irradiance meter (cosine
+    /// sampling of the irradiance integral), 1 otherwise.
+    #[inline]
+    pub fn ray_weight(&self) -> f32 {
+        if self.projection == Projection::Irradiancemeter {
+            PI
+        } else {
+            1.0
+        }
+    }
+
     /// The projection.
     pub fn projection(&self) -> Projection {
         self.projection
@@ -144,7 +182,8 @@ impl Camera {
     /// The same camera on a `width × height` film: the field of view along its axis is kept, the
     /// other follows the new aspect ratio (orthographic: the width keeps its extent).
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
-        if self.projection == Projection::Radiancemeter && (width, height) != (1, 1) {
+        let meter = matches!(self.projection, Projection::Radiancemeter | Projection::Irradiancemeter);
+        if meter && (width, height) != (1, 1) {
             return Err(CameraError::MeterFilm(width, height));
         }
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
@@ -200,6 +239,16 @@ impl Camera {
             let d = self.to_world.apply_vector(d).normalize();
             let o = self.to_world.apply_point(Vec3::ZERO);
             return Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip);
+        }
+        if let Some(shape) = &self.meter_shape {
+            // The film position within the one pixel picks the point, the lens sample the
+            // direction (Mitsuba's irradiancemeter does the same).
+            let u = (film - film.floor()).clamp(Vec2::ZERO, Vec2::splat(ONE_MINUS_EPSILON));
+            let Some(ps) = shape.sample_area(u) else {
+                return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0);
+            };
+            let d = Frame::from_z(ps.ns).to_world(sample_cosine_hemisphere_malley(u_lens).value);
+            return Ray::new(offset_ray_origin(ps.p, ps.p_error, ps.ng, d), d);
         }
         if self.projection == Projection::Radiancemeter {
             let o = self.to_world.apply_point(Vec3::ZERO);
@@ -320,7 +369,8 @@ pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
 }
 
 /// Camera plugins by their (Mitsuba) names.
-pub const CAMERA_PLUGINS: &[&str] = &["perspective", "thinlens", "orthographic", "radiancemeter", "spherical"];
+pub const CAMERA_PLUGINS: &[&str] =
+    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "spherical"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -338,6 +388,10 @@ impl Camera {
         }
         if o.ty == "radiancemeter" {
             return Camera::radiancemeter_from_props(o, width, height);
+        }
+        if o.ty == "irradiancemeter" {
+            // (The loader builds one nested in a shape with `Camera::irradiancemeter`.)
+            return Err(o.error("an irradiancemeter must be nested in the <shape> whose irradiance it measures"));
         }
         let to_world = o.transform("to_world")?;
         // The shutter interval only matters for animated transforms, which neumann does not have.

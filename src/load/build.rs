@@ -11,7 +11,7 @@
 //! scene format shares them.
 
 use super::SceneFile;
-use crate::camera::Camera;
+use crate::camera::{Camera, CameraError};
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
@@ -73,6 +73,8 @@ pub struct Builder {
     resolver: FileResolver,
     /// Meshes and images the scene's format decoded itself (glTF's).
     memory: MemoryFiles,
+    /// A sensor nested in a shape (an irradiance meter) with that shape's world geometry.
+    shape_sensor: Option<(Rc<Obj>, Geometry)>,
 }
 
 impl Builder {
@@ -92,6 +94,7 @@ impl Builder {
             time_limit: None,
             resolver,
             memory: MemoryFiles::default(),
+            shape_sensor: None,
         }
     }
 
@@ -149,8 +152,17 @@ impl Builder {
                 e.id.as_deref().unwrap_or("")
             )));
         }
-        let sensor = sensor.ok_or_else(|| SceneError::at(&root.loc, "the scene has no <sensor> (camera)"))?;
-        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, transform } = self.sensor(&sensor)?;
+        let meter = self.shape_sensor.take();
+        if let (Some(_), Some((nested, _))) = (&sensor, &meter) {
+            return Err(SceneError::at(&nested.loc, "the scene has more than one <sensor> (one is supported)"));
+        }
+        let (sensor, meter_shape) = match (sensor, meter) {
+            (Some(s), None) => (s, None),
+            (None, Some((s, shape))) => (s, Some(shape)),
+            _ => return Err(SceneError::at(&root.loc, "the scene has no <sensor> (camera)")),
+        };
+        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, transform } =
+            self.sensor(&sensor, meter_shape.as_ref())?;
         self.sb.set_camera(camera);
         let mut scene =
             self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
@@ -209,7 +221,9 @@ impl Builder {
         Ok(())
     }
 
-    fn sensor(&mut self, o: &Obj) -> Result<SensorSettings> {
+    /// The sensor `o`; `meter_shape` is the world geometry of the shape it is nested in (an
+    /// irradiance meter's).
+    fn sensor(&mut self, o: &Obj, meter_shape: Option<&Geometry>) -> Result<SensorSettings> {
         o.built.set(true);
         o.check_children(&["film", "sampler", "medium"])?;
         let media = o.nested("medium");
@@ -229,7 +243,15 @@ impl Builder {
             Some(s) => SamplerSettings::from_props(s)?,
             None => SamplerSettings::default(),
         };
-        let camera = Camera::from_props(o, film.width, film.height)?;
+        let camera = match meter_shape {
+            Some(shape) => {
+                if (film.width, film.height) != (1, 1) {
+                    return Err(o.error(CameraError::MeterFilm(film.width, film.height).to_string()));
+                }
+                Camera::irradiancemeter(shape).map_err(|e| o.error(e.to_string()))?
+            }
+            None => Camera::from_props(o, film.width, film.height)?,
+        };
         let FilmSettings { filter, window, alpha, transform, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
         Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, transform })
@@ -273,7 +295,7 @@ impl Builder {
             }
             _ => {}
         }
-        o.check_children(&["bsdf", "emitter"])?;
+        o.check_children(&["bsdf", "emitter", "sensor"])?;
         let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let to_world = *outer * o.transform("to_world")?;
@@ -285,6 +307,16 @@ impl Builder {
         })?;
         let geometry = plugin(o, &to_world, flip, self)?;
         check_finite_geometry(o, &geometry)?;
+        for sensor in o.nested("sensor") {
+            if sensor.ty != "irradiancemeter" {
+                return Err(sensor.error("only an irradiancemeter can be nested in a <shape> (it measures that shape)"));
+            }
+            if let Some((first, _)) = &self.shape_sensor {
+                let at = if Rc::ptr_eq(first, &sensor) { &o.loc } else { &sensor.loc };
+                return Err(SceneError::at(at, "the scene has more than one <sensor> (one is supported)"));
+            }
+            self.shape_sensor = Some((sensor, geometry.clone()));
+        }
         let emitters = o.nested("emitter");
         if emitters.len() > 1 {
             return Err(SceneError::at(&emitters[1].loc, "a shape takes one <emitter>"));

@@ -344,6 +344,7 @@ pub fn render_from(
     // Which pixels still take samples (adaptive sampling only); written between passes only.
     let pixels = if adaptive.is_some() { width as usize * height as usize } else { 0 };
     let active: Vec<AtomicBool> = (0..pixels).map(|_| AtomicBool::new(true)).collect();
+    let ray_weight = cam.ray_weight();
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -371,7 +372,12 @@ pub fn render_from(
                     let ray = cam.generate_ray(film_pos, u_lens);
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
-                    let s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
+                    let mut s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
+                    if ray_weight != 1.0 {
+                        // An irradiance meter's rays (the AOVs stay unweighted, as in Mitsuba).
+                        s.l *= ray_weight;
+                        sample_terms.iter_mut().for_each(|t| *t *= ray_weight);
+                    }
                     let alpha = settings.alpha.then_some(s.alpha);
                     let l = if settings.transform.is_identity() {
                         s.l

@@ -157,6 +157,57 @@ fn radiancemeter_measures_one_ray() {
     assert!(e.to_string().contains("radiance-meter"), "{e}");
 }
 
+/// Mitsuba's `irradiancemeter`, nested in the shape it measures: the film holds the irradiance
+/// averaged over the surface. Under a unit constant environment an unoccluded plane receives
+/// exactly π; flipped (facing away from a light above it) nothing. Under a sphere light
+/// (radius 1, radiance 1, centre 3 above the middle of a 3 × 3 square) the mean irradiance is
+/// `∫ π R² h / D³ dA / A` = 0.281149 (quadrature); only the point at the centre would read
+/// π/9 = 0.349, and uniform instead of cosine directions 0.18. Misplaced meters are errors.
+#[test]
+fn irradiancemeter_measures_mean_irradiance() {
+    let meter = |flip: bool, film: &str, light: &str| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"/>
+            <shape type="rectangle"><transform name="to_world"><scale value="1.5"/></transform>
+                <boolean name="flip_normals" value="{flip}"/>
+                <sensor type="irradiancemeter">
+                    <sampler type="independent"><integer name="sample_count" value="262144"/></sampler>
+                    <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor></shape>
+            {light}</scene>"#
+        )
+    };
+    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let sphere = r#"<shape type="sphere"><point name="center" x="0" y="0" z="3"/><float name="radius" value="1"/>
+        <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let measure = |text: &str, spp: u32| {
+        let f = load(text).unwrap();
+        assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+        assert_eq!(f.scene.camera().ray_weight(), std::f32::consts::PI);
+        let settings = crate::render::RenderSettings { spp, seed: 5, ..Default::default() };
+        let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
+        out.film.image()[0]
+    };
+    let sky = measure(&meter(false, one, r#"<emitter type="constant"/>"#), 64);
+    assert!((sky - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-4, "{sky}");
+    let below = measure(&meter(true, one, sphere), 4096);
+    assert_eq!(below, Vec3::ZERO);
+    let e = measure(&meter(false, one, sphere), 262_144).x;
+    assert!((e - 0.281149).abs() < 0.025 * 0.281149, "{e}");
+    for (text, what) in [
+        (meter(false, r#"<integer name="width" value="2"/><integer name="height" value="1"/>"#, sphere), "must be 1x1, got 2x1"),
+        (scene(r#"<shape type="sphere"><sensor type="perspective"/></shape>"#), "only an irradiancemeter"),
+        (
+            r#"<scene version="3.0.0"><sensor type="irradiancemeter"><film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film></sensor></scene>"#.to_string(),
+            "must be nested in the <shape>",
+        ),
+        (scene(r#"<shape type="sphere"><sensor type="irradiancemeter"/></shape>"#), "more than one <sensor>"),
+    ] {
+        let e = err(&text);
+        assert!(e.contains(":") && e.contains(what), "{e}");
+    }
+}
+
 #[test]
 fn shared_scenes_load() {
     let spheres = load_scene_file(&shared("cbox_spheres.xml"), &[]).expect("cbox_spheres.xml loads");
