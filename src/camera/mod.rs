@@ -1,7 +1,8 @@
 //! Cameras: Mitsuba's `perspective` (pinhole), `thinlens`, `orthographic`, `radiancemeter`
 //! (one ray: the radiance arriving at a point from a direction) and `irradiancemeter` (the
 //! irradiance on a shape's surface, averaged over it); neumann's `spherical` (pbrt-v4's: every
-//! direction around a point, in an equirectangular or an equal-area image).
+//! direction around a point, in an equirectangular or an equal-area image); Mitsuba's `batch`
+//! (several cameras side by side on one film).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
@@ -35,6 +36,9 @@ pub enum CameraError {
     /// A radiance or irradiance meter's film is not 1 × 1.
     #[error("a radiancemeter or irradiancemeter measures one value: its film must be 1x1, got {0}x{1}")]
     MeterFilm(u32, u32),
+    /// A batch's film width is not a multiple of its camera count (or it has none).
+    #[error("a batch sensor's film width ({0}) must be a positive multiple of its number of sensors ({1})")]
+    BatchWidth(u32, usize),
     /// An irradiance meter's shape has no area to sample.
     #[error("an irradiancemeter needs a shape with an area (a mesh, rectangle, disk, sphere or cylinder)")]
     MeterShape,
@@ -60,6 +64,9 @@ pub enum Projection {
     /// about its normal (from the lens sample), and carries the weight π: the film measures the
     /// irradiance `E = ∫ L cos θ dω` (W m⁻²) averaged over the surface.
     Irradiancemeter,
+    /// Mitsuba's `batch`: the film is split into as many columns of equal width as there are
+    /// cameras, column k rendered by camera k on a film of that column's size.
+    Batch,
 }
 
 /// How a spherical camera lays the sphere of directions out on the film. With (u, v) the film
@@ -96,6 +103,8 @@ pub struct Camera {
     focus_distance: f32,
     /// The surface an irradiance meter measures (its area sampling prepared).
     meter_shape: Option<Arc<Geometry>>,
+    /// A batch's cameras, left to right, each on its column's film.
+    batch: Vec<Camera>,
 }
 
 impl Camera {
@@ -131,6 +140,7 @@ impl Camera {
             lens_radius: 0.0,
             focus_distance: 1.0,
             meter_shape: None,
+            batch: Vec::new(),
         })
     }
 
@@ -163,6 +173,22 @@ impl Camera {
         Ok(Camera { projection: Projection::Irradiancemeter, meter_shape: Some(Arc::new(shape)), ..c })
     }
 
+    /// Mitsuba's batch sensor: `cameras` side by side on a `width × height` film, each on a
+    /// `width / n × height` column (their own film sizes are replaced). `width` must be a
+    /// multiple of their number `n`.
+    pub fn batch(cameras: Vec<Camera>, width: u32, height: u32) -> Result<Camera, CameraError> {
+        let n = cameras.len();
+        if n == 0 || !width.is_multiple_of(n as u32) || width == 0 {
+            return Err(CameraError::BatchWidth(width, n));
+        }
+        let columns = cameras
+            .iter()
+            .map(|c| c.with_resolution(width / n as u32, height))
+            .collect::<Result<Vec<Camera>, CameraError>>()?;
+        let first = columns[0].clone();
+        Ok(Camera { projection: Projection::Batch, width, height, batch: columns, ..first })
+    }
+
     /// The weight every camera ray's radiance carries: π for an irradiance meter (cosine
     /// sampling of the irradiance integral), 1 otherwise.
     #[inline]
@@ -182,6 +208,9 @@ impl Camera {
     /// The same camera on a `width × height` film: the field of view along its axis is kept, the
     /// other follows the new aspect ratio (orthographic: the width keeps its extent).
     pub fn with_resolution(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
+        if self.projection == Projection::Batch {
+            return Camera::batch(self.batch.clone(), width, height);
+        }
         let meter = matches!(self.projection, Projection::Radiancemeter | Projection::Irradiancemeter);
         if meter && (width, height) != (1, 1) {
             return Err(CameraError::MeterFilm(width, height));
@@ -239,6 +268,11 @@ impl Camera {
             let d = self.to_world.apply_vector(d).normalize();
             let o = self.to_world.apply_point(Vec3::ZERO);
             return Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip);
+        }
+        if !self.batch.is_empty() {
+            let column = (self.width as usize / self.batch.len()) as f32;
+            let k = ((film.x / column) as usize).min(self.batch.len() - 1);
+            return self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens);
         }
         if let Some(shape) = &self.meter_shape {
             // The film position within the one pixel picks the point, the lens sample the
@@ -370,7 +404,7 @@ pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
 
 /// Camera plugins by their (Mitsuba) names.
 pub const CAMERA_PLUGINS: &[&str] =
-    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "spherical"];
+    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "batch", "spherical"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -388,6 +422,10 @@ impl Camera {
         }
         if o.ty == "radiancemeter" {
             return Camera::radiancemeter_from_props(o, width, height);
+        }
+        if o.ty == "batch" {
+            // (The loader builds it from the nested sensors with `Camera::batch`.)
+            return Err(o.error("a batch sensor cannot be nested in another"));
         }
         if o.ty == "irradiancemeter" {
             // (The loader builds one nested in a shape with `Camera::irradiancemeter`.)

@@ -225,7 +225,11 @@ impl Builder {
     /// irradiance meter's).
     fn sensor(&mut self, o: &Obj, meter_shape: Option<&Geometry>) -> Result<SensorSettings> {
         o.built.set(true);
-        o.check_children(&["film", "sampler", "medium"])?;
+        if o.ty == "batch" {
+            o.check_children(&["film", "sampler", "medium", "sensor"])?;
+        } else {
+            o.check_children(&["film", "sampler", "medium"])?;
+        }
         let media = o.nested("medium");
         if media.len() > 1 {
             return Err(SceneError::at(&media[1].loc, "a sensor sits in one <medium>"));
@@ -250,6 +254,7 @@ impl Builder {
                 }
                 Camera::irradiancemeter(shape).map_err(|e| o.error(e.to_string()))?
             }
+            None if o.ty == "batch" => batch_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
         let FilmSettings { filter, window, alpha, transform, .. } = film;
@@ -717,4 +722,36 @@ fn check_finite_geometry(o: &Obj, geometry: &Geometry) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Mitsuba's `batch` sensor: its nested sensors side by side on its `width × height` film (the
+/// width a multiple of their number). The nested sensors' own films and samplers are read and
+/// replaced, as in Mitsuba.
+fn batch_from_props(o: &Obj, width: u32, height: u32) -> Result<Camera> {
+    let nested = o.nested("sensor");
+    if nested.is_empty() || !width.is_multiple_of(nested.len() as u32) {
+        return Err(o.error(format!(
+            "the film width ({width}) must be a multiple of the number of nested sensors ({})",
+            nested.len()
+        )));
+    }
+    let columns = width / nested.len() as u32;
+    let mut cameras = Vec::with_capacity(nested.len());
+    for s in &nested {
+        s.built.set(true);
+        s.check_children(&["film", "sampler"])?;
+        if matches!(s.ty.as_str(), "batch" | "irradiancemeter" | "radiancemeter") {
+            return Err(s.error(format!("a {} cannot be part of a batch", s.ty)));
+        }
+        for f in s.nested("film") {
+            f.built.set(true);
+            FilmSettings::from_props(&f)?;
+        }
+        for m in s.nested("sampler") {
+            m.built.set(true);
+            SamplerSettings::from_props(&m)?;
+        }
+        cameras.push(Camera::from_props(s, columns, height)?);
+    }
+    Camera::batch(cameras, width, height).map_err(|e| o.error(e.to_string()))
 }

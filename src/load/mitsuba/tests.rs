@@ -154,7 +154,7 @@ fn radiancemeter_measures_one_ray() {
     let f = load(&meter("", one)).unwrap();
     let light_tracer = crate::integrator::AnyIntegrator::Ptracer(Default::default());
     let e = crate::render::render_integrator(&f.scene, &light_tracer, &settings, &never).err().unwrap();
-    assert!(e.to_string().contains("radiance-meter"), "{e}");
+    assert!(e.to_string().contains("meter one"), "{e}");
 }
 
 /// Mitsuba's `irradiancemeter`, nested in the shape it measures: the film holds the irradiance
@@ -205,6 +205,61 @@ fn irradiancemeter_measures_mean_irradiance() {
     ] {
         let e = err(&text);
         assert!(e.contains(":") && e.contains(what), "{e}");
+    }
+}
+
+/// Mitsuba's `batch` sensor: its sensors side by side, each on an equal column of the film (its
+/// own film replaced); rays as Mitsuba 3.9.1 traces them (`Sensor::sample_ray` at film
+/// positions 0.1, 0.3, 0.49, 0.51 and 0.9 of the width). A width that is not a multiple of the
+/// sensor count, and a batch of meters, are errors; `--res` keeps the columns.
+#[test]
+fn batch_sensor_puts_cameras_side_by_side() {
+    use crate::math::Vec2;
+    let batch = |width: u32, second: &str| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"/>
+            <sensor type="batch">
+                <sensor type="perspective"><float name="fov" value="40"/>
+                    <transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,1,0"/></transform></sensor>
+                {second}
+                <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="4"/></film>
+            </sensor><shape type="sphere"/><emitter type="constant"/></scene>"#
+        )
+    };
+    let ortho = r#"<sensor type="orthographic"><transform name="to_world"><lookat origin="5,0,0" target="0,0,0" up="0,1,0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="7"/><integer name="height" value="3"/></film></sensor>"#;
+    let f = load(&batch(8, ortho)).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let cam = f.scene.camera();
+    assert_eq!((cam.width(), cam.height()), (8, 4));
+    let expected = [
+        (0.1, [-0.00218382, 0.0, 4.99], [-0.213354, 0.0, -0.976975]),
+        (0.3, [0.00072794, 0.0, 4.99], [0.0726019, 0.0, -0.997361]),
+        (0.49, [0.00349411, 0.0, 4.99], [0.329855, 0.0, -0.944031]),
+        (0.51, [4.99, 0.0, 0.96], [-1.0, 0.0, 0.0]),
+        (0.9, [4.99, 0.0, -0.6], [-1.0, 0.0, 0.0]),
+    ];
+    for (x, o, d) in expected {
+        let r = cam.generate_ray(Vec2::new(8.0 * x, 2.0), Vec2::splat(0.5));
+        assert!((r.o - Vec3::from(o)).length() < 1e-5, "x = {x}: {}", r.o);
+        assert!((r.d - Vec3::from(d)).length() < 1e-5, "x = {x}: {}", r.d);
+    }
+    // A render fills both columns; --res 16x4 keeps two columns of 8.
+    let settings = crate::render::RenderSettings { spp: 4, seed: 1, ..Default::default() };
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
+    assert_eq!(out.film.image().len(), 32);
+    let wide = cam.with_resolution(16, 4).unwrap();
+    let r = wide.generate_ray(Vec2::new(16.0 * 0.9, 2.0), Vec2::splat(0.5));
+    assert!((r.d - Vec3::new(-1.0, 0.0, 0.0)).length() < 1e-6);
+    assert!(cam.with_resolution(9, 4).is_err());
+    for (text, what) in [
+        (batch(7, ortho), "multiple of the number of nested sensors (2)"),
+        (batch(8, r#"<sensor type="radiancemeter"/>"#), "cannot be part of a batch"),
+        (batch(8, r#"<sensor type="orthographic"><rfilter type="box"/></sensor>"#), "<rfilter> cannot be nested"),
+    ] {
+        let e = err(&text);
+        assert!(e.contains("test.xml:") && e.contains(what), "{e}");
     }
 }
 
