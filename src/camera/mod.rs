@@ -2,7 +2,8 @@
 //! (one ray: the radiance arriving at a point from a direction) and `irradiancemeter` (the
 //! irradiance on a shape's surface, averaged over it); neumann's `spherical` (pbrt-v4's: every
 //! direction around a point, in an equirectangular or an equal-area image); Mitsuba's `batch`
-//! (several cameras side by side on one film).
+//! (several cameras side by side on one film) and `distant` (the radiance leaving the scene
+//! in one direction, averaged over a target).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
@@ -11,7 +12,7 @@
 
 use crate::geometry::Geometry;
 use crate::math::float::offset_ray_origin;
-use crate::math::{Frame, Ray, Transform, Vec2, Vec3, ONE_MINUS_EPSILON, PI};
+use crate::math::{Bounds3, Frame, Ray, Transform, Vec2, Vec3, ONE_MINUS_EPSILON, PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_disk_concentric};
 use std::sync::Arc;
@@ -64,6 +65,11 @@ pub enum Projection {
     /// about its normal (from the lens sample), and carries the weight π: the film measures the
     /// irradiance `E = ∫ L cos θ dω` (W m⁻²) averaged over the surface.
     Irradiancemeter,
+    /// Mitsuba's `distant`: parallel rays along `to_world`'s +z from outside the scene's
+    /// bounding sphere toward a [`DistantTarget`] (the lens sample picks the target point);
+    /// the 1 × 1 film measures the radiance leaving the scene in the opposite direction,
+    /// averaged over the target.
+    Distant,
     /// Mitsuba's `batch`: the film is split into as many columns of equal width as there are
     /// cameras, column k rendered by camera k on a film of that column's size.
     Batch,
@@ -81,6 +87,18 @@ pub enum SphericalMapping {
     /// pbrt-v4's equal-area octahedral square (Clarberg), its z axis turned to camera +y: every
     /// pixel covers the same solid angle.
     EqualArea,
+}
+
+/// Where a distant sensor's rays go (Mitsuba's `target`).
+#[derive(Clone, Debug)]
+pub enum DistantTarget {
+    /// Uniformly over the cross-section of the scene's bounding sphere (no `target`).
+    Scene,
+    /// Every ray through this world point.
+    Point(Vec3),
+    /// Uniformly over this surface (world space; not part of the scene), area sampling
+    /// prepared.
+    Shape(Arc<Geometry>),
 }
 
 /// A perspective camera, optionally with a thin lens, or an orthographic one.
@@ -105,6 +123,10 @@ pub struct Camera {
     meter_shape: Option<Arc<Geometry>>,
     /// A batch's cameras, left to right, each on its column's film.
     batch: Vec<Camera>,
+    /// A distant sensor's target.
+    distant: Option<DistantTarget>,
+    /// The scene's bounding sphere (centre, radius), which a distant sensor aims at.
+    scene_sphere: (Vec3, f32),
 }
 
 impl Camera {
@@ -141,6 +163,8 @@ impl Camera {
             focus_distance: 1.0,
             meter_shape: None,
             batch: Vec::new(),
+            distant: None,
+            scene_sphere: (Vec3::ZERO, 1.0),
         })
     }
 
@@ -171,6 +195,35 @@ impl Camera {
         }
         let c = Camera::radiancemeter(Transform::IDENTITY);
         Ok(Camera { projection: Projection::Irradiancemeter, meter_shape: Some(Arc::new(shape)), ..c })
+    }
+
+    /// Mitsuba's distant sensor looking along `to_world`'s +z at `target`; the film is 1 × 1.
+    /// Its rays need the scene's bounds ([`Camera::with_scene_bounds`], which building a scene
+    /// applies). An error for a target shape without area.
+    pub fn distant(to_world: Transform, target: DistantTarget) -> Result<Camera, CameraError> {
+        let target = match target {
+            DistantTarget::Shape(shape) => {
+                let mut shape = (*shape).clone();
+                if !shape.prepare_sampling() {
+                    return Err(CameraError::MeterShape);
+                }
+                DistantTarget::Shape(Arc::new(shape))
+            }
+            t => t,
+        };
+        let c = Camera::radiancemeter(to_world);
+        Ok(Camera { projection: Projection::Distant, distant: Some(target), ..c })
+    }
+
+    /// The camera for a scene whose shapes lie in `bounds`: a distant sensor aims at their
+    /// bounding sphere (Mitsuba's, its radius enlarged by a relative 10⁻⁴ and at least 10⁻⁴);
+    /// other cameras are unchanged.
+    pub fn with_scene_bounds(mut self, bounds: Bounds3) -> Camera {
+        if bounds.is_finite() && !bounds.is_empty() {
+            let (centre, radius) = bounds.bounding_sphere();
+            self.scene_sphere = (centre, (radius * (1.0 + 1e-4)).max(1e-4));
+        }
+        self
     }
 
     /// Mitsuba's batch sensor: `cameras` side by side on a `width × height` film, each on a
@@ -211,7 +264,8 @@ impl Camera {
         if self.projection == Projection::Batch {
             return Camera::batch(self.batch.clone(), width, height);
         }
-        let meter = matches!(self.projection, Projection::Radiancemeter | Projection::Irradiancemeter);
+        let meter =
+            matches!(self.projection, Projection::Radiancemeter | Projection::Irradiancemeter | Projection::Distant);
         if meter && (width, height) != (1, 1) {
             return Err(CameraError::MeterFilm(width, height));
         }
@@ -273,6 +327,22 @@ impl Camera {
             let column = (self.width as usize / self.batch.len()) as f32;
             let k = ((film.x / column) as usize).min(self.batch.len() - 1);
             return self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens);
+        }
+        if let Some(target) = &self.distant {
+            let d = self.to_world.apply_vector(Vec3::Z).normalize();
+            let (centre, radius) = self.scene_sphere;
+            let o = match target {
+                DistantTarget::Point(p) => *p - d * (2.0 * radius),
+                DistantTarget::Shape(shape) => match shape.sample_area(u_lens) {
+                    Some(ps) => ps.p - d * (2.0 * radius),
+                    None => return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0),
+                },
+                DistantTarget::Scene => {
+                    let offset = sample_uniform_disk_concentric(u_lens).value * radius;
+                    centre + Frame::from_z(d).to_world(Vec3::new(offset.x, offset.y, 0.0)) - d * radius
+                }
+            };
+            return Ray::new(o, d);
         }
         if let Some(shape) = &self.meter_shape {
             // The film position within the one pixel picks the point, the lens sample the
@@ -404,7 +474,7 @@ pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
 
 /// Camera plugins by their (Mitsuba) names.
 pub const CAMERA_PLUGINS: &[&str] =
-    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "batch", "spherical"];
+    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "distant", "batch", "spherical"];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -422,6 +492,10 @@ impl Camera {
         }
         if o.ty == "radiancemeter" {
             return Camera::radiancemeter_from_props(o, width, height);
+        }
+        if o.ty == "distant" {
+            // (The loader builds it, with its target shape, by `Camera::distant`.)
+            return Err(o.error("a distant sensor cannot be part of a batch"));
         }
         if o.ty == "batch" {
             // (The loader builds it from the nested sensors with `Camera::batch`.)

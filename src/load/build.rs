@@ -11,7 +11,7 @@
 //! scene format shares them.
 
 use super::SceneFile;
-use crate::camera::{Camera, CameraError};
+use crate::camera::{Camera, CameraError, DistantTarget};
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
@@ -25,10 +25,10 @@ use crate::load::memory::MemoryFiles;
 use crate::load::FileResolver;
 use crate::material::{bsdf_plugin, Bsdf, BsdfBuilder, Diffuse, BSDF_PLUGINS};
 use crate::math::spectrum::SpectrumKind;
-use crate::math::{Rgb, Transform};
+use crate::math::{Rgb, Transform, Vec3};
 use crate::medium::MEDIUM_PLUGINS;
-use crate::props::Obj;
 use crate::props::SceneError;
+use crate::props::{Obj, Value};
 use crate::sampling::sampler::{SamplerKind, SamplerSettings};
 use crate::scene::SceneBuilder;
 use crate::texture::{texture_plugin, Texture, TextureSource, TEXTURE_PLUGINS};
@@ -255,11 +255,48 @@ impl Builder {
                 Camera::irradiancemeter(shape).map_err(|e| o.error(e.to_string()))?
             }
             None if o.ty == "batch" => batch_from_props(o, film.width, film.height)?,
+            None if o.ty == "distant" => self.distant_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
         let FilmSettings { filter, window, alpha, transform, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
         Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, transform })
+    }
+
+    /// Mitsuba's `distant` sensor: `direction` or `to_world` (not both; it looks along
+    /// `to_world`'s +z), `target` (a `<point>`, or a `<shape name="target">` sampled by area and
+    /// not part of the scene; none: the scene's bounding sphere), a 1 × 1 film.
+    fn distant_from_props(&mut self, o: &Obj, width: u32, height: u32) -> Result<Camera> {
+        if (width, height) != (1, 1) {
+            return Err(o.error(CameraError::MeterFilm(width, height).to_string()));
+        }
+        let to_world = match o.point_opt("direction")? {
+            Some(_) if o.get("to_world").is_some() => {
+                return Err(o.error_at("direction", "give 'direction' or 'to_world', not both (as in Mitsuba)"))
+            }
+            Some(d) => {
+                let up = if d.normalize_or_zero().y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+                Transform::look_at(Vec3::ZERO, d, up).ok_or_else(|| {
+                    o.error_at("direction", format!("the direction must be a non-zero finite vector, got {d}"))
+                })?
+            }
+            None => o.transform("to_world")?,
+        };
+        let target = match o.get("target").map(|p| &p.value) {
+            None => DistantTarget::Scene,
+            Some(Value::Object(shape)) if shape.tag == "shape" => {
+                shape.built.set(true);
+                shape.check_children(&[])?;
+                let plugin = shape_plugin(&shape.ty)
+                    .ok_or_else(|| shape.unknown_plugin(&SHAPE_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
+                let (t, flip) = (shape.transform("to_world")?, shape.bool("flip_normals", false)?);
+                let geometry = plugin(shape, &t, flip, self)?;
+                check_finite_geometry(shape, &geometry)?;
+                DistantTarget::Shape(std::sync::Arc::new(geometry))
+            }
+            Some(_) => DistantTarget::Point(o.point_opt("target")?.expect("present")),
+        };
+        Camera::distant(to_world, target).map_err(|e| o.error_at("target", e.to_string()))
     }
 
     // ---------------------------------------------------------------- shapes
@@ -740,7 +777,7 @@ fn batch_from_props(o: &Obj, width: u32, height: u32) -> Result<Camera> {
     for s in &nested {
         s.built.set(true);
         s.check_children(&["film", "sampler"])?;
-        if matches!(s.ty.as_str(), "batch" | "irradiancemeter" | "radiancemeter") {
+        if matches!(s.ty.as_str(), "batch" | "irradiancemeter" | "radiancemeter" | "distant") {
             return Err(s.error(format!("a {} cannot be part of a batch", s.ty)));
         }
         for f in s.nested("film") {

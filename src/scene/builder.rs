@@ -225,6 +225,8 @@ impl SceneBuilder {
         let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);
         // Texture coordinates on spheres only where a BSDF or an emitter reads them.
         let needs_uv = self.bsdfs.iter().any(Bsdf::reads_uv) || self.lights.iter().any(Light::reads_uv);
+        // A distant sensor aims at the scene's bounding sphere.
+        let camera = camera.with_scene_bounds(bvh.bounds());
         Ok(Scene {
             needs_dpdv,
             needs_uv,

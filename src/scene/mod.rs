@@ -276,7 +276,7 @@ impl Scene {
 
     /// Replaces the camera (e.g. to change the resolution).
     pub fn set_camera(&mut self, camera: Camera) {
-        self.camera = camera;
+        self.camera = camera.with_scene_bounds(self.bvh.bounds());
     }
 
     /// The shapes.

@@ -263,6 +263,62 @@ fn batch_sensor_puts_cameras_side_by_side() {
     }
 }
 
+/// Mitsuba's `distant` sensor: parallel rays from outside the scene's bounding sphere (radius
+/// √3 · (1 + 10⁻⁴) around a unit sphere) toward its target; the film holds the radiance
+/// leaving the scene toward the sensor, averaged over the target. Against a unit sphere that
+/// emits 2 (and nothing else): 2/3 · (1 - 2·10⁻⁴) over the bounding sphere's cross-section,
+/// exactly 2 through a point on it, 0 through a point beside it, 2 · π/4 over a 2 × 2 square
+/// (a target shape, not part of the scene). The ray through a point starts 2R before it, as
+/// Mitsuba 3.9.1 traces it.
+#[test]
+fn distant_sensor_averages_over_its_target() {
+    use crate::math::Vec2;
+    let distant = |params: &str, film: &str| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"/>
+            <sensor type="distant">{params}
+                <sampler type="independent"><integer name="sample_count" value="65536"/></sampler>
+                <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor>
+            <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+                <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape></scene>"#
+        )
+    };
+    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let down = r#"<vector name="direction" x="0" y="0" z="-1"/>"#;
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let measure = |params: &str| {
+        let f = load(&distant(params, one)).unwrap();
+        assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+        let settings = crate::render::RenderSettings { spp: f.spp, seed: 2, ..Default::default() };
+        let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
+        (f, out.film.image()[0].x)
+    };
+    let (f, v) = measure(&format!(r#"{down}<point name="target" x="0.5" y="0" z="0"/>"#));
+    assert_eq!(v, 2.0);
+    let r = f.scene.camera().generate_ray(Vec2::splat(0.5), Vec2::new(0.3, 0.6));
+    assert!((r.o - Vec3::new(0.5, 0.0, 3.46441)).length() < 1e-4 && r.d == Vec3::new(0.0, 0.0, -1.0), "{}", r.o);
+    assert_eq!(measure(&format!(r#"{down}<point name="target" x="2" y="0" z="0"/>"#)).1, 0.0);
+    let (f, v) = measure(down);
+    assert!((v - 2.0 / 3.0 * (1.0 - 2e-4)).abs() < 0.015, "{v}");
+    for u in [Vec2::new(0.3, 0.6), Vec2::new(0.99, 0.01)] {
+        let r = f.scene.camera().generate_ray(Vec2::splat(0.5), u);
+        assert!((r.o.z - 3f32.sqrt()).abs() < 1e-3 && r.o.truncate().length() <= 3f32.sqrt() * 1.0002, "{}", r.o);
+    }
+    let square = r#"<shape type="rectangle" name="target"/>"#;
+    let (f, v) = measure(&format!("{down}{square}"));
+    assert!((v - 2.0 * std::f32::consts::FRAC_PI_4).abs() < 0.013, "{v}");
+    assert_eq!(f.scene.shapes().len(), 1, "the target is not part of the scene");
+    for (params, film, what) in [
+        (down.to_string(), r#"<integer name="width" value="2"/><integer name="height" value="2"/>"#, "must be 1x1"),
+        (format!(r#"{down}<transform name="to_world"><rotate x="1" angle="30"/></transform>"#), one, "not both"),
+        (r#"<vector name="direction" x="0" y="0" z="0"/>"#.to_string(), one, "non-zero"),
+        (format!(r#"{down}<string name="target" value="sphere"/>"#), one, "'target'"),
+    ] {
+        let e = err(&distant(&params, film));
+        assert!(e.contains("test.xml:") && e.contains(what), "{params}: {e}");
+    }
+}
+
 #[test]
 fn shared_scenes_load() {
     let spheres = load_scene_file(&shared("cbox_spheres.xml"), &[]).expect("cbox_spheres.xml loads");
