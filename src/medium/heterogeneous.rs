@@ -20,13 +20,13 @@
 //! Both need an unbounded number of random numbers: they come from a per-path generator
 //! ([`crate::sampling::Pcg32`]) that the integrator seeds from its sampler.
 
-use super::volume::{check_range, volume_param, Volume};
 use super::FreeFlight;
 use crate::image::VolumeSource;
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::props::{Obj, Result};
 use crate::sampling::{sample_exponential, Pcg32};
+use crate::texture::volume::{check_range, volume_param, Volume};
 
 /// Tentative collisions one tracking walk may take before giving up (an optical depth of
 /// about a million majorant units along one segment); the walk then returns zero.

@@ -16,8 +16,9 @@ pub mod heterogeneous;
 pub mod homogeneous;
 pub mod phase;
 pub mod presets;
-pub mod volume;
 
+/// Volume textures (in the texture layer: Mitsuba's `volume` surface texture reads them too).
+pub use crate::texture::volume;
 pub use heterogeneous::Heterogeneous;
 pub use homogeneous::Homogeneous;
 pub use phase::PhaseFunction;

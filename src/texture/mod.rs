@@ -13,7 +13,7 @@
 //! OBJ's v-up texture coordinates by default (`flip_tex_coords`), which the XML loader does too.
 
 use crate::geometry::mesh::MeshPoint;
-use crate::image::{Image, ImageSource};
+use crate::image::{Image, ImageSource, VolumeSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{floor, Mat3, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
@@ -21,6 +21,7 @@ use std::sync::Arc;
 
 pub mod noise;
 pub mod procedural;
+pub mod volume;
 
 pub use procedural::{Procedural, Projection};
 
@@ -167,6 +168,10 @@ pub enum Texture {
     /// One minus a texture's value per channel, negative results giving 0 (of its scalar as a
     /// scalar): pbrt-v4's `invert` of image textures, `max(0, 1 − scale · v)`.
     Invert(Box<Texture>),
+    /// Mitsuba's `volume`: a volume texture ([`volume::Volume`]: `gridvolume`, `constvolume`)
+    /// looked up at the point's world position; its scalar is the mean of its channels, as
+    /// Mitsuba's `eval_1`.
+    Volume(Arc<volume::Volume>),
 }
 
 impl Texture {
@@ -341,6 +346,7 @@ impl Texture {
             Texture::Procedural(p) => p.eval(uv, at.p),
             Texture::Sqrt(t) => t.eval_at(at).max(Rgb::ZERO).powf(0.5),
             Texture::Invert(t) => (Rgb::ONE - t.eval_at(at)).max(Rgb::ZERO),
+            Texture::Volume(v) => v.eval(at.p),
         }
     }
 
@@ -397,6 +403,10 @@ impl Texture {
             }
             Texture::Sqrt(t) => t.eval_scalar(at).max(0.0).sqrt(),
             Texture::Invert(t) => (1.0 - t.eval_scalar(at)).max(0.0),
+            Texture::Volume(v) => {
+                let c = v.eval(at.p);
+                (c.x + c.y + c.z) / 3.0
+            }
             t => crate::math::luminance(t.eval_at(at)),
         }
     }
@@ -413,7 +423,7 @@ impl Texture {
             Texture::Checkerboard { color0, color1, .. } => color0.uses_position() || color1.uses_position(),
             Texture::Projected { projection, texture } => projection.uses_position() || texture.uses_position(),
             Texture::Mix { amount, tex } => amount.uses_position() || tex[0].uses_position() || tex[1].uses_position(),
-            Texture::DirectionMix { .. } => true,
+            Texture::DirectionMix { .. } | Texture::Volume(_) => true,
             Texture::Procedural(p) => p.uses_position(),
         }
     }
@@ -466,6 +476,8 @@ impl Texture {
             Texture::Sqrt(t) => t.mean().max(Rgb::ZERO).powf(0.5),
             // Exact where the texture stays within [0, 1] (no clamping).
             Texture::Invert(t) => (Rgb::ONE - t.mean()).max(Rgb::ZERO),
+            // The average over the volume's box (its grid's values).
+            Texture::Volume(v) => v.mean(),
         }
     }
 
@@ -495,6 +507,7 @@ impl Texture {
             Texture::DirectionMix { tex, .. } => tex[0].is_reflectance() && tex[1].is_reflectance(),
             Texture::Procedural(p) => p.is_reflectance(),
             Texture::Sqrt(t) | Texture::Invert(t) => t.is_reflectance(),
+            Texture::Volume(v) => v.min() >= 0.0 && v.max() <= 1.0,
             Texture::Scale(t) => {
                 let bound = |t: &Texture| match t {
                     Texture::Constant(c) => c.max_element(),
@@ -517,7 +530,7 @@ impl Texture {
 /// Where plugins get their texturable parameters: a nested or referenced `<texture>` (built
 /// by the loader, which holds the scene's objects), or a constant colour. Images come through
 /// the [`ImageSource`] it extends.
-pub trait TextureSource: ImageSource {
+pub trait TextureSource: ImageSource + VolumeSource {
     /// The parameter `name` of `o` as a texture: a nested or referenced `<texture>`, or a
     /// constant colour (`default` if absent) whose spectra reduce to RGB as `kind` says.
     fn texture_of(&mut self, o: &Obj, name: &str, default: Rgb, kind: SpectrumKind) -> PropResult<Texture>;
@@ -571,7 +584,25 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("wrinkled", procedural::wrinkled_from_props),
         ("windy", procedural::windy_from_props),
         ("marble", procedural::marble_from_props),
+        ("volume", volume_from_props),
     ];
+
+/// Mitsuba's `volume`: `volume`, a nested `<volume name="volume">` (`gridvolume` or
+/// `constvolume`, see [`volume::Volume::from_props`]), looked up at the surface point's world
+/// position.
+fn volume_from_props(o: &Obj, src: &mut dyn TextureSource) -> PropResult<Texture> {
+    o.check_children(&[])?;
+    let v = match o.get("volume").map(|p| &p.value) {
+        Some(crate::props::Value::Object(v)) if v.tag == "volume" => v.clone(),
+        _ => return Err(o.error("the parameter 'volume' (a nested <volume name=\"volume\">) is required")),
+    };
+    v.built.set(true);
+    let volume = volume::Volume::from_props(&v, SpectrumKind::Unbounded, src)?;
+    if !volume.is_finite() {
+        return Err(v.error("the volume holds values that are not finite"));
+    }
+    Ok(Texture::Volume(Arc::new(volume)))
+}
 
 /// The constructor of the texture plugin `name`.
 pub fn texture_plugin(name: &str) -> Option<TexturePlugin> {

@@ -319,6 +319,62 @@ fn distant_sensor_averages_over_its_target() {
     }
 }
 
+/// Mitsuba's `volume` texture: a `<volume>` looked up at the surface point's world position,
+/// as Mitsuba 3.9.1 evaluates it (a 2 × 1 × 1 grid from 0 to 1 over a box scaled by 2: 0 at
+/// x = 0.25 and 0.5 (clamped to the first texel centre), 1 at 1.5 and beyond; 0.5 between the
+/// centres); an RGB `constvolume`'s scalar is its channels' mean (0.4 for 0.2, 0.4, 0.6). The
+/// nested volume named `volume` is required (as in Mitsuba, a float will not do).
+#[test]
+fn volume_texture_is_looked_up_by_position() {
+    use crate::image::GridVolume;
+    use crate::math::Vec2;
+    use crate::texture::{TexPoint, Texture};
+    let dir = std::env::temp_dir().join(format!("neumann-voltex-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let grid = GridVolume { res: [2, 1, 1], channels: 1, bbox: [[0.0; 3], [1.0; 3]], data: vec![0.0, 1.0] };
+    std::fs::write(dir.join("ramp.vol"), crate::load::volume::grid_volume_bytes(&grid)).unwrap();
+    let bsdf = |texture: &str| {
+        scene(&format!(
+            r#"<shape type="sphere"><bsdf type="diffuse"><texture type="volume" name="reflectance">{texture}</texture></bsdf></shape>"#
+        ))
+    };
+    let reflectance = |text: &str| {
+        let f = load_scene_text(&dir.join("s.xml"), text, &[]).unwrap();
+        assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+        match &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] {
+            Bsdf::Diffuse(d) => d.reflectance.clone(),
+            b => panic!("{b:?}"),
+        }
+    };
+    let ramp = reflectance(&bsdf(
+        r#"<volume type="gridvolume" name="volume"><string name="filename" value="ramp.vol"/>
+            <transform name="to_world"><scale value="2"/></transform></volume>"#,
+    ));
+    assert!(matches!(ramp, Texture::Volume(_)) && ramp.uses_position());
+    let at = |p: Vec3| TexPoint { uv: Vec2::new(0.9, 0.1), p, n: Vec3::Z, mesh: None };
+    for (x, want) in [(0.25, 0.0), (0.5, 0.0), (1.0, 0.5), (1.5, 1.0), (3.0, 1.0)] {
+        let got = ramp.eval_at(&at(Vec3::new(x, 0.5, 0.5)));
+        assert!((got - Vec3::splat(want)).abs().max_element() < 1e-6, "x = {x}: {got}");
+    }
+    let rgb = reflectance(&bsdf(
+        r#"<volume type="constvolume" name="volume"><rgb name="value" value="0.2, 0.4, 0.6"/></volume>"#,
+    ));
+    assert_eq!(rgb.eval_at(&at(Vec3::splat(5.0))), Vec3::new(0.2, 0.4, 0.6));
+    assert!((rgb.eval_scalar(&at(Vec3::splat(5.0))) - 0.4).abs() < 1e-6);
+    for (texture, what) in [
+        ("", "'volume' (a nested <volume name=\"volume\">) is required"),
+        (r#"<float name="volume" value="0.5"/>"#, "'volume' (a nested"),
+        (r#"<volume type="constvolume"/>"#, "a <volume> cannot be nested in texture 'volume'"),
+    ] {
+        let e = match load_scene_text(&dir.join("s.xml"), &bsdf(texture), &[]) {
+            Ok(_) => panic!("{texture}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(what), "{texture}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn shared_scenes_load() {
     let spheres = load_scene_file(&shared("cbox_spheres.xml"), &[]).expect("cbox_spheres.xml loads");

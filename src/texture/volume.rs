@@ -1,5 +1,6 @@
-//! Volume textures: values over 3D space that parametrise heterogeneous media (Mitsuba's
-//! `<volume>` plugins `gridvolume` and `constvolume`).
+//! Volume textures: values over 3D space that parametrise heterogeneous media, blended phase
+//! functions and Mitsuba's `volume` surface texture (Mitsuba's `<volume>` plugins `gridvolume`
+//! and `constvolume`).
 //!
 //! Both live in the unit cube `[0, 1]³` of their local space, placed in the world by `to_world`.
 //! Their world bounding box is Mitsuba's: the box spanned by the images of the two corners
@@ -177,6 +178,24 @@ impl Volume {
     /// The largest value of any channel (an upper bound of [`Volume::eval`]).
     pub fn max(&self) -> f32 {
         self.max
+    }
+
+    /// The average value over the volume's box (of its grid values; a one-channel grid's in
+    /// all three channels).
+    pub fn mean(&self) -> Rgb {
+        match &self.data {
+            VolumeData::Constant(v) => *v,
+            VolumeData::Grid(g) => {
+                let (ch, data) = (g.data.channels, &g.data.data);
+                let n = (data.len() / ch.max(1)).max(1) as f64;
+                let sum = |c: usize| data.iter().skip(c).step_by(ch.max(1)).map(|&x| x as f64).sum::<f64>() / n;
+                if ch == 3 {
+                    Rgb::new(sum(0) as f32, sum(1) as f32, sum(2) as f32)
+                } else {
+                    Rgb::splat(sum(0) as f32)
+                }
+            }
+        }
     }
 
     /// The smallest value of any channel anywhere.
