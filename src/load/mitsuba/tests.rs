@@ -101,6 +101,28 @@ fn merge_renders_as_its_shapes() {
     assert!(e.contains("the nearest is 'merge'"), "{e}");
 }
 
+/// A 1 × 1 film's size parameters.
+const ONE_PIXEL: &str = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+
+/// A scene rendered by the path tracer through a sensor of type `ty` (`params` inside it,
+/// `spp` samples, a box-filtered film of size parameters `film`) around `body`.
+fn meter_scene(ty: &str, params: &str, spp: u32, film: &str, body: &str) -> String {
+    format!(
+        r#"<scene version="3.0.0"><integrator type="path"/>
+        <sensor type="{ty}">{params}
+            <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
+            <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor>
+        {body}</scene>"#
+    )
+}
+
+/// The one pixel of a meter's render of `f` at its sample count (seed `seed`).
+fn measure_pixel(f: &SceneFile, seed: u64) -> Vec3 {
+    let settings = crate::render::RenderSettings { spp: f.spp, seed, ..Default::default() };
+    let never = std::sync::atomic::AtomicBool::new(false);
+    crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap().film.image()[0]
+}
+
 /// Mitsuba's `radiancemeter`: one ray, from `origin` along `direction` (or `to_world`'s origin
 /// along its +z, which wins over them). A diffuse sphere (albedo 0.5) under a constant
 /// environment of radiance 1 reflects exactly 0.5 toward the meter (a convex surface sees the
@@ -110,15 +132,10 @@ fn merge_renders_as_its_shapes() {
 fn radiancemeter_measures_one_ray() {
     use crate::math::Vec2;
     let meter = |params: &str, film: &str| {
-        format!(
-            r#"<scene version="3.0.0"><integrator type="path"/>
-            <sensor type="radiancemeter">{params}
-                <sampler type="independent"><integer name="sample_count" value="16384"/></sampler>
-                <film type="hdrfilm">{film}</film></sensor>
-            <shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/></scene>"#
-        )
+        let body = r#"<shape type="sphere"><bsdf type="diffuse"/></shape><emitter type="constant"/>"#;
+        meter_scene("radiancemeter", params, 16384, film, body)
     };
-    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let one = ONE_PIXEL;
     let f =
         load(&meter(r#"<point name="origin" x="0" y="0" z="3"/><vector name="direction" x="0" y="0" z="-2"/>"#, one))
             .unwrap();
@@ -128,10 +145,7 @@ fn radiancemeter_measures_one_ray() {
         assert!((r.o - Vec3::new(0.0, 0.0, 3.0)).length() < 1e-5 && (r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         assert_eq!(r.t_max, f32::INFINITY);
     }
-    let settings = crate::render::RenderSettings { spp: f.spp, seed: 1, ..Default::default() };
-    let never = std::sync::atomic::AtomicBool::new(false);
-    let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
-    let v = out.film.image()[0];
+    let v = measure_pixel(&f, 1);
     assert!((v - Vec3::splat(0.5)).abs().max_element() < 0.01, "{v}");
     // to_world wins over origin (Mitsuba reads and ignores it then).
     let f = load(&meter(
@@ -153,6 +167,8 @@ fn radiancemeter_measures_one_ray() {
     }
     let f = load(&meter("", one)).unwrap();
     let light_tracer = crate::integrator::AnyIntegrator::Ptracer(Default::default());
+    let settings = crate::render::RenderSettings { spp: 4, ..Default::default() };
+    let never = std::sync::atomic::AtomicBool::new(false);
     let e = crate::render::render_integrator(&f.scene, &light_tracer, &settings, &never).err().unwrap();
     assert!(e.to_string().contains("meter one"), "{e}");
 }
@@ -176,17 +192,15 @@ fn irradiancemeter_measures_mean_irradiance() {
             {light}</scene>"#
         )
     };
-    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let one = ONE_PIXEL;
     let sphere = r#"<shape type="sphere"><point name="center" x="0" y="0" z="3"/><float name="radius" value="1"/>
         <emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>"#;
-    let never = std::sync::atomic::AtomicBool::new(false);
     let measure = |text: &str, spp: u32| {
-        let f = load(text).unwrap();
+        let mut f = load(text).unwrap();
         assert!(f.warnings.is_empty(), "{:?}", f.warnings);
         assert_eq!(f.scene.camera().ray_weight(), std::f32::consts::PI);
-        let settings = crate::render::RenderSettings { spp, seed: 5, ..Default::default() };
-        let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
-        out.film.image()[0]
+        f.spp = spp;
+        measure_pixel(&f, 5)
     };
     let sky = measure(&meter(false, one, r#"<emitter type="constant"/>"#), 64);
     assert!((sky - Vec3::splat(std::f32::consts::PI)).abs().max_element() < 1e-4, "{sky}");
@@ -274,24 +288,17 @@ fn batch_sensor_puts_cameras_side_by_side() {
 fn distant_sensor_averages_over_its_target() {
     use crate::math::Vec2;
     let distant = |params: &str, film: &str| {
-        format!(
-            r#"<scene version="3.0.0"><integrator type="path"/>
-            <sensor type="distant">{params}
-                <sampler type="independent"><integer name="sample_count" value="65536"/></sampler>
-                <film type="hdrfilm">{film}<rfilter type="box"/></film></sensor>
-            <shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-                <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape></scene>"#
-        )
+        let body = r#"<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+            <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>"#;
+        meter_scene("distant", params, 65536, film, body)
     };
-    let one = r#"<integer name="width" value="1"/><integer name="height" value="1"/>"#;
+    let one = ONE_PIXEL;
     let down = r#"<vector name="direction" x="0" y="0" z="-1"/>"#;
-    let never = std::sync::atomic::AtomicBool::new(false);
     let measure = |params: &str| {
         let f = load(&distant(params, one)).unwrap();
         assert!(f.warnings.is_empty(), "{:?}", f.warnings);
-        let settings = crate::render::RenderSettings { spp: f.spp, seed: 2, ..Default::default() };
-        let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
-        (f, out.film.image()[0].x)
+        let v = measure_pixel(&f, 2).x;
+        (f, v)
     };
     let (f, v) = measure(&format!(r#"{down}<point name="target" x="0.5" y="0" z="0"/>"#));
     assert_eq!(v, 2.0);
