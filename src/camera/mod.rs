@@ -314,57 +314,48 @@ impl Camera {
     /// clip range.
     #[inline]
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
-        // +x is left and +y is up in camera space; film x grows right and y grows down.
-        let xy = film * self.plane_scale + self.tan_half;
-        if let Projection::Spherical(mapping) = self.projection {
-            let uv = Vec2::new(film.x / self.width as f32, film.y / self.height as f32);
-            let d = spherical_direction(mapping, uv);
-            let d = self.to_world.apply_vector(d).normalize();
-            let o = self.to_world.apply_point(Vec3::ZERO);
-            return Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip);
+        match self.projection {
+            Projection::Perspective => self.perspective_ray(film, u_lens),
+            Projection::Orthographic => {
+                // Mitsuba: the origin on the near plane, through to_world (which may scale it);
+                // the direction is to_world's +z, normalized; the ray spans far − near.
+                let xy = self.plane_point(film);
+                let o = self.to_world.apply_point(Vec3::new(xy.x, xy.y, self.near_clip));
+                let d = self.to_world.apply_vector(Vec3::Z).normalize();
+                Ray::bounded(o, d, self.far_clip - self.near_clip)
+            }
+            Projection::Spherical(mapping) => {
+                let uv = Vec2::new(film.x / self.width as f32, film.y / self.height as f32);
+                let d = self.to_world.apply_vector(spherical_direction(mapping, uv)).normalize();
+                let o = self.to_world.apply_point(Vec3::ZERO);
+                Ray::bounded(o + d * self.near_clip, d, self.far_clip - self.near_clip)
+            }
+            Projection::Radiancemeter => {
+                let o = self.to_world.apply_point(Vec3::ZERO);
+                Ray::new(o, self.to_world.apply_vector(Vec3::Z).normalize())
+            }
+            Projection::Irradiancemeter => self.irradiance_meter_ray(film, u_lens),
+            Projection::Distant => self.distant_ray(u_lens),
+            Projection::Batch => {
+                let column = (self.width as usize / self.batch.len()) as f32;
+                let k = ((film.x / column) as usize).min(self.batch.len() - 1);
+                self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens)
+            }
         }
-        if !self.batch.is_empty() {
-            let column = (self.width as usize / self.batch.len()) as f32;
-            let k = ((film.x / column) as usize).min(self.batch.len() - 1);
-            return self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens);
-        }
-        if let Some(target) = &self.distant {
-            let d = self.to_world.apply_vector(Vec3::Z).normalize();
-            let (centre, radius) = self.scene_sphere;
-            let o = match target {
-                DistantTarget::Point(p) => *p - d * (2.0 * radius),
-                DistantTarget::Shape(shape) => match shape.sample_area(u_lens) {
-                    Some(ps) => ps.p - d * (2.0 * radius),
-                    None => return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0),
-                },
-                DistantTarget::Scene => {
-                    let offset = sample_uniform_disk_concentric(u_lens).value * radius;
-                    centre + Frame::from_z(d).to_world(Vec3::new(offset.x, offset.y, 0.0)) - d * radius
-                }
-            };
-            return Ray::new(o, d);
-        }
-        if let Some(shape) = &self.meter_shape {
-            // The film position within the one pixel picks the point, the lens sample the
-            // direction (Mitsuba's irradiancemeter does the same).
-            let u = (film - film.floor()).clamp(Vec2::ZERO, Vec2::splat(ONE_MINUS_EPSILON));
-            let Some(ps) = shape.sample_area(u) else {
-                return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0);
-            };
-            let d = Frame::from_z(ps.ns).to_world(sample_cosine_hemisphere_malley(u_lens).value);
-            return Ray::new(offset_ray_origin(ps.p, ps.p_error, ps.ng, d), d);
-        }
-        if self.projection == Projection::Radiancemeter {
-            let o = self.to_world.apply_point(Vec3::ZERO);
-            return Ray::new(o, self.to_world.apply_vector(Vec3::Z).normalize());
-        }
-        if self.projection == Projection::Orthographic {
-            // Mitsuba: the origin on the near plane, through to_world (which may scale it);
-            // the direction is to_world's +z, normalized; the ray spans far − near.
-            let o = self.to_world.apply_point(Vec3::new(xy.x, xy.y, self.near_clip));
-            let d = self.to_world.apply_vector(Vec3::Z).normalize();
-            return Ray::bounded(o, d, self.far_clip - self.near_clip);
-        }
+    }
+
+    /// The camera-space point on the plane z = 1 (perspective) or of the film (orthographic)
+    /// that film position `film` maps to. +x is left and +y is up in camera space; film x grows
+    /// right and y grows down.
+    #[inline]
+    fn plane_point(&self, film: Vec2) -> Vec2 {
+        film * self.plane_scale + self.tan_half
+    }
+
+    /// A pinhole or thin-lens ray through `film`.
+    #[inline]
+    fn perspective_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        let xy = self.plane_point(film);
         let d = Vec3::new(xy.x, xy.y, 1.0);
         let (o, d) = if self.lens_radius > 0.0 {
             let lens = sample_uniform_disk_concentric(u_lens).value * self.lens_radius;
@@ -380,6 +371,37 @@ impl Camera {
         let t_max = (self.far_clip - self.near_clip) * inv_z * len;
         let d_world = self.to_world.apply_vector(d).normalize();
         Ray::bounded(self.to_world.apply_point(o_clip), d_world, t_max)
+    }
+
+    /// An irradiance meter's ray: the film position within the one pixel picks the point on
+    /// the shape, the lens sample the cosine-distributed direction (as Mitsuba's
+    /// `irradiancemeter` does).
+    fn irradiance_meter_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        let u = (film - film.floor()).clamp(Vec2::ZERO, Vec2::splat(ONE_MINUS_EPSILON));
+        let Some(ps) = self.meter_shape.as_ref().and_then(|shape| shape.sample_area(u)) else {
+            return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0);
+        };
+        let d = Frame::from_z(ps.ns).to_world(sample_cosine_hemisphere_malley(u_lens).value);
+        Ray::new(offset_ray_origin(ps.p, ps.p_error, ps.ng, d), d)
+    }
+
+    /// A distant sensor's ray toward the target point the lens sample picks, from outside the
+    /// scene's bounding sphere.
+    fn distant_ray(&self, u_lens: Vec2) -> Ray {
+        let d = self.to_world.apply_vector(Vec3::Z).normalize();
+        let (centre, radius) = self.scene_sphere;
+        let o = match &self.distant {
+            Some(DistantTarget::Point(p)) => *p - d * (2.0 * radius),
+            Some(DistantTarget::Shape(shape)) => match shape.sample_area(u_lens) {
+                Some(ps) => ps.p - d * (2.0 * radius),
+                None => return Ray::bounded(Vec3::ZERO, Vec3::Z, 0.0),
+            },
+            Some(DistantTarget::Scene) | None => {
+                let offset = sample_uniform_disk_concentric(u_lens).value * radius;
+                centre + Frame::from_z(d).to_world(Vec3::new(offset.x, offset.y, 0.0)) - d * radius
+            }
+        };
+        Ray::new(o, d)
     }
 }
 
