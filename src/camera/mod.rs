@@ -189,12 +189,8 @@ impl Camera {
     /// normals face); the film is 1 × 1. An error for a shape without area (an SDF grid,
     /// curves).
     pub fn irradiancemeter(shape: &Geometry) -> Result<Camera, CameraError> {
-        let mut shape = shape.clone();
-        if !shape.prepare_sampling() {
-            return Err(CameraError::MeterShape);
-        }
         let c = Camera::radiancemeter(Transform::IDENTITY);
-        Ok(Camera { projection: Projection::Irradiancemeter, meter_shape: Some(Arc::new(shape)), ..c })
+        Ok(Camera { projection: Projection::Irradiancemeter, meter_shape: Some(sampled_shape(shape)?), ..c })
     }
 
     /// Mitsuba's distant sensor looking along `to_world`'s +z at `target`; the film is 1 × 1.
@@ -202,13 +198,7 @@ impl Camera {
     /// applies). An error for a target shape without area.
     pub fn distant(to_world: Transform, target: DistantTarget) -> Result<Camera, CameraError> {
         let target = match target {
-            DistantTarget::Shape(shape) => {
-                let mut shape = (*shape).clone();
-                if !shape.prepare_sampling() {
-                    return Err(CameraError::MeterShape);
-                }
-                DistantTarget::Shape(Arc::new(shape))
-            }
+            DistantTarget::Shape(shape) => DistantTarget::Shape(sampled_shape(&shape)?),
             t => t,
         };
         let c = Camera::radiancemeter(to_world);
@@ -566,25 +556,46 @@ impl Camera {
     /// Mitsuba's `radiancemeter` (see [`Camera::from_props`]): a `to_world` wins over `origin`
     /// and `direction`, as in Mitsuba (which reads and ignores them then).
     fn radiancemeter_from_props(o: &Obj, width: u32, height: u32) -> PropResult<Camera> {
-        if (width, height) != (1, 1) {
-            return Err(o.error(CameraError::MeterFilm(width, height).to_string()));
-        }
+        require_one_pixel(o, width, height)?;
         let (origin, direction) = (o.point_opt("origin")?, o.point_opt("direction")?);
         if o.get("to_world").is_some() {
             return Ok(Camera::radiancemeter(o.transform("to_world")?));
         }
         let to_world = match (origin, direction) {
             (None, None) => Transform::IDENTITY,
-            (Some(p), Some(d)) => {
-                let up = if d.normalize_or_zero().y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
-                Transform::look_at(p, p + d, up).ok_or_else(|| {
-                    o.error_at("direction", format!("the direction must be a non-zero finite vector, got {d}"))
-                })?
-            }
+            (Some(p), Some(d)) => look_along(o, p, d)?,
             _ => return Err(o.error("give both 'origin' and 'direction' (or a 'to_world')")),
         };
         Ok(Camera::radiancemeter(to_world))
     }
+}
+
+/// A copy of `shape` ready to be sampled by area (a meter's or a distant sensor's target); an
+/// error for a shape without area.
+fn sampled_shape(shape: &Geometry) -> Result<Arc<Geometry>, CameraError> {
+    let mut shape = shape.clone();
+    if !shape.prepare_sampling() {
+        return Err(CameraError::MeterShape);
+    }
+    Ok(Arc::new(shape))
+}
+
+/// The error unless a meter's film (`width × height`, sensor `o`) is 1 × 1, as Mitsuba's
+/// radiance, irradiance and distant meters require.
+pub(crate) fn require_one_pixel(o: &Obj, width: u32, height: u32) -> PropResult<()> {
+    if (width, height) != (1, 1) {
+        return Err(o.error(CameraError::MeterFilm(width, height).to_string()));
+    }
+    Ok(())
+}
+
+/// A sensor's `to_world` from its `direction` parameter `d` (and a position `p`): looking along
+/// `d` from `p`, with any up vector not parallel to it; an error at `direction` for a zero or
+/// non-finite one.
+pub(crate) fn look_along(o: &Obj, p: Vec3, d: Vec3) -> PropResult<Transform> {
+    let up = if d.normalize_or_zero().y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
+    Transform::look_at(p, p + d, up)
+        .ok_or_else(|| o.error_at("direction", format!("the direction must be a non-zero finite vector, got {d}")))
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@
 //! scene format shares them.
 
 use super::SceneFile;
-use crate::camera::{Camera, CameraError, DistantTarget};
+use crate::camera::{look_along, require_one_pixel, Camera, DistantTarget};
 use crate::choice::Choice;
 use crate::film::filter::Filter;
 use crate::film::FilmSettings;
@@ -249,9 +249,7 @@ impl Builder {
         };
         let camera = match meter_shape {
             Some(shape) => {
-                if (film.width, film.height) != (1, 1) {
-                    return Err(o.error(CameraError::MeterFilm(film.width, film.height).to_string()));
-                }
+                require_one_pixel(o, film.width, film.height)?;
                 Camera::irradiancemeter(shape).map_err(|e| o.error(e.to_string()))?
             }
             None if o.ty == "batch" => batch_from_props(o, film.width, film.height)?,
@@ -267,19 +265,12 @@ impl Builder {
     /// `to_world`'s +z), `target` (a `<point>`, or a `<shape name="target">` sampled by area and
     /// not part of the scene; none: the scene's bounding sphere), a 1 × 1 film.
     fn distant_from_props(&mut self, o: &Obj, width: u32, height: u32) -> Result<Camera> {
-        if (width, height) != (1, 1) {
-            return Err(o.error(CameraError::MeterFilm(width, height).to_string()));
-        }
+        require_one_pixel(o, width, height)?;
         let to_world = match o.point_opt("direction")? {
             Some(_) if o.get("to_world").is_some() => {
                 return Err(o.error_at("direction", "give 'direction' or 'to_world', not both (as in Mitsuba)"))
             }
-            Some(d) => {
-                let up = if d.normalize_or_zero().y.abs() < 0.9 { Vec3::Y } else { Vec3::X };
-                Transform::look_at(Vec3::ZERO, d, up).ok_or_else(|| {
-                    o.error_at("direction", format!("the direction must be a non-zero finite vector, got {d}"))
-                })?
-            }
+            Some(d) => look_along(o, Vec3::ZERO, d)?,
             None => o.transform("to_world")?,
         };
         let target = match o.get("target").map(|p| &p.value) {
@@ -287,12 +278,7 @@ impl Builder {
             Some(Value::Object(shape)) if shape.tag == "shape" => {
                 shape.built.set(true);
                 shape.check_children(&[])?;
-                let plugin = shape_plugin(&shape.ty)
-                    .ok_or_else(|| shape.unknown_plugin(&SHAPE_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>()))?;
-                let (t, flip) = (shape.transform("to_world")?, shape.bool("flip_normals", false)?);
-                let geometry = plugin(shape, &t, flip, self)?;
-                check_finite_geometry(shape, &geometry)?;
-                DistantTarget::Shape(std::sync::Arc::new(geometry))
+                DistantTarget::Shape(std::sync::Arc::new(self.geometry(shape, &Transform::IDENTITY, &[])?))
             }
             Some(_) => DistantTarget::Point(o.point_opt("target")?.expect("present")),
         };
@@ -300,6 +286,21 @@ impl Builder {
     }
 
     // ---------------------------------------------------------------- shapes
+
+    /// The world geometry of the shape plugin `o` (`to_world` and `flip_normals` read), placed
+    /// by `outer` after its own `to_world`; an unknown type names the shape plugins and `more`.
+    fn geometry(&mut self, o: &Obj, outer: &Transform, more: &[&str]) -> Result<Geometry> {
+        let to_world = *outer * o.transform("to_world")?;
+        let flip = o.bool("flip_normals", false)?;
+        let plugin = shape_plugin(&o.ty).ok_or_else(|| {
+            let mut names: Vec<&str> = SHAPE_PLUGINS.iter().map(|p| p.0).collect();
+            names.extend(more);
+            o.unknown_plugin(&names)
+        })?;
+        let geometry = plugin(o, &to_world, flip, self)?;
+        check_finite_geometry(o, &geometry)?;
+        Ok(geometry)
+    }
 
     /// Adds the shape `o`, placed by `outer` after its own `to_world` (instances).
     fn shape(&mut self, o: &Rc<Obj>, outer: &Transform) -> Result<()> {
@@ -340,15 +341,7 @@ impl Builder {
         o.check_children(&["bsdf", "emitter", "sensor"])?;
         let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
-        let to_world = *outer * o.transform("to_world")?;
-        let flip = o.bool("flip_normals", false)?;
-        let plugin = shape_plugin(&o.ty).ok_or_else(|| {
-            let mut names: Vec<&str> = SHAPE_PLUGINS.iter().map(|p| p.0).collect();
-            names.extend(["shapegroup", "instance", "merge"]);
-            o.unknown_plugin(&names)
-        })?;
-        let geometry = plugin(o, &to_world, flip, self)?;
-        check_finite_geometry(o, &geometry)?;
+        let geometry = self.geometry(o, outer, &["shapegroup", "instance", "merge"])?;
         for sensor in o.nested("sensor") {
             if sensor.ty != "irradiancemeter" {
                 return Err(sensor.error("only an irradiancemeter can be nested in a <shape> (it measures that shape)"));
