@@ -1,7 +1,9 @@
 /* Times Embree 3 on the mesh and rays that `neumann bench --export DIR` writes, the way
  * `neumann bench` times neumann: BVH build (HIGH and MEDIUM quality, one thread), then
  * incoherent closest-hit (rtcIntersect1) and shadow (rtcOccluded1) rays with one thread and
- * with all threads, each the best of three passes after a warm-up.
+ * with all threads, each the best of three passes after a warm-up; then the same rays as packets
+ * of 8 and 16 consecutive rays (rtcIntersect8/16, rtcOccluded8/16: the kernels Mitsuba 3's LLVM
+ * backend calls, one packet per SIMD register of paths), their SoA copy-in timed with them.
  *
  * Build: cc -O2 -o embree_bench embree_bench.c -lembree3 -lpthread
  * Usage: embree_bench DIR [THREADS]        (a yardstick only: neumann does not link Embree) */
@@ -65,10 +67,43 @@ static RTCScene build(RTCDevice device, enum RTCBuildQuality quality) {
     return scene;
 }
 
-struct job { RTCScene scene; int shadow; uint32_t begin, end; uint64_t hits; };
+struct job { RTCScene scene; int shadow, width; uint32_t begin, end; uint64_t hits; };
+
+/* Packets of `width` (8 or 16) consecutive rays, copied into the packet's structure of arrays
+ * (timed with the query); a last partial packet has its other lanes off. */
+#define TRACE_PACKETS(N)                                                                          \
+    static void trace_packets##N(struct job *j) {                                                \
+        struct RTCIntersectContext ctx;                                                          \
+        rtcInitIntersectContext(&ctx);                                                           \
+        uint64_t hits = 0;                                                                       \
+        for (uint32_t i = j->begin; i < j->end; i += N) {                                        \
+            __attribute__((aligned(64))) int valid[N];                                           \
+            struct RTCRayHit##N rh;                                                              \
+            for (int k = 0; k < N; k++) {                                                        \
+                valid[k] = i + k < j->end ? -1 : 0;                                              \
+                const float *r = rays + 6 * (size_t)(valid[k] ? i + k : i);                      \
+                rh.ray.org_x[k] = r[0]; rh.ray.org_y[k] = r[1]; rh.ray.org_z[k] = r[2];         \
+                rh.ray.dir_x[k] = r[3]; rh.ray.dir_y[k] = r[4]; rh.ray.dir_z[k] = r[5];         \
+                rh.ray.tnear[k] = 0.0f; rh.ray.tfar[k] = INFINITY; rh.ray.time[k] = 0.0f;        \
+                rh.ray.mask[k] = 0xFFFFFFFFu; rh.ray.id[k] = 0; rh.ray.flags[k] = 0;             \
+                rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;                                      \
+                rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;                                   \
+            }                                                                                    \
+            if (j->shadow) rtcOccluded##N(valid, j->scene, &ctx, &rh.ray);                        \
+            else rtcIntersect##N(valid, j->scene, &ctx, &rh);                                     \
+            for (int k = 0; k < N; k++)                                                          \
+                if (valid[k])                                                                    \
+                    hits += j->shadow ? rh.ray.tfar[k] < 0.0f : rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID; \
+        }                                                                                        \
+        j->hits = hits;                                                                          \
+    }
+TRACE_PACKETS(8)
+TRACE_PACKETS(16)
 
 static void *trace(void *arg) {
     struct job *j = arg;
+    if (j->width == 8) { trace_packets8(j); return NULL; }
+    if (j->width == 16) { trace_packets16(j); return NULL; }
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     uint64_t hits = 0;
@@ -94,12 +129,12 @@ static void *trace(void *arg) {
 }
 
 /* Mrays/s of one pass over all rays on `threads` threads; the hit count through `hits`. */
-static double pass(RTCScene scene, int shadow, int threads, uint64_t *hits) {
+static double pass(RTCScene scene, int shadow, int width, int threads, uint64_t *hits) {
     pthread_t tid[256];
     struct job jobs[256];
     double t0 = now();
     for (int k = 0; k < threads; k++) {
-        jobs[k] = (struct job){scene, shadow, (uint32_t)((uint64_t)nr * k / threads),
+        jobs[k] = (struct job){scene, shadow, width, (uint32_t)((uint64_t)nr * k / threads),
                                (uint32_t)((uint64_t)nr * (k + 1) / threads), 0};
         pthread_create(&tid[k], NULL, trace, &jobs[k]);
     }
@@ -108,10 +143,10 @@ static double pass(RTCScene scene, int shadow, int threads, uint64_t *hits) {
     return nr / (now() - t0) / 1e6;
 }
 
-static double best(RTCScene scene, int shadow, int threads, uint64_t *hits) {
+static double best(RTCScene scene, int shadow, int width, int threads, uint64_t *hits) {
     double b = 0.0;
-    pass(scene, shadow, threads, hits);
-    for (int i = 0; i < 3; i++) { double r = pass(scene, shadow, threads, hits); if (r > b) b = r; }
+    pass(scene, shadow, width, threads, hits);
+    for (int i = 0; i < 3; i++) { double r = pass(scene, shadow, width, threads, hits); if (r > b) b = r; }
     return b;
 }
 
@@ -145,13 +180,19 @@ int main(int argc, char **argv) {
                names[q], now() - t0, (double)mem_now / nt, (double)mem_peak / nt);
     }
     /* Traced on the HIGH-quality BVH (the best Embree can do for rendering). */
-    printf("%-28s %12s %12s   hit rate\n", "rays (Mrays/s)", "1 thread", threads == 1 ? "" : "all threads");
-    for (int shadow = 0; shadow < 2; shadow++) {
-        uint64_t hits;
-        double r1 = best(scene, shadow, 1, &hits);
-        double rn = threads > 1 ? best(scene, shadow, threads, &hits) : r1;
-        printf("%-28s %12.2f %12.2f   %.0f %%\n", shadow ? "incoherent shadow (occluded)" : "incoherent closest-hit", r1, rn,
-               100.0 * hits / nr);
+    printf("%-36s %12s %12s   hit rate\n", "rays (Mrays/s)", "1 thread", threads == 1 ? "" : "all threads");
+    const int widths[] = {1, 8, 16};
+    const char *suffix[] = {"", " packets of 8", " packets of 16"};
+    for (int wi = 0; wi < 3; wi++) {
+        int width = widths[wi];
+        for (int shadow = 0; shadow < 2; shadow++) {
+            uint64_t hits;
+            double r1 = best(scene, shadow, width, 1, &hits);
+            double rn = threads > 1 ? best(scene, shadow, width, threads, &hits) : r1;
+            char label[64];
+            snprintf(label, sizeof label, "%s%s", shadow ? "incoherent shadow" : "incoherent closest-hit", suffix[wi]);
+            printf("%-36s %12.2f %12.2f   %.0f %%\n", label, r1, rn, 100.0 * hits / nr);
+        }
     }
     rtcReleaseScene(scene);
     rtcReleaseDevice(one);
