@@ -1,4 +1,5 @@
-//! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids; rectangles and cubes as meshes;
+//! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids, curves (pbrt-v4's flat
+//! ones, Mitsuba's round linear and B-spline ones); rectangles and cubes as meshes;
 //! Loop subdivision surfaces as meshes), their
 //! ray intersection with floating-point error bounds, and area / solid-angle sampling.
 //!
@@ -11,6 +12,8 @@ pub mod disk;
 pub mod interaction;
 pub mod mesh;
 mod registry;
+pub mod roundcurve;
+pub mod bspline_curve;
 pub mod sdfgrid;
 pub mod shape;
 pub mod sphere;
@@ -23,6 +26,8 @@ pub use cylinder::Cylinder;
 pub use disk::Disk;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
+pub use bspline_curve::BSplineCurves;
+pub use roundcurve::LinearCurves;
 pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
 pub use mesh::MeshError;
 pub use sdfgrid::{SdfGrid, SdfGridError};

@@ -29,6 +29,10 @@ pub trait MeshSource: VolumeSource {
 
     /// The curves a scene format decoded, named by parameter `name` of `o`.
     fn curves(&mut self, o: &Obj, name: &str) -> Result<super::CurveSet>;
+
+    /// The control points of a Mitsuba curve file named by parameter `name` of `o`: curves,
+    /// each a list of points with radii (file coordinates).
+    fn curve_file(&mut self, o: &Obj, name: &str) -> Result<Vec<Vec<super::roundcurve::ControlPoint>>>;
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
@@ -47,6 +51,8 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("cylinder", cylinder),
     ("sdfgrid", sdfgrid),
     ("curve", curve),
+    ("linearcurve", linearcurve),
+    ("bsplinecurve", bsplinecurve),
 ];
 
 /// The constructor of the shape plugin `name`.
@@ -197,4 +203,33 @@ fn similarity(t: &Transform) -> Option<(Vec3, f32)> {
 fn curve(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource) -> Result<Geometry> {
     let set = meshes.curves(o, "filename")?;
     Ok(Geometry::Curves(Box::new(super::Curves::new(&set, to_world, flip))))
+}
+
+/// Mitsuba's `linearcurve`: round tubes along the polylines of the curve file `filename`,
+/// their points placed by `to_world` and their radii kept (as in Mitsuba). No `flip_normals`
+/// (Mitsuba's curves have none: a tube is seen from outside only).
+fn linearcurve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
+    if flip {
+        return Err(o.error_at(
+            "flip_normals",
+            "a linearcurve has no flip_normals (as in Mitsuba): its tubes are seen from outside only",
+        ));
+    }
+    let curves = files.curve_file(o, "filename")?;
+    let c = super::LinearCurves::new(&curves, to_world).map_err(|e| o.error_at("filename", e))?;
+    Ok(Geometry::LinearCurves(Box::new(c)))
+}
+
+/// Mitsuba's `bsplinecurve`: round tubes along the uniform cubic B-splines of the curve file
+/// `filename` (at least four points per curve), placed as `linearcurve`'s. No `flip_normals`.
+fn bsplinecurve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
+    if flip {
+        return Err(o.error_at(
+            "flip_normals",
+            "a bsplinecurve has no flip_normals (as in Mitsuba): its tubes are seen from outside only",
+        ));
+    }
+    let curves = files.curve_file(o, "filename")?;
+    let c = super::BSplineCurves::new(&curves, to_world).map_err(|e| o.error_at("filename", e))?;
+    Ok(Geometry::BSplineCurves(Box::new(c)))
 }

@@ -1,6 +1,6 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
-use super::{Curves, Cylinder, Disk, SdfGrid, Sphere, TriangleMesh};
+use super::{BSplineCurves, Curves, Cylinder, Disk, LinearCurves, SdfGrid, Sphere, TriangleMesh};
 use crate::math::{Bounds3, DirectionCone, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
@@ -19,6 +19,10 @@ pub enum Geometry {
     SdfGrid(Box<SdfGrid>),
     /// pbrt-v4's curves (no area: they cannot emit).
     Curves(Box<Curves>),
+    /// Mitsuba's round linear curves (no area: they cannot emit).
+    LinearCurves(Box<LinearCurves>),
+    /// Mitsuba's round B-spline curves (no area: they cannot emit).
+    BSplineCurves(Box<BSplineCurves>),
 }
 
 /// A point sampled on a shape as seen from a reference point.
@@ -45,7 +49,7 @@ impl Geometry {
             Geometry::Disk(d) => d.area(),
             Geometry::Cylinder(c) => c.area(),
             // As in Mitsuba: not sampled, so no area.
-            Geometry::SdfGrid(_) | Geometry::Curves(_) => 0.0,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => 0.0,
         }
     }
 
@@ -55,6 +59,8 @@ impl Geometry {
             Geometry::Mesh(m) => m.len(),
             Geometry::SdfGrid(g) => g.len(),
             Geometry::Curves(c) => c.len(),
+            Geometry::LinearCurves(c) => c.len(),
+            Geometry::BSplineCurves(c) => c.len(),
             _ => 1,
         }
     }
@@ -80,6 +86,8 @@ impl Geometry {
             Geometry::Cylinder(c) => c.bounds(),
             Geometry::SdfGrid(g) => g.voxel_bounds(i),
             Geometry::Curves(c) => c.bounds(i),
+            Geometry::LinearCurves(c) => c.bounds(i),
+            Geometry::BSplineCurves(c) => c.bounds(i),
         }
     }
 
@@ -96,9 +104,12 @@ impl Geometry {
         match self {
             Geometry::Mesh(m) => m.normal_cone(),
             Geometry::Disk(d) => DirectionCone::from_direction(d.normal()),
-            Geometry::Sphere(_) | Geometry::Cylinder(_) | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
-                DirectionCone::ENTIRE_SPHERE
-            }
+            Geometry::Sphere(_)
+            | Geometry::Cylinder(_)
+            | Geometry::SdfGrid(_)
+            | Geometry::Curves(_)
+            | Geometry::LinearCurves(_)
+            | Geometry::BSplineCurves(_) => DirectionCone::ENTIRE_SPHERE,
         }
     }
 
@@ -128,7 +139,9 @@ impl Geometry {
                 let (sp, pdf) = c.sample_area(u);
                 (sp, sp.n, pdf)
             }
-            Geometry::SdfGrid(_) | Geometry::Curves(_) => return None,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => {
+                return None
+            }
         };
         Some(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf })
     }
@@ -150,7 +163,9 @@ impl Geometry {
                 let (sp, uv) = c.surface(c.sample_local(u));
                 (sp, sp.n, 1.0 / c.area(), uv)
             }
-            Geometry::SdfGrid(_) | Geometry::Curves(_) => return None,
+            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => {
+                return None
+            }
         };
         Some((ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf }, uv))
     }

@@ -639,7 +639,11 @@ mod tests {
                     Geometry::Disk(d) => d.intersect(&ray, f32::INFINITY).map(|(_, q)| (d.surface(q).0.p, d.normal())),
                     // Cylinders sample area like disks; their area sampling is χ²-tested in
                     // (φ, z) beside them (silhouette slivers of a tube defeat a direction test).
-                    Geometry::Cylinder(_) | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
+                    Geometry::Cylinder(_)
+                    | Geometry::SdfGrid(_)
+                    | Geometry::Curves(_)
+                    | Geometry::LinearCurves(_)
+                    | Geometry::BSplineCurves(_) => {
                         unreachable!("not among the shapes tested here")
                     }
                 };

@@ -178,7 +178,11 @@ mod tests {
                                 Geometry::Disk(d) => {
                                     d.intersect(&ray, f32::INFINITY).map(|(_, q)| (d.surface(q).0.p, d.normal()))
                                 }
-                                Geometry::Cylinder(_) | Geometry::SdfGrid(_) | Geometry::Curves(_) => None,
+                                Geometry::Cylinder(_)
+                                | Geometry::SdfGrid(_)
+                                | Geometry::Curves(_)
+                                | Geometry::LinearCurves(_)
+                                | Geometry::BSplineCurves(_) => None,
                             };
                             match hit {
                                 Some((q, nq)) if nq.dot(-*w) > 0.0 => light.pdf_li(&shapes, p, q, nq),

@@ -361,6 +361,11 @@ impl Builder {
             Some(e) if e.ty == "area" && matches!(geometry, Geometry::SdfGrid(_)) => {
                 return Err(e.error("an sdfgrid cannot be an area emitter (as in Mitsuba: it has no area to sample)"));
             }
+            Some(e) if e.ty == "area" && matches!(geometry, Geometry::LinearCurves(_) | Geometry::BSplineCurves(_)) => {
+                return Err(
+                    e.error(format!("a {} cannot be an area emitter (as in Mitsuba: it has no area to sample)", o.ty))
+                );
+            }
             Some(e) if e.ty == "area" && matches!(geometry, Geometry::Curves(_)) => {
                 return Err(e.error("curves cannot be area emitters (as in pbrt-v4: they have no area to sample)"));
             }
@@ -690,6 +695,11 @@ impl VolumeSource for Builder {
 }
 
 impl MeshSource for Builder {
+    fn curve_file(&mut self, o: &Obj, name: &str) -> Result<Vec<Vec<crate::geometry::roundcurve::ControlPoint>>> {
+        let path = self.resolver.resolve(&o.string(name)?);
+        crate::load::curve_file::load_curve_file(&path).map_err(|e| o.error_at(name, e.to_string()))
+    }
+
     fn curves(&mut self, o: &Obj, name: &str) -> Result<crate::geometry::CurveSet> {
         let file = o.string(name)?;
         self.memory.curves.get(&file).cloned().ok_or_else(|| {

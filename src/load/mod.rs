@@ -4,6 +4,7 @@
 //! was expected.
 
 pub mod build;
+pub mod curve_file;
 mod error;
 pub mod gltf;
 pub mod image;

@@ -184,7 +184,7 @@ impl SceneBuilder {
                 Geometry::Disk(_) => Primitive::Disk,
                 Geometry::Cylinder(_) => Primitive::Cylinder,
                 Geometry::SdfGrid(_) => Primitive::SdfVoxel,
-                Geometry::Curves(_) => Primitive::Curve,
+                Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => Primitive::Curve,
             }
         };
         bvh.remap_leaves(|first, count| {

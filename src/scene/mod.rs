@@ -476,13 +476,16 @@ impl Scene {
                 }
                 _ => None,
             },
-            Primitive::Curve => match geometry() {
-                Geometry::Curves(c) => {
-                    let piece = self.refs[lp.r as usize].index as usize;
-                    c.intersect(piece, ray, t_max).map(|h| (h.t, HitKind::Curve(h.uv, lp.r)))
-                }
-                _ => None,
-            },
+            Primitive::Curve => {
+                let piece = self.refs[lp.r as usize].index as usize;
+                let hit = match geometry() {
+                    Geometry::Curves(c) => c.intersect(piece, ray, t_max),
+                    Geometry::LinearCurves(c) => c.intersect(piece, ray, t_max),
+                    Geometry::BSplineCurves(c) => c.intersect(piece, ray, t_max),
+                    _ => None,
+                };
+                hit.map(|h| (h.t, HitKind::Curve(h.uv, lp.r)))
+            }
         }
     }
 
@@ -534,6 +537,20 @@ impl Scene {
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
             return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+        }
+        if let (HitKind::Curve(uv, _), Geometry::BSplineCurves(c)) = (kind, &self.geometries[r.shape as usize]) {
+            let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });
+            let (p, p_error, n, uv, dpdu, dpdv) = (s.p, s.p_error, s.n, s.uv, s.dpdu, s.dpdv);
+            let (shape, prim, bary) = (r.shape, r.index, Vec2::ZERO);
+            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
+        }
+        if let (HitKind::Curve(uv, _), Geometry::LinearCurves(c)) = (kind, &self.geometries[r.shape as usize]) {
+            // No parameterization derivatives (as Mitsuba 3.9.1): a frame around the normal.
+            let hit = crate::geometry::curve::CurveHit { t, uv };
+            let s = c.surface(r.index as usize, ray, hit);
+            let (p, p_error, n, uv) = (s.p, s.p_error, s.n, s.uv);
+            let (dpdu, dpdv, shape, prim, bary) = (Vec3::ZERO, Vec3::ZERO, r.shape, r.index, Vec2::ZERO);
+            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
         }
         if let (HitKind::Curve(uv, _), Geometry::Curves(c)) = (kind, &self.geometries[r.shape as usize]) {
             let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });

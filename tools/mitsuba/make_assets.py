@@ -10,6 +10,9 @@
   version 4) holding a small triangle first so that shape_index 1 picks the knot.
 - bumps_normal.png: a tangent-space normal map of round bumps (raw 8-bit), for normalmap.
 - blob.vol: a signed distance field (a sphere and a torus) on a 24^3 grid, for sdfgrid.
+- tufts.txt and coil.txt: Mitsuba's curve files (x y z radius per line, blank lines between
+  curves) of a tuft of bent strands thinning toward their tips and of a coil of constant
+  radius, for linearcurve.
 Needs numpy and Mitsuba (for its EXR/PNG writer): run with the venv that renders the references."""
 import math
 import struct
@@ -162,5 +165,21 @@ m = 6
 zs, ys, xs = np.meshgrid(*(np.linspace(0, 1, m),) * 3, indexing="ij")
 albedo = np.stack([0.95 - 0.5 * xs, 0.4 + 0.5 * ys, 0.45 + 0.5 * xs], axis=-1)
 write_vol("scenes/assets/albedo.vol", albedo)
+# Curves (linearcurve): 24 strands rising from a ring, bending outward, 7 points each, their
+# radius shrinking from 0.05 to 0.012; and a coil of 40 points of radius 0.06 around them.
+lines = []
+for k in range(24):
+    a = 2 * math.pi * k / 24
+    for i in range(7):
+        s_ = i / 6
+        rad = 0.25 + 0.9 * s_ * s_
+        lines.append(f"{rad * math.cos(a):.5f} {1.6 * s_:.5f} {rad * math.sin(a):.5f} {0.05 - 0.038 * s_:.5f}")
+    lines.append("")
+with open("scenes/assets/tufts.txt", "w") as f:
+    f.write("\n".join(lines))
+with open("scenes/assets/coil.txt", "w") as f:
+    for i in range(40):
+        a = 2 * math.pi * i / 16
+        f.write(f"{0.95 * math.cos(a):.5f} {0.1 + 0.02 * i:.5f} {0.95 * math.sin(a):.5f} 0.06\n")
 print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply, blob.vol, bumps_normal.png, "
-      "smoke.vol and albedo.vol")
+      "smoke.vol, albedo.vol, tufts.txt and coil.txt")

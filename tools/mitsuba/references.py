@@ -72,6 +72,8 @@ SCENES = {
     # Phase functions: Rayleigh, a table over the deflection cosine (tabphase), and a blend of
     # a forward and a backward lobe weighted by a grid volume (blendphase), backlit.
     "phase": (4096, 128, {}, 1.5),
+    # Round curves: tapered bent strands (linearcurve, diffuse) and a coil (bsplinecurve, rough gold).
+    "curves": (8192, 64, {}, 1.5),
 }
 SEEDS = 4
 

@@ -1344,6 +1344,47 @@ fn sdfgrid_shapes() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Mitsuba's `linearcurve` and `bsplinecurve` from curve files: they load, are hit where the
+/// tube is (the linear one's radius untouched by `to_world`); their errors are located (a
+/// missing file, a bad line with its line and column, an area emitter, flip_normals, too few
+/// points for a B-spline).
+#[test]
+fn linearcurve_shapes() {
+    let dir = std::env::temp_dir().join(format!("neumann-linearcurve-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("c.txt"), "-1 0 0 0.25\n1 0 0 0.25\n").unwrap();
+    std::fs::write(dir.join("bad.txt"), "-1 0 0 0.25\n1 0 zero 0.25\n").unwrap();
+    let shape = |file: &str, extra: &str| {
+        scene(&format!(
+            r#"<shape type="linearcurve"><string name="filename" value="{file}"/>{extra}
+            <transform name="to_world"><scale value="2"/></transform></shape>"#
+        ))
+    };
+    let f = load_scene_text(&dir.join("s.xml"), &shape("c.txt", ""), &[]).unwrap();
+    let si = f.scene.intersect(&Ray::new(Vec3::new(1.5, 0.0, 5.0), -Vec3::Z)).expect("the tube is hit");
+    assert!((si.p.z - 0.25).abs() < 1e-4 && si.ns.z > 0.999, "{} {}", si.p, si.ns);
+    assert!(f.scene.intersect(&Ray::new(Vec3::new(2.3, 0.0, 5.0), -Vec3::Z)).is_none(), "past the round end cap");
+    for (file, extra, expectation) in [
+        ("nowhere.txt", "", "nowhere.txt"),
+        ("bad.txt", "", "bad.txt:2: column 5: expected a finite number (z;"),
+        ("c.txt", r#"<emitter type="area"/>"#, "cannot be an area emitter"),
+        ("c.txt", r#"<boolean name="flip_normals" value="true"/>"#, "no flip_normals"),
+    ] {
+        let e = load_scene_text(&dir.join("s.xml"), &shape(file, extra), &[]).unwrap_err().to_string();
+        assert!(e.contains("s.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+    // bsplinecurve: the same file format, four points at least; a straight B-spline's tube.
+    std::fs::write(dir.join("b.txt"), "-3 0 0 0.25\n-1 0 0 0.25\n1 0 0 0.25\n3 0 0 0.25\n").unwrap();
+    let spline = |file: &str| scene(&format!(r#"<shape type="bsplinecurve"><string name="filename" value="{file}"/></shape>"#));
+    let f = load_scene_text(&dir.join("s.xml"), &spline("b.txt"), &[]).unwrap();
+    let si = f.scene.intersect(&Ray::new(Vec3::new(0.5, 0.0, 5.0), -Vec3::Z)).expect("the tube is hit");
+    assert!((si.p.z - 0.25).abs() < 1e-4 && si.ns.z > 0.999, "{} {}", si.p, si.ns);
+    assert!(f.scene.intersect(&Ray::new(Vec3::new(1.1, 0.0, 5.0), -Vec3::Z)).is_none(), "past the open end");
+    let e = load_scene_text(&dir.join("s.xml"), &spline("c.txt"), &[]).unwrap_err().to_string();
+    assert!(e.contains("s.xml:7:") && e.contains("at least four"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Every projective camera reads `focus_distance` as Mitsuba's do (default `far_clip`): the
 /// perspective and orthographic cameras accept it (it cannot change their image), the thin lens
 /// needs only `aperture_radius`; a non-positive distance is a located error.
