@@ -257,17 +257,23 @@ impl Search<'_> {
         let (curves, k, o, d) = (self.curves, self.k, self.o, self.d);
         let (a, b) = (curves.eval(k, u0, o), curves.eval(k, u1, o));
         let axis = b.c - a.c;
-        let entry = frustum_entry(-a.c, d, axis, a.r, b.r);
-        let approach = closest_approach(-a.c, d, axis);
-        for (t, s) in [entry, approach].into_iter().flatten() {
-            self.polish(t, u0 + (u1 - u0) * s, u0, u1);
+        if let Some((t, s)) = frustum_entry(-a.c, d, axis, a.r, b.r) {
+            if self.polish(t, u0 + (u1 - u0) * s, u0, u1) {
+                return;
+            }
+        }
+        // The second guess only where the ray passes within reach of the piece's axis.
+        if let Some((t, s)) = closest_approach(-a.c, d, axis) {
+            if (t * d + a.c - s * axis).length() <= 1.25 * a.r.max(b.r) {
+                self.polish(t, u0 + (u1 - u0) * s, u0, u1);
+            }
         }
     }
 
     /// Newton's method on F₁ = (p − c)·c′ = 0 (the circle's plane) and F₂ = |p − c|² − r² = 0
     /// from `(t, u)`; a converged front-facing root near the piece `[u0, u1]` that is nearer
-    /// than the best so far becomes the hit.
-    fn polish(&mut self, mut t: f64, mut u: f64, u0: f64, u1: f64) {
+    /// than the best so far becomes the hit (`true`).
+    fn polish(&mut self, mut t: f64, mut u: f64, u0: f64, u1: f64) -> bool {
         let (curves, k, o, d) = (self.curves, self.k, self.o, self.d);
         let mut converged = false;
         for _ in 0..12 {
@@ -278,7 +284,7 @@ impl Search<'_> {
             let (j21, j22) = (2.0 * v.dot(d), -2.0 * v.dot(e.dc) - 2.0 * e.r * e.dr);
             let det = j11 * j22 - j12 * j21;
             if det == 0.0 || !det.is_finite() {
-                return;
+                return false;
             }
             let (dt, du) = ((f1 * j22 - f2 * j12) / det, (j11 * f2 - j21 * f1) / det);
             t -= dt;
@@ -290,23 +296,25 @@ impl Search<'_> {
         }
         let slack = 0.5 * (u1 - u0);
         if !converged || !(u0 - slack..=u1 + slack).contains(&u) || !(0.0..=1.0).contains(&u) {
-            return;
+            return false;
         }
         if !(t > 0.0 && t < self.best) {
-            return;
+            return false;
         }
         // On the circle, and an entry: the sweep's outward normal faces the ray.
         let e = curves.eval(k, u, o);
         let v = t * d - e.c;
         let r = e.r.max(1e-9);
         if (v.length_squared() - e.r * e.r).abs() > 1e-6 * r * r + 1e-12 {
-            return;
+            return false;
         }
         let n = (e.dc.length_squared() - v.dot(e.ddc)) * v - (e.r * e.dr) * e.dc;
-        if n.dot(d) < 0.0 {
-            self.best = t;
-            self.hit = Some((t, u));
+        if n.dot(d) >= 0.0 {
+            return false;
         }
+        self.best = t;
+        self.hit = Some((t, u));
+        true
     }
 }
 

@@ -166,22 +166,6 @@ fn segment_entry(y: DVec3, d: DVec3, a: ControlPoint, b: ControlPoint) -> Option
     let nr = (1.0 - ns * ns).sqrt();
     // Along-axis coordinates where the cone touches the spheres: the caps lie beyond them.
     let (s_lo, s_hi) = (r0 * ns, len + r1 * ns);
-    let mut best: Option<(f64, f64)> = None;
-    let mut offer = |t: f64, v: f64| {
-        if t > 0.0 && best.is_none_or(|(bt, _)| t < bt) {
-            best = Some((t, v));
-        }
-    };
-    if let Some(t) = sphere_entry(y, d, r0) {
-        if (y + t * d).dot(w) <= s_lo {
-            offer(t, 0.0);
-        }
-    }
-    if let Some(t) = sphere_entry(y - axis, d, r1) {
-        if (y + t * d).dot(w) >= s_hi {
-            offer(t, 1.0);
-        }
-    }
     // The cone: distance to the axis ρ(t) = (r₀ − ns·s(t)) / nr, s the along-axis coordinate.
     let (s0, ds) = (y.dot(w), d.dot(w));
     let (yp, dp) = (y - s0 * w, d - ds * w);
@@ -189,6 +173,10 @@ fn segment_entry(y: DVec3, d: DVec3, a: ControlPoint, b: ControlPoint) -> Option
     // g(t) = ρ(t)² − (k₀ + k₁t)² = qa t² + 2 qb t + qc: inside the cone where g < 0.
     let (qa, qb, qc) = (dp.dot(dp) - k1 * k1, yp.dot(dp) - k0 * k1, yp.dot(yp) - k0 * k0);
     let disc = qb * qb - qa * qc;
+    if disc < 0.0 && qa > 0.0 {
+        // Never inside the cone, nor then in the spheres it holds.
+        return None;
+    }
     if disc >= 0.0 {
         // The entering root (g falling through zero) is (−qb − √disc) / qa for either sign of
         // qa; a ray parallel to the cone's slope (qa = 0) enters at −qc / 2qb if qb < 0.
@@ -200,11 +188,18 @@ fn segment_entry(y: DVec3, d: DVec3, a: ControlPoint, b: ControlPoint) -> Option
         if let Some(t) = t {
             let s = s0 + t * ds;
             if k0 + k1 * t >= 0.0 && (s_lo..=s_hi).contains(&s) {
-                offer(t, ((s - s_lo) / (len * nr * nr)).clamp(0.0, 1.0));
+                // The hull's one entry (it is convex): before the origin, no hit.
+                return (t > 0.0).then(|| (t, ((s - s_lo) / (len * nr * nr)).clamp(0.0, 1.0)));
             }
         }
     }
-    best
+    // Not through the cone: through a cap, if at all.
+    let cap0 = sphere_entry(y, d, r0).filter(|&t| t > 0.0 && (y + t * d).dot(w) <= s_lo).map(|t| (t, 0.0));
+    let cap1 = sphere_entry(y - axis, d, r1).filter(|&t| t > 0.0 && (y + t * d).dot(w) >= s_hi).map(|t| (t, 1.0));
+    match (cap0, cap1) {
+        (Some(a), Some(b)) => Some(if a.0 <= b.0 { a } else { b }),
+        (a, b) => a.or(b),
+    }
 }
 
 /// Entry distance of the ray `y + t d` (`y` relative to the centre, `d` unit) into the sphere
