@@ -23,7 +23,7 @@
 //! Curves have no area to sample: they cannot be area emitters (Mitsuba gives them no area).
 
 use super::curve::CurveHit;
-use super::roundcurve::{local_frame, ControlPoint};
+use super::roundcurve::{local_frame, place, ControlPoint};
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Ray, Transform, Vec2, Vec3};
 use glam::DVec3;
@@ -70,25 +70,7 @@ impl BSplineCurves {
     /// Curves given as lists of at least four control points each (object space), placed by
     /// `to_world` (points only). `Err` names the problem.
     pub fn new(curves: &[Vec<ControlPoint>], to_world: &Transform) -> Result<BSplineCurves, String> {
-        if curves.is_empty() {
-            return Err("no curves: a B-spline curve needs at least four control points".into());
-        }
-        let (mut points, mut first) = (Vec::new(), Vec::new());
-        for (i, curve) in curves.iter().enumerate() {
-            if curve.len() < 4 {
-                return Err(format!(
-                    "curve {} has {} control point(s); a B-spline curve needs at least four",
-                    i + 1,
-                    curve.len()
-                ));
-            }
-            if let Some(c) = curve.iter().find(|c| c.r.is_nan() || c.r < 0.0) {
-                return Err(format!("curve {} has a control point of radius {}: radii must be ≥ 0", i + 1, c.r));
-            }
-            let start = points.len() as u32;
-            first.extend((0..curve.len() as u32 - 3).map(|k| start + k));
-            points.extend(curve.iter().map(|c| ControlPoint { p: to_world.apply_point(c.p), r: c.r }));
-        }
+        let (points, first) = place(curves, to_world, 4, "a B-spline curve")?;
         Ok(BSplineCurves { points, first })
     }
 
@@ -466,17 +448,21 @@ mod tests {
         );
     }
 
-    /// A bent curve of five points: Mitsuba 3.9.1's hits (and misses) for rays from two sides.
-    #[test]
-    fn matches_mitsuba_on_a_bent_curve() {
-        let pts = vec![
+    /// The bent curve of five points probed in Mitsuba 3.9.1.
+    fn bent() -> Vec<ControlPoint> {
+        vec![
             cp(-2.0, 0.0, 0.0, 0.2),
             cp(-1.0, 1.0, 0.0, 0.3),
             cp(0.0, 0.0, 0.5, 0.2),
             cp(1.0, 1.0, 1.0, 0.25),
             cp(2.0, 0.0, 1.0, 0.15),
-        ];
-        let c = BSplineCurves::new(&[pts], &Transform::IDENTITY).unwrap();
+        ]
+    }
+
+    /// The bent curve: Mitsuba 3.9.1's hits (and misses) for rays from two sides.
+    #[test]
+    fn matches_mitsuba_on_a_bent_curve() {
+        let c = BSplineCurves::new(&[bent()], &Transform::IDENTITY).unwrap();
         let (down, back) = ([0.0, 0.0, -1.0], [0.0, -1.0, 0.0]);
         check(&c, [-1.2, 0.6, 6.0], down, None);
         check(&c, [-1.2, 6.0, 0.4], back, None);
@@ -499,18 +485,12 @@ mod tests {
 
     /// Every hit lies on the sweep (in the circle's plane, on the circle) and faces the ray;
     /// the ray passes through no tube before its hit, and a ray that misses through none.
-    /// Random rays at a bent curve of six points with varying radius.
+    /// Random rays at the bent curve extended to six points.
     #[test]
     fn hits_are_first_entries_of_the_sweep() {
         use crate::sampling::{sample_uniform_sphere, Pcg32};
-        let pts = vec![
-            cp(-2.0, 0.0, 0.0, 0.2),
-            cp(-1.0, 1.0, 0.0, 0.3),
-            cp(0.0, 0.0, 0.5, 0.2),
-            cp(1.0, 1.0, 1.0, 0.25),
-            cp(2.0, 0.0, 1.0, 0.15),
-            cp(2.5, -1.0, 0.0, 0.1),
-        ];
+        let mut pts = bent();
+        pts.push(cp(2.5, -1.0, 0.0, 0.1));
         let c = BSplineCurves::new(&[pts], &Transform::IDENTITY).unwrap();
         // Inside: at a foot of the point on the centre line (a local minimum of the distance),
         // within the radius there.
@@ -567,7 +547,7 @@ mod tests {
     #[test]
     fn errors() {
         let three = vec![cp(0.0, 0.0, 0.0, 0.1); 3];
-        assert!(BSplineCurves::new(&[three], &Transform::IDENTITY).unwrap_err().contains("at least four"));
+        assert!(BSplineCurves::new(&[three], &Transform::IDENTITY).unwrap_err().contains("at least 4"));
         let negative = vec![cp(0.0, 0.0, 0.0, -0.1); 4];
         assert!(BSplineCurves::new(&[negative], &Transform::IDENTITY).unwrap_err().contains("≥ 0"));
     }

@@ -51,8 +51,8 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("cylinder", cylinder),
     ("sdfgrid", sdfgrid),
     ("curve", curve),
-    ("linearcurve", linearcurve),
-    ("bsplinecurve", bsplinecurve),
+    ("linearcurve", round_curve),
+    ("bsplinecurve", round_curve),
 ];
 
 /// The constructor of the shape plugin `name`.
@@ -205,31 +205,20 @@ fn curve(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn MeshSource)
     Ok(Geometry::Curves(Box::new(super::Curves::new(&set, to_world, flip))))
 }
 
-/// Mitsuba's `linearcurve`: round tubes along the polylines of the curve file `filename`,
-/// their points placed by `to_world` and their radii kept (as in Mitsuba). No `flip_normals`
-/// (Mitsuba's curves have none: a tube is seen from outside only).
-fn linearcurve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
+/// Mitsuba's `linearcurve` and `bsplinecurve`: round tubes from the curve file `filename`
+/// (`load::curve_file`), along its polylines or along the uniform cubic B-splines of its
+/// points (at least four per curve), the points placed by `to_world` and the radii kept (as in
+/// Mitsuba). No `flip_normals` (Mitsuba's curves have none: a tube is seen from outside only).
+fn round_curve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
     if flip {
-        return Err(o.error_at(
-            "flip_normals",
-            "a linearcurve has no flip_normals (as in Mitsuba): its tubes are seen from outside only",
-        ));
+        let message = format!("a {} has no flip_normals (as in Mitsuba): its tubes are seen from outside only", o.ty);
+        return Err(o.error_at("flip_normals", message));
     }
     let curves = files.curve_file(o, "filename")?;
-    let c = super::LinearCurves::new(&curves, to_world).map_err(|e| o.error_at("filename", e))?;
-    Ok(Geometry::LinearCurves(Box::new(c)))
-}
-
-/// Mitsuba's `bsplinecurve`: round tubes along the uniform cubic B-splines of the curve file
-/// `filename` (at least four points per curve), placed as `linearcurve`'s. No `flip_normals`.
-fn bsplinecurve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
-    if flip {
-        return Err(o.error_at(
-            "flip_normals",
-            "a bsplinecurve has no flip_normals (as in Mitsuba): its tubes are seen from outside only",
-        ));
-    }
-    let curves = files.curve_file(o, "filename")?;
-    let c = super::BSplineCurves::new(&curves, to_world).map_err(|e| o.error_at("filename", e))?;
-    Ok(Geometry::BSplineCurves(Box::new(c)))
+    let located = |e: String| o.error_at("filename", e);
+    Ok(if o.ty == "bsplinecurve" {
+        Geometry::BSplineCurves(Box::new(super::BSplineCurves::new(&curves, to_world).map_err(located)?))
+    } else {
+        Geometry::LinearCurves(Box::new(super::LinearCurves::new(&curves, to_world).map_err(located)?))
+    })
 }

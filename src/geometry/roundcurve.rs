@@ -61,22 +61,7 @@ impl LinearCurves {
     /// `to_world` (points only). `Err` names the problem: a curve of fewer than two points, a
     /// negative radius, or no curve at all.
     pub fn new(curves: &[Vec<ControlPoint>], to_world: &Transform) -> Result<LinearCurves, String> {
-        if curves.is_empty() {
-            return Err("no curves: a curve needs at least two control points".into());
-        }
-        let mut points = Vec::new();
-        let mut first = Vec::new();
-        for (i, curve) in curves.iter().enumerate() {
-            if curve.len() < 2 {
-                return Err(format!("curve {} has {} control point; a curve needs at least two", i + 1, curve.len()));
-            }
-            if let Some(c) = curve.iter().find(|c| c.r.is_nan() || c.r < 0.0) {
-                return Err(format!("curve {} has a control point of radius {}: radii must be ≥ 0", i + 1, c.r));
-            }
-            let start = points.len() as u32;
-            first.extend((0..curve.len() as u32 - 1).map(|k| start + k));
-            points.extend(curve.iter().map(|c| ControlPoint { p: to_world.apply_point(c.p), r: c.r }));
-        }
+        let (points, first) = place(curves, to_world, 2, "a curve")?;
         Ok(LinearCurves { points, first })
     }
 
@@ -135,6 +120,35 @@ impl LinearCurves {
         let p_error = (ray.o.abs() + (ray.d * hit.t).abs()) * gamma(5);
         RoundCurveSurface { p, p_error, n, uv }
     }
+}
+
+/// Curves of control points placed by `to_world` (points only; radii kept), each with at least
+/// `order` points and `len − order + 1` segments, a segment starting at each of its first
+/// points: all points, and each segment's first point. `Err` names the problem (`what`, such as
+/// "a curve", needs at least `order` points; a negative radius; no curve at all).
+pub fn place(
+    curves: &[Vec<ControlPoint>],
+    to_world: &Transform,
+    order: usize,
+    what: &str,
+) -> Result<(Vec<ControlPoint>, Vec<u32>), String> {
+    if curves.is_empty() {
+        return Err(format!("no curves: {what} needs at least {order} control points"));
+    }
+    let (mut points, mut first) = (Vec::new(), Vec::new());
+    for (i, curve) in curves.iter().enumerate() {
+        if curve.len() < order {
+            let n = curve.len();
+            return Err(format!("curve {} has {n} control point(s); {what} needs at least {order}", i + 1));
+        }
+        if let Some(c) = curve.iter().find(|c| c.r.is_nan() || c.r < 0.0) {
+            return Err(format!("curve {} has a control point of radius {}: radii must be ≥ 0", i + 1, c.r));
+        }
+        let start = points.len() as u32;
+        first.extend((0..(curve.len() - order + 1) as u32).map(|k| start + k));
+        points.extend(curve.iter().map(|c| ControlPoint { p: to_world.apply_point(c.p), r: c.r }));
+    }
+    Ok((points, first))
 }
 
 /// Mitsuba's frame about a segment's unit axis: the rotation axis (+z made perpendicular to
@@ -329,7 +343,7 @@ mod tests {
         let b = c.bounds(0);
         assert_eq!((b.min, b.max), (Vec3::new(-0.5, -0.5, -0.5), Vec3::new(2.5, 0.5, 0.5)));
         let e = LinearCurves::new(&[vec![cp(0.0, 0.0, 0.0, 0.5)]], &t).unwrap_err();
-        assert!(e.contains("at least two"), "{e}");
+        assert!(e.contains("at least 2"), "{e}");
         let e = LinearCurves::new(&[vec![cp(0.0, 0.0, 0.0, -0.5), cp(1.0, 0.0, 0.0, 0.5)]], &t).unwrap_err();
         assert!(e.contains("≥ 0"), "{e}");
         assert!(LinearCurves::new(&[], &t).is_err());

@@ -1381,7 +1381,7 @@ fn linearcurve_shapes() {
     assert!((si.p.z - 0.25).abs() < 1e-4 && si.ns.z > 0.999, "{} {}", si.p, si.ns);
     assert!(f.scene.intersect(&Ray::new(Vec3::new(1.1, 0.0, 5.0), -Vec3::Z)).is_none(), "past the open end");
     let e = load_scene_text(&dir.join("s.xml"), &spline("c.txt"), &[]).unwrap_err().to_string();
-    assert!(e.contains("s.xml:7:") && e.contains("at least four"), "{e}");
+    assert!(e.contains("s.xml:7:") && e.contains("at least 4"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
 
