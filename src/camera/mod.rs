@@ -38,7 +38,7 @@ pub enum CameraError {
     #[error("a radiancemeter or irradiancemeter measures one value: its film must be 1x1, got {0}x{1}")]
     MeterFilm(u32, u32),
     /// A batch's film width is not a multiple of its camera count (or it has none).
-    #[error("a batch sensor's film width ({0}) must be a positive multiple of its number of sensors ({1})")]
+    #[error("a batch sensor's film width ({0}) must be a positive multiple of the number of nested sensors ({1})")]
     BatchWidth(u32, usize),
     /// An irradiance meter's shape has no area to sample.
     #[error("an irradiancemeter needs a shape with an area (a mesh, rectangle, disk, sphere or cylinder)")]
@@ -216,18 +216,22 @@ impl Camera {
         self
     }
 
+    /// The width of each of a batch's `n` columns on a film `width` wide: an error unless
+    /// `width` is a positive multiple of `n`.
+    pub fn batch_column_width(width: u32, n: usize) -> Result<u32, CameraError> {
+        match u32::try_from(n) {
+            Ok(n) if n > 0 && width > 0 && width.is_multiple_of(n) => Ok(width / n),
+            _ => Err(CameraError::BatchWidth(width, n)),
+        }
+    }
+
     /// Mitsuba's batch sensor: `cameras` side by side on a `width × height` film, each on a
     /// `width / n × height` column (their own film sizes are replaced). `width` must be a
     /// multiple of their number `n`.
     pub fn batch(cameras: Vec<Camera>, width: u32, height: u32) -> Result<Camera, CameraError> {
-        let n = cameras.len();
-        if n == 0 || !width.is_multiple_of(n as u32) || width == 0 {
-            return Err(CameraError::BatchWidth(width, n));
-        }
-        let columns = cameras
-            .iter()
-            .map(|c| c.with_resolution(width / n as u32, height))
-            .collect::<Result<Vec<Camera>, CameraError>>()?;
+        let column = Camera::batch_column_width(width, cameras.len())?;
+        let columns =
+            cameras.iter().map(|c| c.with_resolution(column, height)).collect::<Result<Vec<Camera>, CameraError>>()?;
         let first = columns[0].clone();
         Ok(Camera { projection: Projection::Batch, width, height, batch: columns, ..first })
     }

@@ -23,7 +23,7 @@
 //! Curves have no area to sample: they cannot be area emitters (Mitsuba gives them no area).
 
 use super::curve::CurveHit;
-use super::roundcurve::{local_frame, place, ControlPoint};
+use super::roundcurve::{local_frame, place, ControlPoint, RoundCurveSurface};
 use crate::math::float::gamma;
 use crate::math::{Bounds3, Ray, Transform, Vec2, Vec3};
 use glam::DVec3;
@@ -34,23 +34,6 @@ pub struct BSplineCurves {
     points: Vec<ControlPoint>,
     /// Segment `k` is the B-spline of `points[first[k] .. first[k] + 4]`.
     first: Vec<u32>,
-}
-
-/// Geometry of a hit on a B-spline curve.
-#[derive(Clone, Copy, Debug)]
-pub struct BSplineSurface {
-    /// The point (on the ray).
-    pub p: Vec3,
-    /// Its error bound.
-    pub p_error: Vec3,
-    /// Unit outward normal of the sweep.
-    pub n: Vec3,
-    /// Mitsuba's (u, v): around the curve, along all segments.
-    pub uv: Vec2,
-    /// `∂p/∂u` (around).
-    pub dpdu: Vec3,
-    /// `∂p/∂v` (along).
-    pub dpdv: Vec3,
 }
 
 /// A segment evaluated at `u`: centre, its first and second derivatives, radius and its
@@ -157,7 +140,7 @@ impl BSplineCurves {
     }
 
     /// The surface at a hit of segment `k` by `ray`.
-    pub fn surface(&self, k: usize, ray: &Ray, hit: CurveHit) -> BSplineSurface {
+    pub fn surface(&self, k: usize, ray: &Ray, hit: CurveHit) -> RoundCurveSurface {
         let p = ray.at(hit.t);
         let e = self.eval(k, f64::from(hit.uv.x), DVec3::ZERO);
         let (c, dc, ddc) = (e.c.as_vec3(), e.dc.as_vec3(), e.ddc.as_vec3());
@@ -177,7 +160,7 @@ impl BSplineCurves {
         let dpdv = (dc + rad_n * dr) * segments;
         // `o + t d` rounded, and `t` itself rounded from the double-precision solution.
         let p_error = (ray.o.abs() + (ray.d * hit.t).abs()) * gamma(5);
-        BSplineSurface { p, p_error, n, uv, dpdu, dpdv }
+        RoundCurveSurface { p, p_error, n, uv, dpdu, dpdv }
     }
 }
 

@@ -43,17 +43,21 @@ pub struct LinearCurves {
     first: Vec<u32>,
 }
 
-/// Geometry of a hit on a round curve.
+/// Geometry of a hit on a round curve (linear or B-spline).
 #[derive(Clone, Copy, Debug)]
 pub struct RoundCurveSurface {
     /// The point (on the ray).
     pub p: Vec3,
     /// Its error bound.
     pub p_error: Vec3,
-    /// Unit outward normal `(p − c(v)) / r(v)`.
+    /// Unit outward normal.
     pub n: Vec3,
-    /// Mitsuba's (u, v): around the segment's axis, along all segments.
+    /// Mitsuba's (u, v): around the curve, along all segments.
     pub uv: Vec2,
+    /// `∂p/∂u` (around; zero on linear curves, as Mitsuba 3.9.1).
+    pub dpdu: Vec3,
+    /// `∂p/∂v` (along; zero on linear curves).
+    pub dpdv: Vec3,
 }
 
 impl LinearCurves {
@@ -102,7 +106,7 @@ impl LinearCurves {
         (t > 0.0 && t < t_max).then(|| CurveHit { t, uv: Vec2::new(v as f32, 0.0) })
     }
 
-    /// The surface at a hit of segment `k` by `ray`.
+    /// The surface at a hit of segment `k` by `ray` (normal `(p − c(v)) / r(v)`; no ∂p/∂u, ∂p/∂v).
     pub fn surface(&self, k: usize, ray: &Ray, hit: CurveHit) -> RoundCurveSurface {
         let (a, b) = self.segment(k);
         let v = hit.uv.x;
@@ -118,7 +122,7 @@ impl LinearCurves {
         let uv = Vec2::new(u / std::f32::consts::TAU, (v + k as f32) / self.len() as f32);
         // `o + t d` rounded, and `t` itself rounded from the double-precision solution.
         let p_error = (ray.o.abs() + (ray.d * hit.t).abs()) * gamma(5);
-        RoundCurveSurface { p, p_error, n, uv }
+        RoundCurveSurface { p, p_error, n, uv, dpdu: Vec3::ZERO, dpdv: Vec3::ZERO }
     }
 }
 

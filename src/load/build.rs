@@ -769,13 +769,7 @@ fn check_finite_geometry(o: &Obj, geometry: &Geometry) -> Result<()> {
 /// replaced, as in Mitsuba.
 fn batch_from_props(o: &Obj, width: u32, height: u32) -> Result<Camera> {
     let nested = o.nested("sensor");
-    if nested.is_empty() || !width.is_multiple_of(nested.len() as u32) {
-        return Err(o.error(format!(
-            "the film width ({width}) must be a multiple of the number of nested sensors ({})",
-            nested.len()
-        )));
-    }
-    let columns = width / nested.len() as u32;
+    let columns = Camera::batch_column_width(width, nested.len()).map_err(|e| o.error(e.to_string()))?;
     let mut cameras = Vec::with_capacity(nested.len());
     for s in &nested {
         s.built.set(true);

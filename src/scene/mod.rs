@@ -538,19 +538,19 @@ impl Scene {
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
             return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
         }
-        if let (HitKind::Curve(uv, _), Geometry::BSplineCurves(c)) = (kind, &self.geometries[r.shape as usize]) {
-            let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });
-            let (p, p_error, n, uv, dpdu, dpdv) = (s.p, s.p_error, s.n, s.uv, s.dpdu, s.dpdv);
-            let (shape, prim, bary) = (r.shape, r.index, Vec2::ZERO);
-            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
-        }
-        if let (HitKind::Curve(uv, _), Geometry::LinearCurves(c)) = (kind, &self.geometries[r.shape as usize]) {
-            // No parameterization derivatives (as Mitsuba 3.9.1): a frame around the normal.
-            let hit = crate::geometry::curve::CurveHit { t, uv };
-            let s = c.surface(r.index as usize, ray, hit);
-            let (p, p_error, n, uv) = (s.p, s.p_error, s.n, s.uv);
-            let (dpdu, dpdv, shape, prim, bary) = (Vec3::ZERO, Vec3::ZERO, r.shape, r.index, Vec2::ZERO);
-            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
+        if let HitKind::Curve(uv, _) = kind {
+            // Mitsuba's round curves (a linear one gives no ∂p/∂u: a frame around the normal).
+            let (hit, k) = (crate::geometry::curve::CurveHit { t, uv }, r.index as usize);
+            let round = match &self.geometries[r.shape as usize] {
+                Geometry::LinearCurves(c) => Some(c.surface(k, ray, hit)),
+                Geometry::BSplineCurves(c) => Some(c.surface(k, ray, hit)),
+                _ => None,
+            };
+            if let Some(s) = round {
+                let (p, p_error, n, uv, dpdu, dpdv) = (s.p, s.p_error, s.n, s.uv, s.dpdu, s.dpdv);
+                let (shape, prim, bary) = (r.shape, r.index, Vec2::ZERO);
+                return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
+            }
         }
         if let (HitKind::Curve(uv, _), Geometry::Curves(c)) = (kind, &self.geometries[r.shape as usize]) {
             let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });
