@@ -361,6 +361,57 @@ mod tests {
         assert!((m_lt - m_ref).abs() < 4.0 * sigma, "ptracer {m_lt} vs path {m_ref} (± {sigma})");
     }
 
+    /// Mitsuba's `directionalarea` emitter: a square sending radiance 2 straight down onto a
+    /// white (albedo ½) floor gives the floor an irradiance of exactly 2, so the light tracer
+    /// must show the lit square at ½ · 2 / π, and nothing elsewhere (the emitter's own default
+    /// BSDF is black, as Mitsuba's for emitting shapes). The path tracer sees nothing at all,
+    /// as Mitsuba's: no camera, BSDF or shadow ray meets a delta direction.
+    #[test]
+    fn directional_area_light_lights_the_floor_below_it() {
+        let text = r#"<scene version="3.0.0">
+            <sensor type="perspective">
+                <float name="fov" value="40"/>
+                <transform name="to_world"><lookat origin="0, 3, 4" target="0, 0, 0" up="0, 1, 0"/></transform>
+                <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/><rfilter type="box"/></film>
+            </sensor>
+            <shape type="rectangle">
+                <transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform>
+                <bsdf type="diffuse"/>
+            </shape>
+            <shape type="rectangle">
+                <transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="1"/></transform>
+                <emitter type="directionalarea"><rgb name="radiance" value="2"/></emitter>
+            </shape>
+        </scene>"#;
+        let file = crate::load::mitsuba::load_scene_text(std::path::Path::new("da.xml"), text, &[]).unwrap();
+        let never = AtomicBool::new(false);
+        let settings = RenderSettings { spp: 256, seed: 3, ..Default::default() };
+        let film = render_light_paths(&file.scene, &LightTracer::default(), &settings, &never).unwrap().film;
+        let image = film.image();
+        let at = |x: usize, y: usize| image[y * 32 + x];
+        // Rows 14–17, columns 12–19 see the floor inside the lit square (the square covers
+        // rows 13–18, columns 11–20, partly at its border).
+        let (mut sum, mut n) = (0.0f64, 0);
+        for y in 0..32 {
+            for x in 0..32 {
+                let v = at(x, y);
+                assert!(v.x == v.y && v.y == v.z, "grey light on a grey floor");
+                if (14..=17).contains(&y) && (12..=19).contains(&x) {
+                    sum += f64::from(v.x);
+                    n += 1;
+                    let r = v.x * crate::math::PI;
+                    assert!((r - 1.0).abs() < 0.06, "pixel ({x}, {y}): {r} / π");
+                } else if !(12..=19).contains(&y) || !(10..=21).contains(&x) {
+                    assert_eq!(v.x, 0.0, "pixel ({x}, {y}) away from the lit square");
+                }
+            }
+        }
+        let mean = sum / f64::from(n) * std::f64::consts::PI;
+        assert!((mean - 1.0).abs() < 0.01, "lit floor: {mean} / π, expected 1 / π");
+        let path = render(&file.scene, &PathIntegrator::default(), &settings, &never).unwrap().film.image();
+        assert!(path.iter().all(|v| *v == Rgb::ZERO), "the path tracer sees no directional area light");
+    }
+
     /// The same seed gives the same image whatever the number of threads.
     #[test]
     fn deterministic_across_thread_counts() {

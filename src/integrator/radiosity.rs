@@ -234,7 +234,8 @@ impl Radiosity {
                 Light::Goniometric(_) => "goniometric",
                 Light::Constant { .. } => "constant environment",
                 Light::Area { .. } => "two-sided area",
-                _ => "environment map",
+                Light::DirectionalArea { .. } => "directional area",
+                Light::EnvMap { .. } => "environment map",
             }));
         }
         // Count the patches before making them: a tiny patch size must be an error, not an

@@ -49,7 +49,8 @@ pub struct LightBounds {
 }
 
 impl LightBounds {
-    /// The bounds of `light`, or `None` for lights at infinity and lights without power.
+    /// The bounds of `light`, or `None` for lights at infinity, lights without power and lights
+    /// that next-event estimation cannot reach (a directional area light).
     pub fn of(light: &Light, shapes: &[Geometry]) -> Option<LightBounds> {
         let phi = light.power(shapes);
         if !(phi > 0.0 && phi.is_finite()) {
@@ -91,7 +92,10 @@ impl LightBounds {
                 cos_theta_o: -1.0,
                 cos_theta_e: 0.0,
             }),
-            Light::Constant { .. } | Light::EnvMap { .. } | Light::Directional { .. } => None,
+            Light::Constant { .. }
+            | Light::EnvMap { .. }
+            | Light::Directional { .. }
+            | Light::DirectionalArea { .. } => None,
         }
     }
 

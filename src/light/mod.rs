@@ -39,6 +39,18 @@ pub enum Light {
         /// Whether the back emits too.
         two_sided: bool,
     },
+    /// Mitsuba's `directionalarea` emitter: a shape that emits only along its front (shading)
+    /// normal, a delta in direction. `radiance` (W m⁻² per channel, constant or a texture over
+    /// the shape's (u, v)) is the irradiance it delivers on a surface facing it, so the shape
+    /// sends out power `A · radiance`. As in Mitsuba, only light tracing (`ptracer`) shows its
+    /// light: no camera or BSDF ray and no shadow ray can meet a delta direction, so for the
+    /// other integrators it emits nothing (and is not chosen for next-event estimation).
+    DirectionalArea {
+        /// Index of the emitting shape.
+        shape: u32,
+        /// Power per unit area, emitted along the normal.
+        radiance: Texture,
+    },
     /// Mitsuba's `constant` emitter: uniform radiance arriving from every direction at
     /// infinity. Parameters: `radiance` (W m⁻² sr⁻¹ per channel). `center` / `radius` bound the
     /// scene (filled in when the scene is built), to place shadow-ray endpoints and estimate power.
@@ -104,6 +116,34 @@ pub enum Light {
         /// Radiant intensity.
         intensity: Rgb,
     },
+}
+
+/// What a shape's `<emitter>` makes it: the emission a shape carries before it has an index.
+#[derive(Clone, Debug)]
+pub enum ShapeEmission {
+    /// [`Light::Area`]: Lambertian emission of `radiance` from the front (both sides if
+    /// `two_sided`).
+    Area {
+        /// Emitted radiance.
+        radiance: Texture,
+        /// Whether the back emits too.
+        two_sided: bool,
+    },
+    /// [`Light::DirectionalArea`]: `radiance` sent along the normal only.
+    DirectionalArea {
+        /// Power per unit area.
+        radiance: Texture,
+    },
+}
+
+impl ShapeEmission {
+    /// The light this emission makes of shape `shape`.
+    pub fn light(self, shape: u32) -> Light {
+        match self {
+            ShapeEmission::Area { radiance, two_sided } => Light::Area { shape, radiance, two_sided },
+            ShapeEmission::DirectionalArea { radiance } => Light::DirectionalArea { shape, radiance },
+        }
+    }
 }
 
 /// How a spot light fades between its beam width and its cutoff angle.
@@ -212,6 +252,7 @@ impl Light {
                 let sides = if *two_sided { 2.0 } else { 1.0 };
                 sides * PI * shapes[*shape as usize].area() * luminance(radiance.mean())
             }
+            Light::DirectionalArea { shape, radiance } => shapes[*shape as usize].area() * luminance(radiance.mean()),
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
@@ -236,6 +277,7 @@ impl Light {
             Light::Point { .. }
                 | Light::Spot { .. }
                 | Light::Directional { .. }
+                | Light::DirectionalArea { .. }
                 | Light::Projector(_)
                 | Light::Goniometric(_)
         )
@@ -373,6 +415,8 @@ impl Light {
             }
             Light::Projector(p) => p.sample_li(p_ref),
             Light::Goniometric(g) => g.sample_li(p_ref),
+            // Emission along the normal only: no point but the one straight below could receive it.
+            Light::DirectionalArea { .. } => None,
             Light::Point { position, intensity } => {
                 let d = *position - p_ref;
                 let dist2 = d.length_squared();
@@ -402,6 +446,7 @@ impl Light {
             Light::Point { .. }
             | Light::Spot { .. }
             | Light::Directional { .. }
+            | Light::DirectionalArea { .. }
             | Light::Projector(_)
             | Light::Goniometric(_) => 0.0,
             Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction(p_ref, (p - p_ref).normalize_or_zero()),
@@ -451,6 +496,14 @@ impl Light {
                 let d = crate::math::Frame::from_z(ps.ns * side).to_world(local.value);
                 // Le cos θ / (p_A · p_side · cos θ / π) = sides · π Le / p_A.
                 EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d, weight: le * (sides * PI / ps.pdf) }
+            }
+            Light::DirectionalArea { shape, radiance } => {
+                // Along the normal: the power of the position, radiance / p_A (Mitsuba's area × radiance).
+                let (ps, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
+                if ps.pdf <= 0.0 {
+                    return None;
+                }
+                EmissionSample { p: ps.p, p_error: ps.p_error, n: ps.ng, d: ps.ns, weight: radiance.eval(uv) / ps.pdf }
             }
             Light::Point { position, intensity } => {
                 let d = sample_uniform_sphere(u_dir);
@@ -514,8 +567,8 @@ impl Light {
 
     /// A position on the light for connecting it straight to the camera (the emitter vertex of
     /// a light path seen directly): by area for area lights, the position of point and spot
-    /// lights; `None` for lights at infinity and directional lights, which no pinhole or
-    /// thin-lens camera can be connected to.
+    /// lights; `None` for lights at infinity and lights that emit along one direction
+    /// (directional, directional area), which no pinhole or thin-lens camera can be connected to.
     pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
         match self {
             Light::Area { shape, radiance, .. } => {
@@ -560,7 +613,8 @@ impl Light {
     }
 
     /// Radiance emitted from a surface point with shading normal `ns` and texture coordinates
-    /// `uv` toward `wo` (world).
+    /// `uv` toward `wo` (world); zero off area lights (a directional area light's delta in
+    /// direction is never met by a ray).
     #[inline]
     pub fn le(&self, ns: Vec3, wo: Vec3, uv: Vec2) -> Rgb {
         match self {
@@ -772,8 +826,16 @@ mod tests {
                 Light::Constant { radiance: Rgb::new(1.0, 2.0, 3.0), center, radius },
                 (4.0 * PI * PI * radius * radius) as f64,
             ),
+            // Mitsuba's directional area light: area × radiance, all of it along the normal.
+            (Light::DirectionalArea { shape: 0, radiance: Rgb::new(1.0, 2.0, 3.0).into() }, 4.0 * 0.5 * 2.0),
         ];
         for (k, (light, flux_per_unit)) in lights.iter().enumerate() {
+            if matches!(light, Light::Area { .. } | Light::DirectionalArea { .. }) {
+                // (The others' powers only steer light selection, some approximately.)
+                let phi = light.power(&shapes) as f64;
+                let want = flux_per_unit * luminance(Rgb::new(1.0, 2.0, 3.0)) as f64;
+                assert!((phi - want).abs() < 1e-4 * want, "light {k}: power {phi} vs {want}");
+            }
             let mut rng = Pcg32::new(4, k as u64);
             let n = 200_000;
             let mut sum = [0.0f64; 3];
@@ -790,6 +852,7 @@ mod tests {
                         assert!(s.d.dot(s.n) != 0.0);
                     }
                     Light::Directional { direction, .. } => assert!((s.d - *direction).length() < 1e-5),
+                    Light::DirectionalArea { .. } => assert!((s.d - s.n).length() < 1e-5, "along the normal"),
                     Light::Constant { .. } => {
                         assert!((s.p - center).length() > radius, "origin outside the bounding sphere");
                         let closest = s.p + s.d * (center - s.p).dot(s.d);
@@ -810,5 +873,26 @@ mod tests {
                 assert!((mean - want).abs() < 0.01 * want, "light {k}, channel {c}: {mean} vs {want}");
             }
         }
+    }
+
+    /// A directional area light reaches nothing but by light tracing, as in Mitsuba: no
+    /// direction toward it can be sampled or met (zero radiance toward any ray, zero density),
+    /// and it has no position to connect straight to a camera.
+    #[test]
+    fn directional_area_light_is_met_only_by_its_own_rays() {
+        let mut rect = Geometry::Mesh(TriangleMesh::rectangle());
+        assert!(rect.prepare_sampling());
+        let shapes = [rect];
+        let light = Light::DirectionalArea { shape: 0, radiance: Rgb::splat(2.0).into() };
+        let mut rng = crate::sampling::Pcg32::new(2, 0);
+        for _ in 0..100 {
+            let p_ref = Vec3::new(0.0, 0.0, 1.0) + (Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5);
+            assert!(light.sample_li(&shapes, p_ref, u2(&mut rng)).is_none());
+            assert_eq!(light.pdf_li(&shapes, p_ref, Vec3::ZERO, Vec3::Z), 0.0);
+            assert_eq!(light.le(Vec3::Z, Vec3::Z, Vec2::ZERO), Rgb::ZERO);
+        }
+        assert!(light.is_delta() && !light.is_infinite());
+        assert!(light.sample_le_position(&shapes, Vec2::splat(0.5)).is_none());
+        assert_eq!(LightBounds::of(&light, &shapes), None, "never chosen for next-event estimation");
     }
 }

@@ -19,7 +19,7 @@ use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGIN
 use crate::image::{GridVolume, Image, ImageSource, VolumeSource};
 use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
-use crate::light::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, EMITTER_PLUGINS};
+use crate::light::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, ShapeEmission, EMITTER_PLUGINS};
 use crate::load::image::load_image;
 use crate::load::memory::MemoryFiles;
 use crate::load::FileResolver;
@@ -125,7 +125,7 @@ impl Builder {
                 }
                 "shape" => self.shape(c, &Transform::IDENTITY)?,
                 // An area emitter with an id is attached to the shapes that <ref> it.
-                "emitter" if c.ty == "area" && c.id.is_some() => {}
+                "emitter" if is_shape_emitter(&c.ty) && c.id.is_some() => {}
                 "emitter" => self.emitter(c)?,
                 "bsdf" => {
                     self.bsdf_index(c)?;
@@ -146,9 +146,11 @@ impl Builder {
             }
         }
         // An area emitter declared apart must light some shape: dropping it would change the image.
-        if let Some(e) = root.children.iter().find(|c| c.tag == "emitter" && c.ty == "area" && !c.built.get()) {
+        if let Some(e) = root.children.iter().find(|c| c.tag == "emitter" && is_shape_emitter(&c.ty) && !c.built.get())
+        {
             return Err(e.error(format!(
-                "no shape references this area emitter (add <ref id=\"{}\"/> to the shape that emits)",
+                "no shape references this {} emitter (add <ref id=\"{}\"/> to the shape that emits)",
+                e.ty,
                 e.id.as_deref().unwrap_or("")
             )));
         }
@@ -358,16 +360,42 @@ impl Builder {
         }
         let emission = match emitters.first() {
             None => None,
-            Some(e) if e.ty == "area" && matches!(geometry, Geometry::SdfGrid(_)) => {
-                return Err(e.error("an sdfgrid cannot be an area emitter (as in Mitsuba: it has no area to sample)"));
+            Some(e) if is_shape_emitter(&e.ty) && matches!(geometry, Geometry::SdfGrid(_)) => {
+                return Err(e.error(format!(
+                    "an sdfgrid cannot be {} (as in Mitsuba: it has no area to sample)",
+                    emitter_name(&e.ty)
+                )));
             }
-            Some(e) if e.ty == "area" && matches!(geometry, Geometry::LinearCurves(_) | Geometry::BSplineCurves(_)) => {
-                return Err(
-                    e.error(format!("a {} cannot be an area emitter (as in Mitsuba: it has no area to sample)", o.ty))
-                );
+            Some(e)
+                if is_shape_emitter(&e.ty)
+                    && matches!(geometry, Geometry::LinearCurves(_) | Geometry::BSplineCurves(_)) =>
+            {
+                return Err(e.error(format!(
+                    "a {} cannot be {} (as in Mitsuba: it has no area to sample)",
+                    o.ty,
+                    emitter_name(&e.ty)
+                )));
             }
-            Some(e) if e.ty == "area" && matches!(geometry, Geometry::Curves(_)) => {
-                return Err(e.error("curves cannot be area emitters (as in pbrt-v4: they have no area to sample)"));
+            Some(e) if is_shape_emitter(&e.ty) && matches!(geometry, Geometry::Curves(_)) => {
+                return Err(e.error(format!(
+                    "curves cannot be {} (as in pbrt-v4: they have no area to sample)",
+                    emitter_name(&e.ty)
+                )));
+            }
+            Some(e) if e.ty == "directionalarea" => {
+                e.built.set(true);
+                e.check_children(&[])?;
+                read_sampling_weight(e)?;
+                let radiance = area_radiance_from_props(e, self)?;
+                let power = geometry.area() * radiance.mean().max_element();
+                if !power.is_finite() {
+                    return Err(e.error(format!(
+                        "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
+                        geometry.area(),
+                        radiance.mean()
+                    )));
+                }
+                Some(ShapeEmission::DirectionalArea { radiance })
             }
             Some(e) if e.ty == "area" => {
                 e.built.set(true);
@@ -420,9 +448,9 @@ impl Builder {
                         radiance.mean()
                     )));
                 }
-                Some((radiance, two_sided))
+                Some(ShapeEmission::Area { radiance, two_sided })
             }
-            Some(e) => return Err(e.error("only an 'area' emitter can be attached to a shape")),
+            Some(e) => return Err(e.error("only an 'area' or 'directionalarea' emitter can be attached to a shape")),
         };
         // BSDF: nested or referenced. Mitsuba's default is diffuse with reflectance 0.5, except on
         // emitters, which are black (they only emit).
@@ -456,11 +484,14 @@ impl Builder {
                 )));
             }
         }
-        if emission.as_ref().is_some_and(|(t, _)| !t.mesh_attributes().is_empty()) {
+        let radiance = match &emission {
+            Some(ShapeEmission::Area { radiance, .. } | ShapeEmission::DirectionalArea { radiance }) => Some(radiance),
+            None => None,
+        };
+        if radiance.is_some_and(|t| !t.mesh_attributes().is_empty()) {
             return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
         }
-        let two_sided = emission.as_ref().is_some_and(|e| e.1);
-        let index = self.sb.add_shape_textured(geometry, bsdf, emission.map(|e| e.0), two_sided);
+        let index = self.sb.add_emitting_shape(geometry, bsdf, emission);
         self.sb.set_shape_media(index, interior, exterior);
         let id = o.id.as_deref().map_or(String::new(), |id| format!(" '{id}'"));
         self.sb.set_shape_label(index, format!("the {} shape{id}", o.ty), Some(o.loc.clone()));
@@ -612,14 +643,15 @@ impl Builder {
     fn emitter(&mut self, o: &Obj) -> Result<()> {
         o.built.set(true);
         o.check_children(&["texture"])?;
-        if o.ty == "area" {
-            return Err(o.error(
-                "an area emitter must be nested in the <shape> that emits, or given an id and referenced from it",
-            ));
+        if is_shape_emitter(&o.ty) {
+            return Err(o.error(format!(
+                "{} must be nested in the <shape> that emits, or given an id and referenced from it",
+                emitter_name(&o.ty)
+            )));
         }
         let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
             let mut names: Vec<&str> = EMITTER_PLUGINS.iter().map(|p| p.0).collect();
-            names.push("area");
+            names.extend(["area", "directionalarea"]);
             o.unknown_plugin(&names)
         })?;
         read_sampling_weight(o)?;
@@ -627,6 +659,17 @@ impl Builder {
         self.sb.add_light(light);
         Ok(())
     }
+}
+
+/// Whether an emitter of plugin `ty` belongs to the shape it is nested in (or that references it).
+fn is_shape_emitter(ty: &str) -> bool {
+    matches!(ty, "area" | "directionalarea")
+}
+
+/// "an area emitter", "a directionalarea emitter": an emitter plugin named in a message.
+fn emitter_name(ty: &str) -> String {
+    let article = if ty.starts_with(['a', 'e', 'i', 'o', 'u']) { "an" } else { "a" };
+    format!("{article} {ty} emitter")
 }
 
 /// Mitsuba's `sampling_weight` of an emitter (default 1): it only steers which light Mitsuba's

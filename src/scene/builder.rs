@@ -7,7 +7,7 @@ use crate::bvh::Bvh;
 use crate::camera::Camera;
 use crate::geometry::triangle8::{Triangle8, LANES};
 use crate::geometry::Geometry;
-use crate::light::{Light, LightSampler, LightSamplerKind};
+use crate::light::{Light, LightSampler, LightSamplerKind, ShapeEmission};
 use crate::material::Bsdf;
 use crate::math::{Rgb, Vec3};
 use crate::sampling::AliasTable;
@@ -63,21 +63,16 @@ impl SceneBuilder {
     /// Adds a shape with BSDF `bsdf`; with `Some(radiance)` it is also an area emitter (front
     /// side). Returns the shape index.
     pub fn add_shape(&mut self, geometry: Geometry, bsdf: u32, emission: Option<Rgb>) -> u32 {
-        self.add_shape_textured(geometry, bsdf, emission.map(Texture::Constant), false)
+        let emission = emission.map(|c| ShapeEmission::Area { radiance: Texture::Constant(c), two_sided: false });
+        self.add_emitting_shape(geometry, bsdf, emission)
     }
 
-    /// [`SceneBuilder::add_shape`] with an emitted radiance that may be a texture over the
-    /// shape's (u, v), emitting from both sides if `two_sided`.
-    pub fn add_shape_textured(
-        &mut self,
-        geometry: Geometry,
-        bsdf: u32,
-        emission: Option<Texture>,
-        two_sided: bool,
-    ) -> u32 {
+    /// [`SceneBuilder::add_shape`] with any emission a shape can carry (a radiance texture over
+    /// the shape's (u, v), two-sided, or along the normal only).
+    pub fn add_emitting_shape(&mut self, geometry: Geometry, bsdf: u32, emission: Option<ShapeEmission>) -> u32 {
         let index = self.shapes.len() as u32;
-        let light = emission.map(|radiance| {
-            self.lights.push(Light::Area { shape: index, radiance, two_sided });
+        let light = emission.map(|e| {
+            self.lights.push(e.light(index));
             self.lights.len() as u32 - 1
         });
         self.shapes.push(Shape { bsdf, light, interior: None, exterior: None });
@@ -140,7 +135,7 @@ impl SceneBuilder {
             }
         }
         for l in &self.lights {
-            if let Light::Area { shape, .. } = l {
+            if let Light::Area { shape, .. } | Light::DirectionalArea { shape, .. } = l {
                 if !self.geometries[*shape as usize].prepare_sampling() {
                     return Err(BuildError::EmitterWithoutArea(*shape));
                 }

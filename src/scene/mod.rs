@@ -743,9 +743,10 @@ mod tests {
                 _ => Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))),
             };
             let m = b.add_bsdf(bsdf);
-            let emission = (variant == 2).then(|| checker.clone());
+            let emission = (variant == 2)
+                .then(|| crate::light::ShapeEmission::Area { radiance: checker.clone(), two_sided: false });
             let sphere = Geometry::Sphere(Sphere::new(Vec3::new(0.3, -0.2, 0.1), 1.5, false));
-            b.add_shape_textured(sphere, m, emission, false);
+            b.add_emitting_shape(sphere, m, emission);
             b.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
             b.build().unwrap()
         };

@@ -626,6 +626,47 @@ fn area_emitters_by_reference() {
     assert!(e.to_string().contains("no shape references this area emitter") && e.to_string().contains("lost"), "{e}");
 }
 
+/// Mitsuba's `directionalarea`: nested in a shape or referenced by id like an area emitter; the
+/// shape's default BSDF is black, as for any emitting shape; its parameter is `radiance`, and
+/// what Mitsuba refuses (a `to_world`) is a located error.
+#[test]
+fn directional_area_emitters() {
+    let f = load(&scene(
+        r#"<shape type="rectangle"><emitter type="directionalarea"><rgb name="radiance" value="2, 3, 4"/></emitter></shape>
+           <emitter type="directionalarea" id="lamp"/>
+           <shape type="disk"><ref id="lamp"/></shape>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let radiances: Vec<Rgb> = f
+        .scene
+        .lights()
+        .iter()
+        .map(|l| match l {
+            Light::DirectionalArea { radiance: crate::texture::Texture::Constant(c), .. } => *c,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(radiances, [Rgb::new(2.0, 3.0, 4.0), Rgb::ONE]);
+    for shape in f.scene.shapes() {
+        assert!(shape.light.is_some(), "the emitting shape knows its light (hide_emitters passes through it)");
+        assert!(matches!(&f.scene.bsdfs()[shape.bsdf as usize], Bsdf::Diffuse(d) if matches!(d.reflectance, crate::texture::Texture::Constant(c) if c == Rgb::ZERO)));
+    }
+    for (body, expectation) in [
+        (r#"<emitter type="directionalarea"/>"#, "a directionalarea emitter must be nested in the <shape>"),
+        (r#"<emitter type="directionalarea" id="x"/>"#, "no shape references this directionalarea emitter"),
+        (
+            r#"<shape type="sphere"><emitter type="directionalarea"><transform name="to_world"/></emitter></shape>"#,
+            "to_world",
+        ),
+        (r#"<shape type="sphere"><emitter type="directionalarea"><rgb name="radiance" value="1e38"/></emitter><float name="radius" value="1e3"/></shape>"#, "overflows"),
+        (r#"<shape type="sphere"><emitter type="spot"/></shape>"#, "only an 'area' or 'directionalarea' emitter"),
+    ] {
+        let e = err(&scene(body));
+        assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+}
+
 /// References to objects declared later in the file work, as in Mitsuba (nested objects too);
 /// the object is built once; a reference cycle and an id declared nowhere are located errors.
 #[test]
@@ -1368,6 +1409,7 @@ fn linearcurve_shapes() {
         ("nowhere.txt", "", "nowhere.txt"),
         ("bad.txt", "", "bad.txt:2: column 5: expected a finite number (z;"),
         ("c.txt", r#"<emitter type="area"/>"#, "cannot be an area emitter"),
+        ("c.txt", r#"<emitter type="directionalarea"/>"#, "cannot be a directionalarea emitter"),
         ("c.txt", r#"<boolean name="flip_normals" value="true"/>"#, "no flip_normals"),
     ] {
         let e = load_scene_text(&dir.join("s.xml"), &shape(file, extra), &[]).unwrap_err().to_string();

@@ -1156,7 +1156,7 @@ fn curves_and_hair() {
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"string type\" \"ribbon\"", "normals"),
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"integer degree\" 4", "degree"),
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0] \"string basis\" \"bezeir\"", "the nearest is 'bezier'"),
-        ("AreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]", "area emitters"),
+        ("AreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]", "cannot be an area emitter"),
     ] {
         let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{bad}\n"));
         assert!(e.contains(what), "{bad}: {e}");
