@@ -299,6 +299,9 @@ impl Integrator for VolPathMisIntegrator {
                     }
                     path_nee = path;
                     let s = phase.sample(p, wo, sampler.next_2d());
+                    if s.pdf <= 0.0 {
+                        break; // (degenerate SGGX flakes: no direction to scatter into)
+                    }
                     path.update_scalar(s.pdf, Rgb::splat(s.pdf));
                     path_nee.update_scalar(1.0, Rgb::splat(s.pdf));
                     ray = Ray::new(p, s.value);

@@ -20,6 +20,7 @@
 //! Both need an unbounded number of random numbers: they come from a per-path generator
 //! ([`crate::sampling::Pcg32`]) that the integrator seeds from its sampler.
 
+use super::phase::SggxPhase;
 use super::FreeFlight;
 use crate::image::VolumeSource;
 use crate::math::spectrum::SpectrumKind;
@@ -27,6 +28,7 @@ use crate::math::{Ray, Rgb, Vec3};
 use crate::props::{Obj, Result};
 use crate::sampling::{sample_exponential, Pcg32};
 use crate::texture::volume::{check_range, volume_param, Volume};
+use std::sync::Arc;
 
 /// Tentative collisions one tracking walk may take before giving up (an optical depth of
 /// about a million majorant units along one segment); the walk then returns zero.
@@ -46,8 +48,11 @@ pub struct Heterogeneous {
     pub albedo: Volume,
     /// Factor on `sigma_t`.
     pub scale: f32,
-    /// `scale · max sigma_t`.
+    /// `scale · max sigma_t` (times the flakes' largest projected area).
     majorant: f32,
+    /// The SGGX flakes of a microflake medium (an `sggx` phase function): the extinction
+    /// toward `ω` is `σₜ(x) σ(ω)`, their projected area (Mitsuba's microflake media).
+    flakes: Option<Arc<SggxPhase>>,
 }
 
 impl Heterogeneous {
@@ -55,7 +60,16 @@ impl Heterogeneous {
     /// (finite) are the caller's to check ([`Heterogeneous::from_props`] does).
     pub fn new(sigma_t: Volume, albedo: Volume, scale: f32) -> Heterogeneous {
         let majorant = scale * sigma_t.max();
-        Heterogeneous { sigma_t, albedo, scale, majorant }
+        Heterogeneous { sigma_t, albedo, scale, majorant, flakes: None }
+    }
+
+    /// The medium of these flakes: its extinction toward `ω` scaled by their projected area
+    /// `σ(ω)`, and its majorant by their largest (so that tracking stays unbiased where `S`
+    /// is not normalised; Mitsuba's majorant ignores the flakes and clamps).
+    pub fn with_flakes(mut self, flakes: Arc<SggxPhase>) -> Heterogeneous {
+        self.majorant *= flakes.max_projected_area();
+        self.flakes = Some(flakes);
+        self
     }
 
     /// The majorant `σ̄` (m⁻¹).
@@ -75,10 +89,15 @@ impl Heterogeneous {
         self.sigma_t.bounds().intersect_p(&bounded, inv_d).filter(|(t0, t1)| t0 < t1)
     }
 
-    /// Extinction `σₜ(p)` (m⁻¹).
+    /// Extinction `σₜ(p)` (m⁻¹) toward the unit direction `d` (which only microflake media
+    /// read).
     #[inline]
-    pub fn sigma_t_at(&self, p: Vec3) -> Rgb {
-        self.sigma_t.eval(p) * self.scale
+    pub fn sigma_t_at(&self, p: Vec3, d: Vec3) -> Rgb {
+        let sigma_t = self.sigma_t.eval(p) * self.scale;
+        match &self.flakes {
+            None => sigma_t,
+            Some(f) => sigma_t * f.projected_area(p, d),
+        }
     }
 
     /// Samples the next real collision along `ray` (unit direction) before `t_max` by spectral
@@ -96,7 +115,7 @@ impl Heterogeneous {
                 return FreeFlight::Pass { weight };
             }
             let p = ray.at(t);
-            let sigma_t = self.sigma_t_at(p);
+            let sigma_t = self.sigma_t_at(p, ray.d);
             let sigma_n = (Rgb::splat(majorant) - sigma_t).max(Rgb::ZERO);
             let bw = beta * weight;
             let (p_t, p_n) = ((sigma_t * bw).element_sum(), (sigma_n * bw).element_sum());
@@ -123,7 +142,7 @@ impl Heterogeneous {
         let t = t0 + sample_exponential(u, self.majorant).value;
         let collision = (t < t1).then(|| {
             let p = ray.at(t);
-            let sigma_t = self.sigma_t_at(p);
+            let sigma_t = self.sigma_t_at(p, ray.d);
             super::Collision {
                 t,
                 sigma_t,
@@ -146,7 +165,7 @@ impl Heterogeneous {
             if t >= t1 {
                 return tr;
             }
-            let sigma_n = (Rgb::splat(majorant) - self.sigma_t_at(ray.at(t))).max(Rgb::ZERO);
+            let sigma_n = (Rgb::splat(majorant) - self.sigma_t_at(ray.at(t), ray.d)).max(Rgb::ZERO);
             tr *= sigma_n / majorant;
             let m = tr.max_element();
             if m < RR_THRESHOLD {
@@ -192,7 +211,7 @@ mod tests {
     }
 
     fn ramp_sigma(m: &Heterogeneous, x: f64) -> [f64; 3] {
-        let s = m.sigma_t_at(Vec3::new(x as f32, 0.5, 0.5));
+        let s = m.sigma_t_at(Vec3::new(x as f32, 0.5, 0.5), Vec3::X);
         [s.x as f64, s.y as f64, s.z as f64]
     }
 
@@ -253,6 +272,45 @@ mod tests {
                 assert!((r - tr).abs() < 0.01 * tr, "channel {c}: ratio tracking {r} vs {tr}");
                 assert!((s - scatter[c]).abs() < 0.01 * scatter[c], "channel {c}: scatter {s} vs {}", scatter[c]);
             }
+        }
+    }
+
+    /// A microflake medium (SGGX flakes, one matrix with eigenvalues above 1): the extinction
+    /// toward `d` is `σₜ σ(d)`, so along each direction through a constant medium free flights
+    /// pass, and ratio tracking transmits, `e^(-σₜ σ(d) L)` on average, and scatter with
+    /// probability `α (1 − e^(-σₜ σ(d) L))`; the majorant bounds every direction.
+    #[test]
+    fn microflake_extinction_follows_the_projected_area() {
+        let s = [2.5, 0.4, 1.2, 0.3, 0.5, -0.2];
+        let flakes = Arc::new(crate::medium::phase::sggx::tests::uniform(s));
+        let sigma = 1.5f32;
+        let m = Heterogeneous::new(
+            Volume::constant(Rgb::splat(sigma), Transform::IDENTITY),
+            Volume::constant(Rgb::splat(0.8), Transform::IDENTITY),
+            1.0,
+        )
+        .with_flakes(flakes.clone());
+        let mut rng = Pcg32::new(11, 2);
+        for d in [Vec3::X, Vec3::Y, Vec3::new(0.3, 0.5, 1.0).normalize()] {
+            let area = crate::medium::phase::sggx::projected_area(d, &s);
+            assert!(m.majorant() >= sigma * area, "majorant {} below σₜ σ(d) = {}", m.majorant(), sigma * area);
+            // From outside the cube, through its centre, to beyond it.
+            let ray = Ray::new(Vec3::splat(0.5) - d * 2.0, d);
+            let length = d.abs().max_element().recip() as f64;
+            let tr = (-(sigma * area) as f64 * length).exp();
+            let n = 200_000;
+            let (mut pass, mut scatter, mut ratio) = (0.0f64, 0.0f64, 0.0f64);
+            for _ in 0..n {
+                match m.sample_free_flight(&ray, 4.0, Rgb::ONE, rng.next_f32(), &mut rng) {
+                    FreeFlight::Pass { weight } => pass += weight.x as f64,
+                    FreeFlight::Scatter { weight, .. } => scatter += weight.x as f64,
+                }
+                ratio += m.transmittance(&ray, 4.0, &mut rng).x as f64;
+            }
+            let (pass, scatter, ratio) = (pass / n as f64, scatter / n as f64, ratio / n as f64);
+            assert!((pass - tr).abs() < 0.01, "{d}: pass {pass} vs {tr}");
+            assert!((ratio - tr).abs() < 0.01, "{d}: ratio tracking {ratio} vs {tr}");
+            assert!((scatter - 0.8 * (1.0 - tr)).abs() < 0.01, "{d}: scatter {scatter} vs {}", 0.8 * (1.0 - tr));
         }
     }
 

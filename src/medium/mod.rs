@@ -213,11 +213,24 @@ fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<M
     if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
         return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
     }
-    common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }), files)
+    let medium = common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }), files)?;
+    if medium.phase.microflakes().is_some() {
+        // Its extinction follows the flakes' S grid from point to point: not homogeneous.
+        let phase = &o.nested("phase")[0];
+        return Err(phase.error(
+            "an sggx phase function needs a heterogeneous medium (its extinction varies with the S grid); \
+             give the medium type=\"heterogeneous\" with the same sigma_t and albedo",
+        ));
+    }
+    Ok(medium)
 }
 
 /// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`.
 fn heterogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let h = Heterogeneous::from_props(o, files)?;
-    common(o, Coefficients::Heterogeneous(Box::new(h)), files)
+    let mut medium = common(o, Coefficients::Heterogeneous(Box::new(h.clone())), files)?;
+    if let Some(flakes) = medium.phase.microflakes() {
+        medium.coefficients = Coefficients::Heterogeneous(Box::new(h.with_flakes(flakes.clone())));
+    }
+    Ok(medium)
 }

@@ -64,7 +64,8 @@ impl GridWrap {
     }
 }
 
-/// A grid of one or three channels read as colours (one channel: grey).
+/// A grid of one or three channels read as colours (one channel: grey), or of six read as
+/// the six numbers of an SGGX matrix ([`Volume6`]).
 #[derive(Clone, Debug)]
 pub struct Grid {
     data: Arc<GridVolume>,
@@ -73,23 +74,19 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// The texel at integer coordinates `i` (zero where outside the grid).
+    /// The `N` channels of the texel at integer coordinates `i` (zero where outside the grid);
+    /// the grid has `N` channels.
     #[inline]
-    fn texel(&self, i: [Option<usize>; 3]) -> Rgb {
-        let [Some(x), Some(y), Some(z)] = i else { return Rgb::ZERO };
-        let i = [x, y, z];
+    fn texel<const N: usize>(&self, i: [Option<usize>; 3]) -> [f32; N] {
+        let [Some(x), Some(y), Some(z)] = i else { return [0.0; N] };
         let g = &*self.data;
-        let k = ((i[2] * g.res[1] + i[1]) * g.res[0] + i[0]) * g.channels;
-        if g.channels == 1 {
-            Rgb::splat(g.data[k])
-        } else {
-            Rgb::new(g.data[k], g.data[k + 1], g.data[k + 2])
-        }
+        let k = ((z * g.res[1] + y) * g.res[0] + x) * g.channels;
+        std::array::from_fn(|c| g.data[k + c])
     }
 
-    /// The value at local point `p` (unit cube).
+    /// The `N` channels at local point `p` (unit cube); the grid has `N` channels.
     #[inline]
-    fn eval(&self, p: Vec3) -> Rgb {
+    fn lookup<const N: usize>(&self, p: Vec3) -> [f32; N] {
         let res = self.data.res;
         let w = self.wrap;
         match self.filter {
@@ -103,17 +100,30 @@ impl Grid {
                 let f = [0, 1, 2].map(|a| x[a] - i0[a]);
                 let lo = [0, 1, 2].map(|a| w.apply(i0[a] as i64, res[a]));
                 let hi = [0, 1, 2].map(|a| w.apply(i0[a] as i64 + 1, res[a]));
-                let mut v = Rgb::ZERO;
+                let mut v = [0.0; N];
                 for corner in 0..8 {
                     let pick = |a: usize| corner >> a & 1 == 1;
                     let weight = (0..3).map(|a| if pick(a) { f[a] } else { 1.0 - f[a] }).product::<f32>();
                     if weight != 0.0 {
                         let i = [0, 1, 2].map(|a| if pick(a) { hi[a] } else { lo[a] });
-                        v += self.texel(i) * weight;
+                        let t = self.texel::<N>(i);
+                        for c in 0..N {
+                            v[c] += t[c] * weight;
+                        }
                     }
                 }
                 v
             }
+        }
+    }
+
+    /// The value at local point `p` (unit cube) as a colour (one channel: grey).
+    #[inline]
+    fn eval(&self, p: Vec3) -> Rgb {
+        if self.data.channels == 1 {
+            Rgb::splat(self.lookup::<1>(p)[0])
+        } else {
+            Rgb::from(self.lookup::<3>(p))
         }
     }
 }
@@ -269,34 +279,14 @@ impl Volume {
         match o.ty.as_str() {
             "constvolume" => Ok(Volume::constant(o.rgb("value", Rgb::ONE, kind)?, to_world)),
             "gridvolume" => {
-                let filter = match o.choice("filter_type", &["trilinear", "nearest"])?.as_str() {
-                    "nearest" => GridFilter::Nearest,
-                    _ => GridFilter::Trilinear,
-                };
-                let wrap = match o.choice("wrap_mode", &["clamp", "repeat", "mirror", "zero"])?.as_str() {
-                    "repeat" => GridWrap::Repeat,
-                    "mirror" => GridWrap::Mirror,
-                    "zero" => GridWrap::Zero,
-                    _ => GridWrap::Clamp,
-                };
-                o.bool("raw", false)?;
-                o.bool("accel", true)?;
-                let data = files.grid_volume(o, "filename")?;
-                let mut to_world = to_world;
-                if o.bool("use_grid_bbox", false)? {
-                    let [lo, hi] = data.bbox.map(Vec3::from);
-                    let box_to_world = Transform::scale(hi - lo)
-                        .map(|s| Transform::translate(lo) * s)
-                        .ok_or_else(|| o.error_at("use_grid_bbox", "the file's bounding box is empty"))?;
-                    to_world = to_world * box_to_world;
-                }
+                let (data, filter, wrap, to_world) = grid_from_props(o, files)?;
                 let channels = data.channels;
                 let mut v = Volume::grid(data, filter, wrap, to_world).ok_or_else(|| {
                     o.error_at(
                         "filename",
                         format!(
                             "a medium reads grids of 1 or 3 channels, this one has {channels} (6-channel grids \
-                             parametrise SGGX phase functions, which neumann does not implement)"
+                             parametrise SGGX phase functions: their 'S')"
                         ),
                     )
                 })?;
@@ -308,6 +298,83 @@ impl Volume {
             _ => Err(o.unknown_plugin(&["gridvolume", "constvolume"])),
         }
     }
+}
+
+/// A grid volume of six channels (Mitsuba's `gridvolume` read by `eval_6`): the parameters
+/// `[S_xx, S_yy, S_zz, S_xy, S_xz, S_yz]` of an SGGX phase function over space, read as
+/// [`Volume`] reads grids (the unit cube under `to_world`, the same filters and wrap modes).
+#[derive(Clone, Debug)]
+pub struct Volume6 {
+    grid: Grid,
+    /// World to the unit cube of the grid.
+    to_local: Transform,
+}
+
+impl Volume6 {
+    /// A six-channel grid over the unit cube under `to_world`; `None` for another channel
+    /// count.
+    pub fn grid(data: Arc<GridVolume>, filter: GridFilter, wrap: GridWrap, to_world: Transform) -> Option<Volume6> {
+        (data.channels == 6).then(|| Volume6 { grid: Grid { data, filter, wrap }, to_local: to_world.inverse() })
+    }
+
+    /// The six values at world point `p`.
+    #[inline]
+    pub fn eval(&self, p: Vec3) -> [f32; 6] {
+        self.grid.lookup::<6>(self.to_local.apply_point(p))
+    }
+
+    /// The texels, six numbers each.
+    pub fn texels(&self) -> impl Iterator<Item = &[f32]> {
+        self.grid.data.data.chunks_exact(6)
+    }
+
+    /// Mitsuba's `gridvolume` of six channels (what an SGGX phase function's `S` must be:
+    /// Mitsuba 3.9.1's `constvolume` has no six-value form): `filename`, `filter_type`,
+    /// `wrap_mode`, `to_world`, `use_grid_bbox`, `raw`, `accel` as for [`Volume::from_props`].
+    pub fn from_props(o: &Obj, files: &mut dyn VolumeSource) -> Result<Volume6> {
+        o.check_children(&[])?;
+        if o.ty != "gridvolume" {
+            return Err(
+                o.error("six values per point need a gridvolume of six channels (Mitsuba's constvolume has none)")
+            );
+        }
+        let (data, filter, wrap, to_world) = grid_from_props(o, files)?;
+        let channels = data.channels;
+        Volume6::grid(data, filter, wrap, to_world).ok_or_else(|| {
+            o.error_at("filename", format!("an SGGX phase function reads grids of 6 channels, this one has {channels}"))
+        })
+    }
+}
+
+/// What a `gridvolume` reads besides `max_value`: its grid, `filter_type`, `wrap_mode` and
+/// placement (`to_world`, and the file's box with `use_grid_bbox`); `raw` and `accel` are read
+/// and change nothing in RGB rendering.
+fn grid_from_props(
+    o: &Obj,
+    files: &mut dyn VolumeSource,
+) -> Result<(Arc<GridVolume>, GridFilter, GridWrap, Transform)> {
+    let mut to_world = o.transform("to_world")?;
+    let filter = match o.choice("filter_type", &["trilinear", "nearest"])?.as_str() {
+        "nearest" => GridFilter::Nearest,
+        _ => GridFilter::Trilinear,
+    };
+    let wrap = match o.choice("wrap_mode", &["clamp", "repeat", "mirror", "zero"])?.as_str() {
+        "repeat" => GridWrap::Repeat,
+        "mirror" => GridWrap::Mirror,
+        "zero" => GridWrap::Zero,
+        _ => GridWrap::Clamp,
+    };
+    o.bool("raw", false)?;
+    o.bool("accel", true)?;
+    let data = files.grid_volume(o, "filename")?;
+    if o.bool("use_grid_bbox", false)? {
+        let [lo, hi] = data.bbox.map(Vec3::from);
+        let box_to_world = Transform::scale(hi - lo)
+            .map(|s| Transform::translate(lo) * s)
+            .ok_or_else(|| o.error_at("use_grid_bbox", "the file's bounding box is empty"))?;
+        to_world = to_world * box_to_world;
+    }
+    Ok((data, filter, wrap, to_world))
 }
 
 /// Rejects volumes with values outside `[lo, hi]` (or not finite), at parameter `name` of `o`.

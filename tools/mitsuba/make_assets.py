@@ -10,6 +10,8 @@
   version 4) holding a small triangle first so that shape_index 1 picks the knot.
 - bumps_normal.png: a tangent-space normal map of round bumps (raw 8-bit), for normalmap.
 - blob.vol: a signed distance field (a sphere and a torus) on a 24^3 grid, for sdfgrid.
+- flakes.vol: SGGX matrices (six channels) on a 12^3 grid, fibres below and surface-like flakes
+  above, for the sggx phase function.
 - tufts.txt and coil.txt: Mitsuba's curve files (x y z radius per line, blank lines between
   curves) of a tuft of bent strands thinning toward their tips and of a coil of constant
   radius, for linearcurve.
@@ -181,5 +183,25 @@ with open("scenes/assets/coil.txt", "w") as f:
     for i in range(40):
         a = 2 * math.pi * i / 16
         f.write(f"{0.95 * math.cos(a):.5f} {0.1 + 0.02 * i:.5f} {0.95 * math.sin(a):.5f} 0.06\n")
+# SGGX flakes (the sggx phase function's S, six channels: xx yy zz xy xz yz) on a 12^3 grid:
+# fibres circling the vertical axis at the bottom (S = sigma^2 t t^T + (I - t t^T), t the fibre
+# direction, sigma 0.15), surface-like flakes facing up at the top (S = n n^T + sigma^2 (I - n n^T),
+# sigma 0.3), blended linearly in height; every matrix has largest eigenvalue 1.
+m = 12
+zs, ys, xs = np.meshgrid(*(np.linspace(0.5 / m, 1 - 0.5 / m, m),) * 3, indexing="ij")
+flakes = np.zeros((m, m, m, 6))
+eye = np.eye(3)
+for k in range(m):
+    for j in range(m):
+        for i in range(m):
+            x, y, z = xs[k, j, i] - 0.5, ys[k, j, i], zs[k, j, i] - 0.5
+            t = np.array([-z, 0.25, x])
+            t /= np.linalg.norm(t)
+            fibre = 0.15 ** 2 * np.outer(t, t) + (eye - np.outer(t, t))
+            n_ = np.array([0.0, 1.0, 0.0])
+            surface = np.outer(n_, n_) + 0.3 ** 2 * (eye - np.outer(n_, n_))
+            S = (1 - y) * fibre + y * surface
+            flakes[k, j, i] = [S[0, 0], S[1, 1], S[2, 2], S[0, 1], S[0, 2], S[1, 2]]
+write_vol("scenes/assets/flakes.vol", flakes)
 print("wrote scenes/assets/sky.exr, tiles.png, knot.obj, knot.serialized, knot_colors.ply, blob.vol, bumps_normal.png, "
-      "smoke.vol, albedo.vol, tufts.txt and coil.txt")
+      "smoke.vol, albedo.vol, tufts.txt, coil.txt and flakes.vol")

@@ -74,9 +74,9 @@ impl BlendPhase {
     }
 
     /// Mean cosine of the deflection at `p`.
-    pub fn mean_cosine(&self, p: Vec3) -> f32 {
+    pub fn mean_cosine(&self, p: Vec3) -> Option<f32> {
         let w = self.weight(p);
-        BlendPhase::mix(w, self.phases[0].mean_cosine(p), self.phases[1].mean_cosine(p))
+        Some(BlendPhase::mix(w, self.phases[0].mean_cosine(p)?, self.phases[1].mean_cosine(p)?))
     }
 
     /// `blendphase`: `weight` (required: a `<float>`, `<rgb>`, `<spectrum>` or `<volume>`) and
@@ -95,6 +95,12 @@ impl BlendPhase {
             return Err(o.error(format!("a blendphase takes two nested <phase>s, got {}", nested.len())));
         }
         let phases = [PhaseFunction::from_props(&nested[0], files)?, PhaseFunction::from_props(&nested[1], files)?];
+        // Mitsuba's blend takes the microflake flag from its parts but keeps the projected area
+        // at 1, so its medium's extinction would not follow the flakes: refused.
+        if let Some(k) = phases.iter().position(|ph| ph.microflakes().is_some()) {
+            return Err(nested[k]
+                .error("an sggx phase function cannot be blended (its medium's extinction follows its flakes)"));
+        }
         Ok(BlendPhase::new(weight, phases))
     }
 }

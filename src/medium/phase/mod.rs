@@ -12,11 +12,14 @@
 //! | `isotropic`, `hg`, `rayleigh` | [`PhaseFunction::Isotropic`], [`PhaseFunction::HenyeyGreenstein`], [`PhaseFunction::Rayleigh`] | here |
 //! | `tabphase` | [`PhaseFunction::Tabulated`] | [`tabulated`] |
 //! | `blendphase` | [`PhaseFunction::Blend`] | [`blend`] |
+//! | `sggx` | [`PhaseFunction::Sggx`] | [`sggx`] |
 
 pub mod blend;
+pub mod sggx;
 pub mod tabulated;
 
 pub use blend::BlendPhase;
+pub use sggx::SggxPhase;
 pub use tabulated::TabulatedPhase;
 
 use crate::image::VolumeSource;
@@ -45,6 +48,9 @@ pub enum PhaseFunction {
     /// Mitsuba's `blendphase`: a mixture of two phase functions by a weight that may vary in
     /// space.
     Blend(Arc<BlendPhase>),
+    /// Mitsuba's `sggx`: specular microflakes of the SGGX distribution, a matrix per point; its
+    /// medium's extinction depends on direction ([`SggxPhase`]).
+    Sggx(Arc<SggxPhase>),
 }
 
 impl PhaseFunction {
@@ -59,6 +65,7 @@ impl PhaseFunction {
             PhaseFunction::Rayleigh => rayleigh(-wo.dot(wi)),
             PhaseFunction::Tabulated(t) => t.eval(-wo.dot(wi)),
             PhaseFunction::Blend(b) => b.eval(p, wo, wi),
+            PhaseFunction::Sggx(s) => s.eval(p, wo, wi),
         }
     }
 
@@ -87,16 +94,28 @@ impl PhaseFunction {
                 Sample::solid_angle(deflect(wo, cos, u.y), pdf)
             }
             PhaseFunction::Blend(b) => b.sample(p, wo, u),
+            PhaseFunction::Sggx(s) => s.sample(p, wo, u),
         }
     }
 
-    /// Mean cosine of the deflection angle at `p` (0 for isotropic and Rayleigh scattering).
-    pub fn mean_cosine(&self, p: Vec3) -> f32 {
+    /// Mean cosine of the deflection angle at `p` (0 for isotropic and Rayleigh scattering);
+    /// `None` where it depends on the direction of travel (SGGX, also inside a blend).
+    pub fn mean_cosine(&self, p: Vec3) -> Option<f32> {
         match self {
-            PhaseFunction::Isotropic | PhaseFunction::Rayleigh => 0.0,
-            PhaseFunction::HenyeyGreenstein { g } => *g,
-            PhaseFunction::Tabulated(t) => t.mean_cosine(),
+            PhaseFunction::Isotropic | PhaseFunction::Rayleigh => Some(0.0),
+            PhaseFunction::HenyeyGreenstein { g } => Some(*g),
+            PhaseFunction::Tabulated(t) => Some(t.mean_cosine()),
             PhaseFunction::Blend(b) => b.mean_cosine(p),
+            PhaseFunction::Sggx(_) => None,
+        }
+    }
+
+    /// The SGGX flakes whose projected area scales the medium's extinction (Mitsuba's
+    /// `Microflake` phase functions), if this is one.
+    pub fn microflakes(&self) -> Option<&Arc<SggxPhase>> {
+        match self {
+            PhaseFunction::Sggx(s) => Some(s),
+            _ => None,
         }
     }
 }
@@ -134,17 +153,18 @@ fn sample_rayleigh_cos(u: f32) -> f32 {
 }
 
 /// Every phase plugin by its (Mitsuba) name.
-const PHASE_PLUGINS: &[&str] = &["isotropic", "hg", "rayleigh", "tabphase", "blendphase"];
+const PHASE_PLUGINS: &[&str] = &["isotropic", "hg", "rayleigh", "tabphase", "blendphase", "sggx"];
 
 impl PhaseFunction {
     /// Mitsuba's phase plugins: `isotropic`; `hg` with `g` (0.8, in (-1, 1)); `rayleigh`;
     /// `tabphase` with `values` (see [`TabulatedPhase::from_props`]); `blendphase` with
-    /// `weight` and two nested phases (see [`BlendPhase::from_props`]). `files` reads a blend's
-    /// grid volume.
+    /// `weight` and two nested phases (see [`BlendPhase::from_props`]); `sggx` with its `S`
+    /// grid ([`SggxPhase::from_props`]). `files` reads grid volumes.
     pub fn from_props(p: &Obj, files: &mut dyn VolumeSource) -> PropResult<PhaseFunction> {
         p.built.set(true);
         match p.ty.as_str() {
             "blendphase" => return Ok(PhaseFunction::Blend(Arc::new(BlendPhase::from_props(p, files)?))),
+            "sggx" => return Ok(PhaseFunction::Sggx(Arc::new(SggxPhase::from_props(p, files)?))),
             "isotropic" | "hg" | "rayleigh" | "tabphase" => p.check_children(&[])?,
             _ => {}
         }
@@ -188,12 +208,30 @@ mod tests {
 
     use crate::math::Rgb;
 
+    /// SGGX flakes of the matrices `texels` along x (one texel: everywhere).
+    fn sggx(texels: &[[f32; 6]]) -> PhaseFunction {
+        let grid = GridVolume {
+            res: [texels.len(), 1, 1],
+            channels: 6,
+            bbox: [[0.0; 3], [1.0; 3]],
+            data: texels.iter().flatten().copied().collect(),
+        };
+        let s = crate::texture::volume::Volume6::grid(
+            Arc::new(grid),
+            GridFilter::Trilinear,
+            GridWrap::Clamp,
+            Transform::IDENTITY,
+        );
+        PhaseFunction::Sggx(Arc::new(SggxPhase::new(s.unwrap())))
+    }
+
     /// Every phase function at a few points: samples follow the density (χ² over the sphere,
     /// around an arbitrary `wo`), the density integrates to one, each sample's pdf is the
     /// density at it, and the samples' mean cosine of deflection is `mean_cosine`. Isotropic,
     /// forward and backward HG lobes, Rayleigh, tables (a forward peak with a back lobe, one with
-    /// a zero segment), constant blends (including weights 0 and 1) and a blend whose weight
-    /// varies in space (read at three points, one where it is clamped).
+    /// a zero segment), constant blends (including weights 0 and 1), a blend whose weight
+    /// varies in space (read at three points, one where it is clamped), and SGGX flakes (three
+    /// matrices, one with eigenvalues above 1, and flakes varying in space).
     #[test]
     fn sampling_matches_eval_and_pdf_integrates_to_one() {
         let wo = Vec3::new(0.3, -0.5, 0.81).normalize();
@@ -212,6 +250,11 @@ mod tests {
             (varying_blend(), Vec3::new(0.1, 0.5, 0.5)),
             (varying_blend(), Vec3::new(0.4, 0.5, 0.5)),
             (varying_blend(), Vec3::new(0.9, 0.5, 0.5)),
+            (sggx(&[[1.0, 0.2, 0.05, 0.0, 0.0, 0.0]]), origin),
+            (sggx(&[[0.6, 0.5, 0.3, 0.2, -0.1, 0.15]]), origin),
+            (sggx(&[[2.5, 0.4, 1.2, 0.3, 0.5, -0.2]]), origin),
+            // Surface-like flakes varying in space (a 2×1×1 grid), read between its texels.
+            (sggx(&[[0.05, 0.05, 1.0, 0.0, 0.0, 0.0], [1.0, 0.1, 0.1, 0.0, 0.2, 0.0]]), Vec3::new(0.4, 0.5, 0.5)),
         ];
         for (k, (phase, p)) in cases.into_iter().enumerate() {
             let integral = integrate_pdf_2d(&SPHERE, [32, 64], |w| phase.eval(p, wo, *w) as f64);
@@ -235,7 +278,9 @@ mod tests {
                 mean += (-wo).dot(s.value) as f64;
             }
             mean /= n as f64;
-            assert!((mean - phase.mean_cosine(p) as f64).abs() < 0.01, "{phase:?} at {p}: mean cosine {mean}");
+            if let Some(want) = phase.mean_cosine(p) {
+                assert!((mean - want as f64).abs() < 0.01, "{phase:?} at {p}: mean cosine {mean}");
+            }
         }
     }
 
