@@ -276,6 +276,19 @@ mod tests {
     use crate::scene::SceneBuilder;
     use std::sync::atomic::AtomicBool;
 
+    /// A cube of `medium` (the cube [-1, 1]³, null boundary) under a uniform sky of radiance
+    /// 1, seen by a 12×12 camera at z = 5.
+    fn cube_in_furnace(medium: Medium) -> crate::scene::Scene {
+        let mut b = SceneBuilder::new();
+        let null = b.add_bsdf(Bsdf::Null);
+        let m = b.add_medium(medium);
+        let s = b.add_shape(Geometry::Mesh(TriangleMesh::cube()), null, None);
+        b.set_shape_media(s, Some(m), None);
+        b.add_constant_environment(Rgb::ONE);
+        b.set_camera(camera(12, 12, 30.0));
+        b.build().unwrap()
+    }
+
     fn camera(w: u32, h: u32, fov: f32) -> Camera {
         let t = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
         Camera::perspective(t, fov, FovAxis::X, w, h).unwrap()
@@ -329,14 +342,7 @@ mod tests {
         let to_world = Transform::translate(Vec3::splat(-1.0)) * Transform::scale(Vec3::splat(2.0)).unwrap();
         let sigma = Volume::grid(grid, GridFilter::Trilinear, GridWrap::Clamp, to_world).unwrap();
         let render_with = |medium: Medium, spp: u32| {
-            let mut b = SceneBuilder::new();
-            let null = b.add_bsdf(Bsdf::Null);
-            let m = b.add_medium(medium);
-            let s = b.add_shape(Geometry::Mesh(TriangleMesh::cube()), null, None);
-            b.set_shape_media(s, Some(m), None);
-            b.add_constant_environment(Rgb::ONE);
-            b.set_camera(camera(12, 12, 30.0));
-            let scene = b.build().unwrap();
+            let scene = cube_in_furnace(medium);
             let settings = RenderSettings { spp, seed: 5, ..Default::default() };
             render(&scene, &VolPathIntegrator::default(), &settings, &AtomicBool::new(false)).unwrap()
         };
@@ -410,14 +416,7 @@ mod tests {
                 phase: PhaseFunction::Sggx(flakes.clone()),
                 sample_emitters: true,
             };
-            let mut b = SceneBuilder::new();
-            let null = b.add_bsdf(Bsdf::Null);
-            let m = b.add_medium(medium);
-            let s = b.add_shape(Geometry::Mesh(TriangleMesh::cube()), null, None);
-            b.set_shape_media(s, Some(m), None);
-            b.add_constant_environment(Rgb::ONE);
-            b.set_camera(camera(12, 12, 30.0));
-            b.build().unwrap()
+            cube_in_furnace(medium)
         };
         let settings = RenderSettings { spp: 512, seed: 5, ..Default::default() };
         let never = AtomicBool::new(false);

@@ -181,6 +181,17 @@ impl PhaseFunction {
     }
 }
 
+/// The `(wo, wi)` pairs (not normalised) at which `tools/mitsuba/phase_values.py` prints
+/// Mitsuba's densities, for the tests that compare with them.
+#[cfg(test)]
+pub(crate) const PROBE_PAIRS: [([f32; 3], [f32; 3]); 5] = [
+    ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]),
+    ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
+    ([0.3, -0.5, 0.81], [0.7, 0.1, -0.2]),
+    ([0.6, 0.0, 0.8], [0.0, 1.0, 0.0]),
+    ([1.0, 2.0, 3.0], [-1.0, 0.5, 0.2]),
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -290,13 +301,7 @@ mod tests {
     /// weighs by the channels' mean).
     #[test]
     fn matches_mitsuba_densities() {
-        let pairs = [
-            ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]),
-            ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
-            ([0.3, -0.5, 0.81], [0.7, 0.1, -0.2]),
-            ([0.6, 0.0, 0.8], [0.0, 1.0, 0.0]),
-            ([1.0, 2.0, 3.0], [-1.0, 0.5, 0.2]),
-        ];
+        let pairs = PROBE_PAIRS;
         let rgb_weight = Volume::constant(Rgb::new(0.2, 0.4, 0.9), Transform::IDENTITY);
         let cases = [
             (PhaseFunction::Rayleigh, [0.1193662, 0.1193662, 0.05968354, 0.0596831, 0.0608728]),

@@ -197,13 +197,7 @@ pub(crate) mod tests {
     /// Mitsuba's density is NaN there, neumann's 0.
     #[test]
     fn matches_mitsuba() {
-        let pairs = [
-            ([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]),
-            ([0.0, 0.0, 1.0], [0.0, 0.0, 1.0]),
-            ([0.3, -0.5, 0.81], [0.7, 0.1, -0.2]),
-            ([0.6, 0.0, 0.8], [0.0, 1.0, 0.0]),
-            ([1.0, 2.0, 3.0], [-1.0, 0.5, 0.2]),
-        ];
+        let pairs = super::super::PROBE_PAIRS;
         let cases: [(Params, [f32; 4], [f32; 5]); 4] = [
             (
                 [1.0, 1.0, 1.0, 0.0, 0.0, 0.0],
