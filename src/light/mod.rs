@@ -137,6 +137,13 @@ pub enum ShapeEmission {
 }
 
 impl ShapeEmission {
+    /// The emitted radiance (or, along the normal, power per area) over the shape's uv.
+    pub fn radiance(&self) -> &Texture {
+        match self {
+            ShapeEmission::Area { radiance, .. } | ShapeEmission::DirectionalArea { radiance } => radiance,
+        }
+    }
+
     /// The light this emission makes of shape `shape`.
     pub fn light(self, shape: u32) -> Light {
         match self {

@@ -484,11 +484,7 @@ impl Builder {
                 )));
             }
         }
-        let radiance = match &emission {
-            Some(ShapeEmission::Area { radiance, .. } | ShapeEmission::DirectionalArea { radiance }) => Some(radiance),
-            None => None,
-        };
-        if radiance.is_some_and(|t| !t.mesh_attributes().is_empty()) {
+        if emission.as_ref().is_some_and(|e| !e.radiance().mesh_attributes().is_empty()) {
             return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
         }
         let index = self.sb.add_emitting_shape(geometry, bsdf, emission);

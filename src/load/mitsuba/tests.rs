@@ -664,6 +664,10 @@ fn directional_area_emitters() {
             "overflows",
         ),
         (r#"<shape type="sphere"><emitter type="spot"/></shape>"#, "only an 'area' or 'directionalarea' emitter"),
+        (
+            r#"<shape type="rectangle"><emitter type="directionalarea"><texture type="mesh_attribute" name="radiance"><string name="name" value="vertex_color"/></texture></emitter></shape>"#,
+            "a mesh_attribute texture as an area emitter's radiance is not implemented",
+        ),
     ] {
         let e = err(&scene(body));
         assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
