@@ -387,14 +387,7 @@ impl Builder {
                 e.check_children(&[])?;
                 read_sampling_weight(e)?;
                 let radiance = area_radiance_from_props(e, self)?;
-                let power = geometry.area() * radiance.mean().max_element();
-                if !power.is_finite() {
-                    return Err(e.error(format!(
-                        "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
-                        geometry.area(),
-                        radiance.mean()
-                    )));
-                }
+                check_emitted_power(e, &geometry, &radiance, 1.0)?;
                 Some(ShapeEmission::DirectionalArea { radiance })
             }
             Some(e) if e.ty == "area" => {
@@ -440,14 +433,7 @@ impl Builder {
                 if let Some(opacity) = area_opacity_from_props(e, self)? {
                     radiance = radiance.times(opacity);
                 }
-                let power = std::f32::consts::PI * sides * geometry.area() * radiance.mean().max_element();
-                if !power.is_finite() {
-                    return Err(e.error(format!(
-                        "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
-                        geometry.area(),
-                        radiance.mean()
-                    )));
-                }
+                check_emitted_power(e, &geometry, &radiance, std::f32::consts::PI * sides)?;
                 Some(ShapeEmission::Area { radiance, two_sided })
             }
             Some(e) => return Err(e.error("only an 'area' or 'directionalarea' emitter can be attached to a shape")),
@@ -660,6 +646,19 @@ impl Builder {
 /// Whether an emitter of plugin `ty` belongs to the shape it is nested in (or that references it).
 fn is_shape_emitter(ty: &str) -> bool {
     matches!(ty, "area" | "directionalarea")
+}
+
+/// Refuses a shape emitter `e` whose power, `factor` × the shape's area × the radiance's largest
+/// mean channel (`factor`: π · sides for Lambertian emission, 1 along the normal), overflows.
+fn check_emitted_power(e: &Obj, geometry: &Geometry, radiance: &Texture, factor: f32) -> Result<()> {
+    if !(factor * geometry.area() * radiance.mean().max_element()).is_finite() {
+        return Err(e.error(format!(
+            "the emitted power overflows (area {} × radiance {}): scale the shape or the radiance down",
+            geometry.area(),
+            radiance.mean()
+        )));
+    }
+    Ok(())
 }
 
 /// "an area emitter", "a directionalarea emitter": an emitter plugin named in a message.
