@@ -236,6 +236,7 @@ impl Radiosity {
                 Light::Area { .. } => "two-sided area",
                 Light::DirectionalArea { .. } => "directional area",
                 Light::EnvMap { .. } => "environment map",
+                Light::SunSky { .. } => "sun and sky",
             }));
         }
         // Count the patches before making them: a tiny patch size must be an error, not an

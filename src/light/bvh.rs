@@ -94,6 +94,7 @@ impl LightBounds {
             }),
             Light::Constant { .. }
             | Light::EnvMap { .. }
+            | Light::SunSky { .. }
             | Light::Directional { .. }
             | Light::DirectionalArea { .. } => None,
         }

@@ -12,6 +12,8 @@ mod portal;
 mod projector;
 mod registry;
 mod sampler;
+mod sun_position;
+mod sunsky;
 
 pub use bvh::{LightBounds, LightBvh};
 pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
@@ -20,6 +22,8 @@ pub use portal::{Portal, PortalError};
 pub use projector::{Projector, ProjectorEmission};
 pub use registry::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, NoLightPower};
+pub use sun_position::{sun_direction, DateTime, Location};
+pub use sunsky::{SunPlacement, SunSky, SunSkyError, SunSkyParams};
 
 use crate::geometry::Geometry;
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
@@ -66,6 +70,15 @@ pub enum Light {
     EnvMap {
         /// The map and its sampling distribution.
         map: Box<EnvMap>,
+        /// Centre of the scene's bounding sphere.
+        center: Vec3,
+        /// Radius of the scene's bounding sphere.
+        radius: f32,
+    },
+    /// Mitsuba's `sunsky` emitter (see [`SunSky`]). `center` / `radius` bound the scene.
+    SunSky {
+        /// The sun, the sky and their sampling distribution.
+        sky: Box<SunSky>,
         /// Centre of the scene's bounding sphere.
         center: Vec3,
         /// Radius of the scene's bounding sphere.
@@ -264,6 +277,7 @@ impl Light {
             // Flux through the scene's bounding sphere: irradiance π L over its area 4π R².
             Light::Constant { radiance, radius, .. } => 4.0 * PI * PI * radius * radius * luminance(*radiance),
             Light::EnvMap { map, radius, .. } => PI * radius * radius * map.integral_luminance(),
+            Light::SunSky { sky, radius, .. } => PI * radius * radius * sky.integral_luminance(),
             // Flux through the scene's cross-section.
             Light::Directional { irradiance, radius, .. } => PI * radius * radius * luminance(*irradiance),
             // ∫ falloff dω, with the transition band counted at half strength.
@@ -331,7 +345,7 @@ impl Light {
 
     /// Whether the light sits at infinity (seen by rays that escape the scene).
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Light::Constant { .. } | Light::EnvMap { .. })
+        matches!(self, Light::Constant { .. } | Light::EnvMap { .. } | Light::SunSky { .. })
     }
 
     /// Radiance arriving from an infinite light along a ray from `o` that escaped in direction
@@ -342,6 +356,7 @@ impl Light {
         match self {
             Light::Constant { radiance, .. } => *radiance,
             Light::EnvMap { map, .. } => map.eval_from(o, d),
+            Light::SunSky { sky, .. } => sky.eval(d),
             _ => Rgb::ZERO,
         }
     }
@@ -380,6 +395,11 @@ impl Light {
                     p_error: Vec3::ZERO,
                     delta: false,
                 })
+            }
+            Light::SunSky { sky, center, radius } => {
+                let (wi, li, pdf) = sky.sample(u)?;
+                let far = beyond_scene(p_ref, *center, *radius);
+                Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
             }
             Light::EnvMap { map, center, radius } => {
                 let (wi, li, pdf) = map.sample_from(p_ref, u)?;
@@ -456,7 +476,9 @@ impl Light {
             | Light::DirectionalArea { .. }
             | Light::Projector(_)
             | Light::Goniometric(_) => 0.0,
-            Light::Constant { .. } | Light::EnvMap { .. } => self.pdf_li_direction(p_ref, (p - p_ref).normalize_or_zero()),
+            Light::Constant { .. } | Light::EnvMap { .. } | Light::SunSky { .. } => {
+                self.pdf_li_direction(p_ref, (p - p_ref).normalize_or_zero())
+            }
         }
     }
 
@@ -467,6 +489,7 @@ impl Light {
         match self {
             Light::Constant { .. } => crate::sampling::uniform_sphere_pdf(),
             Light::EnvMap { map, .. } => map.pdf_from(p_ref, wi),
+            Light::SunSky { sky, .. } => sky.pdf(wi),
             _ => 0.0,
         }
     }
@@ -547,6 +570,11 @@ impl Light {
                     d: -wi.value,
                     weight: *radiance * (area / wi.pdf),
                 }
+            }
+            Light::SunSky { sky, center, radius } => {
+                let (wi, li, pdf) = sky.sample(u_dir)?;
+                let (p, area) = parallel(-wi, *center, *radius);
+                EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
             }
             Light::EnvMap { map, center, radius } => match map.portal() {
                 None => {

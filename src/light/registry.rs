@@ -4,7 +4,9 @@
 //! Mitsuba's `area` emitter is not here: it is a property of the shape that emits, whose loader
 //! reads its `radiance` ([`area_radiance_from_props`]).
 
-use super::{EnvMap, Goniometric, Light, Projector, SpotFalloff};
+use super::{
+    DateTime, EnvMap, Goniometric, Light, Location, Projector, SpotFalloff, SunPlacement, SunSky, SunSkyParams,
+};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Frame, Rgb, Vec3};
 use crate::props::{Obj, Result};
@@ -23,6 +25,7 @@ pub const EMITTER_PLUGINS: &[(&str, EmitterPlugin)] = &[
     ("directional", directional),
     ("constant", constant),
     ("envmap", envmap),
+    ("sunsky", sunsky),
 ];
 
 /// The constructor of the emitter plugin `name`.
@@ -181,6 +184,101 @@ fn uniform_emission(o: &Obj, name: &str, textures: &mut dyn TextureSource) -> Re
 /// Mitsuba's `constant`: `radiance` (1) from every direction.
 fn constant(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     Ok(Light::Constant { radiance: uniform_emission(o, "radiance", textures)?, center: Vec3::ZERO, radius: 0.0 })
+}
+
+/// Mitsuba's `sunsky` (Hošek–Wilkie sun and sky, see [`SunSky`]): `turbidity` (3), `albedo`
+/// (0.3, a reflectance the same everywhere), `sun_scale` and `sky_scale` (1), `sun_aperture`
+/// (0.5358°), `complex_sun` (false), `to_world` (the local +z is the zenith); the sun's place
+/// either as `sun_direction` (world) or as a time and place — `latitude` (35.6894),
+/// `longitude` (139.6917), `timezone` (9), `year` (2010), `month` (7), `day` (10), `hour`
+/// (15), `minute` and `second` (0) — never both.
+fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
+    const TIME: [&str; 9] = ["latitude", "longitude", "timezone", "year", "month", "day", "hour", "minute", "second"];
+    let sun = match o.point_opt("sun_direction")? {
+        Some(d) => {
+            if let Some(name) = TIME.iter().find(|n| o.has(n)) {
+                return Err(o.error_at(
+                    name,
+                    "a sunsky takes either sun_direction or a time and place (latitude, …, second), not both (as in Mitsuba)",
+                ));
+            }
+            SunPlacement::Direction(d)
+        }
+        None => {
+            let (t, l) = (DateTime::default(), Location::default());
+            let int = |name: &str, default: i32| -> Result<i32> {
+                let v = o.int(name, default as i64)?;
+                i32::try_from(v).map_err(|_| o.error_at(name, format!("{v} is out of range")))
+            };
+            let month = int("month", t.month)?;
+            if !(1..=12).contains(&month) {
+                return Err(o.error_at("month", format!("month {month} is not 1 to 12")));
+            }
+            let day = int("day", t.day)?;
+            if !(1..=31).contains(&day) {
+                return Err(o.error_at("day", format!("day {day} is not 1 to 31")));
+            }
+            let time = DateTime {
+                year: int("year", t.year)?,
+                month,
+                day,
+                hour: o.float("hour", t.hour)?,
+                minute: o.float("minute", t.minute)?,
+                second: o.float("second", t.second)?,
+            };
+            let place = Location {
+                latitude: o.float("latitude", l.latitude)?,
+                longitude: o.float("longitude", l.longitude)?,
+                timezone: o.float("timezone", l.timezone)?,
+            };
+            let reals = [
+                ("latitude", place.latitude),
+                ("longitude", place.longitude),
+                ("timezone", place.timezone),
+                ("hour", time.hour),
+                ("minute", time.minute),
+                ("second", time.second),
+            ];
+            if let Some((name, v)) = reals.iter().find(|(_, v)| !v.is_finite()) {
+                return Err(o.error_at(name, format!("{name} {v} must be finite")));
+            }
+            SunPlacement::Time(time, place)
+        }
+    };
+    let albedo = match textures.texture_of(o, "albedo", Rgb::splat(0.3), SpectrumKind::Reflectance)? {
+        Texture::Constant(c) => c,
+        _ => return Err(o.error_at(
+            "albedo",
+            "the sunsky emitter's 'albedo' must be the same everywhere (as Mitsuba requires), not a varying texture",
+        )),
+    };
+    let params = SunSkyParams {
+        sun,
+        turbidity: o.float("turbidity", 3.0)?,
+        albedo,
+        sun_scale: o.float("sun_scale", 1.0)?,
+        sky_scale: o.float("sky_scale", 1.0)?,
+        sun_aperture: o.float("sun_aperture", 0.5358)?,
+        complex_sun: o.bool("complex_sun", false)?,
+        to_world: o.transform("to_world")?,
+    };
+    let sky = SunSky::new(&params).map_err(|e| {
+        use super::SunSkyError as E;
+        let at = match e {
+            E::Turbidity(_) => "turbidity",
+            E::Albedo(_) => "albedo",
+            E::Scale(name, _) => name,
+            E::Aperture(_) => "sun_aperture",
+            E::Direction(_) => "sun_direction",
+            E::Transform => "to_world",
+        };
+        if o.has(at) {
+            o.error_at(at, e.to_string())
+        } else {
+            o.error(e.to_string())
+        }
+    })?;
+    Ok(Light::SunSky { sky: Box::new(sky), center: Vec3::ZERO, radius: 0.0 })
 }
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`

@@ -638,6 +638,14 @@ impl Builder {
         })?;
         read_sampling_weight(o)?;
         let light = plugin(o, self)?;
+        if let crate::light::Light::SunSky { sky, .. } = &light {
+            if !sky.is_lit() {
+                self.warnings.push(format!(
+                    "warning: {}: the sun is below the horizon: the sunsky emits nothing (as in Mitsuba)",
+                    o.loc.position()
+                ));
+            }
+        }
         self.sb.add_light(light);
         Ok(())
     }

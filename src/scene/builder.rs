@@ -205,7 +205,8 @@ impl SceneBuilder {
         for l in &mut self.lights {
             if let Light::Constant { center: c, radius: r, .. }
             | Light::Directional { center: c, radius: r, .. }
-            | Light::EnvMap { center: c, radius: r, .. } = l
+            | Light::EnvMap { center: c, radius: r, .. }
+            | Light::SunSky { center: c, radius: r, .. } = l
             {
                 *c = center;
                 *r = radius.max(1e-3);

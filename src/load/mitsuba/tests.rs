@@ -674,6 +674,64 @@ fn directional_area_emitters() {
     }
 }
 
+/// Mitsuba's `sunsky`: every parameter read (a direction, or a time and place), the sun where
+/// the parameters put it, a sun below the horizon a warning, and every refusal a located error.
+#[test]
+fn sunsky_emitters() {
+    let f = load(&scene(
+        r#"<emitter type="sunsky"><vector name="sun_direction" x="0.3" y="0.2" z="0.8"/>
+             <float name="turbidity" value="5"/><rgb name="albedo" value="0.1, 0.2, 0.3"/>
+             <float name="sun_scale" value="0.5"/><float name="sky_scale" value="2"/>
+             <float name="sun_aperture" value="1.5"/><boolean name="complex_sun" value="true"/></emitter>"#,
+    ))
+    .unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let Light::SunSky { sky, .. } = &f.scene.lights()[0] else { panic!("{:?}", f.scene.lights()) };
+    assert!((sky.sun_direction() - Vec3::new(0.3, 0.2, 0.8).normalize()).length() < 1e-6);
+    assert!(f.scene.lights()[0].is_infinite());
+    // A time and place in a y-up frame: the local zenith +z turned to +y.
+    let f = load(&scene(
+        r#"<emitter type="sunsky"><float name="latitude" value="-33.9"/><float name="longitude" value="18.4"/>
+             <float name="timezone" value="2"/><integer name="year" value="1999"/><integer name="month" value="12"/>
+             <integer name="day" value="31"/><float name="hour" value="17"/><float name="minute" value="0"/>
+             <float name="second" value="0"/><transform name="to_world"><rotate x="1" angle="-90"/></transform></emitter>"#,
+    ))
+    .unwrap();
+    let Light::SunSky { sky, .. } = &f.scene.lights()[0] else { panic!() };
+    let local = crate::light::sun_direction(
+        &crate::light::DateTime { year: 1999, month: 12, day: 31, hour: 17.0, minute: 0.0, second: 0.0 },
+        &crate::light::Location { latitude: -33.9, longitude: 18.4, timezone: 2.0 },
+    );
+    let world = crate::math::Transform::rotate(Vec3::X, -90.0).unwrap().apply_vector(local);
+    assert!((sky.sun_direction() - world).length() < 1e-5, "{} vs {world}", sky.sun_direction());
+    assert!(world.y > 0.5, "up is +y: {world}");
+    // Midnight: the sun below the horizon, nothing emitted (Mitsuba warns too); a street lamp
+    // lights the scene.
+    let night =
+        load(&scene(r#"<emitter type="sunsky"><float name="hour" value="1"/></emitter><emitter type="point"/>"#))
+            .unwrap();
+    assert!(night.warnings.iter().any(|w| w.contains("below the horizon")), "{:?}", night.warnings);
+    for (body, expectation) in [
+        (
+            r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="1"/><float name="hour" value="9"/></emitter>"#,
+            "either sun_direction or a time and place",
+        ),
+        (r#"<emitter type="sunsky"><float name="turbidity" value="11"/></emitter>"#, "turbidity 11 is outside [1, 10]"),
+        (r#"<emitter type="sunsky"><float name="sun_scale" value="-1"/></emitter>"#, "sun_scale -1 must be"),
+        (r#"<emitter type="sunsky"><float name="sun_aperture" value="0"/></emitter>"#, "sun_aperture 0°"),
+        (r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="0"/></emitter>"#, "has no direction"),
+        (r#"<emitter type="sunsky"><integer name="month" value="13"/></emitter>"#, "month 13"),
+        (r#"<emitter type="sunsky"><float name="year" value="2010"/></emitter>"#, "year"),
+        (r#"<emitter type="sunsky"><rgb name="albedo" value="0.5, 1.5, 0.5"/></emitter>"#, "albedo"),
+        (r#"<emitter type="sunsky"><texture type="checkerboard" name="albedo"/></emitter>"#, "the same everywhere"),
+        (r#"<emitter type="sunsky"><float name="sun_radius" value="1"/></emitter>"#, "sun_radius"),
+    ] {
+        let e = err(&scene(body));
+        assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
+        assert!(e.contains("test.xml:7:"), "located on the emitter's line: {e}");
+    }
+}
+
 /// References to objects declared later in the file work, as in Mitsuba (nested objects too);
 /// the object is built once; a reference cycle and an id declared nowhere are located errors.
 #[test]
