@@ -400,14 +400,7 @@ mod tests {
     /// `integral_luminance` against a Monte Carlo estimate of `∫ luminance dω` (3 %).
     fn assert_power_estimate(env: &EnvMap, seed: u64) {
         let mut rng = crate::sampling::Pcg32::new(3, seed);
-        let n = 400_000;
-        let mc: f64 = (0..n)
-            .map(|_| {
-                let s = crate::sampling::sample_uniform_sphere(u2(&mut rng));
-                (luminance(env.eval(s.value)) / s.pdf) as f64
-            })
-            .sum::<f64>()
-            / n as f64;
+        let mc = crate::testkit::sphere_integral_mc(400_000, &mut rng, |d| luminance(env.eval(d)) as f64);
         let rel = (env.integral_luminance() as f64 - mc).abs() / mc;
         assert!(rel < 0.03, "power estimate {} vs Monte Carlo {mc}", env.integral_luminance());
     }

@@ -910,6 +910,52 @@ mod tests {
         }
     }
 
+    /// A sun and sky as a light: `sample_li` returns what `le_escaped` and `pdf_li_direction`
+    /// give for its direction, and light tracing emits `π R² ∫ L dω` per channel in parallel
+    /// rays from outside the scene's bounding sphere that pass within R of its centre (a 20°
+    /// sun, so that uniform directions estimate the integral well).
+    #[test]
+    fn sunsky_light_samples_and_emits_its_radiance() {
+        use crate::sampling::Pcg32;
+        let params = SunSkyParams {
+            sun: SunPlacement::Direction(Vec3::new(0.2, 0.4, 0.6)),
+            sun_aperture: 20.0,
+            complex_sun: true,
+            ..SunSkyParams::default()
+        };
+        let (center, radius) = (Vec3::new(1.0, 0.0, -1.0), 3.0);
+        let sky = SunSky::new(&params).unwrap();
+        let light = Light::SunSky { sky: Box::new(sky.clone()), center, radius };
+        assert!(light.is_infinite());
+        let mut rng = Pcg32::new(8, 8);
+        for _ in 0..2000 {
+            let ls = light.sample_li(&[], center, u2(&mut rng)).unwrap();
+            assert!((ls.li - light.le_escaped(center, ls.wi)).abs().max_element() <= 1e-3 * ls.li.abs().max_element());
+            assert!((ls.pdf - light.pdf_li_direction(center, ls.wi)).abs() <= 1e-3 * ls.pdf);
+            assert!((ls.p - center).length() > radius, "the shadow ray ends beyond the scene");
+        }
+        let mut integral = [0.0f64; 3];
+        for (c, v) in integral.iter_mut().enumerate() {
+            let mut rng = Pcg32::new(9, c as u64);
+            *v = crate::testkit::sphere_integral_mc(400_000, &mut rng, |d| sky.eval(d)[c] as f64);
+        }
+        let n = 400_000;
+        let mut sum = [0.0f64; 3];
+        for _ in 0..n {
+            let Some(s) = light.sample_le(&[], u2(&mut rng), u2(&mut rng)) else { continue };
+            assert!((s.p - center).length() > radius, "origin outside the bounding sphere");
+            let closest = s.p + s.d * (center - s.p).dot(s.d);
+            assert!((closest - center).length() <= radius * (1.0 + 1e-4), "ray misses the scene");
+            for (c, total) in sum.iter_mut().enumerate() {
+                *total += s.weight[c] as f64;
+            }
+        }
+        for c in 0..3 {
+            let (mean, want) = (sum[c] / n as f64, integral[c] * (PI * radius * radius) as f64);
+            assert!((mean - want).abs() < 0.02 * want, "channel {c}: {mean} vs {want}");
+        }
+    }
+
     /// A directional area light reaches nothing but by light tracing, as in Mitsuba: no
     /// direction toward it can be sampled or met (zero radiance toward any ray, zero density),
     /// and it has no position to connect straight to a camera.

@@ -718,14 +718,7 @@ mod tests {
                 assert!((l - sky.eval(d)).abs().max_element() <= 1e-3 * l.abs().max_element().max(1e-3));
             }
             // ∫ luminance dω against uniform sphere sampling (the sun at 20° is wide enough).
-            let n = 200_000;
-            let mc = (0..n)
-                .map(|_| {
-                    let s = crate::sampling::sample_uniform_sphere(u2(&mut rng));
-                    (luminance(sky.eval(s.value)) / s.pdf) as f64
-                })
-                .sum::<f64>()
-                / n as f64;
+            let mc = crate::testkit::sphere_integral_mc(200_000, &mut rng, |d| luminance(sky.eval(d)) as f64);
             let rel = (sky.integral_luminance() as f64 - mc).abs() / mc;
             assert!(rel < 0.03, "variant {k}: integral {} against Monte Carlo {mc}", sky.integral_luminance());
         }

@@ -65,6 +65,18 @@ pub fn check_inverse<T>(
     worst
 }
 
+/// `∫ f(ω) dω` over the unit sphere, estimated from `n` uniform directions drawn from `rng`
+/// (an emitter's luminance integral, checked against its own estimate).
+pub fn sphere_integral_mc(n: usize, rng: &mut Pcg32, f: impl Fn(glam::Vec3) -> f64) -> f64 {
+    (0..n)
+        .map(|_| {
+            let s = crate::sampling::sample_uniform_sphere(u2(rng));
+            f(s.value) / s.pdf as f64
+        })
+        .sum::<f64>()
+        / n as f64
+}
+
 /// Two uniform numbers in `[0,1)` from `rng`, as a sampler's `u`.
 #[inline]
 pub fn u2(rng: &mut Pcg32) -> glam::Vec2 {
