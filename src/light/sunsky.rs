@@ -406,15 +406,19 @@ impl SunSky {
         let gamma = angle_between(self.sun, w);
         let cos_gamma = gamma.cos();
         let cos_gamma2 = cos_gamma * cos_gamma;
+        let p = &self.sky_params;
+        // The six exponentials (two per channel) in two four-lane evaluations, and
+        // `x^(3/2)` as `x √x`.
+        let inv = 1.0 / (cos_theta + 0.01);
+        let e1 = crate::math::special::exp4([p[0][1] * inv, p[1][1] * inv, p[2][1] * inv, 0.0]);
+        let e2 = crate::math::special::exp4([p[0][4] * gamma, p[1][4] * gamma, p[2][4] * gamma, 0.0]);
+        let sqrt_cos_theta = cos_theta.sqrt();
         let channel = |c: usize| {
-            let p = &self.sky_params[c];
-            let c1 = 1.0 + p[0] * crate::math::special::exp(p[1] / (cos_theta + 0.01));
-            let chi = (1.0 + cos_gamma2) / (1.0 + p[8] * p[8] - 2.0 * p[8] * cos_gamma).powf(1.5);
-            let c2 = p[2]
-                + p[3] * crate::math::special::exp(p[4] * gamma)
-                + p[5] * cos_gamma2
-                + p[6] * chi
-                + p[7] * cos_theta.sqrt();
+            let p = &p[c];
+            let c1 = 1.0 + p[0] * e1[c];
+            let base = 1.0 + p[8] * p[8] - 2.0 * p[8] * cos_gamma;
+            let chi = (1.0 + cos_gamma2) / (base * base.sqrt());
+            let c2 = p[2] + p[3] * e2[c] + p[5] * cos_gamma2 + p[6] * chi + p[7] * sqrt_cos_theta;
             c1 * c2
         };
         Rgb::new(channel(0), channel(1), channel(2)) * self.sky_rad
@@ -484,7 +488,16 @@ impl SunSky {
             let phi = 2.0 * PI * s.value.x;
             let (sin_t, cos_t) = ((0.5 * PI * s.value.y).sin(), (0.5 * PI * (1.0 - s.value.y)).sin());
             let (sin_p, cos_p) = phi.sin_cos();
-            Vec3::new(cos_p * sin_t, sin_p * sin_t, cos_t)
+            let w = Vec3::new(cos_p * sin_t, sin_p * sin_t, cos_t);
+            if sin_t <= 0.0 || s.pdf <= 0.0 {
+                return None;
+            }
+            // The density from the sample itself (no atan2 to find its cell again).
+            let mut pdf = (1.0 - self.sun_probability) * s.pdf / (PI * PI * sin_t);
+            if self.sun_probability > 0.0 {
+                pdf += self.sun_probability * uniform_cone_pdf(self.sun_frame.to_local(w), self.sun_cos);
+            }
+            return Some((self.to_world.apply_vector(w).normalize(), self.eval_local(w), pdf));
         };
         let pdf = self.pdf_local(local);
         if pdf.is_nan() || pdf <= 0.0 {
