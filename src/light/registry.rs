@@ -210,18 +210,12 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
                 let v = o.int(name, default as i64)?;
                 i32::try_from(v).map_err(|_| o.error_at(name, format!("{v} is out of range")))
             };
-            let month = int("month", t.month)?;
-            if !(1..=12).contains(&month) {
-                return Err(o.error_at("month", format!("month {month} is not 1 to 12")));
-            }
-            let day = int("day", t.day)?;
-            if !(1..=31).contains(&day) {
-                return Err(o.error_at("day", format!("day {day} is not 1 to 31")));
-            }
+            // As in Mitsuba, month and day are not range-checked: the Julian-day formula rolls a
+            // day past the month's end into the next month.
             let time = DateTime {
                 year: int("year", t.year)?,
-                month,
-                day,
+                month: int("month", t.month)?,
+                day: int("day", t.day)?,
                 hour: o.float("hour", t.hour)?,
                 minute: o.float("minute", t.minute)?,
                 second: o.float("second", t.second)?,

@@ -62,10 +62,13 @@ const EARTH_OVER_AU: f64 = 6371.01 / 149_597_890.0;
 pub fn sun_angles(time: &DateTime, place: &Location) -> (f32, f32) {
     // Time of day in UT decimal hours, and days since JD 2451545.0 (noon, 1 January 2000).
     let dec_hours = time.hour - place.timezone + (time.minute + time.second / 60.0) / 60.0;
-    let aux1 = (time.month - 14) / 12;
-    let aux2 = (1461 * (time.year + 4800 + aux1)) / 4 + (367 * (time.month - 2 - 12 * aux1)) / 12
-        - (3 * ((time.year + 4900 + aux1) / 100)) / 4
-        + time.day
+    // Mitsuba's integer arithmetic (truncating division), in 64 bits so that no year overflows;
+    // a day past the month's end rolls over into the next month.
+    let (year, month, day) = (time.year as i64, time.month as i64, time.day as i64);
+    let aux1 = (month - 14) / 12;
+    let aux2 = (1461 * (year + 4800 + aux1)) / 4 + (367 * (month - 2 - 12 * aux1)) / 12
+        - (3 * ((year + 4900 + aux1) / 100)) / 4
+        + day
         - 32075;
     let julian_date = aux2 as f32 - 0.5 + dec_hours / 24.0;
     let days = julian_date - 2_451_545.0;
@@ -137,6 +140,19 @@ mod tests {
         for (time, place, expected) in cases {
             let d = sun_direction(&time, &place);
             assert!((d - expected).length() < 2e-5, "{time:?} {place:?}: {d} against {expected}");
+        }
+    }
+
+    /// Days past the end of a month roll over (the Julian-day formula's own arithmetic, as in
+    /// Mitsuba, which checks no ranges), and no year overflows.
+    #[test]
+    fn days_roll_over_and_years_do_not_overflow() {
+        let place = Location::default();
+        let feb14 = DateTime { year: 2021, month: 2, day: 14, hour: 10.0, minute: 0.0, second: 0.0 };
+        let jan45 = DateTime { month: 1, day: 45, ..feb14 };
+        assert_eq!(sun_direction(&feb14, &place), sun_direction(&jan45, &place));
+        for year in [i32::MIN, -4713, i32::MAX] {
+            assert!(sun_direction(&DateTime { year, ..feb14 }, &place).is_finite());
         }
     }
 

@@ -720,7 +720,7 @@ fn sunsky_emitters() {
         (r#"<emitter type="sunsky"><float name="sun_scale" value="-1"/></emitter>"#, "sun_scale -1 must be"),
         (r#"<emitter type="sunsky"><float name="sun_aperture" value="0"/></emitter>"#, "sun_aperture 0°"),
         (r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="0"/></emitter>"#, "has no direction"),
-        (r#"<emitter type="sunsky"><integer name="month" value="13"/></emitter>"#, "month 13"),
+        (r#"<emitter type="sunsky"><integer name="month" value="99999999999"/></emitter>"#, "out of range"),
         (r#"<emitter type="sunsky"><float name="year" value="2010"/></emitter>"#, "year"),
         (r#"<emitter type="sunsky"><rgb name="albedo" value="0.5, 1.5, 0.5"/></emitter>"#, "albedo"),
         (r#"<emitter type="sunsky"><texture type="checkerboard" name="albedo"/></emitter>"#, "the same everywhere"),
