@@ -631,6 +631,12 @@ impl Builder {
                 emitter_name(&o.ty)
             )));
         }
+        if o.ty == "timed_sunsky" {
+            return Err(o.error(
+                "the timed_sunsky emitter (Mitsuba's sky averaged over the sensor's shutter interval, mapped to days and \
+                 hours) is not implemented: neumann's rays carry no time; a sunsky at a fixed date and time is",
+            ));
+        }
         let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
             let mut names: Vec<&str> = EMITTER_PLUGINS.iter().map(|p| p.0).collect();
             names.extend(["area", "directionalarea"]);
