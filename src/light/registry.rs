@@ -265,6 +265,13 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
             E::Aperture(_) => "sun_aperture",
             E::Direction(_) => "sun_direction",
             E::Transform => "to_world",
+            E::Overflow => {
+                if o.has("sky_scale") {
+                    "sky_scale"
+                } else {
+                    "sun_scale"
+                }
+            }
         };
         if o.has(at) {
             o.error_at(at, e.to_string())

@@ -146,6 +146,8 @@ pub enum SunSkyError {
     Direction(Vec3),
     /// A transform that does not keep directions (singular).
     Transform,
+    /// Radiance that overflows single precision (a scale too large).
+    Overflow,
 }
 
 impl std::fmt::Display for SunSkyError {
@@ -157,6 +159,9 @@ impl std::fmt::Display for SunSkyError {
             SunSkyError::Aperture(a) => write!(f, "sun_aperture {a}° must lie strictly between 0° and 180°"),
             SunSkyError::Direction(d) => write!(f, "sun_direction ({}, {}, {}) has no direction", d.x, d.y, d.z),
             SunSkyError::Transform => write!(f, "to_world is singular"),
+            SunSkyError::Overflow => {
+                write!(f, "the emitted radiance overflows single precision: lower sun_scale or sky_scale")
+            }
         }
     }
 }
@@ -283,7 +288,10 @@ impl SunSky {
         }
         let sun = match p.sun {
             SunPlacement::Direction(d) => {
-                let local = to_local.apply_vector(d.normalize_or_zero()).normalize_or_zero();
+                // Divided by its largest component first, so that huge components do not
+                // overflow the length.
+                let d0 = d / d.abs().max_element();
+                let local = to_local.apply_vector(d0.normalize_or_zero()).normalize_or_zero();
                 if local == Vec3::ZERO || !local.is_finite() {
                     return Err(SunSkyError::Direction(d));
                 }
@@ -335,6 +343,9 @@ impl SunSky {
             grid,
         };
         sky.build_sampling(p.sun_scale > 0.0);
+        if !sky.integral.is_finite() {
+            return Err(SunSkyError::Overflow);
+        }
         Ok(sky)
     }
 
@@ -796,10 +807,14 @@ mod tests {
             (SunSkyParams { sun_aperture: 0.0, ..d }, SunSkyError::Aperture(0.0)),
             (SunSkyParams { sun_aperture: 180.0, ..d }, SunSkyError::Aperture(180.0)),
             (SunSkyParams { sun: SunPlacement::Direction(Vec3::ZERO), ..d }, SunSkyError::Direction(Vec3::ZERO)),
+            (SunSkyParams { sun_scale: 3e38, ..d }, SunSkyError::Overflow),
         ];
         for (params, expected) in bad {
             assert_eq!(SunSky::new(&params).unwrap_err(), expected);
         }
+        // Huge components still give a direction.
+        let huge = SunSkyParams { sun: SunPlacement::Direction(Vec3::new(1e38, 1e38, 1e38)), ..d };
+        assert!((SunSky::new(&huge).unwrap().sun_direction() - Vec3::ONE.normalize()).length() < 1e-6);
     }
 
     /// The sky within 10⁻⁴ and the sun within 5·10⁻⁴ (measured: 4·10⁻⁵ and 1.6·10⁻⁴; the sun's

@@ -24,8 +24,8 @@ pub enum BuildError {
     /// An emitting shape has no area to emit from.
     #[error("emitting shape {0} has no area")]
     EmitterWithoutArea(u32),
-    /// There are lights, but none emits anything.
-    #[error("every light has zero power")]
+    /// There are lights, but none emits anything (or their powers overflow).
+    #[error("every light has zero power, or their powers overflow single precision (check the emitters' scales)")]
     NoLightPower,
     /// The camera's parameters are invalid.
     #[error(transparent)]
