@@ -346,7 +346,7 @@ impl EnvMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
+    use crate::testkit::u2;
 
     /// A high-dynamic-range test sky: dim gradient, a bright sun and a black band.
     pub(crate) fn test_sky(w: u32, h: u32) -> Image {
@@ -408,21 +408,7 @@ mod tests {
     /// χ² of `sample` against `pdf` over the sphere, and each sample's pdf and radiance
     /// against `pdf` and `eval`.
     fn assert_samples_match_pdf_and_eval(env: &EnvMap, seed: u64) {
-        let out = chi2_2d(
-            &SPHERE,
-            [31, 61],
-            500_000,
-            |r| env.sample(u2(r)).map(|s| s.0),
-            |d| env.pdf(*d) as f64,
-            &Chi2Config::default(),
-        );
-        assert!(out.passed(), "{out}");
-        let mut rng = crate::sampling::Pcg32::new(1, seed);
-        for _ in 0..1000 {
-            let (d, l, pdf) = env.sample(u2(&mut rng)).unwrap();
-            assert!((pdf - env.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", env.pdf(d));
-            assert!((l - env.eval(d)).abs().max_element() <= 1e-3 * l.max_element().max(1.0));
-        }
+        super::super::check_environment_sampling(|u| env.sample(u), |d| env.pdf(d), |d| env.eval(d), 500_000, seed);
     }
 
     #[test]

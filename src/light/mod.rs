@@ -661,6 +661,29 @@ impl Light {
     }
 }
 
+/// The checks of a light at infinity's direction sampling (`sample` returning direction,
+/// radiance and solid-angle density): χ² of `sample` against `pdf` over the sphere with `n`
+/// draws, and 2000 samples' density and radiance against `pdf` and `eval`.
+#[cfg(test)]
+pub(crate) fn check_environment_sampling(
+    sample: impl Fn(Vec2) -> Option<(Vec3, Rgb, f32)>,
+    pdf: impl Fn(Vec3) -> f32,
+    eval: impl Fn(Vec3) -> Rgb,
+    n: usize,
+    seed: u64,
+) {
+    use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
+    let cfg = Chi2Config::default().with_seed(seed);
+    let out = chi2_2d(&SPHERE, [31, 61], n, |r| sample(u2(r)).map(|s| s.0), |d| pdf(*d) as f64, &cfg);
+    assert!(out.passed(), "{out}");
+    let mut rng = crate::sampling::Pcg32::new(1, seed);
+    for _ in 0..2000 {
+        let (d, l, p) = sample(u2(&mut rng)).expect("a sample");
+        assert!((p - pdf(d)).abs() <= 1e-3 * p, "{p} vs {}", pdf(d));
+        assert!((l - eval(d)).abs().max_element() <= 1e-3 * l.abs().max_element().max(1e-3), "{l} vs {}", eval(d));
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -708,7 +708,7 @@ mod tests {
     /// rotation, with and without limb darkening, and the sky alone.
     #[test]
     fn sampling_matches_pdf_and_eval() {
-        use crate::testkit::{chi2_2d, integrate_pdf_2d, u2, Chi2Config, SPHERE};
+        use crate::testkit::{integrate_pdf_2d, SPHERE};
         let base = SunSkyParams {
             sun: SunPlacement::Direction(Vec3::new(0.4, 0.3, 0.5)),
             sun_aperture: 20.0,
@@ -722,25 +722,18 @@ mod tests {
             // step of the density.
             let sky = SunSky::with_grid(params, (16, 8)).unwrap();
             assert_eq!(sky.sun_probability > 0.0, k < 2, "variant {k}: {}", sky.sun_probability);
-            let out = chi2_2d(
-                &SPHERE,
-                [31, 61],
+            super::super::check_environment_sampling(
+                |u| sky.sample(u),
+                |d| sky.pdf(d),
+                |d| sky.eval(d),
                 200_000,
-                |r| sky.sample(u2(r)).map(|s| s.0),
-                |d| sky.pdf(*d) as f64,
-                &Chi2Config::default().with_seed(k as u64),
+                k as u64,
             );
-            assert!(out.passed(), "variant {k}: {out}");
             let total = integrate_pdf_2d(&SPHERE, [41, 81], |d| sky.pdf(*d) as f64);
             assert!((total - 1.0).abs() < 2e-3, "variant {k}: the density integrates to {total}");
             let mut rng = crate::sampling::Pcg32::new(1, k as u64);
             // The full grid for what follows (its sampling is the same code).
             let sky = SunSky::new(params).unwrap();
-            for _ in 0..2000 {
-                let (d, l, pdf) = sky.sample(u2(&mut rng)).unwrap();
-                assert!((pdf - sky.pdf(d)).abs() <= 1e-3 * pdf, "{pdf} vs {}", sky.pdf(d));
-                assert!((l - sky.eval(d)).abs().max_element() <= 1e-3 * l.abs().max_element().max(1e-3));
-            }
             // ∫ luminance dω against uniform sphere sampling (the sun at 20° is wide enough).
             let mc = crate::testkit::sphere_integral_mc(200_000, &mut rng, |d| luminance(sky.eval(d)) as f64);
             let rel = (sky.integral_luminance() as f64 - mc).abs() / mc;
