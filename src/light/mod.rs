@@ -263,6 +263,14 @@ fn beyond_scene(p_ref: Vec3, center: Vec3, radius: f32) -> f32 {
     2.0 * (radius + (p_ref - center).length()) + 1.0
 }
 
+/// A direction sampled toward a light at infinity, `(wi, li, pdf)`, as the light sample at
+/// `p_ref` whose shadow ray ends beyond everything in the scene.
+#[inline]
+fn sample_at_infinity(p_ref: Vec3, center: Vec3, radius: f32, (wi, li, pdf): (Vec3, Rgb, f32)) -> LightSample {
+    let far = beyond_scene(p_ref, center, radius);
+    LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false }
+}
+
 impl Light {
     /// Emitted power (luminance of the radiant flux, W) used to choose lights proportionally:
     /// `π A L` for a one-sided Lambertian area emitter of area `A`, `4π I` for a point light.
@@ -384,27 +392,11 @@ impl Light {
             }
             Light::Constant { radiance, center, radius } => {
                 let s = crate::sampling::sample_uniform_sphere(u);
-                // A shadow-ray endpoint beyond everything in the scene.
-                let far = beyond_scene(p_ref, *center, *radius);
-                Some(LightSample {
-                    wi: s.value,
-                    li: *radiance,
-                    pdf: s.pdf,
-                    p: p_ref + s.value * far,
-                    n: Vec3::ZERO,
-                    p_error: Vec3::ZERO,
-                    delta: false,
-                })
+                Some(sample_at_infinity(p_ref, *center, *radius, (s.value, *radiance, s.pdf)))
             }
-            Light::SunSky { sky, center, radius } => {
-                let (wi, li, pdf) = sky.sample(u)?;
-                let far = beyond_scene(p_ref, *center, *radius);
-                Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
-            }
+            Light::SunSky { sky, center, radius } => Some(sample_at_infinity(p_ref, *center, *radius, sky.sample(u)?)),
             Light::EnvMap { map, center, radius } => {
-                let (wi, li, pdf) = map.sample_from(p_ref, u)?;
-                let far = beyond_scene(p_ref, *center, *radius);
-                Some(LightSample { wi, li, pdf, p: p_ref + wi * far, n: Vec3::ZERO, p_error: Vec3::ZERO, delta: false })
+                Some(sample_at_infinity(p_ref, *center, *radius, map.sample_from(p_ref, u)?))
             }
             Light::Directional { direction, irradiance, center, radius } => {
                 let wi = -*direction;
@@ -509,6 +501,12 @@ impl Light {
             let q = sample_uniform_disk_concentric(u_pos).value * radius;
             (center + frame.to_world(Vec3::new(q.x, q.y, -2.0 * radius)), PI * radius * radius)
         };
+        // A direction sampled toward a light at infinity, `(wi, li, pdf)`, as a parallel ray
+        // travelling along `-wi` from outside the scene.
+        let from_infinity = |(wi, li, pdf): (Vec3, Rgb, f32), center: Vec3, radius: f32| {
+            let (p, area) = parallel(-wi, center, radius);
+            EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
+        };
         let s = match self {
             Light::Area { shape, radiance, two_sided } => {
                 let (ps, uv) = area_emission_point(&shapes[*shape as usize], radiance, u_pos)?;
@@ -562,26 +560,11 @@ impl Light {
             }
             Light::Constant { radiance, center, radius } => {
                 let wi = sample_uniform_sphere(u_dir);
-                let (p, area) = parallel(-wi.value, *center, *radius);
-                EmissionSample {
-                    p,
-                    p_error: Vec3::ZERO,
-                    n: Vec3::ZERO,
-                    d: -wi.value,
-                    weight: *radiance * (area / wi.pdf),
-                }
+                from_infinity((wi.value, *radiance, wi.pdf), *center, *radius)
             }
-            Light::SunSky { sky, center, radius } => {
-                let (wi, li, pdf) = sky.sample(u_dir)?;
-                let (p, area) = parallel(-wi, *center, *radius);
-                EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
-            }
+            Light::SunSky { sky, center, radius } => from_infinity(sky.sample(u_dir)?, *center, *radius),
             Light::EnvMap { map, center, radius } => match map.portal() {
-                None => {
-                    let (wi, li, pdf) = map.sample(u_dir)?;
-                    let (p, area) = parallel(-wi, *center, *radius);
-                    EmissionSample { p, p_error: Vec3::ZERO, n: Vec3::ZERO, d: -wi, weight: li * (area / pdf) }
-                }
+                None => from_infinity(map.sample(u_dir)?, *center, *radius),
                 Some(portal) => {
                     // Through the portal: a point uniform on it, a direction from the map's
                     // distribution (rays that do not enter through it carry nothing). The ray
