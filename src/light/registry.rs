@@ -166,10 +166,22 @@ fn directional(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     })
 }
 
-/// An emitter parameter that Mitsuba reads as a texture but requires to be the same
+/// An emitter parameter that Mitsuba reads as an emission texture but requires to be the same
 /// everywhere: a colour, or a texture that does not vary (`srgb`, `rawconstant`).
 fn uniform_emission(o: &Obj, name: &str, textures: &mut dyn TextureSource) -> Result<Rgb> {
-    match textures.texture_of(o, name, Rgb::ONE, SpectrumKind::Illuminant)? {
+    uniform_texture(o, name, Rgb::ONE, SpectrumKind::Illuminant, textures)
+}
+
+/// An emitter parameter of spectrum `kind` (default `default`) that Mitsuba reads as a texture
+/// but requires to be the same everywhere.
+fn uniform_texture(
+    o: &Obj,
+    name: &str,
+    default: Rgb,
+    kind: SpectrumKind,
+    textures: &mut dyn TextureSource,
+) -> Result<Rgb> {
+    match textures.texture_of(o, name, default, kind)? {
         Texture::Constant(c) => Ok(c),
         _ => Err(o.error_at(
             name,
@@ -239,21 +251,15 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
             SunPlacement::Time(time, place)
         }
     };
-    let albedo = match textures.texture_of(o, "albedo", Rgb::splat(0.3), SpectrumKind::Reflectance)? {
-        Texture::Constant(c) => c,
-        _ => return Err(o.error_at(
-            "albedo",
-            "the sunsky emitter's 'albedo' must be the same everywhere (as Mitsuba requires), not a varying texture",
-        )),
-    };
+    let d = SunSkyParams::default();
     let params = SunSkyParams {
         sun,
-        turbidity: o.float("turbidity", 3.0)?,
-        albedo,
-        sun_scale: o.float("sun_scale", 1.0)?,
-        sky_scale: o.float("sky_scale", 1.0)?,
-        sun_aperture: o.float("sun_aperture", 0.5358)?,
-        complex_sun: o.bool("complex_sun", false)?,
+        turbidity: o.float("turbidity", d.turbidity)?,
+        albedo: uniform_texture(o, "albedo", d.albedo, SpectrumKind::Reflectance, textures)?,
+        sun_scale: o.float("sun_scale", d.sun_scale)?,
+        sky_scale: o.float("sky_scale", d.sky_scale)?,
+        sun_aperture: o.float("sun_aperture", d.sun_aperture)?,
+        complex_sun: o.bool("complex_sun", d.complex_sun)?,
         to_world: o.transform("to_world")?,
     };
     let sky = SunSky::new(&params).map_err(|e| {

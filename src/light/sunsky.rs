@@ -46,7 +46,9 @@ const SUN_CONTROL_POINTS: usize = 4;
 const SUN_LIMB_PARAMS: usize = 6;
 /// Sun elevations of the simple sun's table: 2°, 5°, …, 89°.
 const SUN_ELEVATIONS: usize = 30;
-/// The real sun's half aperture (radians), the default: half of 0.5358°.
+/// The default `sun_aperture` (degrees): the real sun's.
+const DEFAULT_APERTURE: f32 = 0.5358;
+/// The real sun's half aperture (radians) as Mitsuba writes it, in double precision.
 const SUN_HALF_APERTURE: f64 = std::f64::consts::PI * (0.5 * 0.5358) / 180.0;
 /// Mitsuba's factor from the solar dataset's spectral units to its RGB ones.
 const SPEC_TO_RGB_SUN: f32 = 467.069_28;
@@ -124,7 +126,7 @@ impl Default for SunSkyParams {
             albedo: Rgb::splat(0.3),
             sun_scale: 1.0,
             sky_scale: 1.0,
-            sun_aperture: 0.5358,
+            sun_aperture: DEFAULT_APERTURE,
             complex_sun: false,
             to_world: Transform::IDENTITY,
         }
@@ -197,16 +199,12 @@ pub struct SunSky {
     sky_params: [[f32; SKY_PARAMS]; 3],
     /// `L_M` per channel times `sky_scale` and Mitsuba's normalisation.
     sky_rad: Rgb,
-    /// Whether anything is emitted (the sun above the horizon).
-    lit: bool,
     /// The sky's sampling density over (φ / 2π, θ / (π/2)); `None` if the sky is black.
     sky_distribution: Option<PiecewiseConstant2D>,
     /// Probability of sampling the sun's cone.
     sun_probability: f32,
     /// ∫ luminance dω over the sphere.
     integral: f32,
-    /// Cells of the sky's sampling grid in φ and in θ.
-    grid: (usize, usize),
 }
 
 /// Cells of the sky's sampling grid in φ and in θ.
@@ -321,7 +319,7 @@ impl SunSky {
             let by_elevation = take_interp(&data.sun_mean, TURBIDITIES, SUN_ELEVATIONS * 3, p.turbidity - 1.0);
             let index = ((eta.to_degrees() - 2.0) / 3.0).clamp(0.0, (SUN_ELEVATIONS - 1) as f32);
             let rgb = take_interp(&by_elevation, SUN_ELEVATIONS, 3, index);
-            let default_half = (0.5f32 * 0.5358).to_radians();
+            let default_half = (0.5 * DEFAULT_APERTURE).to_radians();
             let scale = p.sun_scale * area_ratio(sun_half) / area_ratio(default_half);
             Sun::Uniform(Rgb::new(rgb[0], rgb[1], rgb[2]) * scale)
         };
@@ -336,25 +334,24 @@ impl SunSky {
             sun_model,
             sky_params,
             sky_rad,
-            lit: sun.z >= 0.0,
             sky_distribution: None,
             sun_probability: 0.0,
             integral: 0.0,
-            grid,
         };
-        sky.build_sampling(p.sun_scale > 0.0);
+        sky.build_sampling(grid);
         if !sky.integral.is_finite() {
             return Err(SunSkyError::Overflow);
         }
         Ok(sky)
     }
 
-    /// The sky's sampling grid, the sun's share and the integral of luminance.
-    fn build_sampling(&mut self, sun_on: bool) {
-        if !self.lit {
+    /// The sky's sampling grid of `grid` = (φ, θ) cells, the sun's share and the integral of
+    /// luminance.
+    fn build_sampling(&mut self, grid: (usize, usize)) {
+        if !self.is_lit() {
             return;
         }
-        let (grid_phi, grid_theta) = self.grid;
+        let (grid_phi, grid_theta) = grid;
         // Luminance of the sky alone at the grid's corners.
         let corner = |i: usize, j: usize| {
             let (phi, theta) = (2.0 * PI * i as f32 / grid_phi as f32, 0.5 * PI * j as f32 / grid_theta as f32);
@@ -385,24 +382,21 @@ impl SunSky {
             func.iter_mut().for_each(|f| *f = f.max(0.0) + floor);
             self.sky_distribution = PiecewiseConstant2D::new(&func, grid_phi, grid_theta);
         }
-        // The sun's luminance over its cone: the mean over a 16 × 16 grid of the cone's
-        // parameter square (uniform in solid angle; the limb is darker than the centre).
-        let sun_power = if sun_on {
-            let omega = 2.0 * PI * (1.0 - self.sun_cos);
-            let mut sum = 0.0f64;
-            for a in 0..16 {
-                for b in 0..16 {
-                    let u = Vec2::new((a as f32 + 0.5) / 16.0, (b as f32 + 0.5) / 16.0);
-                    let w = self.sun_frame.to_world(sample_uniform_cone(u, self.sun_cos).value);
-                    if w.z >= 0.0 {
-                        sum += luminance(self.sun_radiance(w, angle_between(self.sun, w))) as f64;
-                    }
+        // The sun's luminance over its cone (0 with `sun_scale` 0): the mean over a 16 × 16 grid
+        // of the cone's parameter square (uniform in solid angle; the limb is darker than the
+        // centre).
+        let omega = 2.0 * PI * (1.0 - self.sun_cos);
+        let mut sum = 0.0f64;
+        for a in 0..16 {
+            for b in 0..16 {
+                let u = Vec2::new((a as f32 + 0.5) / 16.0, (b as f32 + 0.5) / 16.0);
+                let w = self.sun_frame.to_world(sample_uniform_cone(u, self.sun_cos).value);
+                if w.z >= 0.0 {
+                    sum += luminance(self.sun_radiance(w, angle_between(self.sun, w))) as f64;
                 }
             }
-            ((sum / 256.0) as f32 * omega).max(0.0)
-        } else {
-            0.0
-        };
+        }
+        let sun_power = ((sum / 256.0) as f32 * omega).max(0.0);
         self.integral = sky_integral + sun_power;
         self.sun_probability = match (self.sky_distribution.is_some(), sun_power > 0.0) {
             (true, true) => sun_power / (sun_power + sky_integral.max(0.0)),
@@ -469,7 +463,7 @@ impl SunSky {
 
     /// Radiance arriving from the local unit direction `w`.
     fn eval_local(&self, w: Vec3) -> Rgb {
-        if !self.lit || w.z < 0.0 {
+        if !self.is_lit() || w.z < 0.0 {
             return Rgb::ZERO;
         }
         let mut l = self.sky(w);
@@ -487,9 +481,10 @@ impl SunSky {
 
     /// A world direction, its radiance and its solid-angle density.
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
-        let local = if u.x < self.sun_probability {
+        let (local, pdf) = if u.x < self.sun_probability {
             let u = Vec2::new((u.x / self.sun_probability).min(crate::math::ONE_MINUS_EPSILON), u.y);
-            self.sun_frame.to_world(sample_uniform_cone(u, self.sun_cos).value)
+            let w = self.sun_frame.to_world(sample_uniform_cone(u, self.sun_cos).value);
+            (w, self.pdf_local(w))
         } else {
             let dist = self.sky_distribution.as_ref()?;
             let u0 = ((u.x - self.sun_probability) / (1.0 - self.sun_probability)).min(crate::math::ONE_MINUS_EPSILON);
@@ -503,26 +498,27 @@ impl SunSky {
             if sin_t <= 0.0 || s.pdf <= 0.0 {
                 return None;
             }
-            // The density from the sample itself (no atan2 to find its cell again).
-            let mut pdf = (1.0 - self.sun_probability) * s.pdf / (PI * PI * sin_t);
-            if self.sun_probability > 0.0 {
-                pdf += self.sun_probability * uniform_cone_pdf(self.sun_frame.to_local(w), self.sun_cos);
-            }
-            return Some((self.to_world.apply_vector(w).normalize(), self.eval_local(w), pdf));
+            // The sky's density from the sample itself (no atan2 to find its cell again).
+            (w, (1.0 - self.sun_probability) * s.pdf / (PI * PI * sin_t) + self.sun_pdf(w))
         };
-        let pdf = self.pdf_local(local);
         if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
         Some((self.to_world.apply_vector(local).normalize(), self.eval_local(local), pdf))
     }
 
+    /// The sun cone's share of [`SunSky::sample`]'s density at the local unit direction `w`.
+    fn sun_pdf(&self, w: Vec3) -> f32 {
+        if self.sun_probability > 0.0 {
+            self.sun_probability * uniform_cone_pdf(self.sun_frame.to_local(w), self.sun_cos)
+        } else {
+            0.0
+        }
+    }
+
     /// Solid-angle density of [`SunSky::sample`] at the local unit direction `w`.
     fn pdf_local(&self, w: Vec3) -> f32 {
-        let mut pdf = 0.0;
-        if self.sun_probability > 0.0 {
-            pdf += self.sun_probability * uniform_cone_pdf(self.sun_frame.to_local(w), self.sun_cos);
-        }
+        let mut pdf = self.sun_pdf(w);
         if let (Some(dist), true) = (&self.sky_distribution, w.z > 0.0) {
             // θ from atan2, accurate near the zenith (where acos rounds to 0).
             let sin_theta = (w.x * w.x + w.y * w.y).sqrt();
@@ -553,7 +549,7 @@ impl SunSky {
     /// Whether anything is emitted: the sun stands above the horizon (with the sun below it
     /// Mitsuba's sunsky is dark, sky included).
     pub fn is_lit(&self) -> bool {
-        self.lit
+        self.sun.z >= 0.0
     }
 
     /// Unit direction towards the sun's centre (world).
