@@ -224,30 +224,20 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
             };
             // As in Mitsuba, month and day are not range-checked: the Julian-day formula rolls a
             // day past the month's end into the next month.
+            let real = |name: &str, default: f32| o.float_checked(name, default, f32::is_finite, "finite");
             let time = DateTime {
                 year: int("year", t.year)?,
                 month: int("month", t.month)?,
                 day: int("day", t.day)?,
-                hour: o.float("hour", t.hour)?,
-                minute: o.float("minute", t.minute)?,
-                second: o.float("second", t.second)?,
+                hour: real("hour", t.hour)?,
+                minute: real("minute", t.minute)?,
+                second: real("second", t.second)?,
             };
             let place = Location {
-                latitude: o.float("latitude", l.latitude)?,
-                longitude: o.float("longitude", l.longitude)?,
-                timezone: o.float("timezone", l.timezone)?,
+                latitude: real("latitude", l.latitude)?,
+                longitude: real("longitude", l.longitude)?,
+                timezone: real("timezone", l.timezone)?,
             };
-            let reals = [
-                ("latitude", place.latitude),
-                ("longitude", place.longitude),
-                ("timezone", place.timezone),
-                ("hour", time.hour),
-                ("minute", time.minute),
-                ("second", time.second),
-            ];
-            if let Some((name, v)) = reals.iter().find(|(_, v)| !v.is_finite()) {
-                return Err(o.error_at(name, format!("{name} {v} must be finite")));
-            }
             SunPlacement::Time(time, place)
         }
     };

@@ -725,6 +725,7 @@ fn sunsky_emitters() {
         (r#"<emitter type="sunsky"><rgb name="albedo" value="0.5, 1.5, 0.5"/></emitter>"#, "albedo"),
         (r#"<emitter type="sunsky"><texture type="checkerboard" name="albedo"/></emitter>"#, "the same everywhere"),
         (r#"<emitter type="sunsky"><float name="sun_radius" value="1"/></emitter>"#, "sun_radius"),
+        (r#"<emitter type="sunsky"><float name="hour" value="1e39"/></emitter>"#, "'hour' must be finite"),
         (r#"<emitter type="timed_sunsky"/>"#, "timed_sunsky emitter (Mitsuba's sky averaged"),
     ] {
         let e = err(&scene(body));
