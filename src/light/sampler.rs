@@ -15,9 +15,10 @@ use crate::geometry::Geometry;
 use crate::math::Vec3;
 use crate::sampling::AliasTable;
 
-/// Lights exist but none emits anything: nothing to choose by power or importance.
+/// A light's power is not a finite non-negative number (its radiance overflows single precision,
+/// or is negative): there is no distribution to choose lights by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct NoLightPower;
+pub struct InvalidLightPower;
 
 /// Which light sampler a render uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -64,14 +65,26 @@ pub enum LightSampler {
 }
 
 impl LightSampler {
-    /// The sampler of `kind` for `lights` on `shapes`. Errors if lights exist but none has
-    /// power (power and BVH selection would have nothing to choose).
-    pub fn new(kind: LightSamplerKind, lights: &[Light], shapes: &[Geometry]) -> Result<LightSampler, NoLightPower> {
+    /// The sampler of `kind` for `lights` on `shapes`. Where every light's power is zero
+    /// (lights switched off: Mitsuba renders such a scene black) there is nothing worth
+    /// choosing, and power or BVH selection is [`LightSampler::Empty`]; uniform selection still
+    /// chooses among them, as Mitsuba does. Errors if a power is not finite or is negative.
+    pub fn new(
+        kind: LightSamplerKind,
+        lights: &[Light],
+        shapes: &[Geometry],
+    ) -> Result<LightSampler, InvalidLightPower> {
         if lights.is_empty() {
             return Ok(LightSampler::Empty);
         }
         let powers: Vec<f32> = lights.iter().map(|l| l.power(shapes)).collect();
-        let power = AliasTable::new(&powers).ok_or(NoLightPower)?;
+        if powers.iter().all(|&p| p == 0.0) {
+            return Ok(match kind {
+                LightSamplerKind::Uniform => LightSampler::Uniform { count: lights.len() as u32 },
+                LightSamplerKind::Power | LightSamplerKind::Bvh => LightSampler::Empty,
+            });
+        }
+        let power = AliasTable::new(&powers).ok_or(InvalidLightPower)?;
         Ok(match kind {
             LightSamplerKind::Uniform => LightSampler::Uniform { count: lights.len() as u32 },
             LightSamplerKind::Power => LightSampler::Power(power),

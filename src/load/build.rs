@@ -173,6 +173,12 @@ impl Builder {
                 .set_light_sampler(self.light_sampler)
                 .map_err(|e| SceneError::at(&root.loc, format!("cannot build the light sampler: {e}")))?;
         }
+        if !scene.lights().is_empty() && scene.lights().iter().all(|l| l.power(scene.geometries()) == 0.0) {
+            self.warnings.push(format!(
+                "warning: {}: every emitter of the scene emits nothing: only black can be rendered",
+                root.loc.position()
+            ));
+        }
         // Mitsuba 3 rejects parameters that no plugin reads ("unreferenced property"), and so
         // does neumann: such a parameter is a typo or a feature neumann does not implement.
         root.check_unused(&mut Vec::new())?;

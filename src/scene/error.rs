@@ -24,17 +24,17 @@ pub enum BuildError {
     /// An emitting shape has no area to emit from.
     #[error("emitting shape {0} has no area")]
     EmitterWithoutArea(u32),
-    /// There are lights, but none emits anything (or their powers overflow).
-    #[error("every light has zero power, or their powers overflow single precision (check the emitters' scales)")]
-    NoLightPower,
+    /// A light's power is not finite, or is negative.
+    #[error("a light's power overflows single precision or is negative (check the emitters' scales)")]
+    InvalidLightPower,
     /// The camera's parameters are invalid.
     #[error(transparent)]
     Camera(#[from] CameraError),
 }
 
-impl From<crate::light::NoLightPower> for BuildError {
-    fn from(_: crate::light::NoLightPower) -> BuildError {
-        BuildError::NoLightPower
+impl From<crate::light::InvalidLightPower> for BuildError {
+    fn from(_: crate::light::InvalidLightPower) -> BuildError {
+        BuildError::InvalidLightPower
     }
 }
 
@@ -58,8 +58,15 @@ mod tests {
         let mut b = SceneBuilder::new();
         b.set_camera(camera);
         let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), m, Some(Rgb::ZERO));
-        assert_eq!(b.build().unwrap_err(), BuildError::NoLightPower);
+        // Radiance overflowing in the power (4π · π · 10³⁸ is not an f32) is refused; lights
+        // that are off are not (the image is black, as in Mitsuba).
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), m, Some(Rgb::splat(1e38)));
+        assert_eq!(b.build().unwrap_err(), BuildError::InvalidLightPower);
+        let mut off = SceneBuilder::new();
+        off.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
+        let m = off.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        off.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), m, Some(Rgb::ZERO));
+        assert!(off.build().is_ok());
         let e: BuildError = Camera::perspective(Transform::IDENTITY, 200.0, FovAxis::X, 4, 4).unwrap_err().into();
         assert_eq!(e, BuildError::Camera(CameraError::FieldOfView(200.0)));
         assert!(e.to_string().contains("(0, 180)"), "{e}");

@@ -711,6 +711,10 @@ fn sunsky_emitters() {
         load(&scene(r#"<emitter type="sunsky"><float name="hour" value="1"/></emitter><emitter type="point"/>"#))
             .unwrap();
     assert!(night.warnings.iter().any(|w| w.contains("below the horizon")), "{:?}", night.warnings);
+    // The sun alone at night: rendered black (as Mitsuba does), with a warning.
+    let dark = load(&scene(r#"<emitter type="sunsky"><float name="hour" value="1"/></emitter>"#)).unwrap();
+    assert!(dark.warnings.iter().any(|w| w.contains("emits nothing: only black")), "{:?}", dark.warnings);
+    assert!(!night.warnings.iter().any(|w| w.contains("only black")), "{:?}", night.warnings);
     for (body, expectation) in [
         (
             r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="1"/><float name="hour" value="9"/></emitter>"#,
