@@ -16,7 +16,9 @@ Default scenes: the Cornell box at 512², 64 spp, max_depth 8, then every valida
 --depths 1,2,3,8 adds the Cornell box at 512², 64 spp at each of those maximum depths: where the
 ratio changes with depth tells camera rays and direct light (depth ≤ 2) from bounces.
 --neumann BIN (repeatable) times these neumann binaries instead of target/release/neumann, each
-in its own column with its ratio, interleaved run by run: a before and an after in one run."""
+in its own column with its ratio, interleaved run by run: a before and an after in one run.
+--scalar also times Mitsuba's scalar_rgb variant (one path at a time per thread, as neumann
+renders) and prints neumann's ratio to it: the share of the gap that is SIMD width."""
 import argparse
 import os
 import subprocess
@@ -28,9 +30,9 @@ sys.path.insert(0, os.path.dirname(__file__))
 
 MITSUBA_ONE = """
 import sys, mitsuba as mi
-mi.set_variant('llvm_ad_rgb')
+mi.set_variant(sys.argv[3])
 mi.set_log_level(mi.LogLevel.Warn)
-params = dict(a.split('=', 1) for a in sys.argv[3:])
+params = dict(a.split('=', 1) for a in sys.argv[4:])
 scene = mi.load_file(sys.argv[1], **params)
 mi.Bitmap(mi.render(scene, spp=int(params['spp']))).write(sys.argv[2])
 """
@@ -50,6 +52,8 @@ def main():
     parser.add_argument("--neumann", action="append", default=[],
                         help="a neumann binary to time (repeatable; default: target/release/neumann)")
     parser.add_argument("scenes", nargs="*", help="scene names (default: all)")
+    parser.add_argument("--scalar", action="store_true",
+                        help="also time Mitsuba's scalar_rgb variant, with neumann's (first binary's) ratio to it")
     opts = parser.parse_args()
     res, runs, args = opts.res, opts.runs, opts.scenes
     from references import SCENES
@@ -65,6 +69,8 @@ def main():
         if len(binaries) > 1:
             print(f"#{k + 1}: {b}")
     columns = "".join(f"  {label:>11}  ratio" for label in labels)
+    if opts.scalar:
+        columns += f"  {'scalar M/s':>11}  ratio"
     print(f"{'scene':<18} {'res':>5} {'spp':>5} {'depth':>5}  {'Mitsuba M/s':>11}{columns}")
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
@@ -72,17 +78,23 @@ def main():
             params = dict(res=str(r), spp=str(spp), **extra)
             scene = f"scenes/{name}.xml"
             n_cmds = [[b, "render", scene, "-o", out] + [f"-D{k}={v}" for k, v in params.items()] for b in binaries]
-            m_cmd = [sys.executable, "-c", MITSUBA_ONE, scene, out] + [f"{k}={v}" for k, v in params.items()]
+            m_args = [scene, out] + [f"{k}={v}" for k, v in params.items()]
+            m_cmd = [sys.executable, "-c", MITSUBA_ONE] + m_args[:2] + ["llvm_ad_rgb"] + m_args[2:]
+            s_cmd = [sys.executable, "-c", MITSUBA_ONE] + m_args[:2] + ["scalar_rgb"] + m_args[2:]
             timed(m_cmd)  # warm-up: fills Dr.Jit's kernel cache
             t_n = [float("inf")] * len(binaries)
-            t_m = float("inf")
+            t_m = t_s = float("inf")
             for _ in range(runs):
                 for k, cmd in enumerate(n_cmds):
                     t_n[k] = min(t_n[k], timed(cmd))
                 t_m = min(t_m, timed(m_cmd))
+                if opts.scalar:
+                    t_s = min(t_s, timed(s_cmd))
             samples = r * r * spp
             depth = extra.get("max_depth", "")
             cells = "".join(f"  {samples / t / 1e6:>11.3f}  {t_m / t:5.2f}" for t in t_n)
+            if opts.scalar:
+                cells += f"  {samples / t_s / 1e6:>11.3f}  {t_s / t_n[0]:5.2f}"
             print(f"{name:<18} {r:>5} {spp:>5} {depth:>5}  {samples / t_m / 1e6:>11.3f}{cells}", flush=True)
 
 
