@@ -72,12 +72,19 @@ impl BSplineCurves {
         &self.points[i..i + 4]
     }
 
-    /// Bounds of segment `k`: its control points grown by their largest radius (a B-spline
-    /// lies in its control points' convex hull, its radius below their largest).
+    /// Bounds of segment `k`: its Bézier control points grown by the largest radius (a Bézier
+    /// curve lies in its control points' convex hull, about a third of the B-spline points' one
+    /// along a curve; the radius is below its control points' largest). The Bézier points,
+    /// computed in single precision, are grown by a further 10⁻⁶ of the B-spline points'
+    /// magnitude for the rounding.
     pub fn bounds(&self, k: usize) -> Bounds3 {
         let c = self.controls(k);
         let r = c.iter().fold(0.0f32, |m, c| m.max(c.r));
-        c.iter().fold(Bounds3::EMPTY, |b, c| b.union(&Bounds3 { min: c.p - Vec3::splat(r), max: c.p + Vec3::splat(r) }))
+        let magnitude = c.iter().fold(Vec3::ZERO, |m, c| m.max(c.p.abs()));
+        let grow = Vec3::splat(r) + magnitude * 1e-6;
+        bezier_points(std::array::from_fn(|i| c[i].p))
+            .iter()
+            .fold(Bounds3::EMPTY, |b, &p| b.union(&Bounds3 { min: p - grow, max: p + grow }))
     }
 
     /// Segment `k` at `u`, positions relative to `origin`.
@@ -107,6 +114,14 @@ impl BSplineCurves {
     /// The nearest entry of `ray` into segment `k` within `(0, t_max)`: `t` and `uv.x` the
     /// segment's `u` (`uv.y` unused, 0).
     pub fn intersect(&self, k: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
+        if self.misses_hull(k, ray, t_max) {
+            return None;
+        }
+        self.search(k, ray, t_max)
+    }
+
+    /// [`BSplineCurves::intersect`] by the subdivision search alone.
+    fn search(&self, k: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
         let len_d = f64::from(ray.d.length());
         if len_d <= 0.0 || len_d.is_nan() {
             return None;
@@ -137,6 +152,41 @@ impl BSplineCurves {
         search.piece(bez, rb, 0.0, 1.0, 0);
         let (t, u) = search.hit?;
         Some(CurveHit { t: (t / len_d) as f32, uv: Vec2::new(u as f32, 0.0) })
+    }
+
+    /// Whether `ray` certainly misses segment `k` within `(0, t_max)`, by a test in single
+    /// precision before the search in double: the tube lies within its largest radius of the
+    /// convex hull of the segment's Bézier control points, so it is missed if the hull, so
+    /// grown, lies wholly to one side of one of two planes through the ray, behind the origin
+    /// or beyond `t_max` (the search's first test, in another frame). The growth carries a
+    /// margin (10⁻⁴ of the points' distance) far above the rounding of either precision and the
+    /// search's tolerance, so only segments the search would also miss are skipped, and the
+    /// answer is the same. About nineteen in twenty segments a ray's BVH walk reaches are
+    /// skipped here at a fraction of the search's setup cost.
+    #[inline]
+    fn misses_hull(&self, k: usize, ray: &Ray, t_max: f32) -> bool {
+        let d = ray.d.normalize_or_zero();
+        if d == Vec3::ZERO {
+            return false;
+        }
+        let (e1, e2) = d.any_orthonormal_pair();
+        let c = self.controls(k);
+        let q: [Vec3; 4] = std::array::from_fn(|i| c[i].p - ray.o);
+        let scale = q.iter().fold(0.0f32, |m, q| m.max(q.abs().max_element()));
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for b in bezier_points(q) {
+            let f = Vec3::new(b.dot(e1), b.dot(e2), b.dot(d));
+            (lo, hi) = (lo.min(f), hi.max(f));
+        }
+        let r_max = c.iter().fold(0.0f32, |m, c| m.max(c.r));
+        let grow = r_max + 1e-4 * (scale + r_max);
+        // Comparisons false for NaN: a non-finite case is left to the search.
+        lo.x > grow
+            || hi.x < -grow
+            || lo.y > grow
+            || hi.y < -grow
+            || hi.z < -grow
+            || lo.z > t_max * ray.d.length() + grow
     }
 
     /// The surface at a hit of segment `k` by `ray`.
@@ -296,6 +346,19 @@ fn closest_approach(y: DVec3, d: DVec3, axis: DVec3) -> Option<(f64, f64)> {
     let (dy, ay) = (d.dot(y), axis.dot(y));
     let s = ((ay - b * dy) / denom).clamp(0.0, 1.0);
     Some((s * b - dy, s))
+}
+
+/// The Bézier control points of the uniform cubic B-spline of `q` (single precision).
+#[inline(always)]
+fn bezier_points(q: [Vec3; 4]) -> [Vec3; 4] {
+    const SIXTH: f32 = 1.0 / 6.0;
+    const THIRD: f32 = 1.0 / 3.0;
+    [
+        (q[0] + 4.0 * q[1] + q[2]) * SIXTH,
+        (2.0 * q[1] + q[2]) * THIRD,
+        (q[1] + 2.0 * q[2]) * THIRD,
+        (q[1] + 4.0 * q[2] + q[3]) * SIXTH,
+    ]
 }
 
 /// De Casteljau halves of a cubic Bézier.
@@ -464,6 +527,55 @@ mod tests {
         }
         check(&c, [0.3, 6.0, 0.4], back, None);
         check(&c, [-0.5, 3.0, 4.0], [0.1, -0.5, -0.8], None);
+    }
+
+    /// The bounds hold the tube (points all around its circles, curves far from the origin
+    /// too), and the single-precision rejection skips only segments the search misses: random
+    /// rays at random curves, of which it must skip many and the search must hit many.
+    #[test]
+    fn bounds_hold_the_tube_and_rejections_are_misses() {
+        use crate::sampling::{sample_uniform_sphere, Pcg32};
+        let mut rng = Pcg32::new(11, 5);
+        let (mut skipped, mut hits) = (0, 0);
+        for round in 0..200 {
+            let offset = if round % 4 == 0 { Vec3::new(1000.0, -300.0, 20.0) } else { Vec3::ZERO };
+            let mut r = || rng.next_f32();
+            let pts: Vec<ControlPoint> = (0..6)
+                .map(|i| {
+                    let p = Vec3::new(i as f32 + r() - 0.5, 2.0 * r() - 1.0, 2.0 * r() - 1.0);
+                    ControlPoint { p: p + offset, r: 0.02 + 0.3 * r() }
+                })
+                .collect();
+            let c = BSplineCurves::new(&[pts], &Transform::IDENTITY).unwrap();
+            for k in 0..c.len() {
+                let b = c.bounds(k);
+                for i in 0..=16 {
+                    let e = c.eval(k, i as f64 / 16.0, DVec3::ZERO);
+                    let (n1, n2) = e.dc.normalize().any_orthonormal_pair();
+                    for j in 0..16 {
+                        let a = std::f64::consts::TAU * j as f64 / 16.0;
+                        let p = (e.c + e.r * (a.cos() * n1 + a.sin() * n2)).as_vec3();
+                        assert!(b.contains(p), "round {round} segment {k}: {p} outside {b:?}");
+                    }
+                }
+            }
+            let mut r = || rng.next_f32();
+            for _ in 0..50 {
+                let target = offset + Vec3::new(5.0 * r(), 2.0 * r() - 1.0, 2.0 * r() - 1.0);
+                let dir = sample_uniform_sphere(Vec2::new(r(), r())).value;
+                let ray = Ray::new(target - dir * (1.0 + 4.0 * r()), dir * (0.5 + r()));
+                let t_max = if r() < 0.3 { 2.0 } else { f32::INFINITY };
+                for k in 0..c.len() {
+                    let found = c.search(k, &ray, t_max);
+                    hits += found.is_some() as u32;
+                    if c.misses_hull(k, &ray, t_max) {
+                        skipped += 1;
+                        assert!(found.is_none(), "round {round} segment {k}: skipped a hit {found:?}");
+                    }
+                }
+            }
+        }
+        assert!(skipped > 10_000 && hits > 500, "skipped {skipped}, hits {hits}: the test must exercise both");
     }
 
     /// Every hit lies on the sweep (in the circle's plane, on the circle) and faces the ray;
