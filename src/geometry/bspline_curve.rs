@@ -87,28 +87,18 @@ impl BSplineCurves {
             .fold(Bounds3::EMPTY, |b, &p| b.union(&Bounds3 { min: p - grow, max: p + grow }))
     }
 
+    /// Segment `k`'s control points relative to `origin`, and their radii, in double precision.
+    fn segment(&self, k: usize, origin: DVec3) -> Segment {
+        let c = self.controls(k);
+        Segment {
+            q: std::array::from_fn(|i| c[i].p.as_dvec3() - origin),
+            r: std::array::from_fn(|i| f64::from(c[i].r)),
+        }
+    }
+
     /// Segment `k` at `u`, positions relative to `origin`.
     fn eval(&self, k: usize, u: f64, origin: DVec3) -> Eval {
-        let c = self.controls(k);
-        let (u2, u3) = (u * u, u * u * u);
-        let w = [
-            (-u3 + 3.0 * u2 - 3.0 * u + 1.0) / 6.0,
-            (3.0 * u3 - 6.0 * u2 + 4.0) / 6.0,
-            (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) / 6.0,
-            u3 / 6.0,
-        ];
-        let dw = [(-u2 + 2.0 * u - 1.0) / 2.0, (3.0 * u2 - 4.0 * u) / 2.0, (-3.0 * u2 + 2.0 * u + 1.0) / 2.0, u2 / 2.0];
-        let ddw = [1.0 - u, 3.0 * u - 2.0, 1.0 - 3.0 * u, u];
-        let mut e = Eval { c: DVec3::ZERO, dc: DVec3::ZERO, ddc: DVec3::ZERO, r: 0.0, dr: 0.0 };
-        for i in 0..4 {
-            let (p, r) = (c[i].p.as_dvec3() - origin, f64::from(c[i].r));
-            e.c += w[i] * p;
-            e.dc += dw[i] * p;
-            e.ddc += ddw[i] * p;
-            e.r += w[i] * r;
-            e.dr += dw[i] * r;
-        }
-        e
+        self.segment(k, origin).eval(u)
     }
 
     /// The nearest entry of `ray` into segment `k` within `(0, t_max)`: `t` and `uv.x` the
@@ -131,9 +121,8 @@ impl BSplineCurves {
         // The ray's frame: x, y across it, z along it.
         let (e1, e2) = orthonormal_pair(d);
         let to_frame = |p: DVec3| DVec3::new(p.dot(e1), p.dot(e2), p.dot(d));
-        let c = self.controls(k);
-        let q: [DVec3; 4] = std::array::from_fn(|i| c[i].p.as_dvec3() - o);
-        let r: [f64; 4] = std::array::from_fn(|i| f64::from(c[i].r));
+        let seg = self.segment(k, o);
+        let (q, r) = (seg.q, seg.r);
         // B-spline to Bézier control points, in the ray's frame.
         let bez = [
             (q[0] + 4.0 * q[1] + q[2]) / 6.0,
@@ -148,7 +137,7 @@ impl BSplineCurves {
             (r[1] + 2.0 * r[2]) / 3.0,
             (r[1] + 4.0 * r[2] + r[3]) / 6.0,
         ];
-        let mut search = Search { curves: self, k, o, d, best: f64::from(t_max) * len_d, hit: None };
+        let mut search = Search { seg, d, best: f64::from(t_max) * len_d, hit: None };
         search.piece(bez, rb, 0.0, 1.0, 0);
         let (t, u) = search.hit?;
         Some(CurveHit { t: (t / len_d) as f32, uv: Vec2::new(u as f32, 0.0) })
@@ -214,18 +203,50 @@ impl BSplineCurves {
     }
 }
 
-/// The subdivision search of one segment for one ray (unit direction `d` from `o`).
-struct Search<'a> {
-    curves: &'a BSplineCurves,
-    k: usize,
-    o: DVec3,
+/// A segment's four control points (relative to an origin) and radii, in double precision.
+#[derive(Clone, Copy)]
+struct Segment {
+    q: [DVec3; 4],
+    r: [f64; 4],
+}
+
+impl Segment {
+    /// The segment at `u`.
+    #[inline]
+    fn eval(&self, u: f64) -> Eval {
+        let (u2, u3) = (u * u, u * u * u);
+        let w = [
+            (-u3 + 3.0 * u2 - 3.0 * u + 1.0) / 6.0,
+            (3.0 * u3 - 6.0 * u2 + 4.0) / 6.0,
+            (-3.0 * u3 + 3.0 * u2 + 3.0 * u + 1.0) / 6.0,
+            u3 / 6.0,
+        ];
+        let dw = [(-u2 + 2.0 * u - 1.0) / 2.0, (3.0 * u2 - 4.0 * u) / 2.0, (-3.0 * u2 + 2.0 * u + 1.0) / 2.0, u2 / 2.0];
+        let ddw = [1.0 - u, 3.0 * u - 2.0, 1.0 - 3.0 * u, u];
+        let mut e = Eval { c: DVec3::ZERO, dc: DVec3::ZERO, ddc: DVec3::ZERO, r: 0.0, dr: 0.0 };
+        for i in 0..4 {
+            let (p, r) = (self.q[i], self.r[i]);
+            e.c += w[i] * p;
+            e.dc += dw[i] * p;
+            e.ddc += ddw[i] * p;
+            e.r += w[i] * r;
+            e.dr += dw[i] * r;
+        }
+        e
+    }
+}
+
+/// The subdivision search of one segment for one ray (unit direction `d` from the origin of
+/// `seg`'s coordinates).
+struct Search {
+    seg: Segment,
     d: DVec3,
     /// Nearest accepted distance so far (the limit at first).
     best: f64,
     hit: Option<(f64, f64)>,
 }
 
-impl Search<'_> {
+impl Search {
     /// The Bézier piece `bez` (ray frame) with radii `rb`, spanning `[u0, u1]` of the segment.
     fn piece(&mut self, bez: [DVec3; 4], rb: [f64; 4], u0: f64, u1: f64, depth: u32) {
         let rmax = rb.iter().fold(0.0f64, |m, &r| m.max(r));
@@ -269,8 +290,8 @@ impl Search<'_> {
     /// through its end, still gives a guess), and against the piece's axis (the ray's closest
     /// approach); each guess polished by Newton's method on the exact sweep.
     fn leaf(&mut self, u0: f64, u1: f64) {
-        let (curves, k, o, d) = (self.curves, self.k, self.o, self.d);
-        let (a, b) = (curves.eval(k, u0, o), curves.eval(k, u1, o));
+        let d = self.d;
+        let (a, b) = (self.seg.eval(u0), self.seg.eval(u1));
         let axis = b.c - a.c;
         if let Some((t, s)) = frustum_entry(-a.c, d, axis, a.r, b.r) {
             if self.polish(t, u0 + (u1 - u0) * s, u0, u1) {
@@ -289,10 +310,10 @@ impl Search<'_> {
     /// from `(t, u)`; a converged front-facing root near the piece `[u0, u1]` that is nearer
     /// than the best so far becomes the hit (`true`).
     fn polish(&mut self, mut t: f64, mut u: f64, u0: f64, u1: f64) -> bool {
-        let (curves, k, o, d) = (self.curves, self.k, self.o, self.d);
+        let d = self.d;
         let mut converged = false;
         for _ in 0..12 {
-            let e = curves.eval(k, u, o);
+            let e = self.seg.eval(u);
             let v = t * d - e.c;
             let (f1, f2) = (v.dot(e.dc), v.length_squared() - e.r * e.r);
             let (j11, j12) = (d.dot(e.dc), -e.dc.length_squared() + v.dot(e.ddc));
@@ -317,7 +338,7 @@ impl Search<'_> {
             return false;
         }
         // On the circle, and an entry: the sweep's outward normal faces the ray.
-        let e = curves.eval(k, u, o);
+        let e = self.seg.eval(u);
         let v = t * d - e.c;
         let r = e.r.max(1e-9);
         if (v.length_squared() - e.r * e.r).abs() > 1e-6 * r * r + 1e-12 {
