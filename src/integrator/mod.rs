@@ -179,15 +179,46 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("radiosity", |o| Ok(AnyIntegrator::Radiosity(radiosity::Options::from_props(o)?))),
     // Mitsuba's differentiable and MIS variants render, in primal mode, the same expected image
     // as the estimator they extend (they differ in gradients or in noise): neumann renders them
-    // with that estimator.
-    ("prb", |o| Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))),
-    ("prb_basic", |o| {
-        Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
+    // with that estimator, with their defaults (max_depth 6, as Mitsuba's `ADIntegrator`).
+    ("prb", |o| Ok(AnyIntegrator::Path(differentiable_path(o)?))),
+    ("prb_basic", |o| Ok(AnyIntegrator::Path(differentiable_path(o)?))),
+    ("prbvolpath", |o| {
+        Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props_with_depth(o, 6)? }))
     }),
-    ("prbvolpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
+    ("prb_projective", |o| {
+        projective_props(o)?;
+        Ok(AnyIntegrator::Path(differentiable_path(o)?))
+    }),
+    // Direct illumination whatever `max_depth` and `rr_depth` say (Mitsuba sets both to 2).
+    ("direct_projective", |o| {
+        projective_props(o)?;
+        let mut path = differentiable_path(o)?;
+        (path.settings.max_depth, path.settings.rr_depth) = (2, 2);
+        Ok(AnyIntegrator::Path(path))
+    }),
     ("moment", |o| Ok(AnyIntegrator::Moment(MomentIntegrator::from_props(o)?))),
     ("aov", |o| Ok(AnyIntegrator::Aov(AovIntegrator::from_props(o)?))),
 ];
+
+/// The path tracer of Mitsuba's `prb` family: `path`'s settings with max_depth 6 by default.
+fn differentiable_path(o: &Obj) -> PropResult<PathIntegrator> {
+    Ok(PathIntegrator { settings: PathSettings::from_props_with_depth(o, 6)?, ..Default::default() })
+}
+
+/// The parameters of Mitsuba's projective-sampling integrators (`prb_projective`,
+/// `direct_projective`), checked as Mitsuba checks them: they steer only the sampling of
+/// gradients at discontinuities, never the rendered image.
+fn projective_props(o: &Obj) -> PropResult<()> {
+    for name in ["sppc", "sppp", "sppi", "guiding_rounds"] {
+        if o.int(name, 0)? < 0 {
+            return Err(o.error_at(name, format!("'{name}' must be ≥ 0")));
+        }
+    }
+    o.choice("guiding", &["octree", "none", "grid"])?;
+    o.bool("guiding_proj", true)?;
+    o.choice("project_seed", &["both", "bsdf", "emitter"])?;
+    Ok(())
+}
 
 /// The integrators nested in `o` (Mitsuba's `moment` and `aov`), in document order, each with
 /// its name: the `name` attribute, else `_arg_0`, `_arg_1`, … counting the unnamed ones (as

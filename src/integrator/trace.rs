@@ -333,8 +333,18 @@ pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteract
 impl PathSettings {
     /// Mitsuba's `max_depth` (-1), `rr_depth` (5) and `hide_emitters` (false), checked.
     pub fn from_props(o: &Obj) -> PropResult<PathSettings> {
-        PathSettings::new(o.int("max_depth", -1)?, o.int("rr_depth", 5)?, o.bool("hide_emitters", false)?)
-            .map_err(|(name, message)| o.error_at(name, message))
+        PathSettings::from_props_with_depth(o, -1)
+    }
+
+    /// [`PathSettings::from_props`] with another default `max_depth` (Mitsuba's differentiable
+    /// integrators, `prb` and its kin, default to 6).
+    pub fn from_props_with_depth(o: &Obj, default_max_depth: i64) -> PropResult<PathSettings> {
+        PathSettings::new(
+            o.int("max_depth", default_max_depth)?,
+            o.int("rr_depth", 5)?,
+            o.bool("hide_emitters", false)?,
+        )
+        .map_err(|(name, message)| o.error_at(name, message))
     }
 }
 

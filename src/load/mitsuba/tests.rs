@@ -1178,12 +1178,35 @@ fn moment_and_aov_integrators() {
     let e = err(&scene(r#"<integrator type="moment"/>"#));
     assert!(e.contains("needs a nested <integrator>"), "{e}");
     // Mitsuba's differentiable variants render with the estimator they extend; volpathmis is its own.
-    for (ty, kind) in [("volpathmis", "volpathmis"), ("prbvolpath", "volpath"), ("prb", "path"), ("prb_basic", "path")] {
+    // Their default max_depth is Mitsuba 3.9.1's: 6 for the differentiable ones (its
+    // ADIntegrator), -1 for the others; direct_projective is direct illumination whatever it is
+    // given (Mitsuba overrides max_depth and rr_depth with 2).
+    for (ty, kind, default_depth, depth_4) in [
+        ("volpathmis", "volpathmis", -1, 4),
+        ("prbvolpath", "volpath", 6, 4),
+        ("prb", "path", 6, 4),
+        ("prb_basic", "path", 6, 4),
+        ("prb_projective", "path", 6, 4),
+        ("direct_projective", "path", 2, 2),
+    ] {
         let f = load(&scene(&format!(r#"<integrator type="{ty}"><integer name="max_depth" value="4"/></integrator>"#)))
             .unwrap();
         assert_eq!(f.integrator.name(), kind);
-        assert_eq!(f.integrator.path_settings().unwrap().max_depth, 4);
+        assert_eq!(f.integrator.path_settings().unwrap().max_depth, depth_4, "{ty}");
+        let f = load(&scene(&format!(r#"<integrator type="{ty}"/>"#))).unwrap();
+        assert_eq!(f.integrator.path_settings().unwrap().max_depth, default_depth, "{ty}");
     }
+    let f = load(&scene(
+        r#"<integrator type="prb_projective"><integer name="sppc" value="32"/><integer name="sppp" value="8"/>
+        <integer name="sppi" value="0"/><string name="guiding" value="grid"/><boolean name="guiding_proj" value="false"/>
+        <integer name="guiding_rounds" value="2"/><string name="project_seed" value="bsdf"/></integrator>"#,
+    ))
+    .unwrap();
+    assert_eq!(f.integrator.path_settings().unwrap().rr_depth, 5);
+    let e = err(&scene(r#"<integrator type="direct_projective"><string name="guiding" value="kdtree"/></integrator>"#));
+    assert!(e.contains("'guiding' must be one of octree, none, grid"), "{e}");
+    let e = err(&scene(r#"<integrator type="prb_projective"><string name="project_seed" value="all"/></integrator>"#));
+    assert!(e.contains("'project_seed' must be one of"), "{e}");
 }
 
 /// The orthographic sensor, `rawconstant` (a float or a vector, not an rgb, as Mitsuba) and
