@@ -5,6 +5,7 @@
 //! series `L = Σₖ Tᵏ Lₑ` term by term along one path per sample.
 
 pub mod aov;
+pub mod depth;
 pub mod direct;
 pub mod moment;
 pub mod path;
@@ -15,6 +16,7 @@ pub mod volpath;
 pub mod volpathmis;
 
 pub use aov::AovIntegrator;
+pub use depth::DepthIntegrator;
 pub use direct::DirectIntegrator;
 pub use moment::MomentIntegrator;
 pub use path::{DirectStrategy, MisHeuristic, PathIntegrator};
@@ -138,6 +140,8 @@ pub enum IntegratorKind {
     Moment,
     /// Arbitrary output variables (geometry, albedo) beside nested integrators' images.
     Aov,
+    /// Distance to the first surface.
+    Depth,
 }
 
 crate::choices!(IntegratorKind, "integrator", {
@@ -149,6 +153,7 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::VolpathMis => "volpathmis", "volumetric path tracing with spectral and null-scattering MIS (Mitsuba's `volpathmis`)";
     IntegratorKind::Moment => "moment", "path tracing that also records each pixel's second moment as EXR layers (Mitsuba's `moment`)";
     IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices) as EXR layers (Mitsuba's `aov`)";
+    IntegratorKind::Depth => "depth", "the distance to the first surface along each camera ray, 0 where none (Mitsuba's `depth`)";
 });
 
 impl IntegratorKind {
@@ -198,6 +203,7 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     }),
     ("moment", |o| Ok(AnyIntegrator::Moment(MomentIntegrator::from_props(o)?))),
     ("aov", |o| Ok(AnyIntegrator::Aov(AovIntegrator::from_props(o)?))),
+    ("depth", |o| Ok(AnyIntegrator::Depth(DepthIntegrator::from_props(o)?))),
 ];
 
 /// The path tracer of Mitsuba's `prb` family: `path`'s settings with max_depth 6 by default.
@@ -292,6 +298,8 @@ pub enum AnyIntegrator {
     Moment(MomentIntegrator),
     /// Mitsuba's `aov` (arbitrary output variables).
     Aov(AovIntegrator),
+    /// Mitsuba's `depth` (distance to the first surface).
+    Depth(DepthIntegrator),
 }
 
 impl Default for AnyIntegrator {
@@ -312,6 +320,7 @@ impl AnyIntegrator {
             AnyIntegrator::VolPathMis(_) => IntegratorKind::VolpathMis,
             AnyIntegrator::Moment(_) => IntegratorKind::Moment,
             AnyIntegrator::Aov(_) => IntegratorKind::Aov,
+            AnyIntegrator::Depth(_) => IntegratorKind::Depth,
         }
     }
 
@@ -325,6 +334,7 @@ impl AnyIntegrator {
             AnyIntegrator::VolPathMis(i) => Some(i),
             AnyIntegrator::Moment(i) => Some(i),
             AnyIntegrator::Aov(i) => Some(i),
+            AnyIntegrator::Depth(i) => Some(i),
             AnyIntegrator::Ptracer(_) | AnyIntegrator::Radiosity(_) => None,
         }
     }
@@ -357,6 +367,7 @@ impl AnyIntegrator {
                 let aovs = aov::AovKind::CHOICES.iter().map(|c| (c.1.to_string(), c.0)).collect();
                 AnyIntegrator::Aov(AovIntegrator { aovs, nested: vec![("_arg_0".into(), path)], image_layers: true })
             }
+            IntegratorKind::Depth => AnyIntegrator::Depth(DepthIntegrator),
         }
     }
 
@@ -369,7 +380,7 @@ impl AnyIntegrator {
             AnyIntegrator::VolPathMis(v) => Some(&v.settings),
             AnyIntegrator::Moment(m) => m.nested[0].1.path_settings(),
             AnyIntegrator::Aov(a) => a.nested.first()?.1.path_settings(),
-            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
+            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) | AnyIntegrator::Depth(_) => None,
         }
     }
 
@@ -382,7 +393,7 @@ impl AnyIntegrator {
             AnyIntegrator::VolPathMis(v) => Some(&mut v.settings),
             AnyIntegrator::Moment(m) => m.nested[0].1.path_settings_mut(),
             AnyIntegrator::Aov(a) => a.nested.first_mut()?.1.path_settings_mut(),
-            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) => None,
+            AnyIntegrator::Direct(_) | AnyIntegrator::Radiosity(_) | AnyIntegrator::Depth(_) => None,
         }
     }
 
@@ -406,6 +417,7 @@ impl AnyIntegrator {
                 if o.smooth { ", smooth" } else { ", flat" }
             ),
             AnyIntegrator::Moment(m) => format!("moments of {}", describe_nested(&m.nested)),
+            AnyIntegrator::Depth(_) => "distance to the first surface".into(),
             AnyIntegrator::Aov(a) if !a.image_layers && a.nested.len() == 1 => format!(
                 "{}, AOVs {}",
                 a.nested[0].1.describe(),

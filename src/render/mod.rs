@@ -254,6 +254,7 @@ pub fn render_integrator_with(
         AnyIntegrator::VolPathMis(i) => camera(i, after_pass),
         AnyIntegrator::Moment(i) => camera(i, after_pass),
         AnyIntegrator::Aov(i) => camera(i, after_pass),
+        AnyIntegrator::Depth(i) => camera(i, after_pass),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
             let solution = Radiosity::solve(scene, opts).map_err(RenderError::Radiosity)?;

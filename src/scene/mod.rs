@@ -73,6 +73,12 @@ pub struct DeferredHit<'a> {
 }
 
 impl DeferredHit<'_> {
+    /// The hit's ray parameter (distance in units of the ray direction's length).
+    #[inline]
+    pub fn t(&self) -> f32 {
+        self.t
+    }
+
     /// Index of the shape hit (into [`Scene::shapes`]).
     #[inline]
     pub fn shape(&self) -> u32 {

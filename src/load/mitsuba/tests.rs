@@ -1203,6 +1203,11 @@ fn moment_and_aov_integrators() {
     ))
     .unwrap();
     assert_eq!(f.integrator.path_settings().unwrap().rr_depth, 5);
+    let f = load(&scene(r#"<integrator type="depth"><boolean name="hide_emitters" value="true"/></integrator>"#)).unwrap();
+    assert_eq!(f.integrator.kind(), crate::integrator::IntegratorKind::Depth);
+    assert!(f.integrator.camera().is_some() && f.integrator.path_settings().is_none());
+    let e = err(&scene(r#"<integrator type="depth"><integer name="max_depth" value="3"/></integrator>"#));
+    assert!(e.contains("max_depth"), "{e}");
     let e = err(&scene(r#"<integrator type="direct_projective"><string name="guiding" value="kdtree"/></integrator>"#));
     assert!(e.contains("'guiding' must be one of octree, none, grid"), "{e}");
     let e = err(&scene(r#"<integrator type="prb_projective"><string name="project_seed" value="all"/></integrator>"#));
