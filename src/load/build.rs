@@ -364,30 +364,24 @@ impl Builder {
         if emitters.len() > 1 {
             return Err(SceneError::at(&emitters[1].loc, "a shape takes one <emitter>"));
         }
+        if let Some(e) = emitters.first().filter(|e| is_shape_emitter(&e.ty)) {
+            // Shapes without an area to sample, as their renderers have them.
+            let refusal = match geometry {
+                Geometry::SdfGrid(_) => Some(("an sdfgrid".to_string(), "Mitsuba: it has")),
+                Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => {
+                    Some((format!("a {}", o.ty), "Mitsuba: it has"))
+                }
+                Geometry::Curves(_) => Some(("curves".to_string(), "pbrt-v4: they have")),
+                _ => None,
+            };
+            if let Some((what, source)) = refusal {
+                return Err(
+                    e.error(format!("{what} cannot be {} (as in {source} no area to sample)", emitter_name(&e.ty)))
+                );
+            }
+        }
         let emission = match emitters.first() {
             None => None,
-            Some(e) if is_shape_emitter(&e.ty) && matches!(geometry, Geometry::SdfGrid(_)) => {
-                return Err(e.error(format!(
-                    "an sdfgrid cannot be {} (as in Mitsuba: it has no area to sample)",
-                    emitter_name(&e.ty)
-                )));
-            }
-            Some(e)
-                if is_shape_emitter(&e.ty)
-                    && matches!(geometry, Geometry::LinearCurves(_) | Geometry::BSplineCurves(_)) =>
-            {
-                return Err(e.error(format!(
-                    "a {} cannot be {} (as in Mitsuba: it has no area to sample)",
-                    o.ty,
-                    emitter_name(&e.ty)
-                )));
-            }
-            Some(e) if is_shape_emitter(&e.ty) && matches!(geometry, Geometry::Curves(_)) => {
-                return Err(e.error(format!(
-                    "curves cannot be {} (as in pbrt-v4: they have no area to sample)",
-                    emitter_name(&e.ty)
-                )));
-            }
             Some(e) if e.ty == "directionalarea" => {
                 e.built.set(true);
                 e.check_children(&[])?;
