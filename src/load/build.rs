@@ -173,7 +173,7 @@ impl Builder {
                 .set_light_sampler(self.light_sampler)
                 .map_err(|e| SceneError::at(&root.loc, format!("cannot build the light sampler: {e}")))?;
         }
-        if !scene.lights().is_empty() && scene.lights().iter().all(|l| l.power(scene.geometries()) == 0.0) {
+        if scene.lights_are_off() {
             self.warnings.push(format!(
                 "warning: {}: every emitter of the scene emits nothing: only black can be rendered",
                 root.loc.position()

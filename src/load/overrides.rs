@@ -95,8 +95,8 @@ fn object(tag: &str, ty: &str, loc: &Loc, props: Vec<Prop>, children: Vec<Rc<Obj
 
 /// The integrator object `--integrator kind` makes of `file` (the file's integrator, if any):
 /// the file's `max_depth`, `rr_depth` and `hide_emitters` where the new kind takes them (only
-/// `hide_emitters` for `direct`, none for `radiosity` and `depth`); `moment` and `aov` wrap a path tracer
-/// with them (`aov` recording every AOV type, each named after it).
+/// `hide_emitters` for `direct`, none for `radiosity` and `depth`); `moment` and `aov` wrap a
+/// path tracer with them (`aov` recording every AOV type, each named after it).
 fn switched_integrator(kind: IntegratorKind, source: &str, file: Option<&Obj>) -> Obj {
     let loc = Loc { file: Arc::new(SourceFile { path: "command line".into(), text: source.to_string() }), offset: 0 };
     let keep = |names: &[&str]| -> Vec<Prop> {

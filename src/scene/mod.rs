@@ -305,6 +305,12 @@ impl Scene {
         &self.lights
     }
 
+    /// Whether the scene has lights but every one's power is zero (all switched off): nothing
+    /// is emitted, so only black can be rendered.
+    pub fn lights_are_off(&self) -> bool {
+        !self.lights.is_empty() && self.emission_distribution.is_none()
+    }
+
     /// Indices of the lights at infinity (environments), seen by rays that escape.
     pub fn infinite_lights(&self) -> &[u32] {
         &self.infinite_lights

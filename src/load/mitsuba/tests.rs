@@ -715,6 +715,7 @@ fn sunsky_emitters() {
     let dark = load(&scene(r#"<emitter type="sunsky"><float name="hour" value="1"/></emitter>"#)).unwrap();
     assert!(dark.warnings.iter().any(|w| w.contains("emits nothing: only black")), "{:?}", dark.warnings);
     assert!(!night.warnings.iter().any(|w| w.contains("only black")), "{:?}", night.warnings);
+    assert!(dark.scene.lights_are_off() && !night.scene.lights_are_off());
     for (body, expectation) in [
         (
             r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="1"/><float name="hour" value="9"/></emitter>"#,
