@@ -11,6 +11,7 @@
 //! - [`props`]: plugin objects with typed, located properties (what loaders produce and plugins
 //!   construct themselves from); located scene errors.
 //! - [`image`]: images in memory (linear RGB).
+//! - [`tensor`]: tensor files in memory (named n-dimensional arrays: measured BSDFs).
 //! - [`sampling`]: warps (`sample` / `pdf` / `invert`), discrete and tabulated distributions,
 //!   MIS heuristics, the RNG and the samplers.
 //! - [`testkit`]: the statistical harness (χ², Kolmogorov–Smirnov, quadrature) that every
@@ -44,5 +45,6 @@ pub mod props;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod tensor;
 pub mod testkit;
 pub mod texture;

@@ -11,6 +11,7 @@ const LAYERS: &[&str] = &[
     "math",
     "props",
     "image",
+    "tensor",
     "sampling",
     "testkit",
     "estimators",

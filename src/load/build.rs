@@ -62,6 +62,7 @@ pub struct Builder {
     warnings: Vec<String>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     volumes: HashMap<PathBuf, Arc<GridVolume>>,
+    tensors: HashMap<PathBuf, Arc<crate::tensor::TensorFile>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
     default_bsdf: [Option<u32>; 2],
     medium_index: HashMap<*const Obj, u32>,
@@ -88,6 +89,7 @@ impl Builder {
             warnings: Vec::new(),
             images: HashMap::new(),
             volumes: HashMap::new(),
+            tensors: HashMap::new(),
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
             light_sampler: LightSamplerKind::default(),
@@ -702,6 +704,17 @@ impl BsdfBuilder for Builder {
 
     fn nested_textures(&mut self, o: &Obj) -> Result<Vec<Texture>> {
         o.nested("texture").iter().map(|t| self.texture_obj(t)).collect()
+    }
+
+    fn tensor_file(&mut self, o: &Obj, name: &str) -> Result<Arc<crate::tensor::TensorFile>> {
+        let path = self.resolver.resolve(&o.string(name)?);
+        if let Some(t) = self.tensors.get(&path) {
+            return Ok(t.clone());
+        }
+        let t =
+            Arc::new(crate::load::tensor_file::load_tensor_file(&path).map_err(|e| o.error_at(name, e.to_string()))?);
+        self.tensors.insert(path, t.clone());
+        Ok(t)
     }
 }
 

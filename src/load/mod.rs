@@ -1,7 +1,7 @@
 //! Loading files, the top layer: scene formats (Mitsuba 3 XML, [`mitsuba`]; glTF 2.0, [`gltf`]), which construct
 //! scenes, integrators and render settings, and the files they name: Wavefront OBJ, Stanford
-//! PLY and Mitsuba serialized meshes, and images. Errors name the file, the line (for text formats) and what
-//! was expected.
+//! PLY and Mitsuba serialized meshes, images, grid volumes and tensor files. Errors name the
+//! file, the line (for text formats) and what was expected.
 
 pub mod build;
 pub mod curve_file;
@@ -19,6 +19,7 @@ mod resolver;
 #[cfg(test)]
 pub(crate) mod test_support;
 pub mod serialized;
+pub mod tensor_file;
 pub mod volume;
 
 pub use error::LoadError;

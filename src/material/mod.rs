@@ -15,6 +15,7 @@ mod diffusetransmission;
 pub mod hair;
 pub mod fresnel;
 pub mod layered;
+mod measured;
 mod memo;
 pub mod microfacet;
 mod perturbed;
@@ -33,6 +34,7 @@ pub use diffuse::Diffuse;
 pub use diffusetransmission::DiffuseTransmission;
 pub use hair::Hair;
 pub use layered::Layered;
+pub use measured::Measured;
 pub use memo::TextureMemo;
 pub use perturbed::{Perturbation, Perturbed};
 pub use plastic::{diffuse_fresnel_reflectance, Plastic};
@@ -152,6 +154,8 @@ pub enum Bsdf {
     RoughPlastic(RoughPlastic),
     /// Mitsuba's `pplastic` (polarized plastic), unpolarized.
     PPlastic(Box<PPlastic>),
+    /// Mitsuba's `measured`: tabulated data of the RGL material database.
+    Measured(Box<Measured>),
     /// Mitsuba's `principled`: the Disney BSDF.
     Principled(Box<Principled>),
     /// Mitsuba's `principledthin`: the Disney BSDF of a thin sheet.
@@ -203,6 +207,7 @@ impl Bsdf {
             Bsdf::Plastic(_) => "plastic",
             Bsdf::RoughPlastic(_) => "roughplastic",
             Bsdf::PPlastic(_) => "pplastic",
+            Bsdf::Measured(_) => "measured",
             Bsdf::Principled(_) => "principled",
             Bsdf::PrincipledThin(_) => "principledthin",
             Bsdf::ThinDielectric(_) => "thindielectric",
@@ -262,6 +267,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.eval(ctx, wo, wi),
             Bsdf::Principled(b) => b.eval(ctx, wo, wi),
             Bsdf::PPlastic(b) => b.eval(ctx, wo, wi),
+            Bsdf::Measured(b) => b.eval(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.eval(ctx, wo, wi),
             Bsdf::Layered(b) => b.eval(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
@@ -294,6 +300,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.pdf(wo, wi),
             Bsdf::Principled(b) => b.pdf(ctx, wo, wi),
             Bsdf::PPlastic(b) => b.pdf(ctx, wo, wi),
+            Bsdf::Measured(b) => b.pdf(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.pdf(ctx, wo, wi),
             Bsdf::Layered(b) => b.pdf(ctx, wo, wi),
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
@@ -328,6 +335,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Principled(b) => b.sample(ctx, wo, u1, u),
             Bsdf::PPlastic(b) => b.sample(ctx, wo, u1, u),
+            Bsdf::Measured(b) => b.sample(ctx, wo, u),
             Bsdf::PrincipledThin(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Layered(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
@@ -453,6 +461,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
             Bsdf::Principled(b) => b.textures(),
             Bsdf::PPlastic(b) => vec![&b.diffuse_reflectance, &b.specular_reflectance],
+            Bsdf::Measured(_) => Vec::new(),
             Bsdf::PrincipledThin(b) => b.textures(),
             Bsdf::Layered(b) => b.textures(),
             Bsdf::Blend { weight, bsdfs } => {
@@ -520,7 +529,8 @@ impl Bsdf {
             | Bsdf::RoughPlastic(_)
             | Bsdf::Principled(_)
             | Bsdf::PrincipledThin(_)
-            | Bsdf::PPlastic(_) => false,
+            | Bsdf::PPlastic(_)
+            | Bsdf::Measured(_) => false,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
             Bsdf::Layered(b) => b.is_delta(),
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.

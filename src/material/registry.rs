@@ -21,6 +21,11 @@ pub trait BsdfBuilder: TextureSource {
 
     /// The textures nested in `o` without a name (a `bumpmap`'s height field).
     fn nested_textures(&mut self, o: &Obj) -> Result<Vec<crate::texture::Texture>>;
+
+    /// The tensor file (Mitsuba's `TensorFile`, e.g. a measured BSDF's `.bsdf`) named by the
+    /// string parameter `name` of `o`, resolved against the scene's folders and shared between
+    /// the plugins that name it; errors are located at the parameter.
+    fn tensor_file(&mut self, o: &Obj, name: &str) -> Result<Arc<crate::tensor::TensorFile>>;
 }
 
 /// A BSDF plugin's constructor.
@@ -39,6 +44,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("plastic", super::Plastic::from_props),
     ("roughplastic", super::RoughPlastic::from_props),
     ("pplastic", super::PPlastic::from_props),
+    ("measured", super::Measured::from_props),
     ("principled", super::Principled::from_props),
     ("principledthin", super::PrincipledThin::from_props),
     ("coateddiffuse", super::Layered::coated_diffuse_from_props),

@@ -246,6 +246,10 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
             ..thin
         })),
     ));
+    // Measured data (not reciprocal: tabulated per incident direction).
+    for k in ['I', 'A'] {
+        v.push((format!("measured {k}"), Bsdf::Measured(Box::new(super::measured::tests::synthetic(k)))));
+    }
     // Normal maps tilting the normal by about 25°, over a diffuse and a rough conductor (not
     // reciprocal: the cosine is about the perturbed normal, as in Mitsuba).
     let tilted = |n: Vec3| crate::texture::Texture::Constant((n.normalize() + Vec3::ONE) * 0.5);
@@ -332,7 +336,10 @@ fn returned_pdf_and_weight_agree_with_pdf_and_eval() {
 #[test]
 fn reflection_is_reciprocal() {
     let mut rng = crate::sampling::Pcg32::new(9, 9);
-    for (name, b) in all_non_delta().into_iter().filter(|(n, _)| !n.starts_with("normalmap") && n != "hair") {
+    for (name, b) in all_non_delta()
+        .into_iter()
+        .filter(|(n, _)| !n.starts_with("normalmap") && !n.starts_with("measured") && n != "hair")
+    {
         for _ in 0..500 {
             let a = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;
             let c = crate::sampling::sample_uniform_hemisphere(u2(&mut rng)).value;

@@ -188,6 +188,13 @@ pub fn spectrum_to_xyz(samples: &[(f32, f32)]) -> Vec3 {
     integrate_xyz(samples, false)
 }
 
+/// A reflectance spectrum (wavelength nm, value) in linear sRGB, seen under D65, neither clamped
+/// nor made non-negative: the reduction is linear, so it applies to basis functions (the hat
+/// functions of tabulated spectra) and their weighted sums alike.
+pub fn reflectance_to_rgb_linear(samples: &[(f32, f32)]) -> Rgb {
+    xyz_to_srgb(integrate_xyz(samples, true))
+}
+
 /// Reduces a spectrum given as (wavelength in nm, value) pairs to linear sRGB. The pairs must be
 /// sorted by strictly increasing wavelength (the XML loader checks this and says where).
 pub fn spectrum_to_rgb(samples: &[(f32, f32)], kind: SpectrumKind) -> Rgb {

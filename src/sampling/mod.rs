@@ -23,6 +23,7 @@
 //! | discrete by CDF + binary search; alias table | [`discrete`], [`alias`] |
 //! | piecewise-constant 1D and 2D (marginal/conditional) | [`piecewise1d`], [`piecewise2d`] |
 //! | piecewise-linear 1D (tabulated phase functions) | [`piecewise_linear`] |
+//! | bilinearly interpolated 2D, conditioned on parameters (Mitsuba's `Marginal2D`; measured BSDFs) | [`marginal2d`] |
 //! | MIS heuristics | [`mis`] |
 //! | PCG32, hashing, samplers (independent, stratified, Owen-scrambled Sobol) | [`rng`], [`hash`], [`sampler`] |
 
@@ -33,6 +34,7 @@ pub mod equal_area;
 pub mod exponential;
 pub mod hash;
 pub mod hemisphere;
+pub mod marginal2d;
 mod measure;
 pub mod mis;
 pub mod piecewise1d;
@@ -50,6 +52,7 @@ pub use discrete::DiscreteCdf;
 pub use disk::*;
 pub use exponential::*;
 pub use hemisphere::*;
+pub use marginal2d::Marginal2D;
 pub use measure::{area_to_solid_angle, solid_angle_to_area, Measure, Sample};
 pub use mis::{balance_heuristic, power_heuristic};
 pub use piecewise1d::PiecewiseConstant1D;

@@ -62,6 +62,9 @@ SCENES = {
     "principled": (8192, 64, {}, 1.5),
     # Polarized plastic, unpolarized (Mitsuba's RGB variants): plain and textured, anisotropic.
     "pplastic": (8192, 64, {}, 1.5),
+    # Measured BSDFs (RGL tensor files, synthetic: tools/mitsuba/make_measured.py): isotropic
+    # and anisotropic (a quarter circle of incident azimuths, mirrored).
+    "measured": (8192, 64, {}, 1.5),
     # Heterogeneous media: a gridvolume smoke with a coloured albedo grid behind a null
     # boundary, a constvolume inside a glass sphere, filling only part of it.
     # (128 spp: the glass sphere's caustic makes the mean at 64 spp swing by 0.3 %.)

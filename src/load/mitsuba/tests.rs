@@ -1939,3 +1939,44 @@ fn emitters_refuse_textures_that_vary_with_position() {
     let uv = r#"<shape type="rectangle"><emitter type="area"><texture type="bilerp" name="radiance"/></emitter></shape>"#;
     load(&scene(uv)).unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// Mitsuba's `measured`: the RGL tensor file named by `filename` (relative to the scene), shared
+/// between the BSDFs that name it; a missing file, a file that is not a tensor file and one
+/// that lacks a field are errors at the parameter's line naming what is wrong.
+#[test]
+fn measured_bsdf_reads_its_tensor_file() {
+    let f = load_scene_file(&shared("measured.xml"), &[]).expect("measured.xml loads");
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let measured: Vec<&str> = f
+        .scene
+        .bsdfs()
+        .iter()
+        .filter_map(|b| match b {
+            Bsdf::Measured(m) => Some(m.description.as_str()),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(measured.len(), 2, "{measured:?}");
+    assert!(measured[0].contains("isotropic") && measured[1].contains("anisotropic"), "{measured:?}");
+    let dir = std::env::temp_dir().join(format!("neumann-measured-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("junk.bsdf"), b"not a tensor file").unwrap();
+    let mut partial = crate::tensor::TensorFile::default();
+    partial.fields.insert("theta_i".into(), crate::tensor::TensorField::from_f32(&[2], &[0.0, 1.0]));
+    std::fs::write(dir.join("partial.bsdf"), crate::load::tensor_file::tensor_file_bytes(&partial)).unwrap();
+    for (file, what) in [
+        ("nope.bsdf", "nope.bsdf: cannot read"),
+        ("junk.bsdf", "not a tensor file"),
+        ("partial.bsdf", "the file has no field 'phi_i'"),
+    ] {
+        let text = scene(&format!(
+            "<shape type=\"sphere\">\n<bsdf type=\"measured\"><string name=\"filename\" value=\"{file}\"/></bsdf></shape>"
+        ));
+        let e = match load_scene_text(&dir.join("s.xml"), &text, &[]) {
+            Ok(_) => panic!("{file}: loaded"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("s.xml:8:23:") && e.contains(what), "{file}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
