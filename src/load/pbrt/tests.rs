@@ -595,6 +595,23 @@ fn alpha_cuts_area_lights_out() {
     assert!((radiance(1, 0.3) - Rgb::ONE).abs().max_element() < 1e-6, "{}", radiance(1, 0.3));
 }
 
+/// pbrt-v4's `measured` reads the RGL tensor file named by `filename` (relative to the scene)
+/// into Mitsuba's `measured`, two-sided as pbrt's BSDFs are; the file is required.
+#[test]
+fn measured_materials_read_their_tensor_file() {
+    let dir = tmp("measured");
+    let assets = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/assets/measured_iso.bsdf");
+    std::fs::copy(assets, dir.join("m.bsdf")).unwrap();
+    let text =
+        "Camera \"perspective\"\nWorldBegin\nMaterial \"measured\" \"string filename\" \"m.bsdf\"\nShape \"sphere\"\n";
+    let f = load_pbrt_text(&dir.join("s.pbrt"), text, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    let Bsdf::TwoSided([front, back]) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!() };
+    assert!(matches!(&**front, Bsdf::Measured(m) if m.description.contains("isotropic")) && Arc::ptr_eq(front, back));
+    let e = err("Camera \"perspective\"\nWorldBegin\nMaterial \"measured\"\nShape \"sphere\"\n");
+    assert!(e.contains("test.pbrt:3:") && e.contains("needs its \"string filename\""), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn diffuse_transmission_scales_both_albedos() {
     let f = load("Camera \"perspective\"\nWorldBegin\nMaterial \"diffusetransmission\" \"rgb transmittance\" [0.4 0.2 0.1] \"float scale\" 2\nShape \"sphere\"\n")

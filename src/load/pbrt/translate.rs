@@ -20,9 +20,9 @@
 //! - materials `diffuse`, `conductor` (`eta`/`k` of pbrt's named metals, RGB or spectra, or
 //!   `reflectance`; `roughness`, `uroughness`, `vroughness`, `remaproughness`), `dielectric`,
 //!   `thindielectric`, `hair`, `mix` (→ `blendbsdf`), `interface` (→ `null`), `coateddiffuse` and
-//!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`; reflective ones wrapped in
-//!   `twosided` (pbrt's BSDFs work from both sides); `normalmap` → Mitsuba's `normalmap`,
-//!   `displacement` → neumann's `displacement` bump map;
+//!   `coatedconductor` (→ the layered BSDF), `diffusetransmission`, `measured` (→ Mitsuba's, RGL
+//!   tensor files); reflective ones wrapped in `twosided` (pbrt's BSDFs work from both sides);
+//!   `normalmap` → Mitsuba's `normalmap`, `displacement` → neumann's `displacement` bump map;
 //! - textures `imagemap`, `checkerboard` (2D and 3D), `scale`, `constant`, `mix`,
 //!   `directionmix`, `bilerp`, `dots`, `fbm`, `wrinkled`, `windy`, `marble`, over pbrt's uv,
 //!   spherical, cylindrical and planar mappings;
@@ -727,9 +727,14 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             }
             o
         }
-        "measured" | "subsurface" => {
-            return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet")))
+        "measured" => {
+            let file =
+                ps.string("filename")?.ok_or_else(|| ps.error("a measured material needs its \"string filename\""))?;
+            let mut o = obj("bsdf", "measured", l);
+            set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
+            two_sided(o)
         }
+        "subsurface" => return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet"))),
         other => {
             return Err(ps.unknown(
                 "material",
