@@ -199,7 +199,10 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse(_) => "diffuse",
             Bsdf::DiffuseTransmission(_) => "diffusetransmission",
-            Bsdf::Hair(_) => "hair",
+            Bsdf::Hair(h) => match h.convention {
+                hair::HairConvention::Mitsuba => "hair",
+                hair::HairConvention::Pbrt => "pbrt_hair",
+            },
             Bsdf::Conductor(_) => "conductor",
             Bsdf::RoughConductor(_) => "roughconductor",
             Bsdf::Dielectric(_) => "dielectric",

@@ -35,7 +35,8 @@ pub type BsdfPlugin = fn(&Obj, &mut dyn BsdfBuilder) -> Result<Bsdf>;
 pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("diffuse", super::Diffuse::from_props),
     ("diffusetransmission", super::DiffuseTransmission::from_props),
-    ("hair", super::Hair::from_props),
+    ("hair", super::Hair::mitsuba_from_props),
+    ("pbrt_hair", super::Hair::from_props),
     ("conductor", super::Conductor::from_props),
     ("roughconductor", super::RoughConductor::from_props),
     ("dielectric", super::Dielectric::from_props),

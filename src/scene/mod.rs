@@ -746,6 +746,7 @@ mod tests {
             let bsdf = match variant {
                 1 => Bsdf::Diffuse(Diffuse { reflectance: checker.clone() }),
                 3 => Bsdf::Hair(Box::new(crate::material::Hair {
+                    convention: crate::material::hair::HairConvention::Pbrt,
                     colour: crate::material::hair::HairColour::Absorption(Texture::Constant(Rgb::splat(0.5))),
                     eta: 1.55,
                     beta_m: 0.3,

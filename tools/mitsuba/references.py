@@ -77,6 +77,8 @@ SCENES = {
     "phase": (4096, 128, {}, 1.5),
     # Round curves: tapered bent strands (linearcurve, diffuse) and a coil (bsplinecurve, rough gold).
     "curves": (8192, 64, {}, 1.5),
+    # Mitsuba's hair BSDF on round B-spline curves: default brown, and blond with tilted scales.
+    "hair": (8192, 64, {}, 1.5),
     # Sun and sky (sunsky): a time record in a rotated frame, the sky in view, a low sun.
     "sunsky": (8192, 64, {}, 1.5),
 }

@@ -707,7 +707,7 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
         "hair" => {
             // pbrt-v4's HairMaterial: the first of sigma_a, reflectance, melanin that is given.
             // pbrt reads all four, so none is an unused parameter.
-            let mut o = obj("bsdf", "hair", l);
+            let mut o = obj("bsdf", "pbrt_hair", l);
             let sigma_a = texturable(p, ps, "sigma_a", false)?;
             let reflectance = texturable(p, ps, "reflectance", false)?;
             let melanin = [texturable(p, ps, "eumelanin", true)?, texturable(p, ps, "pheomelanin", true)?];
