@@ -20,7 +20,8 @@ x, 0.45 along y) tabulates a quarter circle, phi_i from -pi to -pi/2, which Mits
 directions into ("reduction 4"). Both renderers read the same files, so the comparison of
 images and of eval/pdf values is exact whatever the tables hold.
 
-Run with the venv that renders the references: python tools/mitsuba/make_measured.py"""
+Run with the venv that renders the references: python tools/mitsuba/make_measured.py
+(`--spectral PATH`: the isotropic material with spectra, see write_spectral)."""
 import math
 
 import numpy as np
@@ -106,7 +107,35 @@ def write(path, description, alpha_x, alpha_y, phi_i, isotropic, tint):
     )
 
 
-write("scenes/assets/measured_iso.bsdf", "synthetic isotropic GGX (alpha 0.3), copper tint",
-      0.3, 0.3, [0.0], True, (0.95, 0.64, 0.54))
-write("scenes/assets/measured_aniso.bsdf", "synthetic anisotropic GGX (alpha 0.12 x 0.45), blue tint",
-      0.12, 0.45, [-math.pi, -0.75 * math.pi, -0.5 * math.pi], False, (0.35, 0.55, 0.9))
+def write_spectral(path):
+    """The isotropic material's tables with spectra instead of RGB (48 wavelengths, 360-830 nm),
+    for checking the reduction of spectral files to RGB against Mitsuba's spectral variants (not
+    a validation asset: Mitsuba's RGB variants refuse spectral files)."""
+    ndf, sig, vndf, rgb, lum = tables(0.3, 0.3, [0.0], True, (0.95, 0.64, 0.54))
+    lambdas = np.arange(360, 831, 10).astype(np.float32)
+    s = np.linspace(0, 1, N_S)
+    sx, sy = np.meshgrid(s, s)
+    spectra = np.zeros((1, len(THETA_I), len(lambdas), N_S, N_S), np.float32)
+    for b in range(len(THETA_I)):
+        for k, lam in enumerate(lambdas):
+            bump = math.exp(-0.5 * ((lam - (520 + 120 * 0.5)) / 45) ** 2)
+            spectra[0, b, k] = 0.25 + 0.5 * bump * (0.6 + 0.4 * sx) + 0.15 * sy * (lam > 600)
+    lum = spectra.mean(axis=2).astype(np.float32)
+    tensor_io.write(path, description="synthetic isotropic GGX (alpha 0.3), spectral", phi_i=np.array([0.0], np.float32),
+                    theta_i=THETA_I, ndf=ndf, sigma=sig, vndf=vndf, spectra=spectra, luminance=lum,
+                    wavelengths=lambdas, jacobian=np.array([1], np.uint8))
+
+
+def main():
+    import sys
+    if sys.argv[1:2] == ["--spectral"]:
+        write_spectral(sys.argv[2])
+        return
+    write("scenes/assets/measured_iso.bsdf", "synthetic isotropic GGX (alpha 0.3), copper tint",
+          0.3, 0.3, [0.0], True, (0.95, 0.64, 0.54))
+    write("scenes/assets/measured_aniso.bsdf", "synthetic anisotropic GGX (alpha 0.12 x 0.45), blue tint",
+          0.12, 0.45, [-math.pi, -0.75 * math.pi, -0.5 * math.pi], False, (0.35, 0.55, 0.9))
+
+
+if __name__ == "__main__":
+    main()
