@@ -236,7 +236,10 @@ impl Measured {
     #[inline]
     fn value(&self, inc: &Incident, s: Vec2, u_m: Vec2) -> Rgb {
         let params = [inc.phi, inc.theta];
-        let mut v = Rgb::new(self.rgb[0].eval(s, &params), self.rgb[1].eval(s, &params), self.rgb[2].eval(s, &params));
+        // Measured data holds small negative values; a reflectance below zero is taken as 0 (as
+        // pbrt-v4 does; Mitsuba keeps the sign).
+        let mut v = Rgb::new(self.rgb[0].eval(s, &params), self.rgb[1].eval(s, &params), self.rgb[2].eval(s, &params))
+            .max(Rgb::ZERO);
         if self.jacobian {
             let u_wo = Vec2::new(theta_to_u(inc.theta), phi_to_u(inc.phi));
             v *= self.ndf.eval(u_m, &[]) / (4.0 * self.sigma.eval(u_wo, &[]));

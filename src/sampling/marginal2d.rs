@@ -104,8 +104,10 @@ fn lerp(a: f32, b: f32, t: f32) -> f32 {
 impl Marginal2D {
     /// A distribution of `width × height` grid values per slice (both ≥ 2) over the parameter
     /// grid `params` (each non-empty and increasing; at most [`MAX_PARAMS`]). `normalize`: scale
-    /// every slice to integrate to one (needed for sampling). Errors name what is wrong: the
-    /// data's length, a negative or non-finite value, a slice that is zero everywhere.
+    /// every slice to integrate to one (needed for sampling); a density cannot be negative, so
+    /// negative values (measured data has small ones) are then taken as 0, while an unnormalized
+    /// table interpolates them as they are. Errors name what is wrong: the data's length, a
+    /// value that is not finite, a slice to normalize that is zero everywhere.
     pub fn new(
         data: &[f32],
         width: usize,
@@ -132,9 +134,16 @@ impl Marginal2D {
         if Some(data.len()) != slices.checked_mul(n) {
             return Err(format!("{} values for {slices} slices of {width} × {height}", data.len()));
         }
-        if let Some(v) = data.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
-            return Err(format!("a value is {v} (values must be finite and ≥ 0)"));
+        if let Some(v) = data.iter().find(|v| !v.is_finite()) {
+            return Err(format!("a value is {v} (values must be finite)"));
         }
+        let clamped: Vec<f32>;
+        let data = if normalize && data.iter().any(|&v| v < 0.0) {
+            clamped = data.iter().map(|&v| v.max(0.0)).collect();
+            &clamped[..]
+        } else {
+            data
+        };
         let (sx, sy) = (0.5 / (width - 1) as f64, 0.5 / (height - 1) as f64);
         let mut out = Marginal2D {
             width,
@@ -386,7 +395,12 @@ mod tests {
     fn bad_tables_are_errors() {
         assert!(Marginal2D::new(&[1.0; 4], 1, 4, vec![], true).unwrap_err().contains("too small"));
         assert!(Marginal2D::new(&[1.0; 5], 2, 2, vec![], true).unwrap_err().contains("5 values"));
-        assert!(Marginal2D::new(&[1.0, -1.0, 1.0, 1.0], 2, 2, vec![], true).unwrap_err().contains("≥ 0"));
+        assert!(Marginal2D::new(&[1.0, f32::NAN, 1.0, 1.0], 2, 2, vec![], true).unwrap_err().contains("finite"));
+        // A negative value is a zero of a density, and interpolated as it is otherwise.
+        let (a, b) = (Vec2::new(0.2, 0.7), [1.0, 0.0, 1.0, 1.0]);
+        let clamped = Marginal2D::new(&[1.0, -1.0, 1.0, 1.0], 2, 2, vec![], true).unwrap();
+        assert_eq!(clamped.eval(a, &[]), Marginal2D::new(&b, 2, 2, vec![], true).unwrap().eval(a, &[]));
+        assert_eq!(Marginal2D::new(&[1.0, -1.0, 1.0, 1.0], 2, 2, vec![], false).unwrap().eval(Vec2::X, &[]), -1.0);
         assert!(Marginal2D::new(&[0.0; 4], 2, 2, vec![], true).unwrap_err().contains("zero everywhere"));
         assert!(Marginal2D::new(&[1.0; 8], 2, 2, vec![vec![1.0, 1.0]], true).unwrap_err().contains("increasing"));
         assert!(Marginal2D::new(&[0.0; 4], 2, 2, vec![], false).is_ok());
