@@ -6,7 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-targets=${*:-xml obj ply image vol part gltf pbrt}
+targets=${*:-xml obj ply image vol tensor part gltf pbrt}
 mkdir -p fuzz/corpus
 for t in $targets; do
     mkdir -p "fuzz/corpus/$t"
@@ -15,6 +15,7 @@ for t in $targets; do
         obj) cp -n scenes/assets/*.obj "fuzz/corpus/$t/" ;;
         ply) cp -n scenes/assets/*.ply "fuzz/corpus/$t/" ;;
         vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
+        tensor) cp -n scenes/assets/*.bsdf "fuzz/corpus/$t/" ;;
         gltf) cp -n scenes/*.gltf "fuzz/corpus/$t/" ;;
         pbrt) cp -n scenes/*.pbrt "fuzz/corpus/$t/" ;;
         part) # Parts of a split render of the built-in scene (needs the release build).
