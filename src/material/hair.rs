@@ -21,7 +21,7 @@
 //! `eval` returns `Σ_p M_p A_p N_p` (pbrt's `f` times |cos θᵢ|; Mitsuba's `eval`). Sampling
 //! chooses `p` by the mean (pbrt) or the luminance (Mitsuba) of `A_p`, then θᵢ from `M_p` and φ
 //! from `N_p`: exactly the density `pdf` returns. `M_p` uses the Bessel function to 2·10⁻⁷
-//! ([`bessel_i0`]), where both renderers truncate its series at ten terms (low by up to a few
+//! (`bessel_i0`), where both renderers truncate its series at ten terms (low by up to a few
 //! per cent where `cos θᵢ cos θₒ / v` nears 12; their densities then disagree with their own
 //! sampling).
 //!
