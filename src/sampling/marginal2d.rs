@@ -17,7 +17,7 @@
 //! to column `x + 1` (`height · (width − 1)` entries); both are linear in the data, so they
 //! interpolate between slices exactly as the data does.
 
-use crate::math::Vec2;
+use crate::math::{lerp, Vec2};
 
 /// Most parameters a distribution may depend on (Mitsuba instantiates 0, 2 and 3).
 pub const MAX_PARAMS: usize = 3;
@@ -94,11 +94,6 @@ fn sample_segment(u: f32, inv_width: f32, v0: f32, v1: f32) -> f32 {
 #[inline]
 fn invert_segment(t: f32, width: f32, v0: f32, v1: f32) -> f32 {
     t * (v0 + (v1 - v0) * 0.5 * t) * width
-}
-
-#[inline]
-fn lerp(a: f32, b: f32, t: f32) -> f32 {
-    a + (b - a) * t
 }
 
 impl Marginal2D {
