@@ -394,7 +394,7 @@ pub(super) mod tests {
     /// material's mirroring into its quarter circle is exercised, and a nearly head-on view.
     /// (Exactly head-on, or with `wi` the mirror image of `wo` so that `m` is the normal, an
     /// azimuth is undefined, `atan2(0, 0)`: neumann takes 0, the limit along φ = 0, where Mitsuba
-    /// 3.9.1 returns a value 12 % away from every limit measured. Those directions are a set of
+    /// 3.9.1 returns a value 8–12 % above the two limits measured. Those directions are a set of
     /// measure zero.)
     #[test]
     fn matches_mitsuba() {
