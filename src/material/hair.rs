@@ -33,7 +33,7 @@
 
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::spectrum::SpectrumKind;
-use crate::math::{Rgb, Vec2, Vec3, PI};
+use crate::math::{safe_asin, safe_sqrt, Rgb, Vec2, Vec3, PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::texture::Texture;
 
@@ -123,18 +123,6 @@ impl Lobes {
         };
         (s, c.abs())
     }
-}
-
-/// `√max(0, x)`.
-#[inline]
-fn safe_sqrt(x: f32) -> f32 {
-    x.max(0.0).sqrt()
-}
-
-/// `asin` of `x` clamped to [−1, 1].
-#[inline]
-fn safe_asin(x: f32) -> f32 {
-    x.clamp(-1.0, 1.0).asin()
 }
 
 /// `e^(−x) √x I₀(x)` for `x ≥ 3.75`: Abramowitz and Stegun's 9.8.2 in `t = 3.75 / x`

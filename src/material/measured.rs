@@ -29,7 +29,7 @@
 //! One-sided and glossy: black from the back, no delta lobe.
 
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
-use crate::math::{Rgb, Vec2, Vec3, PI};
+use crate::math::{spherical_direction, Rgb, Vec2, Vec3, PI};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Marginal2D;
 use crate::tensor::TensorFile;
@@ -98,6 +98,14 @@ struct Incident {
     signs: (f32, f32),
     theta: f32,
     phi: f32,
+}
+
+impl Incident {
+    /// `w` mirrored as the viewer direction was (an involution: also back).
+    #[inline]
+    fn mirror(&self, w: Vec3) -> Vec3 {
+        Vec3::new(mulsign_neg(w.x, self.signs.0), mulsign_neg(w.y, self.signs.1), w.z)
+    }
 }
 
 impl Measured {
@@ -232,6 +240,16 @@ impl Measured {
         Vec2::new(theta_to_u(elevation(m)), u - u.floor())
     }
 
+    /// The viewer side of `wo`, and the half vector of `wo` and `wi` (mirrored alike) with its unit
+    /// coordinates: what `eval` and `pdf` look the tables up by.
+    #[inline]
+    fn half_vector(&self, wo: Vec3, wi: Vec3) -> (Incident, Vec3, Vec2) {
+        let inc = self.incident(wo);
+        let m = (inc.wo + inc.mirror(wi)).normalize();
+        let u_m = self.u_m(&inc, m);
+        (inc, m, u_m)
+    }
+
     /// The tabulated `f cos θ` at sample-square point `s`, times `D / 4σ` where the file asks.
     #[inline]
     fn value(&self, inc: &Incident, s: Vec2, u_m: Vec2) -> Rgb {
@@ -258,10 +276,7 @@ impl Measured {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Rgb::ZERO;
         }
-        let inc = self.incident(wo);
-        let wi = Vec3::new(mulsign_neg(wi.x, inc.signs.0), mulsign_neg(wi.y, inc.signs.1), wi.z);
-        let m = (inc.wo + wi).normalize();
-        let u_m = self.u_m(&inc, m);
+        let (inc, _, u_m) = self.half_vector(wo, wi);
         let (s, _) = self.vndf.invert(u_m, &[inc.phi, inc.theta]);
         let v = self.value(&inc, s, u_m);
         if v.is_finite() {
@@ -276,10 +291,7 @@ impl Measured {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
-        let inc = self.incident(wo);
-        let wi = Vec3::new(mulsign_neg(wi.x, inc.signs.0), mulsign_neg(wi.y, inc.signs.1), wi.z);
-        let m = (inc.wo + wi).normalize();
-        let u_m = self.u_m(&inc, m);
+        let (inc, m, u_m) = self.half_vector(wo, wi);
         let params = [inc.phi, inc.theta];
         let (s, vndf_pdf) = self.vndf.invert(u_m, &params);
         let lum_pdf = self.luminance.eval(s, &params);
@@ -307,14 +319,13 @@ impl Measured {
         if self.isotropic {
             phi_m += inc.phi;
         }
-        let (sin_phi, cos_phi) = phi_m.sin_cos();
         let (sin_theta, cos_theta) = u_to_theta(u_m.x).sin_cos();
-        let m = Vec3::new(cos_phi * sin_theta, sin_phi * sin_theta, cos_theta);
+        let m = spherical_direction(sin_theta, cos_theta, phi_m);
         let wo_dot_m = inc.wo.dot(m);
         let wi = m * (2.0 * wo_dot_m) - inc.wo;
         let pdf = vndf_pdf * lum_pdf / Self::jacobian_factor(u_m.x, sin_theta, wo_dot_m);
         let value = self.value(&inc, s, u_m);
-        let wi = Vec3::new(mulsign_neg(wi.x, inc.signs.0), mulsign_neg(wi.y, inc.signs.1), wi.z);
+        let wi = inc.mirror(wi);
         if wi.z <= 0.0 || !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

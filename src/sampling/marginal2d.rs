@@ -197,7 +197,8 @@ impl Marginal2D {
                 continue;
             }
             let x = param[d];
-            let i = first_false(1, values.len() - 1, |k| values[k] < x) - 1;
+            // The interval [values[i], values[i + 1]] holding x, clamped to the table.
+            let i = values[1..values.len() - 1].partition_point(|&v| v < x);
             let (p0, p1) = (values[i], values[i + 1]);
             let w1 = ((x - p0) / (p1 - p0)).clamp(0.0, 1.0);
             let w1 = if w1.is_nan() { 0.0 } else { w1 };
