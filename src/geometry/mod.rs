@@ -1,5 +1,5 @@
 //! Geometry: shapes (triangle meshes, spheres, disks, cylinders, SDF grids, curves (pbrt-v4's flat
-//! ones, Mitsuba's round linear and B-spline ones); rectangles and cubes as meshes;
+//! ones, Mitsuba's round linear and B-spline ones), Mitsuba's ellipsoids; rectangles and cubes as meshes;
 //! Loop subdivision surfaces as meshes), their
 //! ray intersection with floating-point error bounds, and area / solid-angle sampling.
 //!
@@ -9,6 +9,7 @@
 pub mod curve;
 pub mod cylinder;
 pub mod disk;
+pub mod ellipsoids;
 pub mod interaction;
 pub mod mesh;
 mod registry;
@@ -24,6 +25,7 @@ pub mod triangle8;
 pub use curve::{CurveSet, Curves};
 pub use cylinder::Cylinder;
 pub use disk::Disk;
+pub use ellipsoids::Ellipsoids;
 pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use bspline_curve::BSplineCurves;

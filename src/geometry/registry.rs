@@ -33,6 +33,12 @@ pub trait MeshSource: VolumeSource {
     /// The control points of a Mitsuba curve file named by parameter `name` of `o`: curves,
     /// each a list of points with radii (file coordinates).
     fn curve_file(&mut self, o: &Obj, name: &str) -> Result<Vec<Vec<super::roundcurve::ControlPoint>>>;
+
+    /// The first element of the PLY file named by parameter `name` of `o`, as a table.
+    fn point_table(&mut self, o: &Obj, name: &str) -> Result<super::ellipsoids::PointTable>;
+
+    /// Reports a warning (a complete line, `warning: FILE:LINE:COL: …`).
+    fn warn(&mut self, line: String);
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.
@@ -53,6 +59,8 @@ pub const SHAPE_PLUGINS: &[(&str, ShapePlugin)] = &[
     ("curve", curve),
     ("linearcurve", round_curve),
     ("bsplinecurve", round_curve),
+    ("ellipsoids", ellipsoids),
+    ("ellipsoidsmesh", ellipsoids),
 ];
 
 /// The constructor of the shape plugin `name`.
@@ -220,5 +228,78 @@ fn round_curve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSo
         Geometry::BSplineCurves(Box::new(super::BSplineCurves::new(&curves, to_world).map_err(located)?))
     } else {
         Geometry::LinearCurves(Box::new(super::LinearCurves::new(&curves, to_world).map_err(located)?))
+    })
+}
+
+/// Mitsuba's `ellipsoids` and `ellipsoidsmesh`: `filename` (a PLY point file; see
+/// [`EllipsoidSet::from_table`]), `scale_factor` (1), `extent` (3: the shells' size in units of
+/// the file's scales), `extent_adaptive_clamping` (false; true scales each extent by
+/// `√(2 ln(opacity / 0.01)) / 3`, and without opacities in the file is ignored with a warning,
+/// as in Mitsuba), `to_world` (centres moved by it, scales by its mean stretch, orientations
+/// turned by its rotation); `ellipsoidsmesh` also `shell` (`ico_sphere`, the default, `box`,
+/// `uv_sphere`, or a nested mesh shape). Mitsuba's tensor parameters (`data`, `centers`,
+/// `scales`, `quaternions`, attribute tensors) come from Python only. No `flip_normals`.
+fn ellipsoids(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
+    use super::ellipsoids::{shell_mesh, EllipsoidSet};
+    if flip {
+        return Err(o.error_at("flip_normals", format!("{} have no flip_normals (as in Mitsuba)", o.ty)));
+    }
+    let scale_factor =
+        o.float_checked("scale_factor", 1.0, |s| s > 0.0 && s.is_finite(), "positive")?;
+    let extent = o.float_checked("extent", 3.0, |s| s > 0.0 && s.is_finite(), "positive")?;
+    let adaptive = o.bool("extent_adaptive_clamping", false)?;
+    let shell = if o.ty == "ellipsoidsmesh" { Some(shell_template(o, files)?) } else { None };
+    let table = files.point_table(o, "filename")?;
+    let set = EllipsoidSet::from_table(&table, scale_factor, to_world).map_err(|e| o.error_at("filename", e))?;
+    let extents = match set.extents(extent, adaptive) {
+        Some(e) => e,
+        None => {
+            let at = o.get("extent_adaptive_clamping").map_or_else(|| o.loc.position(), |p| p.loc.position());
+            files.warn(format!(
+                "warning: {at}: {} '{}': the file has no opacities: extent_adaptive_clamping is ignored (as Mitsuba ignores it)",
+                o.tag, o.ty
+            ));
+            set.extents(extent, false).expect("a fixed extent needs no opacities")
+        }
+    };
+    Ok(match shell {
+        None => Geometry::Ellipsoids(Box::new(super::Ellipsoids::new(&set, &extents))),
+        Some(shell) => Geometry::Mesh(
+            shell_mesh(&set, &extents, &shell).ok_or_else(|| o.error_at("shell", "the shell has a vertex or a face centred at its origin"))?,
+        ),
+    })
+}
+
+/// An `ellipsoidsmesh`'s `shell`: one of Mitsuba's templates by name, or a nested mesh shape
+/// (its triangles as its own `to_world` places them).
+fn shell_template(o: &Obj, files: &mut dyn MeshSource) -> Result<super::ellipsoids::Shell> {
+    use super::ellipsoids::Shell;
+    use crate::props::Value;
+    let value = o.get("shell").map(|p| p.value.clone());
+    Ok(match value {
+        None => Shell::IcoSphere,
+        Some(Value::String(s)) => match s.as_str() {
+            "default" | "ico_sphere" => Shell::IcoSphere,
+            "box" => Shell::Box,
+            "uv_sphere" => Shell::UvSphere,
+            _ => {
+                let message = format!("unknown shell '{s}' (expected default, ico_sphere, box or uv_sphere, or a mesh shape)");
+                return Err(o.error_at("shell", message));
+            }
+        },
+        Some(Value::Object(mesh)) if mesh.tag == "shape" => {
+            mesh.built.set(true);
+            mesh.check_children(&["bsdf"])?;
+            let plugin = shape_plugin(&mesh.ty).ok_or_else(|| {
+                mesh.unknown_plugin(&SHAPE_PLUGINS.iter().map(|p| p.0).collect::<Vec<_>>())
+            })?;
+            let to_world = mesh.transform("to_world")?;
+            let flip = mesh.bool("flip_normals", false)?;
+            match plugin(&mesh, &to_world, flip, files)? {
+                Geometry::Mesh(m) => Shell::Mesh(m.positions.clone(), m.indices.clone()),
+                _ => return Err(mesh.error("an ellipsoidsmesh's shell must be a triangle mesh")),
+            }
+        }
+        Some(_) => return Err(o.error_at("shell", "the shell must be a <string> or a nested mesh <shape>")),
     })
 }

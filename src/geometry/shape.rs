@@ -1,6 +1,6 @@
 //! The closed set of shape geometries, with area and solid-angle sampling for emitters.
 
-use super::{BSplineCurves, Curves, Cylinder, Disk, LinearCurves, SdfGrid, Sphere, TriangleMesh};
+use super::{BSplineCurves, Curves, Cylinder, Disk, Ellipsoids, LinearCurves, SdfGrid, Sphere, TriangleMesh};
 use crate::math::{Bounds3, DirectionCone, Vec2, Vec3};
 use crate::sampling::area_to_solid_angle;
 
@@ -23,6 +23,8 @@ pub enum Geometry {
     LinearCurves(Box<LinearCurves>),
     /// Mitsuba's round B-spline curves (no area: they cannot emit).
     BSplineCurves(Box<BSplineCurves>),
+    /// Mitsuba's analytic ellipsoids (no area: they cannot emit).
+    Ellipsoids(Box<Ellipsoids>),
 }
 
 /// A point sampled on a shape as seen from a reference point.
@@ -49,7 +51,11 @@ impl Geometry {
             Geometry::Disk(d) => d.area(),
             Geometry::Cylinder(c) => c.area(),
             // As in Mitsuba: not sampled, so no area.
-            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => 0.0,
+            Geometry::SdfGrid(_)
+            | Geometry::Curves(_)
+            | Geometry::LinearCurves(_)
+            | Geometry::BSplineCurves(_)
+            | Geometry::Ellipsoids(_) => 0.0,
         }
     }
 
@@ -61,6 +67,7 @@ impl Geometry {
             Geometry::Curves(c) => c.len(),
             Geometry::LinearCurves(c) => c.len(),
             Geometry::BSplineCurves(c) => c.len(),
+            Geometry::Ellipsoids(e) => e.len(),
             _ => 1,
         }
     }
@@ -88,6 +95,7 @@ impl Geometry {
             Geometry::Curves(c) => c.bounds(i),
             Geometry::LinearCurves(c) => c.bounds(i),
             Geometry::BSplineCurves(c) => c.bounds(i),
+            Geometry::Ellipsoids(e) => e.bounds(i),
         }
     }
 
@@ -109,7 +117,8 @@ impl Geometry {
             | Geometry::SdfGrid(_)
             | Geometry::Curves(_)
             | Geometry::LinearCurves(_)
-            | Geometry::BSplineCurves(_) => DirectionCone::ENTIRE_SPHERE,
+            | Geometry::BSplineCurves(_)
+            | Geometry::Ellipsoids(_) => DirectionCone::ENTIRE_SPHERE,
         }
     }
 
@@ -139,7 +148,11 @@ impl Geometry {
                 let (sp, pdf) = c.sample_area(u);
                 (sp, sp.n, pdf)
             }
-            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => {
+            Geometry::SdfGrid(_)
+            | Geometry::Curves(_)
+            | Geometry::LinearCurves(_)
+            | Geometry::BSplineCurves(_)
+            | Geometry::Ellipsoids(_) => {
                 return None
             }
         };
@@ -163,7 +176,11 @@ impl Geometry {
                 let (sp, uv) = c.surface(c.sample_local(u));
                 (sp, sp.n, 1.0 / c.area(), uv)
             }
-            Geometry::SdfGrid(_) | Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => {
+            Geometry::SdfGrid(_)
+            | Geometry::Curves(_)
+            | Geometry::LinearCurves(_)
+            | Geometry::BSplineCurves(_)
+            | Geometry::Ellipsoids(_) => {
                 return None
             }
         };

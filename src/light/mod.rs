@@ -738,7 +738,8 @@ mod tests {
                     | Geometry::SdfGrid(_)
                     | Geometry::Curves(_)
                     | Geometry::LinearCurves(_)
-                    | Geometry::BSplineCurves(_) => {
+                    | Geometry::BSplineCurves(_)
+                    | Geometry::Ellipsoids(_) => {
                         unreachable!("not among the shapes tested here")
                     }
                 };

@@ -195,7 +195,8 @@ mod tests {
                                 | Geometry::SdfGrid(_)
                                 | Geometry::Curves(_)
                                 | Geometry::LinearCurves(_)
-                                | Geometry::BSplineCurves(_) => None,
+                                | Geometry::BSplineCurves(_)
+                                | Geometry::Ellipsoids(_) => None,
                             };
                             match hit {
                                 Some((q, nq)) if nq.dot(-*w) > 0.0 => light.pdf_li(&shapes, p, q, nq),

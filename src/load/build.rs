@@ -374,6 +374,11 @@ impl Builder {
                     Some((format!("a {}", o.ty), "Mitsuba: it has"))
                 }
                 Geometry::Curves(_) => Some(("curves".to_string(), "pbrt-v4: they have")),
+                Geometry::Ellipsoids(_) => Some(("ellipsoids".to_string(), "Mitsuba: they have")),
+                // Mitsuba's ellipsoid shells skip the mesh's area table.
+                Geometry::Mesh(_) if o.ty == "ellipsoidsmesh" => {
+                    Some(("an ellipsoidsmesh".to_string(), "Mitsuba: its shells have"))
+                }
                 _ => None,
             };
             if let Some((what, source)) = refusal {
@@ -760,6 +765,15 @@ impl VolumeSource for Builder {
 }
 
 impl MeshSource for Builder {
+    fn point_table(&mut self, o: &Obj, name: &str) -> Result<crate::geometry::ellipsoids::PointTable> {
+        let path = self.resolver.resolve(&o.string(name)?);
+        crate::load::ply::load_ply_table(&path).map_err(|e| o.error_at(name, e.to_string()))
+    }
+
+    fn warn(&mut self, line: String) {
+        self.warnings.push(line);
+    }
+
     fn curve_file(&mut self, o: &Obj, name: &str) -> Result<Vec<Vec<crate::geometry::roundcurve::ControlPoint>>> {
         let path = self.resolver.resolve(&o.string(name)?);
         crate::load::curve_file::load_curve_file(&path).map_err(|e| o.error_at(name, e.to_string()))

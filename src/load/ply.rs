@@ -9,6 +9,7 @@
 //! and elements are read and skipped.
 
 use super::LoadError;
+use crate::geometry::ellipsoids::PointTable;
 use crate::geometry::mesh::MeshAttribute;
 use crate::geometry::TriangleMesh;
 use crate::math::{Vec2, Vec3};
@@ -125,8 +126,8 @@ impl Body<'_> {
     }
 }
 
-/// Parses a PLY file's bytes.
-pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
+/// Parses a PLY header: its elements, the body's encoding and where the body starts.
+fn parse_header(data: &[u8]) -> Result<(Vec<Element>, Encoding, usize), String> {
     // Header: text lines up to "end_header".
     let mut pos = 0;
     let mut lines = Vec::new();
@@ -184,6 +185,12 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
         }
     }
     let enc = enc.ok_or("header has no 'format' line")?;
+    Ok((elements, enc, pos))
+}
+
+/// Parses a PLY file's bytes.
+pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
+    let (elements, enc, pos) = parse_header(data)?;
     let mut body = Body { data, pos, enc };
     let (mut positions, mut normals, mut uvs, mut indices) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     // Mitsuba's mesh attributes of vertices and of faces (one value per triangle of a face's
@@ -268,6 +275,38 @@ pub fn parse_ply(data: &[u8]) -> Result<TriangleMesh, String> {
     Ok(mesh)
 }
 
+/// Loads the first element of a PLY file as a table (see [`parse_ply_table`]).
+pub fn load_ply_table(path: &Path) -> Result<PointTable, LoadError> {
+    let data = super::limits::read_bounded(path, super::limits::MAX_FILE_BYTES)?;
+    parse_ply_table(&data).map_err(|e| LoadError::format(path, e))
+}
+
+/// The first element of a PLY file as a table of single-precision values, one row per item and
+/// one column per property, whatever the properties' types — as Mitsuba's `ellipsoids` read
+/// their file (Mitsuba reads the bytes as floats, so its files hold `float` properties only).
+/// List properties are refused; later elements are not read.
+pub fn parse_ply_table(data: &[u8]) -> Result<PointTable, String> {
+    let (elements, enc, pos) = parse_header(data)?;
+    let el = elements.first().ok_or("the header declares no element")?;
+    if let Some(p) = el.props.iter().find(|p| p.list_count.is_some()) {
+        return Err(format!("element '{}' has a list property '{}' (a table has one number per column)", el.name, p.name));
+    }
+    let names: Vec<String> = el.props.iter().map(|p| p.name.clone()).collect();
+    let mut body = Body { data, pos, enc };
+    // Every item takes at least a byte (binary) or a character (ASCII) per property: a count
+    // beyond what the body can hold is refused before anything is allocated for it.
+    if el.count.saturating_mul(names.len()) > data.len().saturating_sub(pos) {
+        return Err(format!("element '{}' declares {} items, more than the file holds", el.name, el.count));
+    }
+    let mut values = Vec::with_capacity(el.count * names.len());
+    for item in 0..el.count {
+        for p in &el.props {
+            values.push(body.read(p.kind).map_err(|e| format!("{} {item}: {e}", el.name))? as f32);
+        }
+    }
+    Ok(PointTable { names, values })
+}
+
 /// A mesh attribute's value from the item's property values: three channels, or one (grey).
 fn attribute_value(vals: &[f64], channels: &[usize]) -> Vec3 {
     match channels {
@@ -343,6 +382,29 @@ mod tests {
     use super::*;
 
     const ASCII: &str = "ply\nformat ascii 1.0\ncomment test\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nproperty float u\nproperty float v\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0\n2 0 0 1 0\n2 2 0 1 1\n0 2 0 0 1\n4 0 1 2 3\n";
+
+    /// The first element as a table, whatever its types and encoding; lists and counts the
+    /// body cannot hold are refused.
+    #[test]
+    fn point_tables() {
+        let ascii = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty uchar k\nproperty double w\n\
+                     element face 0\nproperty list uchar int vertex_indices\nend_header\n1.5 7 -2\n0 255 1e-3\n";
+        let t = parse_ply_table(ascii.as_bytes()).unwrap();
+        assert_eq!(t.names, ["x", "k", "w"]);
+        assert_eq!(t.values, [1.5, 7.0, -2.0, 0.0, 255.0, 1e-3]);
+        let mut binary = b"ply\nformat binary_big_endian 1.0\nelement point 1\nproperty float a\nproperty short b\nend_header\n".to_vec();
+        binary.extend(2.5f32.to_be_bytes());
+        binary.extend((-3i16).to_be_bytes());
+        let t = parse_ply_table(&binary).unwrap();
+        assert_eq!((t.names.as_slice(), t.values.as_slice()), (["a".to_string(), "b".to_string()].as_slice(), [2.5, -3.0].as_slice()));
+        let faces = "ply\nformat ascii 1.0\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n3 0 1 2\n";
+        let e = parse_ply_table(faces.as_bytes()).unwrap_err();
+        assert!(e.contains("element 'face' has a list property 'vertex_indices'"), "{e}");
+        let e = parse_ply_table(b"ply\nformat binary_little_endian 1.0\nelement v 1000000000000\nproperty float x\nend_header\n").unwrap_err();
+        assert!(e.contains("more than the file holds"), "{e}");
+        let e = parse_ply_table(&binary[..binary.len() - 1]).unwrap_err();
+        assert!(e.contains("point 0: unexpected end"), "{e}");
+    }
 
     #[test]
     fn ascii_quad() {

@@ -6,7 +6,7 @@
 //! scene files.
 
 use super::{Bounds3, Ray};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat3, Mat4, Vec3, Vec4};
 use std::ops::Mul;
 
 /// An invertible transform with its cached inverse.
@@ -67,6 +67,22 @@ impl Transform {
         }
         let m = Mat4::from_axis_angle(axis / len, angle_deg.to_radians());
         Some(Transform { m, inv: m.transpose() })
+    }
+
+    /// Mitsuba 3's rotation: the Rodrigues matrix `cos θ I + (1 − cos θ) a aᵀ + sin θ [a]×` of
+    /// the axis `a` as given, not normalized — for a non-unit axis it scales and shears too, as
+    /// Mitsuba 3 (3.9.1) builds `<rotate x="1" y="1" …>`. A unit axis gives [`Transform::rotate`].
+    /// `None` if the matrix is singular or not finite.
+    pub fn rotate_unnormalized(axis: Vec3, angle_deg: f32) -> Option<Transform> {
+        if (axis.length_squared() - 1.0).abs() <= 1e-6 {
+            return Transform::rotate(axis, angle_deg);
+        }
+        let (s, c) = angle_deg.to_radians().sin_cos();
+        let a = axis;
+        let skew = Mat3::from_cols(Vec3::new(0.0, a.z, -a.y), Vec3::new(-a.z, 0.0, a.x), Vec3::new(a.y, -a.x, 0.0));
+        let outer = Mat3::from_cols(a * a.x, a * a.y, a * a.z);
+        let m = Mat3::from_diagonal(Vec3::splat(c)) + outer * (1.0 - c) + skew * s;
+        Transform::from_matrix(Mat4::from_mat3(m))
     }
 
     /// Camera-to-world transform of a camera at `origin` looking at `target` (Mitsuba 3's

@@ -180,6 +180,7 @@ impl SceneBuilder {
                 Geometry::Cylinder(_) => Primitive::Cylinder,
                 Geometry::SdfGrid(_) => Primitive::SdfVoxel,
                 Geometry::Curves(_) | Geometry::LinearCurves(_) | Geometry::BSplineCurves(_) => Primitive::Curve,
+                Geometry::Ellipsoids(_) => Primitive::Ellipsoid,
             }
         };
         bvh.remap_leaves(|first, count| {

@@ -174,6 +174,8 @@ enum Primitive {
     SdfVoxel,
     /// A piece of a curve.
     Curve,
+    /// One of Mitsuba's ellipsoids.
+    Ellipsoid,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -196,6 +198,7 @@ enum HitKind {
     SdfVoxel(u32),
     /// A curve piece's (u, v).
     Curve(Vec2, u32),
+    Ellipsoid(u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -433,7 +436,8 @@ impl Scene {
             | HitKind::Disk(_, r)
             | HitKind::Cylinder(_, r)
             | HitKind::SdfVoxel(r)
-            | HitKind::Curve(_, r) => r,
+            | HitKind::Curve(_, r)
+            | HitKind::Ellipsoid(r) => r,
         }
     }
 
@@ -498,6 +502,13 @@ impl Scene {
                 };
                 hit.map(|h| (h.t, HitKind::Curve(h.uv, lp.r)))
             }
+            Primitive::Ellipsoid => match geometry() {
+                Geometry::Ellipsoids(e) => {
+                    let k = self.refs[lp.r as usize].index as usize;
+                    e.intersect(k, ray, t_max).map(|t| (t, HitKind::Ellipsoid(lp.r)))
+                }
+                _ => None,
+            },
         }
     }
 
@@ -515,7 +526,8 @@ impl Scene {
             | HitKind::Disk(_, r)
             | HitKind::Cylinder(_, r)
             | HitKind::SdfVoxel(r)
-            | HitKind::Curve(_, r) => {
+            | HitKind::Curve(_, r)
+            | HitKind::Ellipsoid(r) => {
                 return self.analytic_interaction(ray, t, kind, self.refs[r as usize]);
             }
         };
@@ -548,6 +560,13 @@ impl Scene {
             // No parameterization: uv = 0 and a shading frame around the normal alone.
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
+            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+        }
+        if let (HitKind::Ellipsoid(_), Geometry::Ellipsoids(e)) = (kind, &self.geometries[r.shape as usize]) {
+            // No parameterization (as in Mitsuba): uv = 0 and a shading frame around the normal.
+            let sp = e.surface(r.index as usize, ray, t);
+            let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
+            let (p, p_error, ng, ns) = (sp.p, sp.p_error, sp.n, sp.n);
             return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
         }
         if let HitKind::Curve(uv, _) = kind {

@@ -79,6 +79,9 @@ SCENES = {
     "curves": (8192, 64, {}, 1.5),
     # Mitsuba's hair BSDF on round B-spline curves: default brown, and blond with tilted scales.
     "hair": (8192, 64, {}, 1.5),
+    # Mitsuba's ellipsoid primitives from a 3D-Gaussian file: analytic shells with adaptive
+    # extents under a rotating, stretching to_world, and uv_sphere mesh shells.
+    "ellipsoids": (8192, 64, {}, 1.5),
     # Sun and sky (sunsky): a time record in a rotated frame, the sky in view, a low sun.
     "sunsky": (8192, 64, {}, 1.5),
 }

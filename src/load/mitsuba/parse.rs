@@ -630,7 +630,9 @@ impl Parser {
                     let angle = self.attr(file, op, "angle")?;
                     let angle = parse_f64(&angle)
                         .ok_or_else(|| invalid(&format!("expected a number of degrees for angle, found {angle:?}")))?;
-                    Transform::rotate(axis, angle as f32).ok_or_else(|| invalid("rotation axis must be non-zero"))?
+                    // As Mitsuba 3: the axis is not normalized (a non-unit one scales too).
+                    Transform::rotate_unnormalized(axis, angle as f32)
+                        .ok_or_else(|| invalid("the rotation is singular (Mitsuba uses the axis as given, not normalized: cos θ I + (1 − cos θ) a aᵀ + sin θ [a]×)"))?
                 }
                 "matrix" => {
                     let v = self.attr(file, op, "value")?;
