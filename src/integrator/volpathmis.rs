@@ -26,11 +26,11 @@
 //! through by camera rays.
 
 use super::trace::{self, PathSettings};
-use super::volpath::medium_after;
+use super::volpath::{medium_after, null_transmission};
 use super::{Integrator, RadianceSample};
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::{LightSample, LightSampleContext};
-use crate::material::{Bsdf, TextureMemo};
+use crate::material::TextureMemo;
 use crate::math::float::offset_ray_origin;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::medium::Medium;
@@ -194,8 +194,12 @@ impl VolPathMisIntegrator {
             let length = ray.d.length();
             let hit = scene.intersect(&ray);
             if let Some(si) = &hit {
-                if !matches!(scene.bsdfs()[scene.shapes()[si.shape as usize].bsdf as usize], Bsdf::Null) {
-                    return None;
+                // Null surfaces pass it on, a polarizing filter only a share of it (the same
+                // factor in both techniques).
+                let t = null_transmission(scene, si)?;
+                if t != Rgb::ONE {
+                    nee.update_scalar(1.0, t);
+                    uni.update_scalar(1.0, t);
                 }
             }
             if let Some(m) = medium {
@@ -343,12 +347,16 @@ impl Integrator for VolPathMisIntegrator {
                     });
                 }
             }
-            if matches!(bsdf, Bsdf::Null) || hidden {
+            if bsdf.is_null() || hidden {
                 crossings += 1;
                 if crossings > MAX_NULL_CROSSINGS {
                     break;
                 }
-                if matches!(bsdf, Bsdf::Null) {
+                if let Some(t) = null_transmission(scene, &si) {
+                    if t != Rgb::ONE {
+                        path.update_scalar(1.0, t);
+                        path_nee.update_scalar(1.0, t);
+                    }
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
                 ray = si.spawn_ray(ray.d);
@@ -446,6 +454,7 @@ impl VolPathMisIntegrator {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::material::Bsdf;
     use crate::camera::{Camera, FovAxis};
     use crate::geometry::{Geometry, Sphere, TriangleMesh};
     use crate::image::GridVolume;

@@ -11,6 +11,7 @@ mod conductor;
 mod conductor_presets;
 mod dielectric;
 mod diffuse;
+mod filter;
 mod diffusetransmission;
 pub mod hair;
 pub mod fresnel;
@@ -32,6 +33,7 @@ pub use conductor_presets::{conductor_names, named_conductor};
 pub use dielectric::{Dielectric, ThinDielectric};
 pub use diffuse::Diffuse;
 pub use diffusetransmission::DiffuseTransmission;
+pub use filter::{Filter, FilterKind};
 pub use hair::Hair;
 pub use layered::Layered;
 pub use measured::Measured;
@@ -184,6 +186,9 @@ pub enum Bsdf {
     /// Mitsuba's `null`: no surface at all, light passes straight through (a delta lobe
     /// `wi = -wo` of weight 1). Marks index-matched boundaries of participating media.
     Null,
+    /// Mitsuba's `polarizer`, `circular` and `retarder` as its RGB variants render them: a null
+    /// surface that passes a share of the light ([`Filter`]).
+    Filter(Filter),
     /// Mitsuba's `twosided`: the front BSDF on the front side, the back BSDF (often the same) on
     /// the back side, each seen as if from its front.
     TwoSided([Arc<Bsdf>; 2]),
@@ -221,12 +226,31 @@ impl Bsdf {
             Bsdf::Blend { .. } => "blendbsdf",
             Bsdf::Mask { .. } => "mask",
             Bsdf::Null => "null",
+            Bsdf::Filter(f) => f.kind.name(),
             Bsdf::TwoSided(_) => "twosided",
             Bsdf::Perturbed(p) => match p.perturbation {
                 Perturbation::NormalMap { .. } => "normalmap",
                 Perturbation::BumpMap { .. } => "bumpmap",
                 Perturbation::Displacement { .. } => "displacement",
             },
+        }
+    }
+
+    /// Whether the volumetric path tracers cross this surface instead of scattering from it:
+    /// `null` and the polarizing [`Filter`]s.
+    #[inline]
+    pub fn is_null(&self) -> bool {
+        matches!(self, Bsdf::Null | Bsdf::Filter(_))
+    }
+
+    /// The factor light crossing a null surface ([`Bsdf::is_null`]) is multiplied by at `ctx`:
+    /// 1 for `null`, a [`Filter`]'s transmission; `None` for every other BSDF.
+    #[inline]
+    pub fn null_transmission(&self, ctx: &BsdfContext) -> Option<Rgb> {
+        match self {
+            Bsdf::Null => Some(Rgb::ONE),
+            Bsdf::Filter(f) => Some(f.transmission(ctx)),
+            _ => None,
         }
     }
 
@@ -240,7 +264,8 @@ impl Bsdf {
             | Bsdf::Mask { .. }
             | Bsdf::DiffuseTransmission(_)
             | Bsdf::Hair(_)
-            | Bsdf::Null => true,
+            | Bsdf::Null
+            | Bsdf::Filter(_) => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
             Bsdf::Blend { bsdfs, .. } => distinct(bsdfs).iter().any(|c| c.transmits()),
@@ -273,7 +298,7 @@ impl Bsdf {
             Bsdf::Measured(b) => b.eval(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.eval(ctx, wo, wi),
             Bsdf::Layered(b) => b.eval(ctx, wo, wi),
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => Rgb::ZERO,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null | Bsdf::Filter(_) => Rgb::ZERO,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].eval(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval(ctx, wo, wi) * w
@@ -306,7 +331,7 @@ impl Bsdf {
             Bsdf::Measured(b) => b.pdf(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.pdf(ctx, wo, wi),
             Bsdf::Layered(b) => b.pdf(ctx, wo, wi),
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => 0.0,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null | Bsdf::Filter(_) => 0.0,
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 bsdfs[0].pdf(ctx, wo, wi) * (1.0 - w) + bsdfs[1].pdf(ctx, wo, wi) * w
@@ -343,6 +368,10 @@ impl Bsdf {
             Bsdf::Layered(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
             Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
+            Bsdf::Filter(f) => {
+                let weight = f.transmission(ctx);
+                (weight != Rgb::ZERO).then_some(BsdfSample { wi: -wo, pdf: 1.0, weight, delta: true, eta: 1.0 })
+            }
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 // Choose a component with its blend probability and reuse u1 for its own choice.
@@ -488,6 +517,7 @@ impl Bsdf {
                 v
             }
             Bsdf::Null => Vec::new(),
+            Bsdf::Filter(f) => vec![&f.transmittance],
         }
     }
 
@@ -534,7 +564,7 @@ impl Bsdf {
             | Bsdf::PrincipledThin(_)
             | Bsdf::PPlastic(_)
             | Bsdf::Measured(_) => false,
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null => true,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::Null | Bsdf::Filter(_) => true,
             Bsdf::Layered(b) => b.is_delta(),
             // Recursive, so kept out of line: the leaf cases above inline into the integrators.
             _ => self.is_delta_nested(),

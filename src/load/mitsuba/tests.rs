@@ -2137,3 +2137,31 @@ fn ellipsoid_parameters_and_errors() {
     assert!((si.t - 3.5).abs() < 1e-5, "a unit sphere times 1.5: {}", si.t);
     assert_eq!((si.uv, si.dpdu), (crate::math::Vec2::ZERO, Vec3::ZERO), "no parameterization");
 }
+
+/// Mitsuba's polarizing elements as its RGB variants sample them (weights printed by Mitsuba
+/// 3.9.1's `scalar_rgb`): a straight-through null lobe of weight ½ × transmittance (polarizer,
+/// circular) or 1 (retarder), their polarizing parameters read and not used.
+#[test]
+fn polarizing_elements_pass_their_share() {
+    for (bsdf, name, weight) in [
+        (r#"<bsdf type="polarizer"><float name="theta" value="30"/><float name="transmittance" value="0.6"/></bsdf>"#, "polarizer", 0.3),
+        (r#"<bsdf type="polarizer"><boolean name="polarizing" value="false"/></bsdf>"#, "polarizer", 0.5),
+        (r#"<bsdf type="circular"><boolean name="left_handed" value="true"/></bsdf>"#, "circular", 0.5),
+        (r#"<bsdf type="retarder"><float name="delta" value="45"/><float name="theta" value="10"/></bsdf>"#, "retarder", 1.0),
+    ] {
+        let f = load(&scene(&format!(r#"<shape type="sphere">{bsdf}</shape>"#))).unwrap();
+        let b = &f.scene.bsdfs()[0];
+        assert_eq!(b.plugin_name(), name);
+        let si = f.scene.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).unwrap();
+        let ctx = f.scene.bsdf_context(&si);
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let s = b.sample(&ctx, wo, 0.3, crate::math::Vec2::new(0.2, 0.7)).unwrap();
+        assert_eq!((s.wi, s.delta, s.pdf), (-wo, true, 1.0));
+        assert!((s.weight - Rgb::splat(weight)).abs().max_element() < 1e-6, "{name}: {}", s.weight);
+        assert_eq!(b.eval(&ctx, wo, -wo), Rgb::ZERO);
+    }
+    let e = load(&scene(r#"<shape type="sphere"><bsdf type="circular"><float name="theta" value="20"/></bsdf></shape>"#))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("does not take the parameter") && e.contains("theta"), "{e}");
+}
