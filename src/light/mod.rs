@@ -20,9 +20,11 @@ pub use envmap::{EnvMap, EnvMapError, Layout as EnvMapLayout};
 pub use goniometric::{Goniometric, GoniometricError};
 pub use portal::{Portal, PortalError};
 pub use projector::{Projector, ProjectorEmission};
-pub use registry::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, EmitterPlugin, EMITTER_PLUGINS};
+pub use registry::{
+    area_opacity_from_props, area_radiance_from_props, emitter_plugin, timed_sunsky, EmitterPlugin, EMITTER_PLUGINS,
+};
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, InvalidLightPower};
-pub use sun_position::{sun_direction, DateTime, Location};
+pub use sun_position::{day_number, sun_direction, DateTime, Location};
 pub use sunsky::{SunPlacement, SunSky, SunSkyError, SunSkyParams};
 
 use crate::geometry::Geometry;

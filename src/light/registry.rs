@@ -241,6 +241,13 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
             SunPlacement::Time(time, place)
         }
     };
+    sunsky_with(o, textures, sun)
+}
+
+/// The sunsky `o` with the sun placed by `sun`: the parameters `sunsky` and `timed_sunsky`
+/// share (`turbidity`, `albedo`, `sun_scale`, `sky_scale`, `sun_aperture`, `complex_sun`,
+/// `to_world`), and its errors located.
+fn sunsky_with(o: &Obj, textures: &mut dyn TextureSource, sun: SunPlacement) -> Result<Light> {
     let d = SunSkyParams::default();
     let params = SunSkyParams {
         sun,
@@ -276,6 +283,56 @@ fn sunsky(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
         }
     })?;
     Ok(Light::SunSky { sky: Box::new(sky), center: Vec3::ZERO, radius: 0.0 })
+}
+
+/// Mitsuba's `timed_sunsky` seen by rays at time `ray_time` (the sensor's, when its shutter
+/// does not open over an interval): the sunsky (Mitsuba's `sunsky`'s shared parameters and
+/// `latitude`, `longitude`, `timezone`) at the moment Mitsuba maps that time to. The emitter's
+/// own `shutter_open` (0) to `shutter_close` (1) spans the days from `start_year` (2025),
+/// `start_month` (1), `start_day` (1) to `end_year` (the start's plus one), `end_month`,
+/// `end_day` (the start's) — at least one, whole days between the dates —, each day the hours
+/// from `window_start_time` (7) to `window_end_time` (19): the time's fraction f of the
+/// shutter falls on day ⌊f · days⌋ after the start, at the window's fraction of what is left.
+pub fn timed_sunsky(o: &Obj, textures: &mut dyn TextureSource, ray_time: f32) -> Result<Light> {
+    let open = o.float_checked("shutter_open", 0.0, f32::is_finite, "finite")?;
+    let close = o.float_checked("shutter_close", 1.0, |c| c.is_finite() && c > open, "after shutter_open")?;
+    let hour =
+        |name: &str, default: f32| o.float_checked(name, default, |h| (0.0..=24.0).contains(&h), "an hour in [0, 24]");
+    let (window_start, window_end) = (hour("window_start_time", 7.0)?, hour("window_end_time", 19.0)?);
+    if window_start > window_end {
+        return Err(o.error_at("window_end_time", "the window ends before it starts"));
+    }
+    let int = |name: &str, default: i32| -> Result<i32> {
+        let v = o.int(name, default as i64)?;
+        i32::try_from(v).map_err(|_| o.error_at(name, format!("{v} is out of range")))
+    };
+    let (year, month, day) = (int("start_year", 2025)?, int("start_month", 1)?, int("start_day", 1)?);
+    let (end_year, end_month, end_day) = (int("end_year", year + 1)?, int("end_month", month)?, int("end_day", day)?);
+    let days = super::day_number(end_year, end_month, end_day) - super::day_number(year, month, day);
+    if days < 0 {
+        return Err(o.error_at("end_year", "the end date is before the start date (as Mitsuba refuses it)"));
+    }
+    let days = days.max(1) as f32;
+    let l = super::Location::default();
+    let real = |name: &str, default: f32| o.float_checked(name, default, f32::is_finite, "finite");
+    let place = super::Location {
+        latitude: real("latitude", l.latitude)?,
+        longitude: real("longitude", l.longitude)?,
+        timezone: real("timezone", l.timezone)?,
+    };
+    // Mitsuba's mapping of the time to a day and an hour (single precision, as Mitsuba's).
+    let f = (ray_time - open) / (close - open);
+    let t = f * (days - f32::EPSILON / 2.0);
+    let whole = t.floor();
+    let time = super::DateTime {
+        year,
+        month,
+        day: day.saturating_add(whole as i32),
+        hour: window_start + (window_end - window_start) * (t - whole),
+        minute: 0.0,
+        second: 0.0,
+    };
+    sunsky_with(o, textures, SunPlacement::Time(time, place))
 }
 
 /// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`

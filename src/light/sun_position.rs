@@ -55,6 +55,17 @@ impl Default for DateTime {
 /// Mean radius of the Earth over the astronomical unit (both in km): the parallax correction.
 const EARTH_OVER_AU: f64 = 6371.01 / 149_597_890.0;
 
+/// The Julian day number of a civil date (the day starting at noon of that date), with
+/// Mitsuba's integer arithmetic (truncating division), in 64 bits so that no year overflows;
+/// a day past the month's end rolls over into the next month.
+pub fn day_number(year: i32, month: i32, day: i32) -> i64 {
+    let (year, month, day) = (year as i64, month as i64, day as i64);
+    let aux1 = (month - 14) / 12;
+    (1461 * (year + 4800 + aux1)) / 4 + (367 * (month - 2 - 12 * aux1)) / 12 - (3 * ((year + 4900 + aux1) / 100)) / 4
+        + day
+        - 32075
+}
+
 /// The sun's zenith angle θ and azimuth φ (radians) at `time` in `place`, as Mitsuba's
 /// `sun_coordinates` returns them (φ measured from +x, the algorithm's azimuth less π). The
 /// algorithm's constants are written as published (more digits than `f32` holds).
@@ -62,15 +73,7 @@ const EARTH_OVER_AU: f64 = 6371.01 / 149_597_890.0;
 pub fn sun_angles(time: &DateTime, place: &Location) -> (f32, f32) {
     // Time of day in UT decimal hours, and days since JD 2451545.0 (noon, 1 January 2000).
     let dec_hours = time.hour - place.timezone + (time.minute + time.second / 60.0) / 60.0;
-    // Mitsuba's integer arithmetic (truncating division), in 64 bits so that no year overflows;
-    // a day past the month's end rolls over into the next month.
-    let (year, month, day) = (time.year as i64, time.month as i64, time.day as i64);
-    let aux1 = (month - 14) / 12;
-    let aux2 = (1461 * (year + 4800 + aux1)) / 4 + (367 * (month - 2 - 12 * aux1)) / 12
-        - (3 * ((year + 4900 + aux1) / 100)) / 4
-        + day
-        - 32075;
-    let julian_date = aux2 as f32 - 0.5 + dec_hours / 24.0;
+    let julian_date = day_number(time.year, time.month, time.day) as f32 - 0.5 + dec_hours / 24.0;
     let days = julian_date - 2_451_545.0;
 
     // Ecliptic coordinates (radians, not reduced to [0, 2π)).

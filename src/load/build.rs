@@ -76,6 +76,8 @@ pub struct Builder {
     memory: MemoryFiles,
     /// A sensor nested in a shape (an irradiance meter) with that shape's world geometry.
     shape_sensor: Option<(Rc<Obj>, Geometry)>,
+    /// The scene's sensor's `shutter_open` and `shutter_close` (0, 0 without one).
+    shutter: (f32, f32),
 }
 
 impl Builder {
@@ -97,6 +99,7 @@ impl Builder {
             resolver,
             memory: MemoryFiles::default(),
             shape_sensor: None,
+            shutter: (0.0, 0.0),
         }
     }
 
@@ -109,6 +112,10 @@ impl Builder {
     /// Builds everything under `root` (a `<scene>`).
     pub fn build(mut self, root: &Obj) -> Result<SceneFile> {
         root.built.set(true);
+        // The sensor's shutter (the time of its rays), for the emitters that depend on time.
+        if let Some(sensor) = root.children.iter().find(|c| c.tag == "sensor") {
+            self.shutter = (sensor.float("shutter_open", 0.0)?, sensor.float("shutter_close", 0.0)?);
+        }
         let mut integrator = None;
         let mut sensor = None;
         for c in &root.children {
@@ -638,19 +645,28 @@ impl Builder {
                 emitter_name(&o.ty)
             )));
         }
-        if o.ty == "timed_sunsky" {
-            return Err(o.error(
-                "the timed_sunsky emitter (Mitsuba's sky averaged over the sensor's shutter interval, mapped to days and \
-                 hours) is not implemented: neumann's rays carry no time; a sunsky at a fixed date and time is",
-            ));
-        }
-        let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
-            let mut names: Vec<&str> = EMITTER_PLUGINS.iter().map(|p| p.0).collect();
-            names.extend(["area", "directionalarea"]);
-            o.unknown_plugin(&names)
-        })?;
-        read_sampling_weight(o)?;
-        let light = plugin(o, self)?;
+        let light = if o.ty == "timed_sunsky" {
+            // Mitsuba's rays carry the sensor's time; neumann renders the one moment a sensor
+            // whose shutter does not open over an interval (Mitsuba's default) gives them all.
+            let (open, close) = self.shutter;
+            if close != open {
+                return Err(o.error(format!(
+                    "the sensor's shutter is open from {open} to {close}: the timed_sunsky would change over it (a sky \
+                     averaged over days and hours), which neumann's rays, without a time, cannot render; a sensor \
+                     with shutter_open = shutter_close renders the sky of that moment"
+                )));
+            }
+            read_sampling_weight(o)?;
+            crate::light::timed_sunsky(o, self, open)?
+        } else {
+            let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
+                let mut names: Vec<&str> = EMITTER_PLUGINS.iter().map(|p| p.0).collect();
+                names.extend(["area", "directionalarea", "timed_sunsky"]);
+                o.unknown_plugin(&names)
+            })?;
+            read_sampling_weight(o)?;
+            plugin(o, self)?
+        };
         if let crate::light::Light::SunSky { sky, .. } = &light {
             if !sky.is_lit() {
                 self.warnings.push(format!(

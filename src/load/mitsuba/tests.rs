@@ -731,7 +731,10 @@ fn sunsky_emitters() {
         (r#"<emitter type="sunsky"><texture type="checkerboard" name="albedo"/></emitter>"#, "the same everywhere"),
         (r#"<emitter type="sunsky"><float name="sun_radius" value="1"/></emitter>"#, "sun_radius"),
         (r#"<emitter type="sunsky"><float name="hour" value="1e39"/></emitter>"#, "'hour' must be finite"),
-        (r#"<emitter type="timed_sunsky"/>"#, "timed_sunsky emitter (Mitsuba's sky averaged"),
+        (r#"<emitter type="timed_sunsky"><integer name="end_year" value="2024"/></emitter>"#, "end date is before"),
+        (r#"<emitter type="timed_sunsky"><float name="window_end_time" value="6"/></emitter>"#, "ends before it starts"),
+        (r#"<emitter type="timed_sunsky"><float name="shutter_close" value="0"/></emitter>"#, "after shutter_open"),
+        (r#"<emitter type="timed_sunsky"><float name="window_start_time" value="25"/></emitter>"#, "an hour in [0, 24]"),
     ] {
         let e = err(&scene(body));
         assert!(e.contains(expectation), "expected '{expectation}' in:\n{e}");
@@ -2164,4 +2167,53 @@ fn polarizing_elements_pass_their_share() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("does not take the parameter") && e.contains("theta"), "{e}");
+}
+
+/// Mitsuba's `timed_sunsky` for rays at one time (the sensor's shutter closed, as by default):
+/// the sky of the moment Mitsuba maps that time to — here the time is 0.435 of the emitter's
+/// shutter, 126 of the 291 days from 20 March 2025, at 12.913 h of a 9–16.5 h window — equal to
+/// Mitsuba 3.9.1's (its `eval` at four directions, the sun off) and to a `sunsky` at that
+/// moment. A sensor whose shutter opens over an interval would need a time per ray: an error.
+#[test]
+fn timed_sunsky_is_the_sky_of_its_moment() {
+    let place = r#"<float name="latitude" value="48.85"/><float name="longitude" value="2.35"/><float name="timezone" value="1"/>
+        <float name="turbidity" value="4"/><float name="sun_scale" value="0"/>"#;
+    let timed = format!(
+        r#"<emitter type="timed_sunsky"><float name="shutter_open" value="-1"/><float name="shutter_close" value="1.3"/>
+        <integer name="start_month" value="3"/><integer name="start_day" value="20"/><integer name="end_year" value="2026"/>
+        <integer name="end_month" value="1"/><integer name="end_day" value="5"/><float name="window_start_time" value="9"/>
+        <float name="window_end_time" value="16.5"/>{place}</emitter>"#
+    );
+    let fixed = format!(
+        r#"<emitter type="sunsky"><integer name="year" value="2025"/><integer name="month" value="3"/>
+        <integer name="day" value="146"/><float name="hour" value="12.913021"/>{place}</emitter>"#
+    );
+    let sky = |body: &str| {
+        let f = load(&scene(body)).unwrap();
+        match &f.scene.lights()[0] {
+            crate::light::Light::SunSky { sky, .. } => sky.clone(),
+            other => panic!("a sunsky, not {other:?}"),
+        }
+    };
+    let (timed, fixed) = (sky(&timed), sky(&fixed));
+    // Mitsuba 3.9.1 scalar_rgb, `eval` of the timed_sunsky with time 0 (radiance from d).
+    for (d, mitsuba) in [
+        ([0.0, 0.0, 1.0], [0.0551924, 0.0755641, 0.124287]),
+        ([1.0, 0.0, 0.3], [0.120841, 0.172585, 0.258084]),
+        ([0.0, 1.0, 0.5], [0.0532458, 0.0905881, 0.1632]),
+        ([-0.5, -0.5, 0.7], [0.0326062, 0.0601146, 0.118377]),
+    ] {
+        let d = Vec3::from(d).normalize();
+        let (a, b) = (timed.eval(d), fixed.eval(d));
+        // (The hour given to the sunsky is rounded to a microhour.)
+        assert!(((a - b) / b).abs().max_element() < 1e-5, "{d}: the same moment, {a} against {b}");
+        let m = Rgb::new(mitsuba[0], mitsuba[1], mitsuba[2]);
+        assert!(((a - m) / m).abs().max_element() < 2e-3, "{d}: {a} against Mitsuba's {m}");
+    }
+    let open = scene(r#"<emitter type="timed_sunsky"/>"#).replace(
+        r#"<float name="fov" value="40"/>"#,
+        r#"<float name="fov" value="40"/><float name="shutter_close" value="0.5"/>"#,
+    );
+    let e = load(&open).unwrap_err().to_string();
+    assert!(e.contains("shutter is open from 0 to 0.5") && e.contains("test.xml:"), "{e}");
 }
