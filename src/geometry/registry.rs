@@ -237,12 +237,17 @@ fn round_curve(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSo
 /// `√(2 ln(opacity / 0.01)) / 3`, and without opacities in the file is ignored with a warning,
 /// as in Mitsuba), `to_world` (centres moved by it, scales by its mean stretch, orientations
 /// turned by its rotation); `ellipsoidsmesh` also `shell` (`ico_sphere`, the default, `box`,
-/// `uv_sphere`, or a nested mesh shape). Mitsuba's tensor parameters (`data`, `centers`,
-/// `scales`, `quaternions`, attribute tensors) come from Python only. No `flip_normals`.
+/// `uv_sphere`, or a nested mesh shape), `flip_normals` and `face_normals` (a mesh's; the shells
+/// have face normals only). Mitsuba's tensor parameters (`data`, `centers`, `scales`,
+/// `quaternions`, attribute tensors) come from Python only.
 fn ellipsoids(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
     use super::ellipsoids::{shell_mesh, EllipsoidSet};
-    if flip {
-        return Err(o.error_at("flip_normals", format!("{} have no flip_normals (as in Mitsuba)", o.ty)));
+    if flip && o.ty == "ellipsoids" {
+        return Err(o.error_at("flip_normals", "analytic ellipsoids have no flip_normals (as in Mitsuba)"));
+    }
+    if o.ty == "ellipsoidsmesh" {
+        // A mesh's parameter; the shells have face normals only, as Mitsuba's.
+        o.bool("face_normals", false)?;
     }
     let scale_factor =
         o.float_checked("scale_factor", 1.0, |s| s > 0.0 && s.is_finite(), "positive")?;
@@ -264,9 +269,12 @@ fn ellipsoids(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSou
     };
     Ok(match shell {
         None => Geometry::Ellipsoids(Box::new(super::Ellipsoids::new(&set, &extents))),
-        Some(shell) => Geometry::Mesh(
-            shell_mesh(&set, &extents, &shell).ok_or_else(|| o.error_at("shell", "the shell has a vertex or a face centred at its origin"))?,
-        ),
+        Some(shell) => {
+            let mut mesh = shell_mesh(&set, &extents, &shell)
+                .ok_or_else(|| o.error_at("shell", "the shell has a vertex or a face centred at its origin"))?;
+            mesh.flip_normals ^= flip;
+            Geometry::Mesh(mesh)
+        }
     })
 }
 
@@ -296,7 +304,7 @@ fn shell_template(o: &Obj, files: &mut dyn MeshSource) -> Result<super::ellipsoi
             let to_world = mesh.transform("to_world")?;
             let flip = mesh.bool("flip_normals", false)?;
             match plugin(&mesh, &to_world, flip, files)? {
-                Geometry::Mesh(m) => Shell::Mesh(m.positions.clone(), m.indices.clone()),
+                Geometry::Mesh(m) => Shell::Mesh(m.positions, m.indices),
                 _ => return Err(mesh.error("an ellipsoidsmesh's shell must be a triangle mesh")),
             }
         }

@@ -2104,8 +2104,19 @@ fn ellipsoid_parameters_and_errors() {
     let f = load(&shape("ellipsoidsmesh", r#"<shape type="cube" name="shell"/>"#)).unwrap();
     let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!("an ellipsoidsmesh is a mesh") };
     assert_eq!(m.len(), 12 * 48);
+    // A mesh's flip_normals turns the shells' normals inward (Mitsuba's mesh takes it).
+    let ray = (0..100)
+        .map(|k| Ray::new(Vec3::new(-1.0 + 0.02 * k as f32, 0.05, 5.0), -Vec3::Z))
+        .find(|r| f.scene.intersect(r).is_some())
+        .expect("a ray across the cloud hits a shell");
+    let outward = f.scene.intersect(&ray).unwrap().ng;
+    assert!(outward.z > 0.0, "{outward}");
+    let flipped = r#"<shape type="cube" name="shell"/><boolean name="flip_normals" value="true"/><boolean name="face_normals" value="true"/>"#;
+    let flipped = load(&shape("ellipsoidsmesh", flipped)).unwrap();
+    assert_eq!(flipped.scene.intersect(&ray).unwrap().ng, -outward);
     for (ty, inner, expected) in [
         ("ellipsoids", r#"<boolean name="flip_normals" value="true"/>"#, "have no flip_normals"),
+        ("ellipsoids", r#"<boolean name="face_normals" value="true"/>"#, "does not take the parameter"),
         ("ellipsoids", r#"<float name="extent" value="0"/>"#, "extent"),
         ("ellipsoidsmesh", r#"<string name="shell" value="cone"/>"#, "unknown shell 'cone'"),
         ("ellipsoidsmesh", r#"<shape type="sphere" name="shell"/>"#, "shell must be a triangle mesh"),
