@@ -384,10 +384,20 @@ fn uv_sphere(segments: u32, bands: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
 /// Mitsuba's `ellipsoidsmesh`: every ellipsoid's copy of the template shell (see
 /// [`Shell::template`]), placed by `c + R (s · extent ⊙ v)`, one mesh with face normals;
 /// triangle `k` belongs to ellipsoid `k / (the template's triangles)`. An ellipsoid whose extent
-/// is not positive gets its shell collapsed onto its centre (never hit). `None` if the template
-/// is degenerate.
-pub fn shell_mesh(set: &EllipsoidSet, extents: &[f32], shell: &Shell) -> Option<TriangleMesh> {
-    let (template, faces) = shell.template()?;
+/// is not positive gets its shell collapsed onto its centre (never hit). An error if the template
+/// is degenerate, or the shells would hold more than [`MAX_SHELL_VERTICES`] vertices.
+pub fn shell_mesh(set: &EllipsoidSet, extents: &[f32], shell: &Shell) -> Result<TriangleMesh, String> {
+    let (template, faces) = shell
+        .template()
+        .ok_or("the shell has a vertex or a face centred at its origin (it cannot enclose the sphere)")?;
+    let total = set.ellipsoids.len().saturating_mul(template.len());
+    if total > MAX_SHELL_VERTICES {
+        return Err(format!(
+            "{} ellipsoids × {} shell vertices is more than {MAX_SHELL_VERTICES} vertices",
+            set.ellipsoids.len(),
+            template.len()
+        ));
+    }
     let mut positions = Vec::with_capacity(set.ellipsoids.len() * template.len());
     let mut indices = Vec::with_capacity(set.ellipsoids.len() * faces.len());
     for (e, &k) in set.ellipsoids.iter().zip(extents) {
@@ -402,8 +412,12 @@ pub fn shell_mesh(set: &EllipsoidSet, extents: &[f32], shell: &Shell) -> Option<
         positions.extend(template.iter().map(|v| e.center + m * (*v * k)));
         indices.extend(faces.iter().map(|f| f.map(|i| i + base)));
     }
-    TriangleMesh::new(positions, Vec::new(), Vec::new(), indices).ok()
+    TriangleMesh::new(positions, Vec::new(), Vec::new(), indices).map_err(|e| e.to_string())
 }
+
+/// The most vertices an `ellipsoidsmesh` may have (3 GiB of positions; a 3D-Gaussian capture of
+/// millions of Gaussians with 38-vertex `uv_sphere` shells stays well below).
+pub const MAX_SHELL_VERTICES: usize = 1 << 28;
 
 #[cfg(test)]
 mod tests {
@@ -585,6 +599,11 @@ mod tests {
         assert!(shells.intersect(0, &ray, f32::INFINITY).is_some());
         assert_eq!(shells.intersect(1, &ray, f32::INFINITY), None);
         let mesh = shell_mesh(&set, &extents, &Shell::IcoSphere).unwrap();
+        // 4000 ellipsoids of a 70 000-vertex shell: refused before anything is allocated.
+        let many = EllipsoidSet { ellipsoids: vec![set.ellipsoids[0]; 4000], opacities: None };
+        let huge = Shell::Mesh(vec![Vec3::ONE; 70_000], vec![[0, 1, 2]]);
+        let e = shell_mesh(&many, &[1.0; 4000], &huge).unwrap_err();
+        assert!(e.contains("more than 268435456 vertices"), "{e}");
         assert_eq!(mesh.len(), 40, "two shells, the second collapsed");
         assert!(mesh.positions[12..].iter().all(|p| *p == set.ellipsoids[1].center));
         assert_eq!(set.extents(2.0, false).unwrap(), vec![2.0, 2.0]);

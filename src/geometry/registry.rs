@@ -270,8 +270,7 @@ fn ellipsoids(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSou
     Ok(match shell {
         None => Geometry::Ellipsoids(Box::new(super::Ellipsoids::new(&set, &extents))),
         Some(shell) => {
-            let mut mesh = shell_mesh(&set, &extents, &shell)
-                .ok_or_else(|| o.error_at("shell", "the shell has a vertex or a face centred at its origin"))?;
+            let mut mesh = shell_mesh(&set, &extents, &shell).map_err(|e| o.error_at("shell", e))?;
             mesh.flip_normals ^= flip;
             Geometry::Mesh(mesh)
         }
