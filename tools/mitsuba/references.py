@@ -82,6 +82,9 @@ SCENES = {
     # Mitsuba's ellipsoid primitives from a 3D-Gaussian file: analytic shells with adaptive
     # extents under a rotating, stretching to_world, and uv_sphere mesh shells.
     "ellipsoids": (8192, 64, {}, 1.5),
+    # Polarizing elements in RGB (polarizer, circular, retarder) crossed by volpath's shadow
+    # rays, under a timed_sunsky at the sensor's closed shutter (its sky; the sun off).
+    "filters": (8192, 64, {}, 1.5),
     # Sun and sky (sunsky): a time record in a rotated frame, the sky in view, a low sun.
     "sunsky": (8192, 64, {}, 1.5),
 }
