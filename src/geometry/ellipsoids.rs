@@ -37,6 +37,18 @@ pub struct Ellipsoid {
     pub scale: Vec3,
 }
 
+impl Ellipsoid {
+    /// `R diag(s)`: its semi-axes as world vectors (the columns).
+    #[inline]
+    pub fn axes(&self) -> Mat3 {
+        Mat3::from_cols(
+            self.rotation.x_axis * self.scale.x,
+            self.rotation.y_axis * self.scale.y,
+            self.rotation.z_axis * self.scale.z,
+        )
+    }
+}
+
 /// Ellipsoids as a file describes them (before the shape's `extent`), with the per-ellipsoid
 /// opacity a 3D-Gaussian file carries (used by `extent_adaptive_clamping`).
 #[derive(Clone, Debug, Default)]
@@ -220,11 +232,7 @@ impl Ellipsoids {
     /// `R diag(s)`, padded by a few units of rounding.
     pub fn bounds(&self, i: usize) -> Bounds3 {
         let e = &self.ellipsoids[i];
-        let m = Mat3::from_cols(
-            e.rotation.x_axis * e.scale.x,
-            e.rotation.y_axis * e.scale.y,
-            e.rotation.z_axis * e.scale.z,
-        );
+        let m = e.axes();
         let half = Vec3::new(m.row(0).length(), m.row(1).length(), m.row(2).length());
         let half = half + gamma(4) * (half + e.center.abs());
         Bounds3::new(e.center - half, e.center + half)
@@ -404,11 +412,7 @@ pub fn shell_mesh(set: &EllipsoidSet, extents: &[f32], shell: &Shell) -> Result<
         let base = positions.len() as u32;
         // No shell: collapsed onto the centre (never hit), keeping the triangles' numbering.
         let k = if k > 0.0 { k } else { 0.0 };
-        let m = Mat3::from_cols(
-            e.rotation.x_axis * e.scale.x,
-            e.rotation.y_axis * e.scale.y,
-            e.rotation.z_axis * e.scale.z,
-        );
+        let m = e.axes();
         positions.extend(template.iter().map(|v| e.center + m * (*v * k)));
         indices.extend(faces.iter().map(|f| f.map(|i| i + base)));
     }
@@ -510,11 +514,7 @@ mod tests {
         for i in 0..shells.len() {
             let e = shells.ellipsoid(i);
             let b = shells.bounds(i);
-            let m = Mat3::from_cols(
-                e.rotation.x_axis * e.scale.x,
-                e.rotation.y_axis * e.scale.y,
-                e.rotation.z_axis * e.scale.z,
-            );
+            let m = e.axes();
             for k in 0..3 {
                 // The support point along +e_k: c + M Mᵀ e_k / |Mᵀ e_k|.
                 let row = m.row(k);

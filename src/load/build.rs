@@ -645,6 +645,7 @@ impl Builder {
                 emitter_name(&o.ty)
             )));
         }
+        read_sampling_weight(o)?;
         let light = if o.ty == "timed_sunsky" {
             // Mitsuba's rays carry the sensor's time; neumann renders the one moment a sensor
             // whose shutter does not open over an interval (Mitsuba's default) gives them all.
@@ -656,7 +657,6 @@ impl Builder {
                      with shutter_open = shutter_close renders the sky of that moment"
                 )));
             }
-            read_sampling_weight(o)?;
             crate::light::timed_sunsky(o, self, open)?
         } else {
             let plugin = emitter_plugin(&o.ty).ok_or_else(|| {
@@ -664,7 +664,6 @@ impl Builder {
                 names.extend(["area", "directionalarea", "timed_sunsky"]);
                 o.unknown_plugin(&names)
             })?;
-            read_sampling_weight(o)?;
             plugin(o, self)?
         };
         if let crate::light::Light::SunSky { sky, .. } = &light {
