@@ -111,8 +111,13 @@ pub struct Camera {
     /// tan of half the horizontal / vertical field of view.
     tan_half: Vec2,
     /// Film position (pixels) to the camera-space plane z = 1: `xy = film · plane_scale +
-    /// tan_half` (the NDC mapping and the field of view folded into one multiply-add).
+    /// plane_origin` (the NDC mapping and the field of view folded into one multiply-add).
     plane_scale: Vec2,
+    /// The plane point of film position (0, 0): `tan_half`, moved by the principal point offset.
+    plane_origin: Vec2,
+    /// Mitsuba's `principal_point_offset_x/y`: the film is shifted by this fraction of its width
+    /// and height (the image's centre no longer on the view axis; 0 for a centred film).
+    principal_offset: Vec2,
     width: u32,
     height: u32,
     near_clip: f32,
@@ -155,6 +160,8 @@ impl Camera {
             fov_axis,
             tan_half,
             plane_scale,
+            plane_origin: tan_half,
+            principal_offset: Vec2::ZERO,
             width,
             height,
             near_clip: 1e-2,
@@ -264,7 +271,18 @@ impl Camera {
             return Err(CameraError::MeterFilm(width, height));
         }
         let c = Camera::perspective(self.to_world, self.fov_deg, self.fov_axis, width, height)?;
-        Ok(Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() })
+        let c = Camera { tan_half: c.tan_half, plane_scale: c.plane_scale, width, height, ..self.clone() };
+        Ok(c.with_principal_point(self.principal_offset))
+    }
+
+    /// Shifts the film of a perspective camera by `offset` times its width and height
+    /// (Mitsuba's `principal_point_offset_x/y`): film position `p` sees what film position
+    /// `p + offset · (width, height)` of the centred camera sees, as in Mitsuba, whose sample
+    /// position moves by the offset over the film (crop windows included).
+    pub fn with_principal_point(mut self, offset: Vec2) -> Camera {
+        self.principal_offset = offset;
+        self.plane_origin = self.tan_half * (Vec2::ONE - 2.0 * offset);
+        self
     }
 
     /// Sets the near and far clip distances (along the view axis).
@@ -343,7 +361,7 @@ impl Camera {
     /// right and y grows down.
     #[inline]
     fn plane_point(&self, film: Vec2) -> Vec2 {
-        film * self.plane_scale + self.tan_half
+        film * self.plane_scale + self.plane_origin
     }
 
     /// A pinhole or thin-lens ray through `film`.
@@ -453,7 +471,8 @@ impl Camera {
             to_p / to_p.z
         };
         let ndc = Vec2::new(-d.x / self.tan_half.x, -d.y / self.tan_half.y);
-        let film = Vec2::new((ndc.x + 1.0) * 0.5 * self.width as f32, (ndc.y + 1.0) * 0.5 * self.height as f32);
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let film = (ndc + Vec2::ONE) * 0.5 * size - self.principal_offset * size;
         if !(film.x >= 0.0 && film.x < self.width as f32 && film.y >= 0.0 && film.y < self.height as f32) {
             return None;
         }
@@ -497,7 +516,9 @@ impl Camera {
     /// `fov` + `fov_axis` (`x` default, `y`, `diagonal`, `smaller`, `larger`) or `focal_length`
     /// (default `50mm`: the diagonal field of view of a 36 × 24 mm frame), `near_clip` (0.01),
     /// `far_clip` (10⁴), `focus_distance` (default `far_clip`: every projective camera of
-    /// Mitsuba reads it; only the thin lens focuses); thin lens: `aperture_radius` (required).
+    /// Mitsuba reads it; only the thin lens focuses); perspective: `principal_point_offset_x/y`
+    /// (0; the film shifted by that fraction of its size, see [`Camera::with_principal_point`]);
+    /// thin lens: `aperture_radius` (required).
     /// `orthographic`: `to_world` (its scale sets the extent: camera-space x ∈ [-1, 1] spans the
     /// film's width), `near_clip`, `far_clip`, `focus_distance`. `radiancemeter`: `to_world`
     /// (rays from its origin along its +z), or else `origin` and `direction` (both; default the
@@ -548,6 +569,13 @@ impl Camera {
         let mut camera =
             Camera::perspective(to_world, fov, axis, width, height).map_err(|e| o.error_at("fov", e.to_string()))?;
         camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()))?;
+        if o.ty == "perspective" {
+            // (Mitsuba's thin lens does not take the offset.)
+            let finite = |v: f32| v.is_finite();
+            let x = o.float_checked("principal_point_offset_x", 0.0, finite, "finite")?;
+            let y = o.float_checked("principal_point_offset_y", 0.0, finite, "finite")?;
+            camera = camera.with_principal_point(Vec2::new(x, y));
+        }
         if o.ty == "thinlens" {
             let r = o.float_opt("aperture_radius")?.ok_or_else(|| o.error("'aperture_radius' is required"))?;
             camera = camera.with_thin_lens(r, focus).map_err(|e| o.error_at("aperture_radius", e.to_string()))?;
@@ -691,6 +719,35 @@ mod tests {
         let (x, y) = edge(&c, Vec2::new(200.0, 0.0));
         assert!(((x * x + y * y).sqrt() - 1.0).abs() < 1e-5);
         assert!(Camera::perspective(Transform::IDENTITY, 180.0, FovAxis::X, 1, 1).is_err());
+    }
+
+    /// Mitsuba 3.9.1's `perspective` with `principal_point_offset_x/y` = (0.1, −0.2), a 64 × 48
+    /// film cropped to 32 × 40 at (8, 4): `sensor.sample_ray` at crop positions (0, 0), (½, ½),
+    /// (¼, 0.9), (1, 1), i.e. film positions below; the offset moves the film, not the crop.
+    /// The light tracer's connection lands back on the same film position.
+    #[test]
+    fn principal_point_offset_matches_mitsuba() {
+        let t = Transform::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
+        let c = Camera::perspective(t, 40.0, FovAxis::X, 64, 48).unwrap().with_principal_point(Vec2::new(0.1, -0.2));
+        let rows = [
+            ((8.0, 4.0), Vec3::new(-0.478671, -0.232764, -0.846579)),
+            ((24.0, 24.0), Vec3::new(-0.301143, -0.439554, -0.84623)),
+            ((16.0, 40.0), Vec3::new(-0.355496, -0.590978, -0.724132)),
+            ((40.0, 44.0), Vec3::new(-0.090065, -0.62193, -0.777876)),
+        ];
+        for ((x, y), d) in rows {
+            let film = Vec2::new(x, y);
+            let r = c.generate_ray(film, Vec2::ZERO);
+            assert!((r.d - d).length() < 2e-6, "{film}: {} vs Mitsuba {d}", r.d);
+            let s = c.sample_wi(r.at(3.0), Vec2::ZERO);
+            if x < 64.0 && y < 48.0 {
+                let s = s.expect("on the film");
+                assert!((s.film - film).length() < 1e-3, "{} vs {film}", s.film);
+            }
+        }
+        // A new resolution keeps the offset as a fraction of the film.
+        let half = c.with_resolution(32, 24).unwrap();
+        assert!((half.generate_ray(Vec2::new(12.0, 12.0), Vec2::ZERO).d - rows[1].1).length() < 2e-6);
     }
 
     #[test]

@@ -101,16 +101,20 @@ fn decoded_mesh(o: &Obj, to_world: &Transform, flip: bool, meshes: &mut dyn Mesh
     Ok(Geometry::Mesh(mesh))
 }
 
-/// Mitsuba's `rectangle`: [-1, 1]² in the z = 0 plane, facing +z.
-fn rectangle(_: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+/// Mitsuba's `rectangle`: [-1, 1]² in the z = 0 plane, facing +z. It takes Mitsuba's
+/// `face_normals`, which changes nothing on a flat shape.
+fn rectangle(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    o.bool("face_normals", false)?;
     let mut mesh = TriangleMesh::rectangle();
     mesh.transform(to_world);
     mesh.flip_normals ^= flip;
     Ok(Geometry::Mesh(mesh))
 }
 
-/// Mitsuba's `cube`: [-1, 1]³, facing out.
-fn cube(_: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+/// Mitsuba's `cube`: [-1, 1]³, facing out, each face flat. It takes Mitsuba's mesh parameter
+/// `face_normals` (the Blender exporter writes it), which changes nothing on flat faces.
+fn cube(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+    o.bool("face_normals", false)?;
     let mut mesh = TriangleMesh::cube();
     mesh.transform(to_world);
     mesh.flip_normals ^= flip;
@@ -249,8 +253,7 @@ fn ellipsoids(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSou
         // A mesh's parameter; the shells have face normals only, as Mitsuba's.
         o.bool("face_normals", false)?;
     }
-    let scale_factor =
-        o.float_checked("scale_factor", 1.0, |s| s > 0.0 && s.is_finite(), "positive")?;
+    let scale_factor = o.float_checked("scale_factor", 1.0, |s| s > 0.0 && s.is_finite(), "positive")?;
     let extent = o.float_checked("extent", 3.0, |s| s > 0.0 && s.is_finite(), "positive")?;
     let adaptive = o.bool("extent_adaptive_clamping", false)?;
     let shell = if o.ty == "ellipsoidsmesh" { Some(shell_template(o, files)?) } else { None };

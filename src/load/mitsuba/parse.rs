@@ -47,6 +47,10 @@ pub struct Parser {
     /// For each document being parsed, whether its `version` is older than 2.0.0 (Mitsuba 0.x),
     /// which Mitsuba upgrades as it reads (see [`Parser::upgraded_name`]).
     legacy: Vec<bool>,
+    /// The `name`s of objects placed directly in the scene (its files and the files they
+    /// include): Mitsuba's scene takes every nested object whatever its name (the Blender
+    /// exporter names them all), so a name there only has to be unique.
+    scene_names: HashMap<String, Loc>,
 }
 
 impl Parser {
@@ -64,6 +68,7 @@ impl Parser {
             resolver: FileResolver::default(),
             aliases: Vec::new(),
             legacy: Vec::new(),
+            scene_names: HashMap::new(),
         }
     }
 
@@ -227,6 +232,10 @@ impl Parser {
                         None => Rc::new(unbound_reference(id, loc.clone())),
                     };
                     match child.attribute("name") {
+                        Some(_) if top => {
+                            self.scene_name(file, child, &loc)?;
+                            obj.children.push(target);
+                        }
                         Some(_) => {
                             let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                             push_prop(obj, name, Value::Object(target), loc)?;
@@ -243,6 +252,10 @@ impl Parser {
                         self.ids.insert(id.clone(), nested.clone());
                     }
                     match child.attribute("name") {
+                        Some(_) if top => {
+                            self.scene_name(file, child, &loc)?;
+                            obj.children.push(nested);
+                        }
                         Some(_) => {
                             let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                             push_prop(obj, name, Value::Object(nested), loc)?;
@@ -266,6 +279,25 @@ impl Parser {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// Records the `name` of an object placed directly in the scene. Mitsuba 3.9 keeps only the
+    /// last of two scene objects of one name (the earlier vanishes without a word); neumann
+    /// says so instead of dropping it.
+    fn scene_name(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node, loc: &Loc) -> Result<()> {
+        let name = self.attr(file, node, "name")?;
+        if let Some(first) = self.scene_names.get(&name) {
+            return Err(SceneError::at(
+                loc,
+                format!(
+                    "two objects of the scene are named '{name}' (first at {}): Mitsuba 3 would keep only \
+                     the last of them; rename or remove one",
+                    first.position()
+                ),
+            ));
+        }
+        self.scene_names.insert(name, loc.clone());
         Ok(())
     }
 

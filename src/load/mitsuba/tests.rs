@@ -542,6 +542,46 @@ fn includes_resolve_against_the_including_file() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The Blender exporter's layout (mitsuba-data's StandardShaderBall): every object carries a
+/// `name`, those placed directly in the scene too, and a material file is included by a
+/// `$`-substituted name. Mitsuba's scene takes its nested objects whatever their names; two of
+/// one name are an error (Mitsuba would drop the first without a word).
+#[test]
+fn named_objects_in_the_scene_as_blender_writes_them() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-named-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("materials")).unwrap();
+    std::fs::write(
+        dir.join("materials/gold.xml"),
+        r#"<scene version="3.0.0"><bsdf type="conductor" id="mat" name="mat"><string name="material" value="Au"/></bsdf></scene>"#,
+    )
+    .unwrap();
+    let main = r#"<scene version="3.0.0">
+    <default name="material" value="gold"/>
+    <integrator type="path" id="elm__0" name="elm__0"><integer name="max_depth" value="3"/></integrator>
+    <sensor type="perspective" id="camera" name="camera">
+        <float name="fov" value="40"/>
+        <sampler type="independent" name="sampler"><integer name="sample_count" value="7"/></sampler>
+        <film type="hdrfilm" name="film"><integer name="width" value="20"/><integer name="height" value="10"/></film>
+    </sensor>
+    <include filename="materials/$material.xml"/>
+    <shape type="rectangle" id="emit-light" name="emit-light">
+        <emitter type="area" name="emitter"><rgb name="radiance" value="1"/></emitter>
+        <bsdf type="null" name="bsdf"/>
+    </shape>
+    <shape type="sphere" id="ball" name="ball"><ref id="mat"/></shape>
+    <emitter type="constant" id="sky" name="sky"/>
+</scene>"#;
+    std::fs::write(dir.join("main.xml"), main).unwrap();
+    let f = load_scene_file(&dir.join("main.xml"), &[]).unwrap();
+    assert_eq!((f.spp, f.scene.camera().width(), f.scene.camera().height()), (7, 20, 10));
+    assert_eq!((f.scene.shapes().len(), f.scene.lights().len()), (2, 2));
+    assert!(f.scene.bsdfs().iter().any(|b| matches!(b, Bsdf::Conductor(_))), "{:?}", f.scene.bsdfs());
+    std::fs::write(dir.join("twice.xml"), main.replace(r#"name="sky""#, r#"name="ball""#)).unwrap();
+    let e = load_scene_file(&dir.join("twice.xml"), &[]).unwrap_err().to_string();
+    assert!(e.contains("twice.xml:15:") && e.contains("named 'ball'") && e.contains("twice.xml:14:"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Mitsuba's file resolution: `<path>` folders come first, then the main scene's folder; files
 /// named inside an included file (nested includes, textures) resolve through that list, not
 /// against the included file's own folder; a missing `<path>` folder and a `<path>` outside the
