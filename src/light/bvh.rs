@@ -513,6 +513,13 @@ impl LightBvh {
         bvh
     }
 
+    /// Whether light `i` can be chosen at all (some point gives it a positive probability): a
+    /// light at infinity, or one in the tree (bounded, of positive power, reachable by
+    /// next-event estimation).
+    pub fn selectable(&self, i: u32) -> bool {
+        self.is_infinite[i as usize] || self.trails[i as usize] != NOT_IN_TREE
+    }
+
     /// Writes the wide node of binary interior node `b` (and its subtree) at binary depth
     /// `depth` with path `trail` (bit `k` set: the second child at depth `k`); returns its index.
     fn collapse(&mut self, binary: &[BinaryNode], b: usize, trail: u64, depth: u32) -> u32 {
