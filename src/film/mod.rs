@@ -674,8 +674,8 @@ impl FilmSettings {
     /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
     /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
     /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
-    /// `sample_border` and `banner` are read (they cannot change the image: the output format
-    /// follows the output file's extension); neumann's `white_balance` (K, 0: none; pbrt-v4's
+    /// `sample_border`, `banner` and `compensate` are read (they cannot change the image: the
+    /// output format follows the output file's extension, and the sums are f64); neumann's `white_balance` (K, 0: none; pbrt-v4's
     /// `whitebalance`, see [`sensor`]) and `max_component` (∞: pbrt-v4's
     /// `maxcomponentvalue`).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
@@ -702,6 +702,8 @@ impl FilmSettings {
         f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
         f.bool("sample_border", false)?;
         f.bool("banner", true)?;
+        // Mitsuba's Kahan-compensated accumulation in single precision: neumann sums in f64.
+        f.bool("compensate", false)?;
         let mut window = None;
         if f.has("crop_width") || f.has("crop_height") || f.has("crop_offset_x") || f.has("crop_offset_y") {
             let ox = f.int("crop_offset_x", 0)?;

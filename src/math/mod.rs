@@ -40,6 +40,28 @@ pub const INV_4PI: f32 = 0.25 * std::f32::consts::FRAC_1_PI;
 /// The largest `f32` strictly below one: uniform random numbers live in `[0, ONE_MINUS_EPSILON]`.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
+/// `x` rounded to the nearest IEEE half-precision value (ties to even), as a texture stored in
+/// half precision holds it: 10 bits of mantissa down to 2⁻¹⁴, steps of 2⁻²⁴ below, ±∞ from
+/// 65520 on (the first value that rounds past 65504); NaN stays NaN.
+pub fn round_to_half(x: f32) -> f32 {
+    let a = x.abs();
+    if a.is_nan() || a.is_infinite() {
+        return x;
+    }
+    if a >= 65520.0 {
+        return f32::INFINITY.copysign(x);
+    }
+    if a < 6.103_515_6e-5 {
+        // Subnormal halves: multiples of 2⁻²⁴ (exact scalings by powers of two).
+        const STEP: f32 = 5.960_464_5e-8;
+        return (x / STEP).round_ties_even() * STEP;
+    }
+    let bits = x.to_bits();
+    // Keep 10 of the 23 mantissa bits, rounding to nearest, ties to even.
+    let rounded = bits + 0x0fff + ((bits >> 13) & 1);
+    f32::from_bits(rounded & !0x1fff)
+}
+
 /// Linear interpolation `a (1 − t) + b t`, exact at both ends.
 #[inline]
 pub fn lerp(a: f32, b: f32, t: f32) -> f32 {
@@ -146,6 +168,28 @@ pub fn spherical_theta(w: Vec3) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Half-precision rounding against NumPy's `float16` (ties to even, subnormals, overflow).
+    #[test]
+    fn rounds_to_half_precision() {
+        for (x, half) in [
+            (1.0f32, 1.0f32),
+            (0.1, 0.099_975_586),
+            (-1.0 / 3.0, -0.333_251_95),
+            (2049.0, 2048.0),
+            (2051.0, 2052.0),
+            (65504.0, 65504.0),
+            (65519.0, 65504.0),
+            (65520.0, f32::INFINITY),
+            (1e-7, 1.192_092_9e-7),
+            (3e-8, 5.960_464_5e-8),
+            (2.9e-8, 0.0),
+            (6.1e-5, 6.097_555e-5),
+        ] {
+            assert_eq!(round_to_half(x), half, "{x}");
+        }
+        assert!(round_to_half(f32::NAN).is_nan());
+    }
 
     #[test]
     fn spherical_round_trip() {

@@ -620,7 +620,8 @@ fn to_uv_from_props(o: &Obj) -> PropResult<Mat3> {
 }
 
 /// Mitsuba's `bitmap`: `filename` (PNG or EXR), `raw` (false: sRGB-decoded), `filter_type`
-/// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`; neumann's
+/// (`bilinear`, `nearest`), `wrap_mode` (`repeat`, `mirror`, `clamp`), `to_uv`, `format`
+/// (`auto`, `variant`, `fp16`: texels rounded to half precision), `accel`; neumann's
 /// `wrap_mode_u` / `wrap_mode_v` (one axis each), `gamma` (8-bit images decoded as v^gamma, not
 /// sRGB: pbrt-v4's "gamma G" encoding), `uv_attribute` (look up at the texture
 /// coordinates of that per-vertex mesh attribute) and `mapping` (pbrt-v4's 2D mappings,
@@ -644,6 +645,14 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
             let pixels = image.pixels.iter().map(|c| c.max(Rgb::ZERO).powf(g)).collect();
             image = Arc::new(Image { width: image.width, height: image.height, pixels });
         }
+    }
+    // Mitsuba's storage `format`: `auto` (half precision for images of 16 bits or fewer per
+    // channel, in Mitsuba's GPU and spectral variants only; its scalar and LLVM RGB variants,
+    // like neumann, keep single precision), `variant` or `fp16` (every texel rounded to half
+    // precision after decoding, as Mitsuba stores it).
+    if o.choice("format", &["auto", "variant", "fp16"])? == "fp16" {
+        let pixels = image.pixels.iter().map(|c| c.map(crate::math::round_to_half)).collect();
+        image = Arc::new(Image { width: image.width, height: image.height, pixels });
     }
     let filter = match o.choice("filter_type", &["bilinear", "nearest"])?.as_str() {
         "bilinear" => Filter::Bilinear,

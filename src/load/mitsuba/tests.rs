@@ -1615,6 +1615,31 @@ fn bump_and_normal_map_parameters() {
     }
 }
 
+/// A bitmap's storage `format`: `fp16` rounds every texel to half precision after decoding (as
+/// Mitsuba stores it); `auto` and `variant` keep single precision, as Mitsuba's RGB CPU variants.
+#[test]
+fn bitmap_storage_format() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let pixels = |format: &str| {
+        let bsdf = format!(
+            r#"<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+            <string name="filename" value="assets/tiles.png"/><string name="format" value="{format}"/></texture></bsdf></shape>"#
+        );
+        let f = load_scene_text(&dir.join("test.xml"), &scene(&bsdf), &[]).unwrap();
+        match &f.scene.bsdfs()[0] {
+            Bsdf::Diffuse(d) => match &d.reflectance {
+                crate::texture::Texture::Bitmap { bitmap, .. } => bitmap.image.pixels.clone(),
+                t => panic!("{t:?}"),
+            },
+            b => panic!("{b:?}"),
+        }
+    };
+    let (single, half) = (pixels("variant"), pixels("fp16"));
+    assert_eq!(pixels("auto"), single);
+    assert!(single.iter().zip(&half).all(|(s, h)| s.map(crate::math::round_to_half) == *h));
+    assert!(single.iter().zip(&half).any(|(s, h)| s != h), "sRGB-decoded texels are not all halves");
+}
+
 /// `principled` and `principledthin` take every parameter as a texture; a lobe left out (or
 /// given as the float 0) is off, as Mitsuba's get_flag decides; `eta` and `specular` exclude
 /// each other.
