@@ -654,6 +654,9 @@ pub struct FilmSettings {
     pub filter: Filter,
     /// What each sample becomes before the film (white balance, clamp).
     pub transform: sensor::SampleTransform,
+    /// Mitsuba's `sample_border`: the pixels within the filter's reach outside the film (or
+    /// crop window) are sampled too, their samples splatted into the edge pixels.
+    pub sample_border: bool,
 }
 
 impl Default for FilmSettings {
@@ -666,6 +669,7 @@ impl Default for FilmSettings {
             alpha: false,
             filter: Filter::gaussian(0.5).unwrap(),
             transform: sensor::SampleTransform::default(),
+            sample_border: false,
         }
     }
 }
@@ -674,8 +678,10 @@ impl FilmSettings {
     /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
     /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
     /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
-    /// `sample_border`, `banner` and `compensate` are read (they cannot change the image: the
-    /// output format follows the output file's extension, and the sums are f64); neumann's `white_balance` (K, 0: none; pbrt-v4's
+    /// `sample_border` (false; true: the pixels outside the film or crop window within the
+    /// filter's reach are sampled too, as Mitsuba samples them); `banner` and `compensate` are
+    /// read (they cannot change the image: the output format follows the output file's
+    /// extension, and the sums are f64); neumann's `white_balance` (K, 0: none; pbrt-v4's
     /// `whitebalance`, see [`sensor`]) and `max_component` (∞: pbrt-v4's
     /// `maxcomponentvalue`).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
@@ -700,7 +706,7 @@ impl FilmSettings {
         let alpha = f.choice("pixel_format", &["rgb", "rgba"])? == "rgba";
         f.choice("component_format", &["float16", "float32", "uint32"])?;
         f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
-        f.bool("sample_border", false)?;
+        let sample_border = f.bool("sample_border", false)?;
         f.bool("banner", true)?;
         // Mitsuba's Kahan-compensated accumulation in single precision: neumann sums in f64.
         f.bool("compensate", false)?;
@@ -729,7 +735,7 @@ impl FilmSettings {
         let matrix = (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin));
         let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
         let transform = sensor::SampleTransform { matrix, max_component };
-        Ok(FilmSettings { width, height, window, alpha, filter, transform })
+        Ok(FilmSettings { width, height, window, alpha, filter, transform, sample_border })
     }
 }
 

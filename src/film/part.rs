@@ -639,13 +639,20 @@ mod tests {
     /// same sample counts and weights, and the same variance estimate.
     #[test]
     fn merge_of_a_split_equals_the_single_render() {
+        split_and_merge(false);
+        // With the film's border sampled, the tiles at the image's edge sample it too.
+        split_and_merge(true);
+    }
+
+    fn split_and_merge(sample_border: bool) {
         let scene = cornell_box(30, 20).unwrap();
         let integrator = PathIntegrator::default();
         let never = AtomicBool::new(false);
         let image = [0, 0, 30, 20];
-        let base = RenderSettings { spp: 24, seed: 3, filter: Filter::gaussian(0.5).unwrap(), ..Default::default() };
+        let filter = Filter::gaussian(0.5).unwrap();
+        let base = RenderSettings { spp: 24, seed: 3, filter, sample_border, ..Default::default() };
         let whole = render(&scene, &integrator, &base, &never).unwrap().film;
-        let d = dir("split");
+        let d = dir(&format!("split-{sample_border}"));
         let mut paths = Vec::new();
         // Samples 0–10 of the whole image; 10–24 in three tiles (one the full width).
         let pieces = [((0, 10), image), ((10, 24), [0, 0, 13, 9]), ((10, 24), [13, 0, 17, 9]), ((10, 24), [0, 9, 30, 11])];
@@ -685,7 +692,7 @@ mod tests {
         }
         // Tiles rendered without their neighbours' samples (a plain crop window) would differ
         // at the tile edges: the margin is what makes them assemble.
-        let crop = RenderSettings { window: Some([0, 0, 13, 9]), ..base.clone() };
+        let crop = RenderSettings { window: Some([0, 0, 13, 9]), sample_border: false, ..base.clone() };
         let cropped = render(&scene, &integrator, &crop, &never).unwrap().film.image();
         assert!((0..9).any(|y| !close(cropped[y * 13 + 12].x, w[y * 30 + 12].x)), "the filter crosses the tile edge");
         // The merge is itself a part: written and merged alone it gives the same image.

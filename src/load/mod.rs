@@ -52,6 +52,9 @@ pub struct SceneFile {
     pub window: Option<[u32; 4]>,
     /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
     pub alpha: bool,
+    /// Whether the pixels just outside the film (or crop window) within the filter's reach are
+    /// sampled too (the film's `sample_border`).
+    pub sample_border: bool,
     /// What each sample becomes before the film (white balance, clamp): the film's.
     pub transform: crate::film::sensor::SampleTransform,
     /// The longest the render may take (Mitsuba's integrator `timeout`): it stops there or at

@@ -63,6 +63,11 @@ pub struct RenderSettings {
     /// reaches into it are sampled too, as the whole window's render samples them, so that tiles
     /// rendered separately assemble into exactly that render.
     pub tile_of: Option<[u32; 4]>,
+    /// Mitsuba's `sample_border`: also sample the pixels outside the image (the crop window, or
+    /// the film) within the filter's reach, whose samples the filter splats into its edge
+    /// pixels (without it the edge pixels average only the samples inside, over a truncated
+    /// footprint).
+    pub sample_border: bool,
     /// Adaptive sampling (camera-ray integrators) with Cycles' noise threshold `T`: after
     /// `min_spp` samples, a pixel whose error estimate ([`Film::adaptive_errors`]) is below
     /// `ADAPTIVE_THRESHOLD_SCALE · T` — and so are those of the pixels within
@@ -93,6 +98,7 @@ impl Default for RenderSettings {
             terms: 0,
             sample_range: None,
             tile_of: None,
+            sample_border: false,
             noise_threshold: None,
             min_spp: 16,
             transform: Default::default(),
@@ -191,22 +197,39 @@ fn update_active(film: &Film, threshold: f32, active: &[AtomicBool]) -> bool {
     any
 }
 
-/// The pixels a render samples (`[x0, y0, width, height]` of the camera's film): the crop
-/// `window`, and with [`RenderSettings::tile_of`] the pixels of the larger window around it whose
-/// filter footprint reaches into it.
-pub fn sampled_region(settings: &RenderSettings, window: [u32; 4]) -> Result<[u32; 4], RenderError> {
-    let Some([ox, oy, ow, oh]) = settings.tile_of else { return Ok(window) };
-    let [x, y, w, h] = window;
-    if x < ox || y < oy || x as u64 + w as u64 > ox as u64 + ow as u64 || y as u64 + h as u64 > oy as u64 + oh as u64 {
-        return Err(RenderError::Unsupported(format!(
-            "the tile {w}x{h} at ({x}, {y}) does not lie inside the window {ow}x{oh} at ({ox}, {oy}) it is a tile of"
-        )));
-    }
+/// The pixels a render samples, `([x0, y0, width, height], shift)`: the crop `window`; with
+/// [`RenderSettings::tile_of`] also the pixels of the larger window around it whose filter
+/// footprint reaches into it; with [`RenderSettings::sample_border`] also those outside the image
+/// (the whole window) within the filter's reach. The region is given in film pixels plus `shift`
+/// (the filter's border with `sample_border`, else 0), so that pixels left of or above the film
+/// have coordinates too: region pixel `(x, y)` is film pixel `(x − shift, y − shift)`.
+pub fn sampled_region(settings: &RenderSettings, window: [u32; 4]) -> Result<([u32; 4], u32), RenderError> {
     let b = settings.filter.border();
+    let s = if settings.sample_border { b } else { 0 };
+    let [x, y, w, h] = window;
+    // The whole image's window, with its border when sampled (shifted coordinates).
+    let outer = match settings.tile_of {
+        Some([ox, oy, ow, oh]) => {
+            if x < ox
+                || y < oy
+                || x as u64 + w as u64 > ox as u64 + ow as u64
+                || y as u64 + h as u64 > oy as u64 + oh as u64
+            {
+                return Err(RenderError::Unsupported(format!(
+                    "the tile {w}x{h} at ({x}, {y}) does not lie inside the window {ow}x{oh} at ({ox}, {oy}) it is a tile of"
+                )));
+            }
+            [ox, oy, ow + 2 * s, oh + 2 * s]
+        }
+        None if s > 0 => [x, y, w + 2 * s, h + 2 * s],
+        None => return Ok((window, 0)),
+    };
+    let [ox, oy, ow, oh] = outer;
+    let (x, y) = (x + s, y + s);
     let (x0, y0) = (x.saturating_sub(b).max(ox), y.saturating_sub(b).max(oy));
     let x1 = (x + w).saturating_add(b).min(ox + ow);
     let y1 = (y + h).saturating_add(b).min(oy + oh);
-    Ok([x0, y0, x1 - x0, y1 - y0])
+    Ok(([x0, y0, x1 - x0, y1 - y0], s))
 }
 
 /// The sample indices `[first, end)` a render takes of every pixel: its
@@ -300,7 +323,7 @@ pub fn render_from(
     let window = crop_window(settings, cam)?;
     // The pixels sampled: the window, or with `tile_of` also its neighbours in the larger window
     // whose filter footprint reaches into it. The film covers them; it is cropped at the end.
-    let [rx, ry, width, height] = sampled_region(settings, window)?;
+    let ([rx, ry, width, height], shift) = sampled_region(settings, window)?;
     let (first_sample, end_sample) = sample_range(settings)?;
     let ts = settings.tile_size.max(1);
     let tiles: Vec<(u32, u32, u32, u32)> = (0..height.div_ceil(ts))
@@ -363,11 +386,13 @@ pub fn render_from(
                 }
                 taken += u64::from(count);
                 for i in first..first + count {
-                    sampler.start_pixel_sample([x + rx, y + ry], i, 0);
+                    // Seeded by the film pixel (those left of or above the film wrap around), so a
+                    // pixel's samples do not depend on whether the border is sampled.
+                    sampler.start_pixel_sample([(x + rx).wrapping_sub(shift), (y + ry).wrapping_sub(shift)], i, 0);
                     // Uniform over the pixel; the filter weighs the sample where it is splatted
                     // (Mitsuba 3's reconstruction).
                     let u_film = sampler.next_2d();
-                    let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5);
+                    let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
                     let ray = cam.generate_ray(film_pos, u_lens);
@@ -415,7 +440,8 @@ pub fn render_from(
         ControlFlow::Continue(())
     });
     let [wx, wy, ww, wh] = window;
-    if [rx, ry, width, height] != window {
+    let (wx, wy) = (wx + shift, wy + shift);
+    if [rx, ry, width, height] != [wx, wy, ww, wh] {
         film = film.crop(wx - rx, wy - ry, ww, wh);
     }
     Ok(RenderOutcome { film, interrupted: passes.interrupted, elapsed: passes.elapsed, report: Vec::new() })
@@ -664,6 +690,49 @@ mod tests {
         let (lo, hi) = out.film.spp_range();
         assert!(lo >= 1 && lo == hi, "whole passes only: {lo}..{hi}");
         assert!(out.elapsed < Duration::from_millis(1500), "{:?}", out.elapsed);
+    }
+
+    /// `sample_border`: with a box filter nothing outside the image is within reach (the same
+    /// image); with a Gaussian of border 2 the pixels within 2 of the film's edge gather the
+    /// samples taken outside, the others keep their values (their samples are seeded by film
+    /// pixel), and a crop window gathers its neighbours' samples as the uncropped render does.
+    #[test]
+    fn sample_border_samples_outside_the_image() {
+        let scene = cornell_box(24, 20).unwrap();
+        let never = AtomicBool::new(false);
+        let run = |settings: RenderSettings| render(&scene, &PathIntegrator::default(), &settings, &never).unwrap();
+        let base = RenderSettings { spp: 4, seed: 3, ..Default::default() };
+        let image = |s: RenderSettings| run(s).film.image();
+        assert_eq!(image(base.clone()), image(RenderSettings { sample_border: true, ..base.clone() }));
+        let gauss = RenderSettings { filter: Filter::gaussian(0.5).unwrap(), ..base };
+        assert_eq!(gauss.filter.border(), 2);
+        let (plain, border) = (image(gauss.clone()), image(RenderSettings { sample_border: true, ..gauss.clone() }));
+        assert_eq!(border.len(), 24 * 20);
+        let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() <= 1e-5 * a.abs().max_element().max(1e-3);
+        let (mut edge, mut changed) = (0, 0);
+        for y in 0..20 {
+            for x in 0..24 {
+                let (p, q) = (plain[y * 24 + x], border[y * 24 + x]);
+                if x < 2 || y < 2 || x >= 22 || y >= 18 {
+                    edge += 1;
+                    changed += usize::from(!close(p, q));
+                } else {
+                    assert!(close(p, q), "pixel ({x}, {y}) {p} vs {q}");
+                }
+            }
+        }
+        // (Some edge pixels see only the black opening of the box, with or without.)
+        assert!(changed * 10 >= edge * 7, "{changed} of {edge} edge pixels changed");
+        // A crop window with its border (reaching outside the film on the left): the whole
+        // bordered render's pixels there (up to the order of the sums).
+        let crop = image(RenderSettings { window: Some([1, 3, 9, 7]), sample_border: true, ..gauss.clone() });
+        let whole = image(RenderSettings { sample_border: true, ..gauss });
+        for y in 0..7 {
+            for x in 0..9 {
+                let (p, q) = (crop[y * 9 + x], whole[(y + 3) * 24 + x + 1]);
+                assert!(close(p, q), "({x}, {y}) {p} vs {q}");
+            }
+        }
     }
 
     /// Render errors are typed and say what is wrong.

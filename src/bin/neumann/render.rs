@@ -399,6 +399,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         sample_range: split.as_ref().and_then(|s| s.part_of).map(|(i, n)| PartInfo::split(job.file.spp, i, n)),
         window: split.as_ref().and_then(|s| s.tile).or(job.file.window),
         tile_of: split.as_ref().and_then(|s| s.tile).map(|_| image),
+        sample_border: job.file.sample_border,
         ..Default::default()
     };
     crate::handle_signals();

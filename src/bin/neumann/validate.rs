@@ -129,6 +129,7 @@ pub fn validate(scenes_dir: &Path, references_dir: &Path, r: &Reference, seed: u
         sampler: file.sampler,
         filter: file.filter.clone(),
         window: file.window,
+        sample_border: file.sample_border,
         transform: file.transform,
         ..Default::default()
     };
