@@ -648,8 +648,11 @@ pub struct FilmSettings {
     pub height: u32,
     /// Crop window `[x, y, width, height]`, if any.
     pub window: Option<[u32; 4]>,
-    /// Whether an alpha channel is written (`pixel_format` `rgba`).
+    /// Whether an alpha channel is written (`pixel_format` `rgba`, `luminance_alpha`, `xyza`).
     pub alpha: bool,
+    /// What the colour channels hold (`pixel_format` `rgb`, `luminance` or `xyz`, with or
+    /// without alpha).
+    pub colors: output::ColorChannels,
     /// Reconstruction filter.
     pub filter: Filter,
     /// What each sample becomes before the film (white balance, clamp).
@@ -667,6 +670,7 @@ impl Default for FilmSettings {
             height: 576,
             window: None,
             alpha: false,
+            colors: output::ColorChannels::Rgb,
             filter: Filter::gaussian(0.5).unwrap(),
             transform: sensor::SampleTransform::default(),
             sample_border: false,
@@ -676,7 +680,8 @@ impl Default for FilmSettings {
 
 impl FilmSettings {
     /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
-    /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`), one
+    /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`,
+    /// `luminance`, `luminance_alpha`, `xyz`, `xyza`: see [`output::ColorChannels`]), one
     /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
     /// `sample_border` (false; true: the pixels outside the film or crop window within the
     /// filter's reach are sampled too, as Mitsuba samples them); `banner` and `compensate` are
@@ -703,7 +708,13 @@ impl FilmSettings {
         if (width as u64) * (height as u64) > 1 << 26 {
             return Err(f.error(format!("film {width}x{height} is too large (at most 67 million pixels)")));
         }
-        let alpha = f.choice("pixel_format", &["rgb", "rgba"])? == "rgba";
+        let format = f.choice("pixel_format", &["rgb", "rgba", "luminance", "luminance_alpha", "xyz", "xyza"])?;
+        let alpha = format.ends_with('a');
+        let colors = match format.as_str() {
+            "luminance" | "luminance_alpha" => output::ColorChannels::Luminance,
+            "xyz" | "xyza" => output::ColorChannels::Xyz,
+            _ => output::ColorChannels::Rgb,
+        };
         f.choice("component_format", &["float16", "float32", "uint32"])?;
         f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
         let sample_border = f.bool("sample_border", false)?;
@@ -735,7 +746,7 @@ impl FilmSettings {
         let matrix = (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin));
         let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
         let transform = sensor::SampleTransform { matrix, max_component };
-        Ok(FilmSettings { width, height, window, alpha, filter, transform, sample_border })
+        Ok(FilmSettings { width, height, window, alpha, colors, filter, transform, sample_border })
     }
 }
 

@@ -2,7 +2,7 @@
 //! `albedo.R` or `m2__arg_0.X`), PNG (8-bit sRGB-encoded, with exposure; RGB or RGBA) and PFM
 //! (float32 RGB, linear), chosen by the file extension.
 
-use crate::math::color::srgb_encode;
+use crate::math::color::{luminance, srgb_encode, srgb_to_xyz};
 use crate::math::Rgb;
 use std::path::{Path, PathBuf};
 
@@ -13,6 +13,42 @@ pub struct ImageInfo {
     pub spp: u32,
     /// Exposure in stops applied when writing 8-bit formats (`× 2^exposure`).
     pub exposure: f32,
+    /// What the colour channels hold (the film's `pixel_format`).
+    pub colors: ColorChannels,
+}
+
+/// What the colour channels of a written image hold: Mitsuba's `pixel_format` without its
+/// alpha. The film holds linear sRGB; the others are derived from it as Mitsuba's RGB variants
+/// derive them (CIE Y and XYZ of linear sRGB under D65).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ColorChannels {
+    /// R, G, B (`rgb`, `rgba`).
+    #[default]
+    Rgb,
+    /// Y, the luminance (`luminance`, `luminance_alpha`): one channel in EXR and PFM, grey in PNG.
+    Luminance,
+    /// X, Y, Z (`xyz`, `xyza`): EXR only.
+    Xyz,
+}
+
+impl ColorChannels {
+    /// The channel names, as Mitsuba writes them.
+    pub fn names(self) -> &'static [&'static str] {
+        match self {
+            ColorChannels::Rgb => &["R", "G", "B"],
+            ColorChannels::Luminance => &["Y"],
+            ColorChannels::Xyz => &["X", "Y", "Z"],
+        }
+    }
+
+    /// Channel `k` (of [`ColorChannels::names`]) of the linear sRGB colour `c`.
+    pub fn channel(self, c: Rgb, k: usize) -> f32 {
+        match self {
+            ColorChannels::Rgb => c[k],
+            ColorChannels::Luminance => luminance(c),
+            ColorChannels::Xyz => srgb_to_xyz(c)[k],
+        }
+    }
 }
 
 /// Supported output formats.
@@ -116,6 +152,12 @@ pub fn write_image_layers(
             message: format!("only OpenEXR holds the {} AOV channels: write .exr", channels.len()),
         });
     }
+    if info.colors == ColorChannels::Xyz && format != Format::Exr {
+        return Err(WriteError::Unsupported {
+            path: path.to_path_buf(),
+            message: "only OpenEXR holds the X, Y, Z channels of pixel_format xyz: write .exr".into(),
+        });
+    }
     if format == Format::Pfm && alpha.is_some() {
         return Err(WriteError::Unsupported {
             path: path.to_path_buf(),
@@ -125,7 +167,7 @@ pub fn write_image_layers(
     write_atomically(path, |tmp| match format {
         Format::Exr => write_exr(tmp, width, height, pixels, alpha, channels, info),
         Format::Png => write_png(tmp, width, height, pixels, alpha, info),
-        Format::Pfm => write_pfm(tmp, width, height, pixels),
+        Format::Pfm => write_pfm(tmp, width, height, pixels, info.colors),
     })
     .map_err(fail)
 }
@@ -188,10 +230,14 @@ fn write_exr(
 ) -> Result<(), String> {
     use exr::prelude::*;
     let finite = |v: f32| if v.is_finite() { v } else { 0.0 };
-    let mut list: Vec<AnyChannel<FlatSamples>> = ["R", "G", "B"]
+    let colors = info.colors;
+    let mut list: Vec<AnyChannel<FlatSamples>> = colors
+        .names()
         .iter()
         .enumerate()
-        .map(|(c, name)| AnyChannel::new(*name, FlatSamples::F32(pixels.iter().map(|p| finite(p[c])).collect())))
+        .map(|(k, name)| {
+            AnyChannel::new(*name, FlatSamples::F32(pixels.iter().map(|&p| finite(colors.channel(clean(p), k))).collect()))
+        })
         .collect();
     if let Some(a) = alpha {
         list.push(AnyChannel::new("A", FlatSamples::F32(a.iter().map(|&v| finite(v).clamp(0.0, 1.0)).collect())));
@@ -223,7 +269,13 @@ fn write_png(
 ) -> Result<(), String> {
     let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
     let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
-    enc.set_color(if alpha.is_some() { png::ColorType::Rgba } else { png::ColorType::Rgb });
+    let grey = info.colors == ColorChannels::Luminance;
+    enc.set_color(match (grey, alpha.is_some()) {
+        (false, false) => png::ColorType::Rgb,
+        (false, true) => png::ColorType::Rgba,
+        (true, false) => png::ColorType::Grayscale,
+        (true, true) => png::ColorType::GrayscaleAlpha,
+    });
     enc.set_depth(png::BitDepth::Eight);
     enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
     let scale = 2f32.powf(info.exposure);
@@ -233,9 +285,9 @@ fn write_png(
         .enumerate()
         .flat_map(|(i, &c)| {
             let c = clean(c) * scale;
-            let rgb = [c.x, c.y, c.z].map(encode);
+            let colour = if grey { vec![encode(luminance(c))] } else { [c.x, c.y, c.z].map(encode).to_vec() };
             let a = alpha.map(|a| (a[i].clamp(0.0, 1.0) * 255.0 + 0.5) as u8);
-            rgb.into_iter().chain(a)
+            colour.into_iter().chain(a)
         })
         .collect();
     let mut writer = enc.write_header().map_err(|e| e.to_string())?;
@@ -243,12 +295,18 @@ fn write_png(
     writer.finish().map_err(|e| e.to_string())
 }
 
-fn write_pfm(path: &Path, width: u32, height: u32, pixels: &[Rgb]) -> Result<(), String> {
-    // PFM: header "PF\nW H\n-1.0\n" (negative scale = little endian), rows bottom to top.
-    let mut out = format!("PF\n{width} {height}\n-1.0\n").into_bytes();
+fn write_pfm(path: &Path, width: u32, height: u32, pixels: &[Rgb], colors: ColorChannels) -> Result<(), String> {
+    // PFM: header "PF\nW H\n-1.0\n" (negative scale = little endian; "Pf": one grey channel),
+    // rows bottom to top.
+    let grey = colors == ColorChannels::Luminance;
+    let mut out = format!("{}\n{width} {height}\n-1.0\n", if grey { "Pf" } else { "PF" }).into_bytes();
     for y in (0..height).rev() {
         for x in 0..width {
             let c = clean(pixels[(y * width + x) as usize]);
+            if grey {
+                out.extend_from_slice(&luminance(c).to_le_bytes());
+                continue;
+            }
             for v in [c.x, c.y, c.z] {
                 out.extend_from_slice(&v.to_le_bytes());
             }
@@ -364,6 +422,49 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
+    /// Mitsuba's pixel formats: `luminance` writes one channel Y (EXR, PFM "Pf") or grey (PNG),
+    /// `xyz` the channels X, Y, Z (EXR only), both from the linear sRGB the film holds.
+    #[test]
+    fn luminance_and_xyz_channels() {
+        let dir = std::env::temp_dir().join(format!("neumann-colors-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px = vec![Rgb::new(1.0, 0.0, 0.0), Rgb::new(0.2, 0.4, 0.6)];
+        let read = |name: &str| {
+            let image = exr::prelude::read_all_flat_layers_from_file(dir.join(name)).unwrap();
+            let layer = &image.layer_data[0];
+            let mut v: Vec<(String, Vec<f32>)> = layer
+                .channel_data
+                .list
+                .iter()
+                .map(|c| (c.name.to_string(), c.sample_data.values_as_f32().collect()))
+                .collect();
+            v.sort_by(|a, b| a.0.cmp(&b.0));
+            v
+        };
+        let luma = ImageInfo { colors: ColorChannels::Luminance, ..Default::default() };
+        write_image_alpha(&dir.join("y.exr"), 2, 1, &px, Some(&[1.0, 0.5]), &luma).unwrap();
+        let y = [0.212671, luminance(px[1])];
+        assert_eq!(read("y.exr"), [("A".to_string(), vec![1.0, 0.5]), ("Y".to_string(), y.to_vec())]);
+        write_image(&dir.join("y.pfm"), 2, 1, &px, &luma).unwrap();
+        let pfm = std::fs::read(dir.join("y.pfm")).unwrap();
+        assert!(pfm.starts_with(b"Pf\n2 1\n-1.0\n") && pfm.len() == 12 + 8, "{} bytes", pfm.len());
+        write_image(&dir.join("y.png"), 2, 1, &px, &luma).unwrap();
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(dir.join("y.png")).unwrap()));
+        assert_eq!(decoder.read_info().unwrap().info().color_type, png::ColorType::Grayscale);
+        let xyz = ImageInfo { colors: ColorChannels::Xyz, ..Default::default() };
+        write_image(&dir.join("xyz.exr"), 2, 1, &px, &xyz).unwrap();
+        let channels = read("xyz.exr");
+        let names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
+        assert_eq!(names, ["X", "Y", "Z"]);
+        assert_eq!(channels[0].1[0], 0.412453);
+        assert_eq!(channels[1].1, y);
+        for name in ["xyz.png", "xyz.pfm"] {
+            let e = write_image(&dir.join(name), 2, 1, &px, &xyz).unwrap_err();
+            assert!(e.to_string().contains("only OpenEXR holds the X, Y, Z"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
     #[test]
     fn formats_by_extension_and_round_trips() {
         assert_eq!(Format::from_path(Path::new("a.EXR")).unwrap(), Format::Exr);
@@ -377,7 +478,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("neumann-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let px: Vec<Rgb> = (0..6).map(|i| Rgb::new(i as f32, 0.5, f32::NAN)).collect();
-        let info = ImageInfo { spp: 7, exposure: 0.0 };
+        let info = ImageInfo { spp: 7, exposure: 0.0, ..Default::default() };
         for name in ["t.exr", "t.png", "t.pfm"] {
             write_image(&dir.join(name), 3, 2, &px, &info).unwrap();
             assert!(std::fs::metadata(dir.join(name)).unwrap().len() > 20);

@@ -61,7 +61,7 @@ pub enum LightSampler {
     /// Proportional to power (the alias table over the lights' powers).
     Power(AliasTable),
     /// The light BVH, mixed with uniform selection among the lights it can choose (see
-    /// [`defensive_share`]).
+    /// `defensive_share` in this file).
     Bvh {
         /// The tree.
         bvh: LightBvh,

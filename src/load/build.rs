@@ -48,6 +48,7 @@ struct SensorSettings {
     filter: Filter,
     window: Option<[u32; 4]>,
     alpha: bool,
+    colors: crate::film::output::ColorChannels,
     transform: crate::film::sensor::SampleTransform,
     sample_border: bool,
 }
@@ -173,7 +174,7 @@ impl Builder {
             (None, Some((s, shape))) => (s, Some(shape)),
             _ => return Err(SceneError::at(&root.loc, "the scene has no <sensor> (camera)")),
         };
-        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, transform, sample_border } =
+        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, colors, transform, sample_border } =
             self.sensor(&sensor, meter_shape.as_ref())?;
         self.sb.set_camera(camera);
         let mut scene =
@@ -202,6 +203,7 @@ impl Builder {
             filter,
             window,
             alpha,
+            colors,
             sample_border,
             transform,
             time_limit: self.time_limit,
@@ -275,9 +277,9 @@ impl Builder {
             None if o.ty == "distant" => self.distant_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
-        let FilmSettings { filter, window, alpha, transform, sample_border, .. } = film;
+        let FilmSettings { filter, window, alpha, colors, transform, sample_border, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
-        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, transform, sample_border })
+        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, colors, transform, sample_border })
     }
 
     /// Mitsuba's `distant` sensor: `direction` or `to_world` (not both; it looks along

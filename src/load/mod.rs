@@ -50,8 +50,11 @@ pub struct SceneFile {
     pub filter: Filter,
     /// Crop window `[x, y, w, h]`, if the film has one.
     pub window: Option<[u32; 4]>,
-    /// Whether the film asks for an alpha channel (`pixel_format` `rgba`).
+    /// Whether the film asks for an alpha channel (`pixel_format` `rgba`, `luminance_alpha`,
+    /// `xyza`).
     pub alpha: bool,
+    /// What the written image's colour channels hold (the rest of `pixel_format`).
+    pub colors: crate::film::output::ColorChannels,
     /// Whether the pixels just outside the film (or crop window) within the filter's reach are
     /// sampled too (the film's `sample_border`).
     pub sample_border: bool,

@@ -125,7 +125,7 @@ pub fn run(a: ConvergeArgs) -> Result<(), Failure> {
             let out =
                 render(&job.file.scene, &integrator, &settings, &CANCEL).map_err(|e| Failure(1, e.to_string()))?;
             let image = out.film.image();
-            write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0 })
+            write_image_alpha(&a.out.join("reference.exr"), w, h, &image, None, &ImageInfo { spp, exposure: 0.0, ..Default::default() })
                 .map_err(|e| Failure(1, e.to_string()))?;
             image
         }

@@ -76,6 +76,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         filter: Filter::BOX,
         window: None,
         alpha: false,
+        colors: Default::default(),
         sample_border: false,
         transform: Default::default(),
         time_limit: None,

@@ -48,7 +48,7 @@ pub fn run(a: MergeArgs) -> Result<(), Failure> {
                 channels = merged.film.aov_channels();
                 channels.push(("spp".to_string(), merged.film.sample_counts()));
             }
-            let info = ImageInfo { spp: lo, exposure: a.exposure };
+            let info = ImageInfo { spp: lo, exposure: a.exposure, ..Default::default() };
             write_image_layers(&a.output, w, h, &merged.film.image(), alpha.as_deref(), &channels, &info)
         }
     }

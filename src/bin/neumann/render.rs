@@ -292,6 +292,11 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     }
     let split = parse_split(&a, job.file.spp, image)?;
     if split.is_some() {
+        if job.file.colors != neumann::film::output::ColorChannels::Rgb {
+            return Err(usage(
+                "a render split into parts keeps R, G, B in its parts (they merge into RGB): give the film pixel_format rgb or rgba, or render in one piece".into(),
+            ));
+        }
         if a.bounces_out.is_some() {
             return Err(usage("--bounces-out cannot be split into parts: render the terms in one piece".into()));
         }
@@ -455,7 +460,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
-    let info = ImageInfo { spp: lo, exposure: a.exposure };
+    let info = ImageInfo { spp: lo, exposure: a.exposure, colors: job.file.colors };
     let mut image = match (a.unbiased_adaptive, out.film.even_image()) {
         (true, Some(even)) => even,
         _ => out.film.image(),
