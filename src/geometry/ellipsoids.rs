@@ -416,7 +416,10 @@ pub fn shell_mesh(set: &EllipsoidSet, extents: &[f32], shell: &Shell) -> Result<
         positions.extend(template.iter().map(|v| e.center + m * (*v * k)));
         indices.extend(faces.iter().map(|f| f.map(|i| i + base)));
     }
-    TriangleMesh::new(positions, Vec::new(), Vec::new(), indices).map_err(|e| e.to_string())
+    let mut mesh = TriangleMesh::new(positions, Vec::new(), Vec::new(), indices).map_err(|e| e.to_string())?;
+    // The AOV `prim_index` counts ellipsoids, as Mitsuba's does.
+    mesh.faces_per_primitive = faces.len() as u32;
+    Ok(mesh)
 }
 
 /// The most vertices an `ellipsoidsmesh` may have (3 GiB of positions; a 3D-Gaussian capture of

@@ -30,6 +30,9 @@ pub struct TriangleMesh {
     parallelogram: Option<Parallelogram>,
     /// Named per-vertex or per-triangle values (Mitsuba's mesh attributes, e.g. `vertex_color`).
     pub attributes: Vec<MeshAttribute>,
+    /// Consecutive triangles per primitive, as the `prim_index` AOV counts them: 1, or the
+    /// faces of one shell of an `ellipsoidsmesh` (whose primitive is the ellipsoid, as Mitsuba's).
+    pub faces_per_primitive: u32,
 }
 
 /// A named value per vertex (interpolated across triangles) or per triangle (Mitsuba's
@@ -165,6 +168,7 @@ impl TriangleMesh {
             face_normals: Vec::new(),
             attributes: Vec::new(),
             parallelogram: None,
+            faces_per_primitive: 1,
         })
     }
 

@@ -6,7 +6,8 @@
 //! (channels `name.R/G/B`: the BSDF's diffuse reflectance), `depth` (`name.T`: distance along
 //! the camera ray from its near-clip origin), `position` (`name.X/Y/Z`, world space),
 //! `uv` (`name.U/V`), `geo_normal` and `sh_normal` (`name.X/Y/Z`, unit, world space),
-//! `prim_index` (`name.I`: the triangle's index in its mesh, 0 for analytic shapes) and
+//! `prim_index` (`name.I`: the triangle's index in its mesh — an `ellipsoidsmesh`'s ellipsoid, as
+//! Mitsuba counts its shells —, the ellipsoid's in `ellipsoids`, 0 for other analytic shapes) and
 //! `shape_index` (`name.I`: 1 + the shape's index in the scene, Mitsuba's shape id). Rays that
 //! hit nothing give 0 in every channel. Nested integrators (named by their `name` attribute,
 //! else `_arg_0`, `_arg_1`, …) come first as `n.R/G/B/A` (their radiance and coverage), then
@@ -253,7 +254,13 @@ impl Integrator for AovIntegrator {
                 }
                 AovKind::GeoNormal => put(&[si.ng.x, si.ng.y, si.ng.z]),
                 AovKind::ShNormal => put(&[si.ns.x, si.ns.y, si.ns.z]),
-                AovKind::PrimIndex => put(&[si.prim as f32]),
+                AovKind::PrimIndex => {
+                    let per = match &scene.geometries()[si.shape as usize] {
+                        crate::geometry::Geometry::Mesh(m) => m.faces_per_primitive.max(1),
+                        _ => 1,
+                    };
+                    put(&[(si.prim / per) as f32])
+                }
                 AovKind::ShapeIndex => put(&[(si.shape + 1) as f32]),
             }
         }
