@@ -571,9 +571,11 @@ impl Camera {
         camera = camera.with_clip(near, far).map_err(|e| o.error_at("near_clip", e.to_string()))?;
         if o.ty == "perspective" {
             // (Mitsuba's thin lens does not take the offset.)
-            let finite = |v: f32| v.is_finite();
-            let x = o.float_checked("principal_point_offset_x", 0.0, finite, "finite")?;
-            let y = o.float_checked("principal_point_offset_y", 0.0, finite, "finite")?;
+            // (Bounded so that the film's plane coordinates stay finite.)
+            let ok = |v: f32| v.abs() <= 1e6;
+            let what = "a finite fraction of the film, at most 10⁶ in size";
+            let x = o.float_checked("principal_point_offset_x", 0.0, ok, what)?;
+            let y = o.float_checked("principal_point_offset_y", 0.0, ok, what)?;
             camera = camera.with_principal_point(Vec2::new(x, y));
         }
         if o.ty == "thinlens" {
