@@ -68,10 +68,8 @@ pub enum LightSampler {
         /// The probability of choosing uniformly instead of by the tree.
         share: f32,
         /// The lights the tree can choose (of positive power, reachable by next-event
-        /// estimation), which the uniform share chooses among.
+        /// estimation: [`LightBvh::selectable`]), which the uniform share chooses among.
         lit: Vec<u32>,
-        /// Whether each light is one of `lit`.
-        is_lit: Vec<bool>,
     },
 }
 
@@ -119,12 +117,11 @@ impl LightSampler {
             LightSamplerKind::Power => LightSampler::Power(power),
             LightSamplerKind::Bvh => {
                 let bvh = LightBvh::new(lights, shapes);
-                let is_lit: Vec<bool> = (0..lights.len() as u32).map(|i| bvh.selectable(i)).collect();
-                let lit: Vec<u32> = (0..lights.len() as u32).filter(|&i| is_lit[i as usize]).collect();
+                let lit: Vec<u32> = (0..lights.len() as u32).filter(|&i| bvh.selectable(i)).collect();
                 if lit.is_empty() {
                     return Ok(LightSampler::Empty);
                 }
-                LightSampler::Bvh { bvh, share: defensive_share(lit.len()), lit, is_lit }
+                LightSampler::Bvh { bvh, share: defensive_share(lit.len()), lit }
             }
         })
     }
@@ -141,7 +138,7 @@ impl LightSampler {
                 let (s, _) = table.sample(u);
                 Some((s.value as u32, s.pdf))
             }
-            LightSampler::Bvh { bvh, share, lit, is_lit } => {
+            LightSampler::Bvh { bvh, share, lit } => {
                 let eps = *share;
                 let uniform = eps / lit.len() as f32;
                 if u < eps {
@@ -151,7 +148,7 @@ impl LightSampler {
                 } else {
                     let u = ((u - eps) / (1.0 - eps)).min(crate::math::ONE_MINUS_EPSILON);
                     let (i, p) = bvh.sample(ctx.p, ctx.n, u)?;
-                    debug_assert!(is_lit[i as usize]);
+                    debug_assert!(bvh.selectable(i));
                     Some((i, uniform + (1.0 - eps) * p))
                 }
             }
@@ -165,8 +162,8 @@ impl LightSampler {
             LightSampler::Empty => 0.0,
             LightSampler::Uniform { count } => 1.0 / *count as f32,
             LightSampler::Power(table) => table.pmf(i as usize),
-            LightSampler::Bvh { bvh, share, lit, is_lit } => {
-                if !is_lit[i as usize] {
+            LightSampler::Bvh { bvh, share, lit } => {
+                if !bvh.selectable(i) {
                     return 0.0;
                 }
                 share / lit.len() as f32 + (1.0 - share) * bvh.pmf(ctx.p, ctx.n, i)

@@ -231,17 +231,7 @@ impl Parser {
                         Some(t) => t.clone(),
                         None => Rc::new(unbound_reference(id, loc.clone())),
                     };
-                    match child.attribute("name") {
-                        Some(_) if top => {
-                            self.scene_name(file, child, &loc)?;
-                            obj.children.push(target);
-                        }
-                        Some(_) => {
-                            let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
-                            push_prop(obj, name, Value::Object(target), loc)?;
-                        }
-                        None => obj.children.push(target),
-                    }
+                    self.place(file, child, obj, target, loc, top)?;
                 }
                 t if OBJECT_TAGS.contains(&t) => {
                     let nested = Rc::new(self.object(file, child)?);
@@ -251,17 +241,7 @@ impl Parser {
                         }
                         self.ids.insert(id.clone(), nested.clone());
                     }
-                    match child.attribute("name") {
-                        Some(_) if top => {
-                            self.scene_name(file, child, &loc)?;
-                            obj.children.push(nested);
-                        }
-                        Some(_) => {
-                            let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
-                            push_prop(obj, name, Value::Object(nested), loc)?;
-                        }
-                        None => obj.children.push(nested),
-                    }
+                    self.place(file, child, obj, nested, loc, top)?;
                 }
                 t if PROPERTY_TAGS.contains(&t) => {
                     // Named properties; a <spectrum type="…"> plugin reduces to a value here.
@@ -278,6 +258,33 @@ impl Parser {
                     return Err(SceneError::at(&loc, format!("unknown element <{other}>{hint}")));
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Puts the object (or reference) `nested` that element `child` declares into `obj`: a
+    /// named property of `obj`, or one of its children when it has no `name` or `obj` is the
+    /// scene (which takes its objects whatever their names, as Mitsuba's; see
+    /// [`Parser::scene_name`]).
+    fn place(
+        &mut self,
+        file: &Arc<SourceFile>,
+        child: roxmltree::Node,
+        obj: &mut Obj,
+        nested: Rc<Obj>,
+        loc: Loc,
+        top: bool,
+    ) -> Result<()> {
+        match child.attribute("name") {
+            Some(_) if top => {
+                self.scene_name(file, child, &loc)?;
+                obj.children.push(nested);
+            }
+            Some(_) => {
+                let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
+                push_prop(obj, name, Value::Object(nested), loc)?;
+            }
+            None => obj.children.push(nested),
         }
         Ok(())
     }
