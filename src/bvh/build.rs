@@ -34,6 +34,16 @@ struct Item {
     bounds: Bounds3,
     centroid: Vec3,
     index: u32,
+    /// Cost of testing this primitive alone, in group tests; 0 for a primitive tested in SIMD
+    /// groups of `leaf_group` (see [`build`]).
+    weight: f32,
+}
+
+/// What the SAH charges a leaf of `grouped` primitives tested in groups of `group` and others
+/// of total `weight`: `⌈grouped / group⌉ + weight` group tests.
+#[inline]
+fn leaf_cost(grouped: u32, weight: f32, group: u32) -> f32 {
+    grouped.div_ceil(group) as f32 + weight
 }
 
 enum BuildNode {
@@ -41,7 +51,13 @@ enum BuildNode {
     Interior { bounds: Bounds3, children: Box<[BuildNode; 2]> },
 }
 
-pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
+/// The BVH over primitives of the given bounds. `weights[i]` is what testing primitive `i` costs
+/// when it is tested alone, in units of one group test (a [`crate::geometry::Triangle8`] block
+/// test), or 0 for a primitive tested in SIMD groups of `leaf_group` (triangles); an empty
+/// `weights` makes every primitive grouped. The SAH charges a leaf `⌈grouped / leaf_group⌉ +
+/// Σ weights`: a curve segment, whose test costs several block tests, then gets a leaf of its
+/// own where a group of eight triangles would share one.
+pub(super) fn build(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) -> Bvh {
     if bounds.is_empty() {
         return Bvh::default();
     }
@@ -59,10 +75,15 @@ pub(super) fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
         .iter()
         .map(sane)
         .enumerate()
-        .map(|(i, b)| Item { bounds: b, centroid: b.centroid(), index: i as u32 })
+        .map(|(i, b)| Item {
+            bounds: b,
+            centroid: b.centroid(),
+            index: i as u32,
+            weight: weights.get(i).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0),
+        })
         .collect();
     let (root, count) = build_rec(&mut items, 0, 0, opts);
-    let (nodes, _) = collapse(&root, count, opts);
+    let (nodes, _) = collapse(&root, count, &items, opts);
     let bounds = match &root {
         BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
     };
@@ -148,44 +169,50 @@ fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildO
         return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
     }
     // Fixed-size bin arrays on the stack: no allocation per node.
-    let mut counts = [[0u32; 3]; MAX_BINS];
+    // Per bin and axis: primitives, grouped primitives and the others' total weight.
+    let mut counts = [[(0u32, 0u32, 0.0f32); 3]; MAX_BINS];
     let mut boxes = [[Bounds3::EMPTY; 3]; MAX_BINS];
+    let mut total = (0u32, 0.0f32);
     for it in items {
+        let grouped = u32::from(it.weight == 0.0);
+        total = (total.0 + grouped, total.1 + it.weight);
         for axis in 0..3 {
             if extent[axis] > 0.0 {
                 let b = bin_of(it.centroid[axis], cbounds.min[axis], extent[axis], nb);
-                counts[b][axis] += 1;
+                let c = &mut counts[b][axis];
+                *c = (c.0 + 1, c.1 + grouped, c.2 + it.weight);
                 boxes[b][axis] = boxes[b][axis].union(&it.bounds);
             }
         }
     }
     let group = opts.leaf_group.max(1) as u32;
-    let groups = |n: u32| n.div_ceil(group) as f32;
+    let cost_of = |c: (u32, u32, f32)| leaf_cost(c.1, c.2, group);
+    let add = |a: (u32, u32, f32), b: (u32, u32, f32)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
     let parent_area = bounds.surface_area().max(1e-30);
     let mut best = (f32::INFINITY, 0usize, 0usize);
     let mut right_area = [0.0f32; MAX_BINS];
-    let mut right_count = [0u32; MAX_BINS];
+    let mut right_count = [(0u32, 0u32, 0.0f32); MAX_BINS];
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
         // Suffix sweep: right side of boundary k holds bins k..nb.
-        let (mut b, mut c) = (Bounds3::EMPTY, 0u32);
+        let (mut b, mut c) = (Bounds3::EMPTY, (0u32, 0u32, 0.0f32));
         for k in (1..nb).rev() {
             b = b.union(&boxes[k][axis]);
-            c += counts[k][axis];
+            c = add(c, counts[k][axis]);
             right_area[k] = b.surface_area();
             right_count[k] = c;
         }
-        let (mut b, mut c) = (Bounds3::EMPTY, 0u32);
+        let (mut b, mut c) = (Bounds3::EMPTY, (0u32, 0u32, 0.0f32));
         for k in 1..nb {
             b = b.union(&boxes[k - 1][axis]);
-            c += counts[k - 1][axis];
-            if c == 0 || right_count[k] == 0 {
+            c = add(c, counts[k - 1][axis]);
+            if c.0 == 0 || right_count[k].0 == 0 {
                 continue;
             }
             let cost = opts.traversal_cost
-                + (groups(c) * b.surface_area() + groups(right_count[k]) * right_area[k]) / parent_area;
+                + (cost_of(c) * b.surface_area() + cost_of(right_count[k]) * right_area[k]) / parent_area;
             if cost < best.0 {
                 best = (cost, axis, k);
             }
@@ -194,7 +221,7 @@ fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildO
     if !best.0.is_finite() {
         return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
     }
-    if best.0 >= groups(n as u32) && n <= opts.max_leaf {
+    if best.0 >= leaf_cost(total.0, total.1, group) && n <= opts.max_leaf {
         return Split::Leaf;
     }
     Split::At { axis: best.1, bin: best.2 }
@@ -218,23 +245,41 @@ struct Binary {
     bounds: Bounds3,
     first: u32,
     count: u32,
+    /// What a leaf of the subtree's primitives would cost ([`leaf_cost`]).
+    leaf_cost: f32,
     children: Option<[usize; 2]>,
 }
 
 /// Flattens the binary tree in pre-order (children after their parent); returns the index of
-/// `node`.
-fn flatten(node: &BuildNode, out: &mut Vec<Binary>) -> usize {
+/// `node`. `items` in leaf order give the leaves' costs.
+fn flatten(node: &BuildNode, items: &[Item], opts: &BuildOptions, out: &mut Vec<Binary>) -> usize {
+    let group = opts.leaf_group.max(1) as u32;
     let index = out.len();
+    // A subtree's primitives: how many are grouped, and the others' total weight.
+    let tally = |first: u32, count: u32| {
+        items[first as usize..(first + count) as usize]
+            .iter()
+            .fold((0u32, 0.0f32), |(g, w), it| (g + u32::from(it.weight == 0.0), w + it.weight))
+    };
     match node {
         BuildNode::Leaf { bounds, first, count } => {
-            out.push(Binary { bounds: *bounds, first: *first, count: *count, children: None });
+            let (g, w) = tally(*first, *count);
+            let leaf_cost = leaf_cost(g, w, group);
+            out.push(Binary { bounds: *bounds, first: *first, count: *count, leaf_cost, children: None });
         }
         BuildNode::Interior { bounds, children } => {
-            out.push(Binary { bounds: *bounds, first: 0, count: 0, children: None });
-            let l = flatten(&children[0], out);
-            let r = flatten(&children[1], out);
+            out.push(Binary { bounds: *bounds, first: 0, count: 0, leaf_cost: 0.0, children: None });
+            let l = flatten(&children[0], items, opts, out);
+            let r = flatten(&children[1], items, opts, out);
             let (first, count) = (out[l].first, out[l].count + out[r].count);
-            out[index] = Binary { bounds: *bounds, first, count, children: Some([l, r]) };
+            // Only subtrees small enough to become one leaf need their leaf cost.
+            let leaf_cost = if count as usize <= opts.max_leaf {
+                let (g, w) = tally(first, count);
+                leaf_cost(g, w, group)
+            } else {
+                f32::INFINITY
+            };
+            out[index] = Binary { bounds: *bounds, first, count, leaf_cost, children: Some([l, r]) };
         }
     }
     index
@@ -262,11 +307,9 @@ enum Slots {
 /// leaving nodes of two or three children near the leaves (a 100k-triangle mesh: 2726 nodes of
 /// six children on average instead of 4436 of four). Returns the wide nodes, root first, and
 /// the collapse's cost `C(root, 1)`.
-fn collapse(root: &BuildNode, binary_nodes: usize, opts: &BuildOptions) -> (Vec<Node8>, f32) {
+fn collapse(root: &BuildNode, binary_nodes: usize, items: &[Item], opts: &BuildOptions) -> (Vec<Node8>, f32) {
     let mut bin = Vec::with_capacity(binary_nodes);
-    flatten(root, &mut bin);
-    let group = opts.leaf_group.max(1) as u32;
-    let blocks = |count: u32| count.div_ceil(group) as f32;
+    flatten(root, items, opts, &mut bin);
     let node_cost = opts.traversal_cost * WIDE_NODE_STEPS;
     // cost[n][i - 1] = C(n, i); how[n][i - 1] how it is reached; leaf[n]: whether n as one child
     // is a leaf.
@@ -280,7 +323,7 @@ fn collapse(root: &BuildNode, binary_nodes: usize, opts: &BuildOptions) -> (Vec<
         let b = &bin[n];
         let area = b.bounds.surface_area();
         let Some([l, r]) = b.children else {
-            cost[n] = [area * blocks(b.count); WIDTH];
+            cost[n] = [area * b.leaf_cost; WIDTH];
             continue;
         };
         // dist[j - 1]: the best split of j slots between l and r (one slot to the left where no
@@ -296,7 +339,7 @@ fn collapse(root: &BuildNode, binary_nodes: usize, opts: &BuildOptions) -> (Vec<
         }
         let as_node = area * node_cost + dist[WIDTH - 1].0;
         open[n] = dist[WIDTH - 1].1;
-        let as_leaf = if b.count as usize <= opts.max_leaf { area * blocks(b.count) } else { f32::INFINITY };
+        let as_leaf = if b.count as usize <= opts.max_leaf { area * b.leaf_cost } else { f32::INFINITY };
         // Never a leaf above `max_leaf` primitives, even where costs do not compare (areas that
         // overflow to infinity or NaN).
         leaf[n] = b.count as usize <= opts.max_leaf && as_node.partial_cmp(&as_leaf) != Some(std::cmp::Ordering::Less);
@@ -441,21 +484,25 @@ mod tests {
     /// node cost plus its leaves' areas times their block tests add up to `C(root, 1)` (a
     /// read-back that put a subtree in the wrong slots would not). Every primitive lies in one
     /// leaf; the cost is at most the greedy collapse's, with fewer nodes.
+    /// Every fifth primitive of the weighted cases is tested alone at the cost of 2.5 group
+    /// tests (a curve among triangles).
     #[test]
     fn collapse_writes_the_costed_tree() {
-        for (n, opts) in [
-            (3000, BuildOptions { leaf_group: 8, ..Default::default() }),
-            (3000, BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..Default::default() }),
-            (500, BuildOptions::default()),
+        for (n, opts, weighted) in [
+            (3000, BuildOptions { leaf_group: 8, ..Default::default() }, false),
+            (3000, BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..Default::default() }, false),
+            (500, BuildOptions::default(), false),
+            (3000, BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..Default::default() }, true),
         ] {
             let bounds = boxes(n, n as u64);
+            let weight = |i: usize| if weighted && i.is_multiple_of(5) { 2.5 } else { 0.0 };
             let mut items: Vec<Item> = bounds
                 .iter()
                 .enumerate()
-                .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 })
+                .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32, weight: weight(i) })
                 .collect();
             let (root, count) = build_rec(&mut items, 0, 0, &opts);
-            let (nodes, cost) = collapse(&root, count, &opts);
+            let (nodes, cost) = collapse(&root, count, &items, &opts);
             let group = opts.leaf_group.max(1) as u32;
             let node_cost = opts.traversal_cost * WIDE_NODE_STEPS;
             let root_bounds = match &root {
@@ -468,7 +515,11 @@ mod tests {
                     children += 1;
                     let area = node.child_bounds(slot).surface_area();
                     if node.count[slot] > 0 {
-                        total += area * node.count[slot].div_ceil(group) as f32;
+                        let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
+                        let leaf = &items[first..first + count];
+                        let grouped = leaf.iter().filter(|it| it.weight == 0.0).count() as u32;
+                        let weight: f32 = leaf.iter().map(|it| it.weight).sum();
+                        total += area * leaf_cost(grouped, weight, group);
                     } else {
                         total += area * node_cost;
                     }
@@ -477,11 +528,35 @@ mod tests {
             assert!((total - cost).abs() <= 1e-4 * cost, "{n}: written {total}, costed {cost}");
             assert!(each_in_one_leaf(&nodes, n), "{n}: every primitive in exactly one leaf");
             let fill = children as f32 / nodes.len() as f32;
-            let (greedy, greedy_nodes) = greedy_cost(&root, node_cost, group);
-            assert!(cost <= greedy * (1.0 + 1e-5), "{n}: optimal {cost} above greedy {greedy}");
+            if !weighted {
+                let (greedy, _) = greedy_cost(&root, node_cost, group);
+                assert!(cost <= greedy * (1.0 + 1e-5), "{n}: optimal {cost} above greedy {greedy}");
+            }
+            let (_, greedy_nodes) = greedy_cost(&root, node_cost, group);
             assert!(nodes.len() < greedy_nodes, "{n}: {} nodes, greedy {greedy_nodes}", nodes.len());
             assert!(fill > 4.0, "{n}: {fill} children per node");
         }
+    }
+
+    /// Primitives that cost more than a group test each get smaller leaves than grouped ones
+    /// (their SAH charges each test): leaves of curve segments hold one or two where triangles
+    /// fill blocks of eight.
+    #[test]
+    fn weighted_primitives_get_small_leaves() {
+        let bounds = boxes(2000, 5);
+        let opts = BuildOptions { traversal_cost: 1.0, leaf_group: 8, ..Default::default() };
+        let mean_leaf = |weights: &[f32]| {
+            let bvh = build(&bounds, weights, &opts);
+            assert!(each_in_one_leaf(&bvh.nodes, bounds.len()));
+            let leaves: Vec<u32> = bvh.nodes.iter().flat_map(|n| n.count).filter(|&c| c > 0).collect();
+            leaves.iter().sum::<u32>() as f32 / leaves.len() as f32
+        };
+        let grouped = mean_leaf(&[]);
+        let curves = mean_leaf(&vec![3.0; bounds.len()]);
+        assert!(grouped > 3.0 && curves < 1.6, "mean leaf: grouped {grouped}, weighted {curves}");
+        // Non-finite and negative weights count as grouped.
+        let odd = mean_leaf(&vec![f32::NAN; bounds.len()]);
+        assert_eq!(odd, grouped);
     }
 
     /// Trees of one, two and a few primitives (a root that is one leaf, a root whose children
@@ -489,7 +564,7 @@ mod tests {
     #[test]
     fn tiny_trees_collapse() {
         for n in [1, 2, 3, 9, 17] {
-            let bvh = build(&boxes(n, 7), &BuildOptions::default());
+            let bvh = build(&boxes(n, 7), &[], &BuildOptions::default());
             assert!(each_in_one_leaf(&bvh.nodes, n), "{n}");
         }
     }
@@ -504,7 +579,7 @@ mod tests {
             let big = Vec3::new(3.0e38, if i % 2 == 0 { 0.0 } else { -3.0e38 }, 1.0);
             *b = Bounds3::new(-big, big);
         }
-        let bvh = build(&bounds, &BuildOptions::default());
+        let bvh = build(&bounds, &[], &BuildOptions::default());
         assert!(each_in_one_leaf(&bvh.nodes, bounds.len()));
         let largest = bvh.nodes.iter().flat_map(|n| n.count).max().unwrap();
         assert!(largest as usize <= BuildOptions::default().max_leaf, "a leaf of {largest} primitives");

@@ -88,9 +88,17 @@ pub struct BvhStats {
 }
 
 impl Bvh {
-    /// Builds a BVH over primitives with the given bounds.
+    /// Builds a BVH over primitives with the given bounds, all tested in SIMD groups of
+    /// `opts.leaf_group` (triangles).
     pub fn build(bounds: &[Bounds3], opts: &BuildOptions) -> Bvh {
-        build::build(bounds, opts)
+        build::build(bounds, &[], opts)
+    }
+
+    /// [`Bvh::build`] where some primitives are tested alone: `weights[i]` is primitive `i`'s
+    /// test cost in group tests (0: tested in groups). The SAH charges a leaf
+    /// `⌈grouped / leaf_group⌉ + Σ weights`.
+    pub fn build_weighted(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) -> Bvh {
+        build::build(bounds, weights, opts)
     }
 
     /// Primitive indices in leaf order: leaf primitive `k` is primitive `order()[k]`.

@@ -167,7 +167,9 @@ impl SceneBuilder {
         };
         let pieces = crate::bvh::presplit::presplit(&bounds, triangle, PRESPLIT_BUDGET);
         let piece_bounds: Vec<_> = pieces.iter().map(|p| p.bounds).collect();
-        let mut bvh = Bvh::build(&piece_bounds, &super::bvh_options(bounds.len()));
+        let costs: Vec<f32> = self.geometries.iter().map(Geometry::test_cost).collect();
+        let weights: Vec<f32> = pieces.iter().map(|p| costs[refs[p.prim as usize].shape as usize]).collect();
+        let mut bvh = Bvh::build_weighted(&piece_bounds, &weights, &super::bvh_options(bounds.len()));
         let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[pieces[k as usize].prim as usize]).collect();
         // Leaves of triangles only become blocks of eight; the others keep a primitive list.
         let (mut blocks, mut prims) = (Vec::new(), Vec::new());
