@@ -104,22 +104,24 @@ impl BSplineCurves {
     /// The nearest entry of `ray` into segment `k` within `(0, t_max)`: `t` and `uv.x` the
     /// segment's `u` (`uv.y` unused, 0).
     pub fn intersect(&self, k: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
-        if self.misses_hull(k, ray, t_max) {
+        self.intersect_with(k, ray, &BSplineRay::new(ray), t_max)
+    }
+
+    /// [`BSplineCurves::intersect`] with the ray's frames computed beforehand (once per ray
+    /// for all the segments it meets: their square roots and divisions would otherwise stall
+    /// every segment's test).
+    #[inline]
+    pub fn intersect_with(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> Option<CurveHit> {
+        if self.misses_hull(k, ray, r, t_max) {
             return None;
         }
-        self.search(k, ray, t_max)
+        self.search(k, ray, r, t_max)
     }
 
     /// [`BSplineCurves::intersect`] by the subdivision search alone.
-    fn search(&self, k: usize, ray: &Ray, t_max: f32) -> Option<CurveHit> {
-        let len_d = f64::from(ray.d.length());
-        if len_d <= 0.0 || len_d.is_nan() {
-            return None;
-        }
+    fn search(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> Option<CurveHit> {
+        let BSplineFrame { len_d, d, e1, e2 } = r.double?;
         let o = ray.o.as_dvec3();
-        let d = ray.d.as_dvec3() / len_d;
-        // The ray's frame: x, y across it, z along it.
-        let (e1, e2) = orthonormal_pair(d);
         let to_frame = |p: DVec3| DVec3::new(p.dot(e1), p.dot(e2), p.dot(d));
         let seg = self.segment(k, o);
         let (q, r) = (seg.q, seg.r);
@@ -154,12 +156,8 @@ impl BSplineCurves {
     /// passes are skipped here at a fraction of the search's setup cost (the curves scene 4 %
     /// faster with the Bézier bounds).
     #[inline]
-    fn misses_hull(&self, k: usize, ray: &Ray, t_max: f32) -> bool {
-        let d = ray.d.normalize_or_zero();
-        if d == Vec3::ZERO {
-            return false;
-        }
-        let (e1, e2) = d.any_orthonormal_pair();
+    fn misses_hull(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> bool {
+        let Some((d, e1, e2)) = r.single else { return false };
         let c = self.controls(k);
         let q: [Vec3; 4] = std::array::from_fn(|i| c[i].p - ray.o);
         let scale = q.iter().fold(0.0f32, |m, q| m.max(q.abs().max_element()));
@@ -201,6 +199,44 @@ impl BSplineCurves {
         // `o + t d` rounded, and `t` itself rounded from the double-precision solution.
         let p_error = (ray.o.abs() + (ray.d * hit.t).abs()) * gamma(5);
         RoundCurveSurface { p, p_error, n, uv, dpdu, dpdv }
+    }
+}
+
+/// What the tests of B-spline segments need of a ray, computed once for it: its unit
+/// direction and two unit vectors across it, in single precision (the hull test; `None` for a
+/// zero direction) and in double (the search, with the direction's length; `None` for a zero
+/// or non-finite length).
+#[derive(Clone, Copy, Debug)]
+pub struct BSplineRay {
+    single: Option<(Vec3, Vec3, Vec3)>,
+    double: Option<BSplineFrame>,
+}
+
+/// The ray's frame in double precision: x, y across it (`e1`, `e2`), z along it (`d`, unit),
+/// and the length of the ray's own direction.
+#[derive(Clone, Copy, Debug)]
+struct BSplineFrame {
+    len_d: f64,
+    d: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+}
+
+impl BSplineRay {
+    /// The frames of `ray`.
+    pub fn new(ray: &Ray) -> BSplineRay {
+        let d = ray.d.normalize_or_zero();
+        let single = (d != Vec3::ZERO).then(|| {
+            let (e1, e2) = d.any_orthonormal_pair();
+            (d, e1, e2)
+        });
+        let len_d = f64::from(ray.d.length());
+        let double = (len_d > 0.0 && !len_d.is_nan()).then(|| {
+            let d = ray.d.as_dvec3() / len_d;
+            let (e1, e2) = orthonormal_pair(d);
+            BSplineFrame { len_d, d, e1, e2 }
+        });
+        BSplineRay { single, double }
     }
 }
 
@@ -587,10 +623,11 @@ mod tests {
                 let dir = sample_uniform_sphere(Vec2::new(r(), r())).value;
                 let ray = Ray::new(target - dir * (1.0 + 4.0 * r()), dir * (0.5 + r()));
                 let t_max = if r() < 0.3 { 2.0 } else { f32::INFINITY };
+                let frames = BSplineRay::new(&ray);
                 for k in 0..c.len() {
-                    let found = c.search(k, &ray, t_max);
+                    let found = c.search(k, &ray, &frames, t_max);
                     hits += found.is_some() as u32;
-                    if c.misses_hull(k, &ray, t_max) {
+                    if c.misses_hull(k, &ray, &frames, t_max) {
                         skipped += 1;
                         assert!(found.is_none(), "round {round} segment {k}: skipped a hit {found:?}");
                     }

@@ -11,12 +11,13 @@ pub use error::BuildError;
 
 use crate::bvh::{prefetch, BuildOptions, Bvh, HugeArray};
 use crate::camera::Camera;
+use crate::geometry::bspline_curve::BSplineRay;
 use crate::geometry::triangle::{intersect_triangle, triangle_point_error, RayPrecomp, TriangleHit};
 use crate::geometry::triangle8::Triangle8;
-use crate::math::simd::Avx;
 use crate::geometry::{Geometry, Sphere, SurfaceInteraction};
 use crate::light::{Light, LightSampleContext, LightSampler, LightSamplerKind};
 use crate::material::Bsdf;
+use crate::math::simd::Avx;
 use crate::math::{Ray, Vec2, Vec3};
 use crate::sampling::AliasTable;
 
@@ -104,6 +105,8 @@ struct LeafTest<'a> {
     scene: &'a Scene,
     ray: &'a Ray,
     pre: &'a RayPrecomp,
+    /// The ray's frames for B-spline curve segments, computed at the first one it meets.
+    bspline: Option<BSplineRay>,
     /// The closest hit so far (closest-hit queries).
     best: Option<(f32, HitKind)>,
 }
@@ -129,7 +132,7 @@ impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
             return;
         }
         for k in first..first + count {
-            if let Some((t, kind)) = scene.intersect_prim(k, self.ray, pre, *t_max) {
+            if let Some((t, kind)) = scene.intersect_prim(k, self.ray, pre, &mut self.bspline, *t_max) {
                 *t_max = t;
                 self.best = Some((t, kind));
             }
@@ -144,7 +147,7 @@ impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
 impl crate::bvh::AnyLeaf for LeafTest<'_> {
     #[inline(always)]
     fn hit(&mut self, first: u32, count: u32, t_max: f32, avx: Option<Avx>) -> bool {
-        self.scene.occluded_in_leaf(self.ray, self.pre, first, count, t_max, avx)
+        self.scene.occluded_in_leaf(self.ray, self.pre, &mut self.bspline, first, count, t_max, avx)
     }
     #[inline(always)]
     fn prefetch(&self, first: u32, count: u32) {
@@ -452,7 +455,7 @@ impl Scene {
     #[inline(always)]
     fn closest(&self, ray: &Ray) -> Option<(f32, HitKind)> {
         let pre = RayPrecomp::new(ray);
-        let mut leaf = LeafTest { scene: self, ray, pre: &pre, best: None };
+        let mut leaf = LeafTest { scene: self, ray, pre: &pre, bspline: None, best: None };
         self.bvh.closest_hit_visit(ray, ray.t_max, &mut leaf);
         leaf.best
     }
@@ -460,19 +463,32 @@ impl Scene {
     /// Intersects primitive `k` of a mixed leaf (`Scene::prims[k]`) within `(0, t_max)`.
     /// Triangles and spheres are tested inline in the traversal, the other shapes by a call.
     #[inline(always)]
-    fn intersect_prim(&self, k: u32, ray: &Ray, pre: &RayPrecomp, t_max: f32) -> Option<(f32, HitKind)> {
+    fn intersect_prim(
+        &self,
+        k: u32,
+        ray: &Ray,
+        pre: &RayPrecomp,
+        bspline: &mut Option<BSplineRay>,
+        t_max: f32,
+    ) -> Option<(f32, HitKind)> {
         // SAFETY: leaf payloads index `prims` (built together).
         let lp = unsafe { self.prims.get_unchecked(k as usize) };
         match &lp.prim {
             Primitive::Triangle(p) => intersect_triangle(pre, p, t_max).map(|h| (h.t, HitKind::Triangle(h, k))),
             Primitive::Sphere(s) => s.intersect(ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
-            _ => self.intersect_other(lp, ray, t_max),
+            _ => self.intersect_other(lp, ray, bspline, t_max),
         }
     }
 
     /// [`Scene::intersect_prim`] for the shapes whose test is too long to inline.
     #[inline(never)]
-    fn intersect_other(&self, lp: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(f32, HitKind)> {
+    fn intersect_other(
+        &self,
+        lp: &LeafPrim,
+        ray: &Ray,
+        bspline: &mut Option<BSplineRay>,
+        t_max: f32,
+    ) -> Option<(f32, HitKind)> {
         let geometry = || &self.geometries[self.refs[lp.r as usize].shape as usize];
         match &lp.prim {
             // Tested inline by `intersect_prim`, never sent here.
@@ -497,7 +513,9 @@ impl Scene {
                 let hit = match geometry() {
                     Geometry::Curves(c) => c.intersect(piece, ray, t_max),
                     Geometry::LinearCurves(c) => c.intersect(piece, ray, t_max),
-                    Geometry::BSplineCurves(c) => c.intersect(piece, ray, t_max),
+                    Geometry::BSplineCurves(c) => {
+                        c.intersect_with(piece, ray, bspline.get_or_insert_with(|| BSplineRay::new(ray)), t_max)
+                    }
                     _ => None,
                 };
                 hit.map(|h| (h.t, HitKind::Curve(h.uv, lp.r)))
@@ -606,15 +624,17 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         let pre = RayPrecomp::new(ray);
-        self.bvh.any_hit_visit(ray, ray.t_max, LeafTest { scene: self, ray, pre: &pre, best: None })
+        self.bvh.any_hit_visit(ray, ray.t_max, LeafTest { scene: self, ray, pre: &pre, bspline: None, best: None })
     }
 
     /// Whether a primitive of a leaf blocks the ray within `(0, t_max)`.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn occluded_in_leaf(
         &self,
         ray: &Ray,
         pre: &RayPrecomp,
+        bspline: &mut Option<BSplineRay>,
         first: u32,
         count: u32,
         t_max: f32,
@@ -631,7 +651,7 @@ impl Scene {
             return false;
         }
         for k in first..first + count {
-            if self.intersect_prim(k, ray, pre, t_max).is_some() {
+            if self.intersect_prim(k, ray, pre, bspline, t_max).is_some() {
                 return true;
             }
         }
