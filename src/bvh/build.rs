@@ -34,9 +34,6 @@ struct Item {
     bounds: Bounds3,
     centroid: Vec3,
     index: u32,
-    /// Cost of testing this primitive alone, in group tests; 0 for a primitive tested in SIMD
-    /// groups of `leaf_group` (see [`build`]).
-    weight: f32,
 }
 
 /// What the SAH charges a leaf of `grouped` primitives tested in groups of `group` and others
@@ -44,6 +41,71 @@ struct Item {
 #[inline]
 fn leaf_cost(grouped: u32, weight: f32, group: u32) -> f32 {
     grouped.div_ceil(group) as f32 + weight
+}
+
+/// What the binned SAH counts of a set of primitives: how many, and what a leaf of them costs.
+/// Two kinds, so that a tree of triangles only bins a plain count (its build as fast as before
+/// weights existed).
+trait Tally: Copy + Default {
+    /// The tally of one primitive; `weights` by primitive index ([`build`]'s, checked).
+    fn of(it: &Item, weights: &[f32]) -> Self;
+    /// The tally of two sets together.
+    fn add(self, other: Self) -> Self;
+    /// How many primitives.
+    fn count(self) -> u32;
+    /// [`leaf_cost`] of a leaf of them.
+    fn cost(self, group: u32) -> f32;
+}
+
+/// Primitives that are all tested in groups.
+#[derive(Clone, Copy, Default)]
+struct Grouped(u32);
+
+impl Tally for Grouped {
+    #[inline(always)]
+    fn of(_: &Item, _: &[f32]) -> Self {
+        Grouped(1)
+    }
+    #[inline(always)]
+    fn add(self, other: Self) -> Self {
+        Grouped(self.0 + other.0)
+    }
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.0
+    }
+    #[inline(always)]
+    fn cost(self, group: u32) -> f32 {
+        leaf_cost(self.0, 0.0, group)
+    }
+}
+
+/// Primitives some of which are tested alone: how many, how many grouped, the others' weight.
+#[derive(Clone, Copy, Default)]
+struct Weighted {
+    count: u32,
+    grouped: u32,
+    weight: f32,
+}
+
+impl Tally for Weighted {
+    #[inline(always)]
+    fn of(it: &Item, weights: &[f32]) -> Self {
+        let weight = weights[it.index as usize];
+        Weighted { count: 1, grouped: u32::from(weight == 0.0), weight }
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Weighted { count: self.count + o.count, grouped: self.grouped + o.grouped, weight: self.weight + o.weight }
+    }
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.count
+    }
+    #[inline(always)]
+    fn cost(self, group: u32) -> f32 {
+        leaf_cost(self.grouped, self.weight, group)
+    }
 }
 
 enum BuildNode {
@@ -75,15 +137,21 @@ pub(super) fn build(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) ->
         .iter()
         .map(sane)
         .enumerate()
-        .map(|(i, b)| Item {
-            bounds: b,
-            centroid: b.centroid(),
-            index: i as u32,
-            weight: weights.get(i).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0),
-        })
+        .map(|(i, b)| Item { bounds: b, centroid: b.centroid(), index: i as u32 })
         .collect();
-    let (root, count) = build_rec(&mut items, 0, 0, opts);
-    let (nodes, _) = collapse(&root, count, &items, opts);
+    // Weights by primitive, each finite and positive or 0 (grouped); none if all are grouped.
+    let mut weights: Vec<f32> = (0..bounds.len())
+        .map(|i| weights.get(i).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0))
+        .collect();
+    if weights.iter().all(|&w| w == 0.0) {
+        weights.clear();
+    }
+    let (root, count) = if weights.is_empty() {
+        build_rec::<Grouped>(&mut items, &weights, 0, 0, opts)
+    } else {
+        build_rec::<Weighted>(&mut items, &weights, 0, 0, opts)
+    };
+    let (nodes, _) = collapse(&root, count, &items, &weights, opts);
     let bounds = match &root {
         BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
     };
@@ -102,7 +170,13 @@ fn leaf(items: &[Item], offset: usize, bounds: Bounds3) -> (BuildNode, usize) {
     (BuildNode::Leaf { bounds, first: offset as u32, count: items.len() as u32 }, 1)
 }
 
-fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOptions) -> (BuildNode, usize) {
+fn build_rec<T: Tally>(
+    items: &mut [Item],
+    weights: &[f32],
+    offset: usize,
+    depth: usize,
+    opts: &BuildOptions,
+) -> (BuildNode, usize) {
     let n = items.len();
     let mut bounds = Bounds3::EMPTY;
     let mut cbounds = Bounds3::EMPTY;
@@ -117,7 +191,7 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
         items.select_nth_unstable_by(n / 2, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
         (n / 2, axis)
     };
-    let (mid, _axis) = match best_split(items, &bounds, &cbounds, opts) {
+    let (mid, _axis) = match best_split::<T>(items, weights, &bounds, &cbounds, opts) {
         Split::Leaf if n <= opts.max_leaf => return leaf(items, offset, bounds),
         // No useful SAH split (or none at all): halve along the largest centroid extent.
         Split::Leaf | Split::Median => median(items, cbounds.max_extent()),
@@ -134,9 +208,15 @@ fn build_rec(items: &mut [Item], offset: usize, depth: usize, opts: &BuildOption
     };
     let (left, right) = items.split_at_mut(mid);
     let ((l, lc), (r, rc)) = if n > opts.parallel_threshold {
-        rayon::join(|| build_rec(left, offset, depth + 1, opts), || build_rec(right, offset + mid, depth + 1, opts))
+        rayon::join(
+            || build_rec::<T>(left, weights, offset, depth + 1, opts),
+            || build_rec::<T>(right, weights, offset + mid, depth + 1, opts),
+        )
     } else {
-        (build_rec(left, offset, depth + 1, opts), build_rec(right, offset + mid, depth + 1, opts))
+        (
+            build_rec::<T>(left, weights, offset, depth + 1, opts),
+            build_rec::<T>(right, weights, offset + mid, depth + 1, opts),
+        )
     };
     (BuildNode::Interior { bounds, children: Box::new([l, r]) }, 1 + lc + rc)
 }
@@ -161,7 +241,13 @@ fn bin_of(c: f32, lo: f32, extent: f32, nb: usize) -> usize {
 }
 
 /// The SAH-best bin boundary over the three axes, or `Leaf` when no split beats a leaf.
-fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildOptions) -> Split {
+fn best_split<T: Tally>(
+    items: &[Item],
+    weights: &[f32],
+    bounds: &Bounds3,
+    cbounds: &Bounds3,
+    opts: &BuildOptions,
+) -> Split {
     let nb = bin_count(opts);
     let n = items.len();
     let extent = cbounds.diagonal();
@@ -169,50 +255,46 @@ fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildO
         return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
     }
     // Fixed-size bin arrays on the stack: no allocation per node.
-    // Per bin and axis: primitives, grouped primitives and the others' total weight.
-    let mut counts = [[(0u32, 0u32, 0.0f32); 3]; MAX_BINS];
+    let mut counts = [[T::default(); 3]; MAX_BINS];
     let mut boxes = [[Bounds3::EMPTY; 3]; MAX_BINS];
-    let mut total = (0u32, 0.0f32);
+    let mut total = T::default();
     for it in items {
-        let grouped = u32::from(it.weight == 0.0);
-        total = (total.0 + grouped, total.1 + it.weight);
+        let one = T::of(it, weights);
+        total = total.add(one);
         for axis in 0..3 {
             if extent[axis] > 0.0 {
                 let b = bin_of(it.centroid[axis], cbounds.min[axis], extent[axis], nb);
-                let c = &mut counts[b][axis];
-                *c = (c.0 + 1, c.1 + grouped, c.2 + it.weight);
+                counts[b][axis] = counts[b][axis].add(one);
                 boxes[b][axis] = boxes[b][axis].union(&it.bounds);
             }
         }
     }
     let group = opts.leaf_group.max(1) as u32;
-    let cost_of = |c: (u32, u32, f32)| leaf_cost(c.1, c.2, group);
-    let add = |a: (u32, u32, f32), b: (u32, u32, f32)| (a.0 + b.0, a.1 + b.1, a.2 + b.2);
     let parent_area = bounds.surface_area().max(1e-30);
     let mut best = (f32::INFINITY, 0usize, 0usize);
     let mut right_area = [0.0f32; MAX_BINS];
-    let mut right_count = [(0u32, 0u32, 0.0f32); MAX_BINS];
+    let mut right_count = [T::default(); MAX_BINS];
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
         // Suffix sweep: right side of boundary k holds bins k..nb.
-        let (mut b, mut c) = (Bounds3::EMPTY, (0u32, 0u32, 0.0f32));
+        let (mut b, mut c) = (Bounds3::EMPTY, T::default());
         for k in (1..nb).rev() {
             b = b.union(&boxes[k][axis]);
-            c = add(c, counts[k][axis]);
+            c = c.add(counts[k][axis]);
             right_area[k] = b.surface_area();
             right_count[k] = c;
         }
-        let (mut b, mut c) = (Bounds3::EMPTY, (0u32, 0u32, 0.0f32));
+        let (mut b, mut c) = (Bounds3::EMPTY, T::default());
         for k in 1..nb {
             b = b.union(&boxes[k - 1][axis]);
-            c = add(c, counts[k - 1][axis]);
-            if c.0 == 0 || right_count[k].0 == 0 {
+            c = c.add(counts[k - 1][axis]);
+            if c.count() == 0 || right_count[k].count() == 0 {
                 continue;
             }
             let cost = opts.traversal_cost
-                + (cost_of(c) * b.surface_area() + cost_of(right_count[k]) * right_area[k]) / parent_area;
+                + (c.cost(group) * b.surface_area() + right_count[k].cost(group) * right_area[k]) / parent_area;
             if cost < best.0 {
                 best = (cost, axis, k);
             }
@@ -221,7 +303,7 @@ fn best_split(items: &[Item], bounds: &Bounds3, cbounds: &Bounds3, opts: &BuildO
     if !best.0.is_finite() {
         return if n <= opts.max_leaf { Split::Leaf } else { Split::Median };
     }
-    if best.0 >= leaf_cost(total.0, total.1, group) && n <= opts.max_leaf {
+    if best.0 >= total.cost(group) && n <= opts.max_leaf {
         return Split::Leaf;
     }
     Split::At { axis: best.1, bin: best.2 }
@@ -252,14 +334,17 @@ struct Binary {
 
 /// Flattens the binary tree in pre-order (children after their parent); returns the index of
 /// `node`. `items` in leaf order give the leaves' costs.
-fn flatten(node: &BuildNode, items: &[Item], opts: &BuildOptions, out: &mut Vec<Binary>) -> usize {
+fn flatten(node: &BuildNode, items: &[Item], weights: &[f32], opts: &BuildOptions, out: &mut Vec<Binary>) -> usize {
     let group = opts.leaf_group.max(1) as u32;
     let index = out.len();
     // A subtree's primitives: how many are grouped, and the others' total weight.
     let tally = |first: u32, count: u32| {
-        items[first as usize..(first + count) as usize]
-            .iter()
-            .fold((0u32, 0.0f32), |(g, w), it| (g + u32::from(it.weight == 0.0), w + it.weight))
+        let items = &items[first as usize..(first + count) as usize];
+        if weights.is_empty() {
+            return (count, 0.0);
+        }
+        let t = items.iter().fold(Weighted::default(), |t, it| t.add(Weighted::of(it, weights)));
+        (t.grouped, t.weight)
     };
     match node {
         BuildNode::Leaf { bounds, first, count } => {
@@ -269,8 +354,8 @@ fn flatten(node: &BuildNode, items: &[Item], opts: &BuildOptions, out: &mut Vec<
         }
         BuildNode::Interior { bounds, children } => {
             out.push(Binary { bounds: *bounds, first: 0, count: 0, leaf_cost: 0.0, children: None });
-            let l = flatten(&children[0], items, opts, out);
-            let r = flatten(&children[1], items, opts, out);
+            let l = flatten(&children[0], items, weights, opts, out);
+            let r = flatten(&children[1], items, weights, opts, out);
             let (first, count) = (out[l].first, out[l].count + out[r].count);
             // Only subtrees small enough to become one leaf need their leaf cost.
             let leaf_cost = if count as usize <= opts.max_leaf {
@@ -307,9 +392,15 @@ enum Slots {
 /// leaving nodes of two or three children near the leaves (a 100k-triangle mesh: 2726 nodes of
 /// six children on average instead of 4436 of four). Returns the wide nodes, root first, and
 /// the collapse's cost `C(root, 1)`.
-fn collapse(root: &BuildNode, binary_nodes: usize, items: &[Item], opts: &BuildOptions) -> (Vec<Node8>, f32) {
+fn collapse(
+    root: &BuildNode,
+    binary_nodes: usize,
+    items: &[Item],
+    weights: &[f32],
+    opts: &BuildOptions,
+) -> (Vec<Node8>, f32) {
     let mut bin = Vec::with_capacity(binary_nodes);
-    flatten(root, items, opts, &mut bin);
+    flatten(root, items, weights, opts, &mut bin);
     let node_cost = opts.traversal_cost * WIDE_NODE_STEPS;
     // cost[n][i - 1] = C(n, i); how[n][i - 1] how it is reached; leaf[n]: whether n as one child
     // is a leaf.
@@ -495,14 +586,20 @@ mod tests {
             (3000, BuildOptions { traversal_cost: 0.3, leaf_group: 4, ..Default::default() }, true),
         ] {
             let bounds = boxes(n, n as u64);
-            let weight = |i: usize| if weighted && i.is_multiple_of(5) { 2.5 } else { 0.0 };
+            let weights: Vec<f32> =
+                (0..n).filter(|_| weighted).map(|i| if i.is_multiple_of(5) { 2.5 } else { 0.0 }).collect();
+            let weight = |i: u32| weights.get(i as usize).copied().unwrap_or(0.0);
             let mut items: Vec<Item> = bounds
                 .iter()
                 .enumerate()
-                .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32, weight: weight(i) })
+                .map(|(i, b)| Item { bounds: *b, centroid: b.centroid(), index: i as u32 })
                 .collect();
-            let (root, count) = build_rec(&mut items, 0, 0, &opts);
-            let (nodes, cost) = collapse(&root, count, &items, &opts);
+            let (root, count) = if weighted {
+                build_rec::<Weighted>(&mut items, &weights, 0, 0, &opts)
+            } else {
+                build_rec::<Grouped>(&mut items, &weights, 0, 0, &opts)
+            };
+            let (nodes, cost) = collapse(&root, count, &items, &weights, &opts);
             let group = opts.leaf_group.max(1) as u32;
             let node_cost = opts.traversal_cost * WIDE_NODE_STEPS;
             let root_bounds = match &root {
@@ -517,8 +614,8 @@ mod tests {
                     if node.count[slot] > 0 {
                         let (first, count) = (node.child[slot] as usize, node.count[slot] as usize);
                         let leaf = &items[first..first + count];
-                        let grouped = leaf.iter().filter(|it| it.weight == 0.0).count() as u32;
-                        let weight: f32 = leaf.iter().map(|it| it.weight).sum();
+                        let grouped = leaf.iter().filter(|it| weight(it.index) == 0.0).count() as u32;
+                        let weight: f32 = leaf.iter().map(|it| weight(it.index)).sum();
                         total += area * leaf_cost(grouped, weight, group);
                     } else {
                         total += area * node_cost;
