@@ -306,7 +306,7 @@ impl Search {
         };
         let rmin = rb.iter().fold(f64::INFINITY, |m, &r| m.min(r));
         if depth >= MAX_DEPTH || off(bez[1]).max(off(bez[2])) <= 0.1 * rmin.max(1e-6 * chord.length()) {
-            self.leaf(u0, u1);
+            self.leaf(&bez, &rb, u0, u1);
             return;
         }
         let (a, b) = split(bez);
@@ -326,18 +326,20 @@ impl Search {
     /// at both ends, so that an entry near a bend, where the straight piece would be entered
     /// through its end, still gives a guess), and against the piece's axis (the ray's closest
     /// approach); each guess polished by Newton's method on the exact sweep.
-    fn leaf(&mut self, u0: f64, u1: f64) {
-        let d = self.d;
-        let (a, b) = (self.seg.eval(u0), self.seg.eval(u1));
-        let axis = b.c - a.c;
-        if let Some((t, s)) = frustum_entry(-a.c, d, axis, a.r, b.r) {
+    /// The piece's ends are its Bézier end points `bez[0]`, `bez[3]` with radii `rb[0]`,
+    /// `rb[3]`, in the ray's frame, where the ray runs along +z from the origin: the guesses are
+    /// found there (a rotation keeps distances along the ray and fractions of the axis) and
+    /// polished on the segment itself.
+    fn leaf(&mut self, bez: &[DVec3; 4], rb: &[f64; 4], u0: f64, u1: f64) {
+        let (a, axis) = (bez[0], bez[3] - bez[0]);
+        if let Some((t, s)) = frustum_entry(-a, DVec3::Z, axis, rb[0], rb[3]) {
             if self.polish(t, u0 + (u1 - u0) * s, u0, u1) {
                 return;
             }
         }
         // The second guess only where the ray passes within reach of the piece's axis.
-        if let Some((t, s)) = closest_approach(-a.c, d, axis) {
-            if (t * d + a.c - s * axis).length() <= 1.25 * a.r.max(b.r) {
+        if let Some((t, s)) = closest_approach(-a, DVec3::Z, axis) {
+            if (t * DVec3::Z + a - s * axis).length() <= 1.25 * rb[0].max(rb[3]) {
                 self.polish(t, u0 + (u1 - u0) * s, u0, u1);
             }
         }
