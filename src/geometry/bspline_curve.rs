@@ -293,19 +293,18 @@ impl Search {
             return;
         }
         // Flat enough: the inner control points within a tenth of the smallest radius bound
-        // of the chord (or as deep as allowed).
+        // of the chord (or as deep as allowed); compared squared (no square roots).
         let chord = bez[3] - bez[0];
-        let off = |p: DVec3| {
+        let l2 = chord.length_squared();
+        let inv_l2 = if l2 > 0.0 { 1.0 / l2 } else { 0.0 };
+        let off2 = |p: DVec3| {
             let v = p - bez[0];
-            let l2 = chord.length_squared();
-            if l2 > 0.0 {
-                (v - chord * (v.dot(chord) / l2)).length()
-            } else {
-                v.length()
-            }
+            (v - chord * (v.dot(chord) * inv_l2)).length_squared()
         };
         let rmin = rb.iter().fold(f64::INFINITY, |m, &r| m.min(r));
-        if depth >= MAX_DEPTH || off(bez[1]).max(off(bez[2])) <= 0.1 * rmin.max(1e-6 * chord.length()) {
+        // (0.1 max(r_min, 10⁻⁶ |chord|))², with r_min ≥ 0.
+        let tolerance2 = (0.01 * rmin * rmin).max(1e-14 * l2);
+        if depth >= MAX_DEPTH || off2(bez[1]).max(off2(bez[2])) <= tolerance2 {
             self.leaf(&bez, &rb, u0, u1);
             return;
         }
