@@ -114,7 +114,7 @@ enum BuildNode {
 }
 
 /// The BVH over primitives of the given bounds. `weights[i]` is what testing primitive `i` costs
-/// when it is tested alone, in units of one group test (a [`crate::geometry::Triangle8`] block
+/// when it is tested alone, in units of one group test (a [`crate::geometry::triangle8::Triangle8`] block
 /// test), or 0 for a primitive tested in SIMD groups of `leaf_group` (triangles); an empty
 /// `weights` makes every primitive grouped. The SAH charges a leaf `⌈grouped / leaf_group⌉ +
 /// Σ weights`: a curve segment, whose test costs several block tests, then gets a leaf of its

@@ -100,7 +100,7 @@ impl Geometry {
     }
 
     /// What one primitive's ray test costs, in units of one eight-triangle block test
-    /// ([`crate::geometry::Triangle8`]), for the BVH's SAH (`Bvh::build_weighted`); 0 for
+    /// ([`crate::geometry::triangle8::Triangle8`]), for the BVH's SAH (`Bvh::build_weighted`); 0 for
     /// triangles, which are tested in blocks. Measured by the render rate of scenes made of
     /// each (128², the validation scenes): charging curve segments, SDF voxels and ellipsoids
     /// as triangles (eight to a block test) gave them leaves of up to eight primitives, each
