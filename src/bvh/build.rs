@@ -114,9 +114,9 @@ enum BuildNode {
 }
 
 /// The BVH over primitives of the given bounds. `weights[i]` is what testing primitive `i` costs
-/// when it is tested alone, in units of one group test (a [`crate::geometry::triangle8::Triangle8`] block
-/// test), or 0 for a primitive tested in SIMD groups of `leaf_group` (triangles); an empty
-/// `weights` makes every primitive grouped. The SAH charges a leaf `⌈grouped / leaf_group⌉ +
+/// when it is tested alone, in units of one group test (a
+/// [`crate::geometry::triangle8::Triangle8`] block test), or 0 for a primitive tested in SIMD
+/// groups of `leaf_group` (triangles); an empty `weights` makes every primitive grouped. The SAH charges a leaf `⌈grouped / leaf_group⌉ +
 /// Σ weights`: a curve segment, whose test costs several block tests, then gets a leaf of its
 /// own where a group of eight triangles would share one.
 pub(super) fn build(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) -> Bvh {
@@ -574,9 +574,9 @@ mod tests {
     /// The wide tree written is the one the dynamic program costed: its nodes' areas times the
     /// node cost plus its leaves' areas times their block tests add up to `C(root, 1)` (a
     /// read-back that put a subtree in the wrong slots would not). Every primitive lies in one
-    /// leaf; the cost is at most the greedy collapse's, with fewer nodes.
-    /// Every fifth primitive of the weighted cases is tested alone at the cost of 2.5 group
-    /// tests (a curve among triangles).
+    /// leaf; the cost is at most the greedy collapse's, with fewer nodes. In the weighted case
+    /// every fifth primitive is tested alone at the cost of 2.5 group tests (a curve among
+    /// triangles); the greedy collapse's cost (per group only) does not compare there.
     #[test]
     fn collapse_writes_the_costed_tree() {
         for (n, opts, weighted) in [
