@@ -100,9 +100,9 @@ impl Geometry {
     }
 
     /// What one primitive's ray test costs, in units of one eight-triangle block test
-    /// ([`crate::geometry::triangle8::Triangle8`]), for the BVH's SAH (`Bvh::build_weighted`); 0 for
-    /// triangles, which are tested in blocks. Measured by the render rate of scenes made of
-    /// each (128², the validation scenes): charging curve segments, SDF voxels and ellipsoids
+    /// ([`crate::geometry::triangle8::Triangle8`]), for the BVH's SAH (`Bvh::build_weighted`);
+    /// 0 for triangles, which are tested in blocks. Measured by the render rate of scenes made
+    /// of each (128², the validation scenes, a thin-LTO build): charging curve segments, SDF voxels and ellipsoids
     /// as triangles (eight to a block test) gave them leaves of up to eight primitives, each
     /// tested alone; charged 2 they get leaves of their own (`hair` +33 %, `curves` +25 %,
     /// `sdfgrid` +20 %, `ellipsoids` +15 % samples/s; any weight from 0.5 to 8 within 3 % of
