@@ -139,13 +139,14 @@ pub(super) fn build(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) ->
         .enumerate()
         .map(|(i, b)| Item { bounds: b, centroid: b.centroid(), index: i as u32 })
         .collect();
-    // Weights by primitive, each finite and positive or 0 (grouped); none if all are grouped.
-    let mut weights: Vec<f32> = (0..bounds.len())
-        .map(|i| weights.get(i).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0))
-        .collect();
-    if weights.iter().all(|&w| w == 0.0) {
-        weights.clear();
-    }
+    // Weights by primitive, each finite and positive or 0 (grouped); none (no allocation) if
+    // all are grouped, as in a scene of triangles only.
+    let tested_alone = |w: &f32| w.is_finite() && *w > 0.0;
+    let weights: Vec<f32> = if weights.iter().any(tested_alone) {
+        (0..bounds.len()).map(|i| weights.get(i).copied().filter(tested_alone).unwrap_or(0.0)).collect()
+    } else {
+        Vec::new()
+    };
     let (root, count) = if weights.is_empty() {
         build_rec::<Grouped>(&mut items, &weights, 0, 0, opts)
     } else {

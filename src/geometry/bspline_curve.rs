@@ -111,16 +111,16 @@ impl BSplineCurves {
     /// for all the segments it meets: their square roots and divisions would otherwise stall
     /// every segment's test).
     #[inline]
-    pub fn intersect_with(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> Option<CurveHit> {
-        if self.misses_hull(k, ray, r, t_max) {
+    pub fn intersect_with(&self, k: usize, ray: &Ray, frames: &BSplineRay, t_max: f32) -> Option<CurveHit> {
+        if self.misses_hull(k, ray, frames, t_max) {
             return None;
         }
-        self.search(k, ray, r, t_max)
+        self.search(k, ray, frames, t_max)
     }
 
     /// [`BSplineCurves::intersect`] by the subdivision search alone.
-    fn search(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> Option<CurveHit> {
-        let BSplineFrame { len_d, d, e1, e2 } = r.double?;
+    fn search(&self, k: usize, ray: &Ray, frames: &BSplineRay, t_max: f32) -> Option<CurveHit> {
+        let BSplineFrame { len_d, d, e1, e2 } = frames.double?;
         let o = ray.o.as_dvec3();
         let to_frame = |p: DVec3| DVec3::new(p.dot(e1), p.dot(e2), p.dot(d));
         let seg = self.segment(k, o);
@@ -156,8 +156,8 @@ impl BSplineCurves {
     /// passes are skipped here at a fraction of the search's setup cost (the curves scene 4 %
     /// faster with the Bézier bounds).
     #[inline]
-    fn misses_hull(&self, k: usize, ray: &Ray, r: &BSplineRay, t_max: f32) -> bool {
-        let Some((d, e1, e2)) = r.single else { return false };
+    fn misses_hull(&self, k: usize, ray: &Ray, frames: &BSplineRay, t_max: f32) -> bool {
+        let Some((d, e1, e2)) = frames.single else { return false };
         let c = self.controls(k);
         let q: [Vec3; 4] = std::array::from_fn(|i| c[i].p - ray.o);
         let scale = q.iter().fold(0.0f32, |m, q| m.max(q.abs().max_element()));
@@ -325,6 +325,7 @@ impl Search {
     /// at both ends, so that an entry near a bend, where the straight piece would be entered
     /// through its end, still gives a guess), and against the piece's axis (the ray's closest
     /// approach); each guess polished by Newton's method on the exact sweep.
+    ///
     /// The piece's ends are its Bézier end points `bez[0]`, `bez[3]` with radii `rb[0]`,
     /// `rb[3]`, in the ray's frame, where the ray runs along +z from the origin: the guesses are
     /// found there (a rotation keeps distances along the ray and fractions of the axis) and

@@ -168,7 +168,12 @@ impl SceneBuilder {
         let pieces = crate::bvh::presplit::presplit(&bounds, triangle, PRESPLIT_BUDGET);
         let piece_bounds: Vec<_> = pieces.iter().map(|p| p.bounds).collect();
         let costs: Vec<f32> = self.geometries.iter().map(Geometry::test_cost).collect();
-        let weights: Vec<f32> = pieces.iter().map(|p| costs[refs[p.prim as usize].shape as usize]).collect();
+        // (None where every shape is a mesh: all triangles are tested in blocks.)
+        let weights: Vec<f32> = if costs.iter().any(|&c| c > 0.0) {
+            pieces.iter().map(|p| costs[refs[p.prim as usize].shape as usize]).collect()
+        } else {
+            Vec::new()
+        };
         let mut bvh = Bvh::build_weighted(&piece_bounds, &weights, &super::bvh_options(bounds.len()));
         let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[pieces[k as usize].prim as usize]).collect();
         // Leaves of triangles only become blocks of eight; the others keep a primitive list.
