@@ -133,6 +133,19 @@ impl Mis {
         }
     }
 
+    /// Whether [`Mis::light_weight`] looks at the BSDF density (a light sample's weight
+    /// depends on it).
+    #[inline(always)]
+    pub fn needs_bsdf_pdf(&self) -> bool {
+        matches!(*self, Mis::Combine { n_bsdf, .. } if n_bsdf > 0)
+    }
+
+    /// Whether [`Mis::bsdf_weight`] looks at the light-sampling density.
+    #[inline(always)]
+    pub fn needs_light_pdf(&self) -> bool {
+        matches!(*self, Mis::Combine { n_light, .. } if n_light > 0)
+    }
+
     /// Weight of emission found by a BSDF sample of density `p_bsdf` against the light-sampling
     /// density `p_light()` of the same direction (only evaluated when needed).
     #[inline(always)]
@@ -204,13 +217,15 @@ pub fn escaped(
     mis: &Mis,
     mut add: impl FnMut(Rgb, f32),
 ) {
+    // Where the weight compares with light sampling, the light's density comes with its radiance.
+    let p_ref = prev.filter(|v| !v.delta && mis.needs_light_pdf()).map(|v| v.ctx.p);
     for &i in scene.infinite_lights() {
         let light = &scene.lights()[i as usize];
-        let le = light.le_escaped(o, d);
+        let (le, pdf) = light.le_pdf_escaped(o, d, p_ref);
         if le == Rgb::ZERO {
             continue;
         }
-        let w = emission_weight(prev, hide_emitters, mis, |ctx| scene.light_pmf(ctx, i) * light.pdf_li_direction(ctx.p, d));
+        let w = emission_weight(prev, hide_emitters, mis, |ctx| scene.light_pmf(ctx, i) * pdf);
         add(le, w);
     }
 }
@@ -223,12 +238,11 @@ pub fn light_pdf_at(scene: &Scene, ctx: &LightSampleContext, i: u32, p: Vec3, ng
 }
 
 /// One light sample at `ctx` (Mitsuba's `sample_emitter_direction` with the BSDF's `eval_pdf`):
-/// `value(ω)` is the BSDF × cosine or phase value toward the unit world direction `ω`,
-/// `pdf(ω)` its sampling density (for MIS; only called for lights that BSDF sampling can
-/// reach), and `visibility(sample)` the fraction of light that arrives (0 or 1 for occlusion, the
-/// transmittance through media; see [`occlusion`]). Returns
+/// `eval(ω, with_pdf)` is the BSDF × cosine or phase value toward the unit world direction `ω`
+/// and, where `with_pdf` (MIS against a light that BSDF sampling can reach), its sampling
+/// density (else any number: it is not read); `visibility(sample)` the fraction of light that
+/// arrives (0 or 1 for occlusion, the transmittance through media; see [`occlusion`]). Returns
 /// `value Lₑ Tr w / (P(l) p_l n_light)` (module docs), zero when nothing arrives.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn sample_direct(
     scene: &Scene,
@@ -236,8 +250,7 @@ pub fn sample_direct(
     u: f32,
     u2: Vec2,
     mis: &Mis,
-    value: impl FnOnce(Vec3) -> Rgb,
-    pdf: impl FnOnce(Vec3) -> f32,
+    eval: impl FnOnce(Vec3, bool) -> (Rgb, f32),
     visibility: impl FnOnce(&LightSample) -> Rgb,
 ) -> Rgb {
     let n_light = match *mis {
@@ -248,7 +261,9 @@ pub fn sample_direct(
     let Some((index, pmf)) = scene.sample_light(ctx, u) else { return Rgb::ZERO };
     let light = &scene.lights()[index as usize];
     let Some(ls) = light.sample_li(scene.geometries(), ctx.p, u2) else { return Rgb::ZERO };
-    let f = value(ls.wi);
+    // The density is computed with the value, before the shadow ray (Mitsuba's order too):
+    // sharing their terms costs less than the density alone after it, even where it is occluded.
+    let (f, pdf) = eval(ls.wi, !ls.delta && mis.needs_bsdf_pdf());
     if f == Rgb::ZERO {
         return Rgb::ZERO;
     }
@@ -260,7 +275,7 @@ pub fn sample_direct(
         f * ls.li * tr / (pmf * n_light as f32)
     } else {
         let p_light = pmf * ls.pdf;
-        let w = mis.light_weight(p_light, || pdf(ls.wi));
+        let w = mis.light_weight(p_light, || pdf);
         f * ls.li * tr * (w / (p_light * n_light as f32))
     }
 }
@@ -286,10 +301,16 @@ impl SurfaceVertex<'_> {
         self.bsdf.eval(&self.ctx, self.wo_local, self.frame.to_local(wi))
     }
 
-    /// The BSDF's sampling density (solid angle) of the unit world direction `wi`.
+    /// [`SurfaceVertex::eval`] and, where `with_pdf`, the BSDF's sampling density (solid angle)
+    /// of the unit world direction `wi` (0 otherwise), computed together.
     #[inline]
-    pub fn pdf(&self, wi: Vec3) -> f32 {
-        self.bsdf.pdf(&self.ctx, self.wo_local, self.frame.to_local(wi))
+    pub fn eval_pdf(&self, wi: Vec3, with_pdf: bool) -> (Rgb, f32) {
+        let wi = self.frame.to_local(wi);
+        if with_pdf {
+            self.bsdf.eval_pdf(&self.ctx, self.wo_local, wi)
+        } else {
+            (self.bsdf.eval(&self.ctx, self.wo_local, wi), 0.0)
+        }
     }
 }
 
@@ -304,7 +325,7 @@ pub fn sample_direct_bsdf(
     v: &SurfaceVertex,
     visibility: impl FnOnce(&LightSample) -> Rgb,
 ) -> Rgb {
-    sample_direct(scene, ctx, u.0, u.1, mis, |wi| v.eval(wi), |wi| v.pdf(wi), visibility)
+    sample_direct(scene, ctx, u.0, u.1, mis, |wi, with_pdf| v.eval_pdf(wi, with_pdf), visibility)
 }
 
 /// Visibility of a light sample from a surface point by a shadow ray (no media): 1 or 0.

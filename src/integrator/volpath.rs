@@ -164,8 +164,11 @@ impl Integrator for VolPathIntegrator {
                                     u_light,
                                     u_light2,
                                     &mis,
-                                    |wi| Rgb::splat(phase.eval(p, wo, wi)),
-                                    |wi| phase.eval(p, wo, wi),
+                                    |wi, _| {
+                                        // A phase function samples its own value.
+                                        let v = phase.eval(p, wo, wi);
+                                        (Rgb::splat(v), v)
+                                    },
                                     |ls| {
                                         let (lp, ln) = (ls.p, ls.n);
                                         let target = if ln == Vec3::ZERO {

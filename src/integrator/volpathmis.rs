@@ -377,8 +377,11 @@ impl Integrator for VolPathMisIntegrator {
                     self.sample_light(scene, &light_ctx, &origin, medium, &path, channel, sampler, &mut rng)
                 {
                     let wi_local = frame.to_local(lp.sample.wi);
-                    let f = bsdf.eval(&ctx, wo_local, wi_local);
-                    let pdf = if lp.sample.delta { 0.0 } else { bsdf.pdf(&ctx, wo_local, wi_local) };
+                    let (f, pdf) = if lp.sample.delta {
+                        (bsdf.eval(&ctx, wo_local, wi_local), 0.0)
+                    } else {
+                        bsdf.eval_pdf(&ctx, wo_local, wi_local)
+                    };
                     lp.nee.update_scalar(1.0, f);
                     lp.uni.update_scalar(pdf, f);
                     l += lp.nee.combined_weight(&lp.uni) * lp.li;

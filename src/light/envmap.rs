@@ -182,6 +182,16 @@ impl EnvMap {
         }
     }
 
+    /// [`EnvMap::eval_from`] from `o` and [`EnvMap::pdf_from`] at `p_ref` of one direction
+    /// (the same bits), sharing the image coordinates where there is no portal.
+    #[inline]
+    pub fn eval_pdf_from(&self, o: Vec3, p_ref: Vec3, d: Vec3) -> (Rgb, f32) {
+        match &self.portal {
+            None => self.eval_pdf(d),
+            Some(_) => (self.eval_from(o, d), self.pdf_from(p_ref, d)),
+        }
+    }
+
     /// Density of [`EnvMap::sample_from`] at `p_ref` for the unit world direction `d`.
     #[inline]
     pub fn pdf_from(&self, p_ref: Vec3, d: Vec3) -> f32 {
@@ -293,10 +303,49 @@ impl EnvMap {
     #[inline]
     pub fn eval(&self, d: Vec3) -> Rgb {
         let local = self.to_local.apply_vector(d).normalize();
+        self.radiance_at(self.coords(local))
+    }
+
+    /// [`EnvMap::eval`] and [`EnvMap::pdf`] of one direction (the same bits), mapping it to
+    /// image coordinates once.
+    #[inline]
+    pub fn eval_pdf(&self, d: Vec3) -> (Rgb, f32) {
+        let local = self.to_local.apply_vector(d).normalize();
+        let c = self.coords(local);
+        (self.radiance_at(c), self.pdf_at(local, c))
+    }
+
+    /// Image coordinates of a local unit direction in this map's layout.
+    #[inline]
+    fn coords(&self, local: Vec3) -> Vec2 {
         match self.layout {
-            Layout::LatLong => self.lookup(Self::uv(local)),
-            Layout::EqualArea => self.nearest(equal_area_sphere_to_square(local)),
+            Layout::LatLong => Self::uv(local),
+            Layout::EqualArea => equal_area_sphere_to_square(local),
         }
+    }
+
+    /// Radiance at image coordinates (bilinear for latitude-longitude maps, nearest texel for
+    /// equal-area squares).
+    #[inline]
+    fn radiance_at(&self, c: Vec2) -> Rgb {
+        match self.layout {
+            Layout::LatLong => self.lookup(c),
+            Layout::EqualArea => self.nearest(c),
+        }
+    }
+
+    /// Solid-angle density of [`EnvMap::sample`] for the local unit direction `local` at its
+    /// image coordinates `c`.
+    #[inline]
+    fn pdf_at(&self, local: Vec3, c: Vec2) -> f32 {
+        if self.layout == Layout::EqualArea {
+            return self.distribution.pdf(c) * INV_4PI;
+        }
+        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
+        if sin_theta <= 0.0 {
+            return 0.0;
+        }
+        self.distribution.pdf(self.to_grid(c)) / (2.0 * PI * PI * sin_theta)
     }
 
     /// A world direction sampled proportionally to luminance, its radiance and its solid-angle
@@ -327,14 +376,7 @@ impl EnvMap {
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
         let local = self.to_local.apply_vector(d).normalize();
-        if self.layout == Layout::EqualArea {
-            return self.distribution.pdf(equal_area_sphere_to_square(local)) * INV_4PI;
-        }
-        let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
-        if sin_theta <= 0.0 {
-            return 0.0;
-        }
-        self.distribution.pdf(self.to_grid(Self::uv(local))) / (2.0 * PI * PI * sin_theta)
+        self.pdf_at(local, self.coords(local))
     }
 
     /// `∫ luminance(L) dω` over the sphere (W m⁻² sr⁻¹ · sr), for power estimates.
@@ -419,6 +461,27 @@ mod tests {
         // Between two black rows the radiance is zero: never sampled, zero pdf.
         let (band, _) = EnvMap::direction(Vec2::new(0.3, 4.5 / 7.0));
         assert_eq!(env.pdf(to_world.apply_vector(band)), 0.0);
+    }
+
+    /// `eval_pdf` is `eval` and `pdf` bit for bit, in both layouts (directions at random and
+    /// the poles, where the density is 0).
+    #[test]
+    fn eval_pdf_is_eval_and_pdf() {
+        let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
+        let maps = [
+            EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap(),
+            EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap(),
+        ];
+        let mut rng = crate::sampling::Pcg32::new(4, 4);
+        for env in &maps {
+            let poles = [Vec3::Y, -Vec3::Y].map(|d| to_world.apply_vector(d));
+            let random = (0..2000).map(|_| crate::sampling::sample_uniform_sphere(u2(&mut rng)).value);
+            for d in poles.into_iter().chain(random) {
+                let ((l, p), l2, p2) = (env.eval_pdf(d), env.eval(d), env.pdf(d));
+                assert!(l.to_array().map(f32::to_bits) == l2.to_array().map(f32::to_bits), "{d}: {l} vs {l2}");
+                assert_eq!(p.to_bits(), p2.to_bits(), "{d}: {p} vs {p2}");
+            }
+        }
     }
 
     #[test]

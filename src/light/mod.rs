@@ -371,6 +371,18 @@ impl Light {
         }
     }
 
+    /// [`Light::le_escaped`] and, with `p_ref` given, [`Light::pdf_li_direction`] at `p_ref` of
+    /// the same direction (else 0): the same bits, an environment map's image coordinates
+    /// found once.
+    #[inline]
+    pub fn le_pdf_escaped(&self, o: Vec3, d: Vec3, p_ref: Option<Vec3>) -> (Rgb, f32) {
+        match (self, p_ref) {
+            (Light::EnvMap { map, .. }, Some(p_ref)) => map.eval_pdf_from(o, p_ref, d),
+            (_, Some(p_ref)) => (self.le_escaped(o, d), self.pdf_li_direction(p_ref, d)),
+            (_, None) => (self.le_escaped(o, d), 0.0),
+        }
+    }
+
     /// Samples incident light at `p_ref`. `None` when nothing can arrive (back side, degenerate).
     #[inline]
     pub fn sample_li(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {

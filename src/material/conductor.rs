@@ -9,7 +9,7 @@
 
 use super::conductor_presets::{conductor_names, named_conductor};
 use super::fresnel::{fresnel_conductor, reflect, reflect_about};
-use super::microfacet::Roughness;
+use super::microfacet::{Microfacet, Roughness};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Rgb, Vec2, Vec3};
@@ -89,11 +89,32 @@ impl RoughConductor {
         }
         let distribution = self.roughness.at(ctx);
         let m = (wo + wi).normalize();
-        let d = distribution.d(m);
+        let (d, g1_o) = (distribution.d(m), distribution.g1(wo, m));
+        self.value(ctx, &distribution, wo, wi, m, d, g1_o)
+    }
+
+    /// [`RoughConductor::eval`] and [`RoughConductor::pdf`] at once (the same bits), sharing
+    /// the half vector, `D` and `G1(wo)`.
+    #[inline]
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let distribution = self.roughness.at(ctx);
+        let m = (wo + wi).normalize();
+        let (d, g1_o) = (distribution.d(m), distribution.g1(wo, m));
+        let pdf = distribution.pdf_given(wo, m, d, g1_o) / (4.0 * wo.dot(m).abs());
+        (self.value(ctx, &distribution, wo, wi, m, d, g1_o), pdf)
+    }
+
+    /// `f cos θᵢ` for the half vector `m` with `d = D(m)` and `g1_o = G1(wo, m)`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn value(&self, ctx: &BsdfContext, dist: &Microfacet, wo: Vec3, wi: Vec3, m: Vec3, d: f32, g1_o: f32) -> Rgb {
         if d == 0.0 {
             return Rgb::ZERO;
         }
-        let g = distribution.g(wi, wo, m);
+        let g = dist.g1(wi, m) * g1_o;
         let f = ConductorIor::reflectance(&self.ior, ctx, wi.dot(m));
         ctx.eval(&self.specular_reflectance) * f * (d * g / (4.0 * wo.z))
     }

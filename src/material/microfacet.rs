@@ -149,6 +149,18 @@ impl Microfacet {
         }
     }
 
+    /// [`Microfacet::pdf`] from `d = D(m)` and `g1 = G1(wi, m)` evaluated already (by
+    /// [`Microfacet::d`] and [`Microfacet::g1`], as a BSDF's value needs them): the same density,
+    /// bit for bit, without evaluating them again.
+    #[inline]
+    pub fn pdf_given(&self, wi: Vec3, m: Vec3, d: f32, g1: f32) -> f32 {
+        match self.kind {
+            MicrofacetType::BlinnPhong(_) => d * m.z.max(0.0),
+            _ if wi.z <= 0.0 => 0.0,
+            _ => visible_density(wi, m, d, g1),
+        }
+    }
+
     /// The visible normal density `G1(wi, m) max(0, wi·m) D(m) / cos θᵢ` with `G1(wi, ·)` where
     /// `wi` sees the front of `m` given by `g1_front` (it does not depend on `m`: `1 / (1 + Λ(wi))`,
     /// which [`Microfacet::sample_grid`] computes once per direction).
@@ -159,7 +171,7 @@ impl Microfacet {
         }
         // As `g1`: zero where `wi` sees the back of `m` or of the macro-surface.
         let g1 = if wi.dot(m) * wi.z <= 0.0 { 0.0 } else { g1_front() };
-        g1 * wi.dot(m).max(0.0) * self.d(m) / wi.z
+        visible_density(wi, m, self.d(m), g1)
     }
 
     /// Samples a microfacet normal for the direction `wi` (local, z > 0) from `u ∈ [0,1)²`:
@@ -520,6 +532,13 @@ impl Microfacet {
         o.bool("sample_visible", true)?;
         Ok(Microfacet::new(kind, au, av))
     }
+}
+
+/// `G1(wi, m) max(0, wi·m) D(m) / cos θᵢ` for `cos θᵢ > 0` (one expression, so that every
+/// caller's density has the same bits).
+#[inline(always)]
+fn visible_density(wi: Vec3, m: Vec3, d: f32, g1: f32) -> f32 {
+    g1 * wi.dot(m).max(0.0) * d / wi.z
 }
 
 #[cfg(test)]

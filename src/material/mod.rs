@@ -315,6 +315,36 @@ impl Bsdf {
         }
     }
 
+    /// [`Bsdf::eval`] and [`Bsdf::pdf`] at once, the same bits as the two calls: where a light
+    /// sample needs both (MIS), the microfacet BSDFs share their half vector, `D`, `G1(wo)`
+    /// and textured parameters between them (Mitsuba's `eval_pdf`).
+    #[inline]
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        match self {
+            Bsdf::RoughConductor(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::RoughDielectric(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::Principled(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::PrincipledThin(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                let ((f0, p0), (f1, p1)) = (bsdfs[0].eval_pdf(ctx, wo, wi), bsdfs[1].eval_pdf(ctx, wo, wi));
+                (f0 * (1.0 - w) + f1 * w, p0 * (1.0 - w) + p1 * w)
+            }
+            Bsdf::Mask { opacity, bsdf } => {
+                let ((f, p), w) = (bsdf.eval_pdf(ctx, wo, wi), blend_weight(opacity, ctx));
+                (f * w, p * w)
+            }
+            Bsdf::TwoSided(b) => {
+                if wo.z >= 0.0 {
+                    b[0].eval_pdf(ctx, wo, wi)
+                } else {
+                    b[1].eval_pdf(ctx, flip(wo), flip(wi))
+                }
+            }
+            _ => (self.eval(ctx, wo, wi), self.pdf(ctx, wo, wi)),
+        }
+    }
+
     /// Density of [`Bsdf::sample`] choosing `wi`, per unit solid angle; 0 for delta BSDFs.
     #[inline]
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {

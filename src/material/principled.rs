@@ -108,6 +108,32 @@ fn smith_ggx1(v: Vec3, m: Vec3, alpha: f32) -> f32 {
     2.0 / (1.0 + (1.0 + alpha * alpha * tan2).sqrt())
 }
 
+/// What [`Principled::eval`] and [`Principled::pdf`] share for one pair of directions.
+struct Pair {
+    /// `cos θₒ` (not 0).
+    cos_o: f32,
+    /// `wo` and `wi` on one side of the surface.
+    reflect: bool,
+    /// `wo` and `wi` on opposite sides.
+    refract: bool,
+    /// The generalized half vector (toward +z, not zero).
+    wh: Vec3,
+    /// The relative index along the path, seen from `wo`'s side.
+    eta_path: f32,
+    /// The specular GGX distribution.
+    dist: Microfacet,
+    /// The dielectric Fresnel reflectance at `wo · wh`.
+    f_diel: f32,
+    /// Whether a reflection through `wh` can join `wo` and `wi`.
+    refl_ok: bool,
+    /// Whether a refraction through `wh` can.
+    refr_ok: bool,
+    /// `D(wh)`.
+    d: f32,
+    /// `G1(wo, wh)`.
+    g1_o: f32,
+}
+
 /// Burley's GTR1 distribution of the clearcoat, roughness `alpha`.
 struct Gtr1 {
     alpha: f32,
@@ -265,31 +291,60 @@ impl Principled {
 
     /// `f(wo, wi) |cos θᵢ|`.
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
-        self.eval_with(ctx, &self.params(ctx), wo, wi)
+        let p = self.params(ctx);
+        self.pair(&p, wo, wi).map_or(Rgb::ZERO, |q| self.eval_pair(ctx, &p, &q, wo, wi))
     }
 
-    /// [`Principled::eval`] with the parameters evaluated at `ctx` already.
-    fn eval_with(&self, ctx: &BsdfContext, p: &Params, wo: Vec3, wi: Vec3) -> Rgb {
+    /// Density of [`Principled::sample`] choosing `wi`.
+    pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
+        let p = self.params(ctx);
+        self.pair(&p, wo, wi).map_or(0.0, |q| self.pdf_pair(ctx, &p, &q, wo, wi))
+    }
+
+    /// [`Principled::eval`] and [`Principled::pdf`] at once (the same bits), sharing the
+    /// parameters, the half vector, the Fresnel term, `D` and `G1(wo)`.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        let p = self.params(ctx);
+        self.pair(&p, wo, wi)
+            .map_or((Rgb::ZERO, 0.0), |q| (self.eval_pair(ctx, &p, &q, wo, wi), self.pdf_pair(ctx, &p, &q, wo, wi)))
+    }
+
+    /// What the value and the density of `(wo, wi)` share; `None` where both are 0 (`wo` in
+    /// the surface's plane, or no half vector).
+    fn pair(&self, p: &Params, wo: Vec3, wi: Vec3) -> Option<Pair> {
         let cos_o = wo.z;
         if cos_o == 0.0 {
-            return Rgb::ZERO;
+            return None;
         }
-        let (brdf, bsdf) = (p.brdf, p.bsdf);
-        let cos_i = wi.z;
-        let (reflect, refract) = (cos_o * cos_i > 0.0, cos_o * cos_i < 0.0);
-        let front = cos_o > 0.0;
         let (wh, eta_path) = self.half_vector(wo, wi);
         if wh == Vec3::ZERO {
-            return Rgb::ZERO;
+            return None;
         }
         let dist = Microfacet::new(MicrofacetType::Ggx, p.alpha.0, p.alpha.1);
         let (f_diel, ..) = fresnel_dielectric(wo.dot(wh), self.eta);
-        let refl_ok = compatible(wh, wo, wi, cos_o, true);
-        let refr_ok = compatible(wh, wo, wi, cos_o, false);
-        let d = dist.d(wh);
-        let g = dist.g(wo, wi, wh);
+        Some(Pair {
+            cos_o,
+            reflect: cos_o * wi.z > 0.0,
+            refract: cos_o * wi.z < 0.0,
+            wh,
+            eta_path,
+            dist,
+            f_diel,
+            refl_ok: compatible(wh, wo, wi, cos_o, true),
+            refr_ok: compatible(wh, wo, wi, cos_o, false),
+            d: dist.d(wh),
+            g1_o: dist.g1(wo, wh),
+        })
+    }
+
+    /// [`Principled::eval`] from the parameters and the pair's shared terms.
+    fn eval_pair(&self, ctx: &BsdfContext, p: &Params, q: &Pair, wo: Vec3, wi: Vec3) -> Rgb {
+        let (brdf, bsdf) = (p.brdf, p.bsdf);
+        let (cos_o, cos_i, wh, f_diel, d) = (q.cos_o, wi.z, q.wh, q.f_diel, q.d);
+        let front = cos_o > 0.0;
+        let g = q.g1_o * q.dist.g1(wi, wh);
         let mut value = Rgb::ZERO;
-        if reflect && refl_ok && f_diel > 0.0 {
+        if q.reflect && q.refl_ok && f_diel > 0.0 {
             let spec_tint = scalar(&self.spec_tint, ctx);
             let lum = if self.spec_tint.is_some() { luminance(p.base) } else { 1.0 };
             let f = if front {
@@ -310,21 +365,22 @@ impl Principled {
             };
             value += f * (d * g / (4.0 * cos_o.abs()));
         }
-        if bsdf > 0.0 && refract && refr_ok && f_diel < 1.0 {
+        if bsdf > 0.0 && q.refract && q.refr_ok && f_diel < 1.0 {
             // Radiance transport: the solid angle compresses by 1/η² across the interface.
+            let eta_path = q.eta_path;
             let scale = 1.0 / (eta_path * eta_path);
             let (ow, iw) = (wo.dot(wh), wi.dot(wh));
             let denom = ow + eta_path * iw;
             let t = (scale * (1.0 - f_diel) * d * g * eta_path * eta_path * ow * iw / (cos_o * denom * denom)).abs();
             value += Rgb::new(p.base.x.max(0.0).sqrt(), p.base.y.max(0.0).sqrt(), p.base.z.max(0.0).sqrt()) * (bsdf * t);
         }
-        if p.clearcoat > 0.0 && reflect && refl_ok && front {
+        if p.clearcoat > 0.0 && q.reflect && q.refl_ok && front {
             let f_cc = schlick(Rgb::splat(0.04), wo.dot(wh), self.eta).x;
             let d_cc = self.clearcoat_distribution(ctx).d(wh);
             let g_cc = smith_ggx1(wo, wh, 0.25) * smith_ggx1(wi, wh, 0.25);
             value += Rgb::splat(p.clearcoat * 0.25 * f_cc * d_cc * g_cc * cos_i.abs());
         }
-        if brdf > 0.0 && reflect && front {
+        if brdf > 0.0 && q.reflect && front {
             let cos_d = wh.dot(wi);
             let flatness = self.flatness.as_ref().map(|_| scalar(&self.flatness, ctx));
             let lobe = disney_diffuse(p.roughness, cos_i.abs(), cos_o.abs(), cos_d, flatness);
@@ -342,48 +398,35 @@ impl Principled {
         }
     }
 
-    /// Density of [`Principled::sample`] choosing `wi`.
-    pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
-        self.pdf_with(ctx, &self.params(ctx), wo, wi)
-    }
-
-    /// [`Principled::pdf`] with the parameters evaluated at `ctx` already.
-    fn pdf_with(&self, ctx: &BsdfContext, p: &Params, wo: Vec3, wi: Vec3) -> f32 {
-        let cos_o = wo.z;
-        if cos_o == 0.0 {
-            return 0.0;
-        }
+    /// [`Principled::pdf`] from the parameters and the pair's shared terms.
+    fn pdf_pair(&self, ctx: &BsdfContext, p: &Params, q: &Pair, wo: Vec3, wi: Vec3) -> f32 {
+        let (cos_o, wh, eta_path) = (q.cos_o, q.wh, q.eta_path);
         let front = cos_o > 0.0;
         // Seen from inside without transmission nothing is sampled (Mitsuba's pdf is not zero
         // there, but its value is: the density differs only where the BSDF vanishes).
         if !front && p.bsdf <= 0.0 {
             return 0.0;
         }
-        let (reflect, refract) = (cos_o * wi.z > 0.0, cos_o * wi.z < 0.0);
-        let (wh, eta_path) = self.half_vector(wo, wi);
-        if wh == Vec3::ZERO {
-            return 0.0;
-        }
-        let dist = Microfacet::new(MicrofacetType::Ggx, p.alpha.0, p.alpha.1);
-        let (f_diel, ..) = fresnel_dielectric(wo.dot(wh), self.eta);
-        let [p_diffuse, p_clearcoat, p_trans, p_reflect] = self.lobe_probabilities(p, f_diel, front);
+        let [p_diffuse, p_clearcoat, p_trans, p_reflect] = self.lobe_probabilities(p, q.f_diel, front);
         let (ow, iw) = (wo.dot(wh), wi.dot(wh));
-        let jacobian = if self.spec_trans.is_some() && !reflect {
+        let jacobian = if self.spec_trans.is_some() && !q.reflect {
             (eta_path * eta_path * iw / (ow + eta_path * iw).powi(2)).abs()
         } else {
             (1.0 / (4.0 * iw)).abs()
         };
+        // The visible-normal density seen from `wo` on the front; G1 is even in `wo`.
         let wo_up = if cos_o < 0.0 { -wo } else { wo };
+        let pdf_wh = || q.dist.pdf_given(wo_up, wh, q.d, q.g1_o);
         let mut pdf = 0.0;
-        let refl_ok = reflect && compatible(wh, wo, wi, cos_o, true);
+        let refl_ok = q.reflect && q.refl_ok;
         if refl_ok {
-            pdf += p_reflect * dist.pdf(wo_up, wh) * jacobian;
+            pdf += p_reflect * pdf_wh() * jacobian;
         }
-        if reflect {
+        if q.reflect {
             pdf += p_diffuse * wi.z * INV_PI;
         }
-        if self.spec_trans.is_some() && refract && compatible(wh, wo, wi, cos_o, false) {
-            pdf += p_trans * dist.pdf(wo_up, wh) * jacobian;
+        if self.spec_trans.is_some() && q.refract && q.refr_ok {
+            pdf += p_trans * pdf_wh() * jacobian;
         }
         if self.clearcoat.is_some() && refl_ok {
             pdf += p_clearcoat * self.clearcoat_distribution(ctx).pdf(wh) * jacobian;
@@ -427,11 +470,12 @@ impl Principled {
             let wi = reflect_about(wo, m);
             (compatible(m, wo, wi, cos_o, true) && cos_o * wi.z > 0.0).then_some(wi)?
         };
-        let pdf = self.pdf_with(ctx, &p, wo, wi);
+        let q = self.pair(&p, wo, wi)?;
+        let pdf = self.pdf_pair(ctx, &p, &q, wo, wi);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval_with(ctx, &p, wo, wi) / pdf;
+        let weight = self.eval_pair(ctx, &p, &q, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
     }
 

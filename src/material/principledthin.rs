@@ -170,6 +170,13 @@ impl PrincipledThin {
         self.pdf_with(&self.params(ctx), wo, wi)
     }
 
+    /// [`PrincipledThin::eval`] and [`PrincipledThin::pdf`] at once (the same bits), with the
+    /// parameters' textures looked up once.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        let p = self.params(ctx);
+        (self.eval_with(ctx, &p, wo, wi), self.pdf_with(&p, wo, wi))
+    }
+
     /// [`PrincipledThin::pdf`] with the parameters evaluated already.
     fn pdf_with(&self, p: &Params, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z == 0.0 {

@@ -15,7 +15,7 @@
 //! `specular_reflectance`, `specular_transmittance`.
 
 use super::fresnel::{fresnel_dielectric, reflect_about, refract_about};
-use super::microfacet::Roughness;
+use super::microfacet::{Microfacet, Roughness};
 use super::{Bsdf, BsdfBuilder, BsdfContext, BsdfSample};
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
@@ -40,6 +40,26 @@ struct Config {
     m: Vec3,
     reflect: bool,
     e: f32,
+}
+
+/// What the value and the density of one `(wo, wi)` pair share.
+struct Pair {
+    /// The pair's microfacet geometry.
+    c: Config,
+    /// `wo · m`.
+    wom: f32,
+    /// `wi · m`.
+    wim: f32,
+    /// `|cos θₒ|`.
+    cos_o: f32,
+    /// The microfacet distribution there.
+    dist: Microfacet,
+    /// `D(m)`.
+    d: f32,
+    /// `G1(wo, m)`.
+    g1_o: f32,
+    /// Dielectric Fresnel reflectance at `wo · m`.
+    f: f32,
 }
 
 impl RoughDielectric {
@@ -72,36 +92,57 @@ impl RoughDielectric {
 
     /// `f |cos θᵢ|` for both reflection and refraction.
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
-        let Some(c) = self.config(wo, wi) else { return Rgb::ZERO };
-        let (wom, wim) = (wo.dot(c.m), wi.dot(c.m));
-        // Directions must lie on the same side of the microfacet as of the macro-surface.
-        if wom * wo.z <= 0.0 || wim * wi.z <= 0.0 {
-            return Rgb::ZERO;
-        }
-        let distribution = self.roughness.at(ctx);
-        let d = distribution.d(c.m);
-        let g = distribution.g(wi, wo, c.m);
-        let (f, ..) = fresnel_dielectric(wom, self.eta);
-        if c.reflect {
-            ctx.eval(&self.specular_reflectance) * (f * d * g / (4.0 * wo.z.abs()))
-        } else {
-            let denom = wom + c.e * wim;
-            ctx.eval(&self.specular_transmittance)
-                * ((1.0 - f) * d * g * (wim * wom).abs() / (wo.z.abs() * denom * denom))
-        }
+        let Some(p) = self.pair(ctx, wo, wi) else { return Rgb::ZERO };
+        self.value(ctx, &p, wi)
     }
 
     /// Density of [`RoughDielectric::sample`] choosing `wi` (solid angle).
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(c) = self.config(wo, wi) else { return 0.0 };
+        let Some(p) = self.pair(ctx, wo, wi) else { return 0.0 };
+        self.density(&p, wo)
+    }
+
+    /// [`RoughDielectric::eval`] and [`RoughDielectric::pdf`] at once (the same bits), sharing
+    /// the half vector, the Fresnel term, `D` and `G1(wo)`.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        let Some(p) = self.pair(ctx, wo, wi) else { return (Rgb::ZERO, 0.0) };
+        (self.value(ctx, &p, wi), self.density(&p, wo))
+    }
+
+    /// What the value and the density of `(wo, wi)` share; `None` where both are 0 (no
+    /// half vector, or a direction on the back of it).
+    fn pair(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Option<Pair> {
+        let c = self.config(wo, wi)?;
         let (wom, wim) = (wo.dot(c.m), wi.dot(c.m));
+        // Directions must lie on the same side of the microfacet as of the macro-surface.
         if wom * wo.z <= 0.0 || wim * wi.z <= 0.0 {
-            return 0.0;
+            return None;
         }
-        let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let pdf_m = self.roughness.at(ctx).pdf(wo_up, c.m);
+        let dist = self.roughness.at(ctx);
+        let (d, g1_o) = (dist.d(c.m), dist.g1(wo, c.m));
         let (f, ..) = fresnel_dielectric(wom, self.eta);
-        wi_pdf(pdf_m, f, c.reflect, c.e, wom, wim)
+        Some(Pair { c, wom, wim, cos_o: wo.z.abs(), dist, d, g1_o, f })
+    }
+
+    /// [`RoughDielectric::eval`] of a pair.
+    fn value(&self, ctx: &BsdfContext, p: &Pair, wi: Vec3) -> Rgb {
+        let (c, wom, wim, d, f) = (&p.c, p.wom, p.wim, p.d, p.f);
+        let g = p.dist.g1(wi, c.m) * p.g1_o;
+        let cos_o = p.cos_o;
+        if c.reflect {
+            ctx.eval(&self.specular_reflectance) * (f * d * g / (4.0 * cos_o))
+        } else {
+            let denom = wom + c.e * wim;
+            ctx.eval(&self.specular_transmittance) * ((1.0 - f) * d * g * (wim * wom).abs() / (cos_o * denom * denom))
+        }
+    }
+
+    /// [`RoughDielectric::pdf`] of a pair.
+    fn density(&self, p: &Pair, wo: Vec3) -> f32 {
+        // G1 is even in the direction: `G1(wo)` serves the density seen from the front.
+        let wo_up = if wo.z < 0.0 { -wo } else { wo };
+        let pdf_m = p.dist.pdf_given(wo_up, p.c.m, p.d, p.g1_o);
+        wi_pdf(pdf_m, p.f, p.c.reflect, p.c.e, p.wom, p.wim)
     }
 
     /// A visible normal from `wo`, then reflection (probability F) or refraction.

@@ -356,6 +356,29 @@ fn returned_pdf_and_weight_agree_with_pdf_and_eval() {
     }
 }
 
+/// `eval_pdf` is `eval` and `pdf` bit for bit, for every BSDF (the fused microfacet ones and
+/// the combinations that forward to them), on both sides and at random directions.
+#[test]
+fn eval_pdf_is_eval_and_pdf() {
+    let mut fused = 0;
+    for (name, b) in all_non_delta() {
+        for wo in outgoing().into_iter().flat_map(|w| [w, -w]) {
+            let mut rng = crate::sampling::Pcg32::new(9, 9);
+            for _ in 0..500 {
+                let wi = crate::sampling::sample_uniform_sphere(u2(&mut rng)).value;
+                let (f, p) = b.eval_pdf(&CTX, wo, wi);
+                let (f2, p2) = (b.eval(&CTX, wo, wi), b.pdf(&CTX, wo, wi));
+                assert!(
+                    f.to_array().map(f32::to_bits) == f2.to_array().map(f32::to_bits) && p.to_bits() == p2.to_bits(),
+                    "{name} {wo} {wi}: ({f}, {p}) vs ({f2}, {p2})"
+                );
+                fused += usize::from(p > 0.0 && f != Rgb::ZERO);
+            }
+        }
+    }
+    assert!(fused > 10_000, "too few directions with a value and a density: {fused}");
+}
+
 #[test]
 fn reflection_is_reciprocal() {
     let mut rng = crate::sampling::Pcg32::new(9, 9);
