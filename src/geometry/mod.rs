@@ -34,4 +34,4 @@ pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGIN
 pub use mesh::MeshError;
 pub use sdfgrid::{SdfGrid, SdfGridError};
 pub use shape::{Geometry, ShapeSample};
-pub use sphere::{Sphere, SphereClip};
+pub use sphere::{Orientation, Sphere, SphereClip};

@@ -4,7 +4,7 @@
 //! ([`MeshSource`]). What a shape is made of (BSDF, emitter, media) and instancing are the
 //! loader's business.
 
-use super::sphere::SphereClip;
+use super::sphere::{Orientation, SphereClip};
 use super::{Cylinder, Disk, Geometry, SdfGrid, Sphere, TriangleMesh};
 use crate::image::VolumeSource;
 use crate::math::{Transform, Vec3};
@@ -144,30 +144,55 @@ fn disk(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Re
     Ok(Geometry::Disk(if pbrt_uv(o)? { d.with_pbrt_uv() } else { d }))
 }
 
-/// Mitsuba's `sphere`: `center` (origin), `radius` (1), and a `to_world` that may only
-/// translate, rotate and scale uniformly; (u, v) = (φ/2π, θ/π), or pbrt-v4's (φ/2π, 1 − θ/π)
-/// with `parameterization` `pbrt` (θ from the object's −z instead of +z). neumann's `zmin`,
-/// `zmax` (object units, along the object's z from the centre) and `phimax` (degrees) make
-/// pbrt-v4's partial sphere, with pbrt's (u, v) stretched over what is left.
-fn sphere(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+/// Mitsuba's `sphere`: `center` (origin), `radius` (1) and `to_world`; (u, v) = (φ/2π, θ/π),
+/// or pbrt-v4's (φ/2π, 1 − θ/π) with `parameterization` `pbrt` (θ from the object's −z instead
+/// of +z). neumann's `zmin`, `zmax` (object units, along the object's z from the centre) and
+/// `phimax` (degrees) make pbrt-v4's partial sphere, with pbrt's (u, v) stretched over what is
+/// left. A `to_world` that mirrors turns the normals inward, as Mitsuba's. One that scales
+/// unevenly or shears is taken as Mitsuba 3.9 takes it, with its warning: the sphere of centre
+/// `to_world(0)` and radius `|to_world · x̂|`, the whole map kept for (u, v) (see
+/// [`super::sphere::Orientation`]); pbrt-v4 would make an ellipsoid of it, which the pbrt
+/// loader and partial spheres refuse.
+fn sphere(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
     // pbrt's v runs from the −z pole: the object's z axis reversed (a reflection the sphere's
     // surface and normals do not see).
     let pbrt = pbrt_uv(o)?;
-    let to_world =
-        &(if pbrt { *to_world * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { *to_world });
     let center = o.point_opt("center")?.unwrap_or(Vec3::ZERO);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
+    let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
+    let mirrors = t.swaps_handedness();
+    let t = if pbrt { t * Transform::scale(Vec3::new(1.0, 1.0, -1.0)).expect("non-zero") } else { t };
     let (zmin, zmax) = (o.float("zmin", -radius)?, o.float("zmax", radius)?);
     let clip = SphereClip::from_pbrt(radius, zmin, zmax, phi_max(o)?.to_degrees())
         .ok_or_else(|| o.error_at("zmin", "zmin and zmax leave nothing of the sphere"))?;
     // In the reflected frame of pbrt's (u, v), z is the object's −z.
     let clip = if pbrt { SphereClip { z_min: -clip.z_max, z_max: -clip.z_min, ..clip } } else { clip };
-    let t = *to_world * Transform::translate(center) * Transform::scale(Vec3::splat(radius)).expect("r > 0");
-    let (c, r) = similarity(&t)
-        .ok_or_else(|| o.error_at("to_world", "a sphere's to_world may only translate, rotate and scale uniformly"))?;
-    let axes = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)].map(|a| a / r);
-    let rotation = crate::math::Mat3::from_cols(axes[0], axes[1], axes[2]);
-    Ok(Geometry::Sphere(Sphere { rotation, clip, ..Sphere::new(c, r, flip) }))
+    let axes = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)];
+    let (c, r) = (t.apply_point(Vec3::ZERO), axes[0].length());
+    let linear = crate::math::Mat3::from_cols(axes[0] / r, axes[1] / r, axes[2] / r);
+    let orientation = match similarity(&t) {
+        Some(_) => Orientation::rotation(linear),
+        None if pbrt || clip.is_partial() => {
+            return Err(o.error_at(
+                "to_world",
+                "this sphere's to_world scales unevenly or shears: an ellipsoid, which a pbrt-v4 or partial sphere cannot be",
+            ))
+        }
+        None => {
+            let stretched = (r > 0.0 && r.is_finite()).then(|| Orientation::stretched(linear)).flatten();
+            let orientation = stretched.ok_or_else(|| o.error_at("to_world", "the transform flattens the sphere"))?;
+            let at = o.get("to_world").map_or_else(|| o.loc.position(), |p| p.loc.position());
+            files.warn(format!(
+                "warning: {at}: {} 'sphere': to_world scales unevenly or shears; as Mitsuba does, the sphere keeps the centre \
+                 to_world(0) and the radius |to_world · (1, 0, 0)| = {r}",
+                o.tag
+            ));
+            orientation
+        }
+    };
+    // Mitsuba flips a mirrored sphere's normals (its decomposed scale is negative); the pbrt
+    // loader keeps its spheres' normals outward.
+    Ok(Geometry::Sphere(Sphere { orientation, clip, ..Sphere::new(c, r, flip ^ (mirrors && !pbrt)) }))
 }
 
 /// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open. neumann's

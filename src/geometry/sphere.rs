@@ -15,14 +15,51 @@ pub struct Sphere {
     pub radius: f32,
     /// Whether normals point inward.
     pub flip: bool,
-    /// The object's axes in world space (columns; orthonormal, a reflection allowed): `to_world`'s
-    /// rotation, which orients the (u, v) parameterization as Mitsuba's does.
-    pub rotation: Mat3,
+    /// How the object's frame, which orients the (u, v) parameterization, sits in world space.
+    pub orientation: Orientation,
     /// The part of the sphere that exists ([`SphereClip::FULL`]: all of it).
     pub clip: SphereClip,
 }
 
-/// A partial sphere, in the object's frame (`rotation`) of the unit sphere: the points with
+/// The object's frame of a sphere: `to_world` maps object directions to world ones (columns:
+/// the object's axes), `to_world / radius` of the shape's transform, and `to_object` is its
+/// inverse. For the similarities that Mitsuba and pbrt-v4 expect `to_world` is a rotation (a
+/// reflection allowed). Mitsuba also takes a `to_world` that scales unevenly or shears (with a
+/// warning): its surface is then the sphere of centre `to_world(0)` and radius `|to_world · x̂|`,
+/// while the (u, v) parameterization and its derivatives keep the whole map (`stretched`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Orientation {
+    /// Object directions to world ones (divided by the radius).
+    pub to_world: Mat3,
+    /// The inverse of `to_world`.
+    pub to_object: Mat3,
+    /// Whether `to_world` is not a rotation (Mitsuba's uneven scales and shears).
+    pub stretched: bool,
+}
+
+impl Orientation {
+    /// The world axes.
+    pub const IDENTITY: Orientation =
+        Orientation { to_world: Mat3::IDENTITY, to_object: Mat3::IDENTITY, stretched: false };
+
+    /// A rotation (orthonormal columns, a reflection allowed).
+    pub fn rotation(r: Mat3) -> Orientation {
+        Orientation { to_world: r, to_object: r.transpose(), stretched: false }
+    }
+
+    /// Any invertible linear map (Mitsuba's stretched spheres); `None` if it is singular or not
+    /// finite.
+    pub fn stretched(m: Mat3) -> Option<Orientation> {
+        let inv = m.inverse();
+        (m.determinant() != 0.0 && inv.is_finite()).then_some(Orientation {
+            to_world: m,
+            to_object: inv,
+            stretched: true,
+        })
+    }
+}
+
+/// A partial sphere, in the object's frame (`orientation`) of the unit sphere: the points with
 /// `z_min ≤ z ≤ z_max` and azimuth `φ = atan2(y, x) ∈ [0, 2π)` at most `phi_max` (pbrt-v4's
 /// `zmin`, `zmax` divided by the radius and `phimax` in radians).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,7 +121,7 @@ pub struct SurfacePoint {
 impl Sphere {
     /// A sphere with its parameterization aligned with the world axes.
     pub fn new(center: Vec3, radius: f32, flip: bool) -> Sphere {
-        Sphere { center, radius, flip, rotation: Mat3::IDENTITY, clip: SphereClip::FULL }
+        Sphere { center, radius, flip, orientation: Orientation::IDENTITY, clip: SphereClip::FULL }
     }
 
     /// Surface area: `4π r²`, of a partial sphere `φ_max r² (z_max − z_min)` (Archimedes).
@@ -134,7 +171,7 @@ impl Sphere {
     /// Whether the world point `p` (on the sphere) lies on the part that exists.
     #[inline]
     fn keeps(&self, p: Vec3) -> bool {
-        self.clip.contains(self.rotation.transpose() * ((p - self.center) / self.radius))
+        self.clip.contains(self.orientation.to_object * ((p - self.center) / self.radius))
     }
 
     /// Reprojects the hit at `ray.at(t)` onto the sphere: point, error bound, outward-or-flipped
@@ -168,11 +205,23 @@ impl Sphere {
 
     /// (u, v) = (φ / 2π, θ / π) of the point in unit direction `v` from the centre (world),
     /// in the object's frame. A partial sphere stretches them over what exists, as pbrt-v4 does:
-    /// `u = φ / φ_max`, `v = (θ − θ(z_max)) / (θ(z_min) − θ(z_max))`.
+    /// `u = φ / φ_max`, `v = (θ − θ(z_max)) / (θ(z_min) − θ(z_max))`. A stretched orientation
+    /// maps `v` to a direction that is not a unit one: θ is then Mitsuba's `unit_angle_z` of it
+    /// (`2 asin(|(x, y, |z| − 1)| / 2)`, from the pole of z's sign), as Mitsuba computes it.
     #[inline]
     pub fn uv_of_direction(&self, v: Vec3) -> Vec2 {
-        let local = self.rotation.transpose() * v;
-        let (phi, theta) = (crate::math::spherical_phi(local), crate::math::spherical_theta(local));
+        let local = self.orientation.to_object * v;
+        let theta = if self.orientation.stretched {
+            let half = (0.5 * Vec3::new(local.x, local.y, local.z.abs() - 1.0).length()).min(1.0).asin() * 2.0;
+            if local.z >= 0.0 {
+                half
+            } else {
+                PI - half
+            }
+        } else {
+            crate::math::spherical_theta(local)
+        };
+        let phi = crate::math::spherical_phi(local);
         if !self.clip.is_partial() {
             return Vec2::new(phi / (2.0 * PI), theta / PI);
         }
@@ -192,17 +241,17 @@ impl Sphere {
     /// to world space (∂p/∂u vanishes at the poles); `∂p/∂v` only `with_v` (else zero).
     #[inline]
     pub fn dpduv(&self, p: Vec3, with_v: bool) -> (Vec3, Vec3) {
-        let local = self.rotation.transpose() * (p - self.center);
+        let local = self.orientation.to_object * (p - self.center);
         // ∂φ/∂u and ∂θ/∂v: 2π and π for the whole sphere.
         let (du, dv) = if self.clip.is_partial() { (self.clip.phi_max, self.theta_range().1) } else { (2.0 * PI, PI) };
         if !with_v {
-            return (self.rotation * (Vec3::new(-local.y, local.x, 0.0) * du), Vec3::ZERO);
+            return (self.orientation.to_world * (Vec3::new(-local.y, local.x, 0.0) * du), Vec3::ZERO);
         }
         let rd = local.x.hypot(local.y);
         let (cos_phi, sin_phi) = if rd > 0.0 { (local.x / rd, local.y / rd) } else { (1.0, 0.0) };
         let dpdu = Vec3::new(-local.y, local.x, 0.0) * du;
         let dpdv = Vec3::new(local.z * cos_phi, local.z * sin_phi, -rd) * dv;
-        (self.rotation * dpdu, self.rotation * dpdv)
+        (self.orientation.to_world * dpdu, self.orientation.to_world * dpdv)
     }
 
     /// The point in unit direction `v` from the centre, its normal and error bound.
@@ -224,7 +273,7 @@ impl Sphere {
             let z = c.z_min + u.x * (c.z_max - c.z_min);
             let r = safe_sqrt(1.0 - z * z);
             let (s, co) = (u.y * c.phi_max).sin_cos();
-            let v = self.rotation * Vec3::new(r * co, r * s, z);
+            let v = self.orientation.to_world * Vec3::new(r * co, r * s, z);
             return (self.point(v), 1.0 / self.area());
         }
         let v = sample_uniform_sphere(u).value;
@@ -296,7 +345,7 @@ mod tests {
     #[test]
     fn parameterization_follows_the_rotation() {
         let rot = Mat3::from_rotation_x(std::f32::consts::FRAC_PI_2);
-        let s = Sphere { rotation: rot, ..Sphere::new(Vec3::ZERO, 2.0, false) };
+        let s = Sphere { orientation: Orientation::rotation(rot), ..Sphere::new(Vec3::ZERO, 2.0, false) };
         // The object's +z axis now points along world −y.
         let ray = Ray::new(Vec3::new(0.0, -5.0, 0.0), Vec3::Y);
         let t = s.intersect(&ray, f32::INFINITY).unwrap().t;
@@ -357,7 +406,11 @@ mod tests {
         let clip = SphereClip::from_pbrt(1.0, -0.6, 0.8, 250.0).unwrap();
         // Placed off the poles of the direction sphere's (z, φ) cells, whose slivers there a
         // cut edge could hide from the quadrature.
-        let s = Sphere { rotation: rot, clip, ..Sphere::new(Vec3::new(2.5, 0.3, 0.2), 1.0, false) };
+        let s = Sphere {
+            orientation: Orientation::rotation(rot),
+            clip,
+            ..Sphere::new(Vec3::new(2.5, 0.3, 0.2), 1.0, false)
+        };
         for (k, p_ref) in [Vec3::ZERO, Vec3::new(2.4, 0.3, 0.3)].into_iter().enumerate() {
             let pdf = |w: &Vec3| -> f64 {
                 // Both crossings of the whole sphere along w, each counted where it is kept.

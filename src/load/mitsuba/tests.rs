@@ -433,11 +433,51 @@ fn transforms_apply_in_document_order() {
         Geometry::Sphere(s) => assert!((s.center - Vec3::new(3.0, 0.0, 0.0)).length() < 1e-6),
         g => panic!("{g:?}"),
     }
-    // Non-uniform scale of a sphere is refused.
-    let e = err(&scene(
-        r#"<shape type="sphere"><transform name="to_world"><scale x="1" y="2" z="1"/></transform></shape>"#,
-    ));
-    assert!(e.contains("uniformly"), "{e}");
+}
+
+/// A sphere's `to_world` that scales unevenly (and shears, rotated before the scale) is taken
+/// as Mitsuba 3.9.1 takes it, with a warning: the sphere of centre `to_world(0)` and radius
+/// `|to_world · x̂|`, (u, v) and their derivatives from the whole map. The hit, (u, v), ∂p/∂u
+/// and ∂p/∂v are Mitsuba's for the same ray (its Python API, `scalar_rgb`). A mirroring
+/// `to_world` turns the normals inward, as in Mitsuba; pbrt-v4 (an ellipsoid) refuses it.
+#[test]
+fn spheres_take_uneven_scales_as_mitsuba_does() {
+    let file = load(&scene(
+        r#"<shape type="sphere"><transform name="to_world">
+             <rotate z="1" angle="30"/><scale x="2" y="0.5" z="1"/><translate x="0.3"/></transform></shape>"#,
+    ))
+    .unwrap();
+    assert_eq!(file.warnings.len(), 1, "{:?}", file.warnings);
+    assert!(file.warnings[0].contains("test.xml:7:22") && file.warnings[0].contains("= 1.75"), "{}", file.warnings[0]);
+    let Geometry::Sphere(s) = &file.scene.geometries()[0] else { panic!("a sphere") };
+    assert!((s.center - Vec3::new(0.3, 0.0, 0.0)).length() < 1e-6 && (s.radius - 1.75).abs() < 1e-6);
+    let d = Vec3::new(-0.1, -0.05, -1.0).normalize();
+    let si = file.scene.intersect(&Ray::new(Vec3::new(1.0, 0.7, 6.0), d)).expect("hits");
+    let close = |a: Vec3, b: [f32; 3], tol: f32| (a - Vec3::from_array(b)).abs().max_element() <= tol;
+    assert!(close(si.p, [0.566083, 0.483042, 1.66083], 1e-5), "{}", si.p);
+    // The interaction computes (u, v) and their derivatives only for what needs them.
+    let uv = s.uv_of_direction((si.p - s.center) / s.radius);
+    let (dpdu, dpdv) = s.dpduv(si.p, true);
+    assert!((uv - crate::math::Vec2::new(0.144886, 0.400962)).abs().max_element() < 1e-5, "{uv}");
+    assert!(close(dpdu, [-12.1402, 0.417963, 0.0], 1e-4), "{dpdu}");
+    assert!(close(dpdv, [1.42364, 2.58444, -3.06368], 1e-4), "{dpdv}");
+    assert!(si.ng.dot(-d) > 0.0, "outward normal");
+    // Mirrored: the normal points inward, as Mitsuba's (flipped twice: outward again).
+    for (mirror, flip, inward) in
+        [(r#"x="-1""#, "false", true), (r#"y="-1" z="-1""#, "false", false), (r#"z="-1""#, "true", false)]
+    {
+        let file = load(&scene(&format!(
+            r#"<shape type="sphere"><boolean name="flip_normals" value="{flip}"/>
+                 <transform name="to_world"><scale {mirror}/></transform></shape>"#
+        )))
+        .unwrap();
+        let si = file.scene.intersect(&Ray::new(Vec3::new(0.3, 0.2, 6.0), -Vec3::Z)).expect("hits");
+        assert_eq!(si.ng.z < 0.0, inward, "{mirror} flip {flip}: {}", si.ng);
+    }
+    // A flattened sphere is an error (the transform's already).
+    let flat = r#"<matrix value="0 0 0 0  0 1 0 0  0 0 1 0  0 0 0 1"/>"#;
+    let e = err(&scene(&format!(r#"<shape type="sphere"><transform name="to_world">{flat}</transform></shape>"#)));
+    assert!(e.contains("test.xml:7:") && e.contains("singular"), "{e}");
 }
 
 #[test]

@@ -240,6 +240,9 @@ fn errors_name_the_place_and_what_was_expected() {
     assert!(e.contains("index 3 is out of range"), "{e}");
     let e = err("Shape \"sphere\" \"string name\" \"unterminated\n");
     assert!(e.contains("unterminated string"), "{e}");
+    // An unevenly scaled sphere is an ellipsoid in pbrt-v4, which its sphere cannot be.
+    let e = err(&format!("{head}Scale 1 2 1\nShape \"sphere\"\n"));
+    assert!(e.contains("test.pbrt:4:1") && e.contains("ellipsoid"), "{e}");
     let e = err(&format!("{head}Include \"missing.pbrt\"\n"));
     assert!(e.contains("test.pbrt:3:1") && e.contains("missing.pbrt"), "{e}");
     // Every prefix of a valid file: an error or a scene, never a panic.
