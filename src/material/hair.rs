@@ -363,24 +363,20 @@ impl Hair {
 
     /// `f(wo, wi) |cos θᵢ|` = `Σ_p M_p A_p N_p` (local frame).
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
-        let o = self.outgoing(ctx, wo);
-        let (v, _) = Self::sums(&o, &self.lobes_at(&Lobes::new(self), &o, wi));
-        if v.is_finite() {
-            v
-        } else {
-            Rgb::ZERO
-        }
+        self.eval_pdf(ctx, wo, wi).0
     }
 
     /// The density of [`Hair::sample`] at `wi` (solid angle).
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
+        self.eval_pdf(ctx, wo, wi).1
+    }
+
+    /// [`Hair::eval`] and [`Hair::pdf`] at once: both are sums over the same terms `M_p` of
+    /// the same outgoing geometry, computed once.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         let o = self.outgoing(ctx, wo);
-        let (_, p) = Self::sums(&o, &self.lobes_at(&Lobes::new(self), &o, wi));
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        let (v, p) = Self::sums(&o, &self.lobes_at(&Lobes::new(self), &o, wi));
+        (if v.is_finite() { v } else { Rgb::ZERO }, if p.is_finite() { p } else { 0.0 })
     }
 
     /// A term chosen with `u1` by its mean attenuation, θᵢ from its `M_p` with `u`, φ from its

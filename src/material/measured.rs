@@ -278,12 +278,7 @@ impl Measured {
         }
         let (inc, _, u_m) = self.half_vector(wo, wi);
         let (s, _) = self.vndf.invert(u_m, &[inc.phi, inc.theta]);
-        let v = self.value(&inc, s, u_m);
-        if v.is_finite() {
-            v
-        } else {
-            Rgb::ZERO
-        }
+        finite_or_zero(self.value(&inc, s, u_m))
     }
 
     /// Density of [`Measured::sample`] choosing `wi` (per unit solid angle).
@@ -292,9 +287,26 @@ impl Measured {
             return 0.0;
         }
         let (inc, m, u_m) = self.half_vector(wo, wi);
-        let params = [inc.phi, inc.theta];
-        let (s, vndf_pdf) = self.vndf.invert(u_m, &params);
-        let lum_pdf = self.luminance.eval(s, &params);
+        let (s, vndf_pdf) = self.vndf.invert(u_m, &[inc.phi, inc.theta]);
+        self.density(&inc, m, u_m, s, vndf_pdf)
+    }
+
+    /// [`Measured::eval`] and [`Measured::pdf`] at once (the same bits), inverting the
+    /// visible-normal warp once.
+    pub fn eval_pdf(&self, _: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let (inc, m, u_m) = self.half_vector(wo, wi);
+        let (s, vndf_pdf) = self.vndf.invert(u_m, &[inc.phi, inc.theta]);
+        (finite_or_zero(self.value(&inc, s, u_m)), self.density(&inc, m, u_m, s, vndf_pdf))
+    }
+
+    /// The density of the half vector `m` (sample-square point `u_m`, luminance-square point
+    /// `s`, visible-normal density `vndf_pdf` there) as a reflected direction; 0 where it is
+    /// not finite and positive.
+    fn density(&self, inc: &Incident, m: Vec3, u_m: Vec2, s: Vec2, vndf_pdf: f32) -> f32 {
+        let lum_pdf = self.luminance.eval(s, &[inc.phi, inc.theta]);
         // x² + y², not 1 − z² (which loses everything near the pole), as Mitsuba's `Frame3f`.
         let sin_theta_m = (m.x * m.x + m.y * m.y).sqrt();
         let pdf = vndf_pdf * lum_pdf / Self::jacobian_factor(u_m.x, sin_theta_m, inc.wo.dot(m));
@@ -381,6 +393,16 @@ fn spectra_to_rgb(spectra: &[f32], shape: &[usize], lambdas: &[f32]) -> Result<V
         }
     }
     Ok(out)
+}
+
+/// `v`, or 0 where a channel is not finite.
+#[inline]
+fn finite_or_zero(v: Rgb) -> Rgb {
+    if v.is_finite() {
+        v
+    } else {
+        Rgb::ZERO
+    }
 }
 
 #[cfg(test)]

@@ -317,7 +317,8 @@ impl Bsdf {
 
     /// [`Bsdf::eval`] and [`Bsdf::pdf`] at once, the same bits as the two calls: where a light
     /// sample needs both (MIS), the microfacet BSDFs share their half vector, `D`, `G1(wo)`
-    /// and textured parameters between them (Mitsuba's `eval_pdf`).
+    /// and textured parameters between them, the hair fibre its longitudinal and azimuthal
+    /// terms, a measured BSDF its inverted warp (Mitsuba's `eval_pdf`).
     #[inline]
     pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         match self {
@@ -325,6 +326,10 @@ impl Bsdf {
             Bsdf::RoughDielectric(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::Principled(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::PrincipledThin(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::Hair(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::Measured(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::RoughPlastic(b) => b.eval_pdf(ctx, wo, wi),
+            Bsdf::PPlastic(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
                 let ((f0, p0), (f1, p1)) = (bsdfs[0].eval_pdf(ctx, wo, wi), bsdfs[1].eval_pdf(ctx, wo, wi));

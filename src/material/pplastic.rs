@@ -47,9 +47,34 @@ impl PPlastic {
             return Rgb::ZERO;
         }
         let h = (wo + wi).normalize();
-        let d = self.distribution.d(h);
+        self.value(ctx, wo, wi, h, self.distribution.d(h), self.distribution.g1(wo, h))
+    }
+
+    /// Density of [`PPlastic::sample`] choosing `wi`.
+    pub fn pdf(&self, _: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (wo + wi).normalize();
+        self.density(wo, wi, h, || self.distribution.pdf(wo, h))
+    }
+
+    /// [`PPlastic::eval`] and [`PPlastic::pdf`] at once (the same bits), sharing the half
+    /// vector, `D` and `G1(wo)`.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let h = (wo + wi).normalize();
+        let (d, g1_o) = (self.distribution.d(h), self.distribution.g1(wo, h));
+        let pdf = self.density(wo, wi, h, || self.distribution.pdf_given(wo, h, d, g1_o));
+        (self.value(ctx, wo, wi, h, d, g1_o), pdf)
+    }
+
+    /// `f cos θᵢ` at the half vector `h` with `d = D(h)`, `g1_o = G1(wo, h)`.
+    fn value(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3, h: Vec3, d: f32, g1_o: f32) -> Rgb {
         let (f, ..) = fresnel_dielectric(wo.dot(h), self.eta);
-        let g = self.distribution.g(wo, wi, h);
+        let g = g1_o * self.distribution.g1(wi, h);
         let specular = ctx.eval(&self.specular_reflectance) * (f * d * g / (4.0 * wo.z));
         let (r_o, ..) = fresnel_dielectric(wo.z, self.eta);
         let (r_i, ..) = fresnel_dielectric(wi.z, self.eta);
@@ -62,17 +87,9 @@ impl PPlastic {
         }
     }
 
-    /// Density of [`PPlastic::sample`] choosing `wi`.
-    pub fn pdf(&self, _: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let h = (wo + wi).normalize();
-        let specular = if wo.dot(h) <= 0.0 || wi.dot(h) <= 0.0 {
-            0.0
-        } else {
-            self.distribution.pdf(wo, h) / (4.0 * wi.dot(h))
-        };
+    /// The mixture density at `wi` from the half vector `h`, whose density is `pdf_h()`.
+    fn density(&self, wo: Vec3, wi: Vec3, h: Vec3, pdf_h: impl FnOnce() -> f32) -> f32 {
+        let specular = if wo.dot(h) <= 0.0 || wi.dot(h) <= 0.0 { 0.0 } else { pdf_h() / (4.0 * wi.dot(h)) };
         let p = self.specular_probability * specular + (1.0 - self.specular_probability) * wi.z * INV_PI;
         if p.is_finite() {
             p
@@ -91,11 +108,11 @@ impl PPlastic {
         } else {
             crate::sampling::sample_cosine_hemisphere_malley(u).value
         };
-        let pdf = self.pdf(ctx, wo, wi);
+        let (f, pdf) = self.eval_pdf(ctx, wo, wi);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval(ctx, wo, wi) / pdf;
+        let weight = f / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
     }
 

@@ -220,10 +220,7 @@ impl RoughPlastic {
             return Rgb::ZERO;
         }
         let m = (wo + wi).normalize();
-        let f = fresnel_dielectric(wo.dot(m), self.eta).0;
-        let spec = f * self.distribution.d(m) * self.distribution.g(wi, wo, m) / (4.0 * wo.z);
-        let diff = self.transmittance(wo.z) * self.transmittance(wi.z) * INV_PI / (self.eta * self.eta) * wi.z;
-        ctx.eval(&self.specular_reflectance) * spec + self.diffuse_albedo(ctx) * diff
+        self.value(ctx, wo, wi, m, self.distribution.d(m), self.distribution.g1(wo, m))
     }
 
     /// Density of [`RoughPlastic::sample`].
@@ -231,9 +228,33 @@ impl RoughPlastic {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
-        let (ps, pd) = self.probabilities(wo.z);
         let m = (wo + wi).normalize();
-        ps * self.distribution.pdf(wo, m) / (4.0 * wo.dot(m).abs()) + pd * wi.z * INV_PI
+        self.density(wo, wi, m, self.distribution.pdf(wo, m))
+    }
+
+    /// [`RoughPlastic::eval`] and [`RoughPlastic::pdf`] at once (the same bits), sharing the
+    /// half vector, `D` and `G1(wo)`.
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let m = (wo + wi).normalize();
+        let (d, g1_o) = (self.distribution.d(m), self.distribution.g1(wo, m));
+        (self.value(ctx, wo, wi, m, d, g1_o), self.density(wo, wi, m, self.distribution.pdf_given(wo, m, d, g1_o)))
+    }
+
+    /// `f cos θᵢ` at the half vector `m` with `d = D(m)`, `g1_o = G1(wo, m)`.
+    fn value(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3, m: Vec3, d: f32, g1_o: f32) -> Rgb {
+        let f = fresnel_dielectric(wo.dot(m), self.eta).0;
+        let spec = f * d * (self.distribution.g1(wi, m) * g1_o) / (4.0 * wo.z);
+        let diff = self.transmittance(wo.z) * self.transmittance(wi.z) * INV_PI / (self.eta * self.eta) * wi.z;
+        ctx.eval(&self.specular_reflectance) * spec + self.diffuse_albedo(ctx) * diff
+    }
+
+    /// The mixture density at `wi` from the half vector `m`'s density `pdf_m`.
+    fn density(&self, wo: Vec3, wi: Vec3, m: Vec3, pdf_m: f32) -> f32 {
+        let (ps, pd) = self.probabilities(wo.z);
+        ps * pdf_m / (4.0 * wo.dot(m).abs()) + pd * wi.z * INV_PI
     }
 
     /// Specular (visible normal, reflected) or diffuse (cosine) direction, weighted by the full
@@ -251,8 +272,8 @@ impl RoughPlastic {
         if wi.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
-        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: self.eval(ctx, wo, wi) / pdf, delta: false, eta: 1.0 })
+        let (f, pdf) = self.eval_pdf(ctx, wo, wi);
+        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: f / pdf, delta: false, eta: 1.0 })
     }
 }
 
