@@ -261,8 +261,9 @@ pub fn sample_direct(
     let Some((index, pmf)) = scene.sample_light(ctx, u) else { return Rgb::ZERO };
     let light = &scene.lights()[index as usize];
     let Some(ls) = light.sample_li(scene.geometries(), ctx.p, u2) else { return Rgb::ZERO };
-    // The density is computed with the value, before the shadow ray (Mitsuba's order too):
-    // sharing their terms costs less than the density alone after it, even where it is occluded.
+    // The density is computed with the value, before the shadow ray (Mitsuba traces that
+    // first): sharing their terms costs less than the density alone after the shadow ray, even
+    // where the light turns out occluded.
     let (f, pdf) = eval(ls.wi, !ls.delta && mis.needs_bsdf_pdf());
     if f == Rgb::ZERO {
         return Rgb::ZERO;
