@@ -170,25 +170,23 @@ fn sphere(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource)
     let axes = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)];
     let (c, r) = (t.apply_point(Vec3::ZERO), axes[0].length());
     let linear = crate::math::Mat3::from_cols(axes[0] / r, axes[1] / r, axes[2] / r);
-    let orientation = match similarity(&t) {
-        Some(_) => Orientation::rotation(linear),
-        None if pbrt || clip.is_partial() => {
-            return Err(o.error_at(
-                "to_world",
-                "this sphere's to_world scales unevenly or shears: an ellipsoid, which a pbrt-v4 or partial sphere cannot be",
-            ))
-        }
-        None => {
-            let stretched = (r > 0.0 && r.is_finite()).then(|| Orientation::stretched(linear)).flatten();
-            let orientation = stretched.ok_or_else(|| o.error_at("to_world", "the transform flattens the sphere"))?;
-            let at = o.get("to_world").map_or_else(|| o.loc.position(), |p| p.loc.position());
-            files.warn(format!(
-                "warning: {at}: {} 'sphere': to_world scales unevenly or shears; as Mitsuba does, the sphere keeps the centre \
-                 to_world(0) and the radius |to_world · (1, 0, 0)| = {r}",
-                o.tag
-            ));
-            orientation
-        }
+    let orientation = if is_similarity(&axes) {
+        Orientation::rotation(linear)
+    } else if pbrt || clip.is_partial() {
+        return Err(o.error_at(
+            "to_world",
+            "this sphere's to_world scales unevenly or shears: an ellipsoid, which a pbrt-v4 or partial sphere cannot be",
+        ));
+    } else {
+        let stretched = (r > 0.0 && r.is_finite()).then(|| Orientation::stretched(linear)).flatten();
+        let orientation = stretched.ok_or_else(|| o.error_at("to_world", "the transform flattens the sphere"))?;
+        let at = o.get("to_world").map_or_else(|| o.loc.position(), |p| p.loc.position());
+        files.warn(format!(
+            "warning: {at}: {} 'sphere': to_world scales unevenly or shears; as Mitsuba does, the sphere keeps the centre \
+             to_world(0) and the radius |to_world · (1, 0, 0)| = {r}",
+            o.tag
+        ));
+        orientation
     };
     // Mitsuba flips a mirrored sphere's normals (its decomposed scale is negative); the pbrt
     // loader keeps its spheres' normals outward.
@@ -224,15 +222,15 @@ fn sdfgrid(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource
     Ok(Geometry::SdfGrid(Box::new(sdf)))
 }
 
-/// Centre and radius of the unit sphere under `t`, if `t` is a similarity (uniform scale).
-fn similarity(t: &Transform) -> Option<(Vec3, f32)> {
-    let cols = [t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z)];
+/// Whether a linear map's columns `cols` are orthogonal and of one positive length (a
+/// similarity: uniform scale, rotation, possibly a reflection), to a relative 10⁻⁴.
+fn is_similarity(cols: &[Vec3; 3]) -> bool {
     let r = cols[0].length();
     let uniform = cols.iter().all(|c| (c.length() - r).abs() <= 1e-4 * r);
     let orthogonal = (cols[0].dot(cols[1])).abs() <= 1e-4 * r * r
         && (cols[0].dot(cols[2])).abs() <= 1e-4 * r * r
         && (cols[1].dot(cols[2])).abs() <= 1e-4 * r * r;
-    (uniform && orthogonal && r > 0.0).then(|| (t.apply_point(Vec3::ZERO), r))
+    uniform && orthogonal && r > 0.0
 }
 
 /// neumann's `curve`: pbrt-v4's curves as a scene format decoded them (`filename` names them

@@ -207,7 +207,8 @@ impl Sphere {
     /// in the object's frame. A partial sphere stretches them over what exists, as pbrt-v4 does:
     /// `u = φ / φ_max`, `v = (θ − θ(z_max)) / (θ(z_min) − θ(z_max))`. A stretched orientation
     /// maps `v` to a direction that is not a unit one: θ is then Mitsuba's `unit_angle_z` of it
-    /// (`2 asin(|(x, y, |z| − 1)| / 2)`, from the pole of z's sign), as Mitsuba computes it.
+    /// (`2 asin(|(x, y, |z| − 1)| / 2)`, from the pole of z's sign), as Mitsuba computes it,
+    /// the arcsine's argument clamped to 1 (where Mitsuba's θ is NaN).
     #[inline]
     pub fn uv_of_direction(&self, v: Vec3) -> Vec2 {
         let local = self.orientation.to_object * v;
