@@ -1,9 +1,13 @@
 //! Cylinders (Mitsuba's `cylinder`): an open tube without caps, the image of the unit cylinder
-//! `{x² + y² = 1, 0 ≤ z ≤ 1}` under a transform that scales x and y uniformly (radius r), z by
-//! the length L, and may rotate and translate. Normals point outward (inward with
-//! `flip_normals`). Area `2π r L`; area sampling is uniform in `(φ, z)`, which is uniform in
-//! area because the transform is a similarity across the axis. A partial cylinder (pbrt-v4's
-//! `phimax`) keeps the azimuths `φ = atan2(y, x) ∈ [0, φ_max]` of the local frame.
+//! `{x² + y² = 1, 0 ≤ z ≤ 1}` under an affine transform, intersected in the unit cylinder's
+//! frame. Normals point outward (inward with `flip_normals`). A transform that scales x and y
+//! uniformly (radius r) and keeps them perpendicular to the axis (length L) makes a round
+//! cylinder of area `2π r L`, whose area sampling, uniform in `(φ, z)`, is uniform in area. Any
+//! other makes an elliptic (or sheared) cylinder, as Mitsuba 3.9 and pbrt-v4 render it: its
+//! area has no closed form (Mitsuba's `2π |to_world · x̂| |to_world · ẑ|` is kept for the
+//! record) and uniform `(φ, z)` is not uniform in area, so it cannot emit
+//! ([`Cylinder::is_elliptic`]). A partial cylinder (pbrt-v4's `phimax`) keeps the azimuths
+//! `φ = atan2(y, x) ∈ [0, φ_max]` of the local frame.
 
 use super::sphere::SurfacePoint;
 use crate::math::float::gamma;
@@ -18,12 +22,13 @@ pub struct Cylinder {
     area: f32,
     /// Largest azimuth kept, radians in `(0, 2π]`.
     phi_max: f32,
+    /// Whether the transform is not a similarity across the axis.
+    elliptic: bool,
 }
 
 impl Cylinder {
     /// The cylinder from `p0` to `p1` of radius `radius`, then placed by `to_world` (Mitsuba's
-    /// parameters). `None` if degenerate or if the transform does not scale uniformly across the
-    /// axis (an elliptic cylinder, which Mitsuba does not allow either).
+    /// parameters; any invertible affine map). `None` if degenerate.
     pub fn new(p0: Vec3, p1: Vec3, radius: f32, to_world: Transform, flip: bool) -> Option<Cylinder> {
         let axis = p1 - p0;
         let len = axis.length();
@@ -41,13 +46,10 @@ impl Cylinder {
         let (ex, ey, ez) = (t.apply_vector(Vec3::X), t.apply_vector(Vec3::Y), t.apply_vector(Vec3::Z));
         let r = ex.length();
         let tol = 1e-4 * r;
-        if (ey.length() - r).abs() > tol
+        let elliptic = (ey.length() - r).abs() > tol
             || ex.dot(ey).abs() > tol * r
             || ex.dot(ez).abs() > tol * ez.length()
-            || ey.dot(ez).abs() > tol * ez.length()
-        {
-            return None;
-        }
+            || ey.dot(ez).abs() > tol * ez.length();
         let area = 2.0 * PI * r * ez.length();
         (area > 0.0 && area.is_finite()).then(|| Cylinder {
             to_world: t,
@@ -55,7 +57,14 @@ impl Cylinder {
             flip,
             area,
             phi_max: 2.0 * PI,
+            elliptic,
         })
+    }
+
+    /// Whether the transform scales unevenly across the axis or tilts it (an elliptic or sheared
+    /// cylinder, which cannot emit: see the module notes).
+    pub fn is_elliptic(&self) -> bool {
+        self.elliptic
     }
 
     /// The same cylinder keeping the azimuths up to `phi_max` radians (pbrt-v4's `phimax`; the
@@ -188,9 +197,11 @@ mod tests {
         assert!(c.intersect(&Ray::new(Vec3::new(1.0, -1.0, 0.0), Vec3::Y), f32::INFINITY).is_none());
         let b = c.bounds();
         assert!(b.min.x <= 0.5 + 1e-5 && b.max.x >= 1.5 - 1e-5 && b.min.y <= 1e-5 && b.max.y >= 2.0 - 1e-5);
-        // Non-uniform scale across the axis is refused; flip turns the normal inward.
-        assert!(Cylinder::new(Vec3::ZERO, Vec3::Z, 1.0, Transform::scale(Vec3::new(1.0, 2.0, 1.0)).unwrap(), false)
-            .is_none());
+        // Non-uniform scale across the axis makes an elliptic cylinder; flip turns the normal inward.
+        let elliptic =
+            Cylinder::new(Vec3::ZERO, Vec3::Z, 1.0, Transform::scale(Vec3::new(1.0, 2.0, 1.0)).unwrap(), false)
+                .unwrap();
+        assert!(elliptic.is_elliptic() && !c.is_elliptic());
         // pbrt-v4's phimax: along +z, φ = 0 is +x; a quarter tube keeps only x, y ≥ 0.
         let quarter =
             Cylinder::new(Vec3::ZERO, Vec3::Z, 1.0, Transform::IDENTITY, false).unwrap().partial(PI / 2.0).unwrap();

@@ -194,17 +194,23 @@ fn sphere(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource)
 }
 
 /// Mitsuba's `cylinder`: from `p0` (origin) to `p1` (+z), `radius` (1), open. neumann's
-/// `phimax` (degrees) makes pbrt-v4's partial cylinder.
-fn cylinder(o: &Obj, to_world: &Transform, flip: bool, _: &mut dyn MeshSource) -> Result<Geometry> {
+/// `phimax` (degrees) makes pbrt-v4's partial cylinder. A `to_world` that scales unevenly
+/// across the axis or shears makes an elliptic cylinder, as Mitsuba 3.9 renders it (with its
+/// warning) and pbrt-v4 too; it cannot emit (see [`Cylinder`]).
+fn cylinder(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource) -> Result<Geometry> {
     let p0 = o.point_opt("p0")?.unwrap_or(Vec3::ZERO);
     let p1 = o.point_opt("p1")?.unwrap_or(Vec3::Z);
     let radius = o.float_checked("radius", 1.0, |r| r > 0.0 && r.is_finite(), "positive")?;
-    let c = Cylinder::new(p0, p1, radius, *to_world, flip).ok_or_else(|| {
-        o.error_at(
-            "to_world",
-            "degenerate cylinder (p0 = p1), or a to_world that does not scale uniformly across the axis",
-        )
-    })?;
+    let c = Cylinder::new(p0, p1, radius, *to_world, flip)
+        .ok_or_else(|| o.error_at("p1", "degenerate cylinder (p0 = p1, or a transform that flattens it)"))?;
+    if c.is_elliptic() {
+        let at = o.get("to_world").map_or_else(|| o.loc.position(), |p| p.loc.position());
+        files.warn(format!(
+            "warning: {at}: {} 'cylinder': to_world scales unevenly across the axis or shears: an elliptic cylinder, as \
+             Mitsuba and pbrt-v4 render it",
+            o.tag
+        ));
+    }
     Ok(Geometry::Cylinder(c.partial(phi_max(o)?).expect("phimax checked positive")))
 }
 

@@ -386,6 +386,12 @@ impl Builder {
                 }
                 Geometry::Curves(_) => Some(("curves".to_string(), "pbrt-v4: they have")),
                 Geometry::Ellipsoids(_) => Some(("ellipsoids".to_string(), "Mitsuba: they have")),
+                Geometry::Cylinder(c) if c.is_elliptic() => return Err(e.error(format!(
+                    "an elliptic cylinder (a to_world that scales unevenly across its axis or shears) cannot be {}: \
+                         its area has no closed form and uniform (φ, z) points are not uniform in area (Mitsuba \
+                         samples it as if they were, a biased estimate)",
+                    emitter_name(&e.ty)
+                ))),
                 // Mitsuba's ellipsoid shells skip the mesh's area table.
                 Geometry::Mesh(_) if o.ty == "ellipsoidsmesh" => {
                     Some(("an ellipsoidsmesh".to_string(), "Mitsuba: its shells have"))

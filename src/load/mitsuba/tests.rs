@@ -480,6 +480,43 @@ fn spheres_take_uneven_scales_as_mitsuba_does() {
     assert!(e.contains("test.xml:7:") && e.contains("singular"), "{e}");
 }
 
+/// A cylinder's `to_world` that scales unevenly across the axis, or shears, makes an elliptic
+/// cylinder, as Mitsuba 3.9.1 renders it (with a warning): the hit, normal and (u, v) are
+/// Mitsuba's for the same ray (its Python API, `scalar_rgb`). It cannot emit.
+#[test]
+fn cylinders_take_uneven_scales_as_mitsuba_does() {
+    let d = Vec3::new(0.0, -1.0, 0.05).normalize();
+    for (transform, p, n, uv) in [
+        (r#"<scale x="1" y="2" z="1"/>"#, [0.1, 0.979796, 0.50101], [0.377964, 0.92582, 0.0], [0.217953, 0.50101]),
+        (
+            r#"<rotate z="1" angle="30"/><scale x="2" y="0.5" z="1.5"/>"#,
+            [0.1, 0.248747, 0.537563],
+            [0.025118, 0.999684, 0.0],
+            [0.150725, 0.358375],
+        ),
+    ] {
+        let file = load(&scene(&format!(
+            r#"<shape type="cylinder"><float name="radius" value="0.5"/><transform name="to_world">{transform}</transform></shape>"#
+        )))
+        .unwrap();
+        assert!(file.warnings.len() == 1 && file.warnings[0].contains("elliptic cylinder"), "{:?}", file.warnings);
+        let Geometry::Cylinder(c) = &file.scene.geometries()[0] else { panic!("a cylinder") };
+        let (t, local) = c.intersect(&Ray::new(Vec3::new(0.1, 5.0, 0.3), d), f32::INFINITY).expect("hits");
+        let (sp, got_uv) = c.surface(local);
+        let close = |a: Vec3, b: [f32; 3]| (a - Vec3::from_array(b)).abs().max_element() <= 2e-5;
+        assert!(close(sp.p, p) && close(Vec3::new(0.1, 5.0, 0.3) + t * d, p), "{transform}: {}", sp.p);
+        assert!(close(sp.n, n), "{transform}: {}", sp.n);
+        assert!((got_uv - crate::math::Vec2::from_array(uv)).abs().max_element() < 2e-5, "{transform}: {got_uv}");
+    }
+    let e = err(&scene(
+        r#"<shape type="cylinder"><emitter type="area"/><transform name="to_world"><scale y="2"/></transform></shape>"#,
+    ));
+    assert!(
+        e.contains("test.xml:7:") && e.contains("an elliptic cylinder") && e.contains("cannot be an area emitter"),
+        "{e}"
+    );
+}
+
 #[test]
 fn defaults_references_spectra_and_plugins() {
     let text = r#"<scene version="2.1.0">
