@@ -189,7 +189,7 @@ fn sphere(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource)
         orientation
     };
     // Mitsuba flips a mirrored sphere's normals (its decomposed scale is negative); the pbrt
-    // loader keeps its spheres' normals outward.
+    // loader gives pbrt-v4's flip (of every quadric) as `flip_normals`.
     Ok(Geometry::Sphere(Sphere { orientation, clip, ..Sphere::new(c, r, flip ^ (mirrors && !pbrt)) }))
 }
 

@@ -215,6 +215,32 @@ Shape "cylinder" "float radius" 1 "float zmin" 1 "float zmax" -1 "float phimax" 
     assert!(e.contains("test.pbrt:3") && e.contains("leave nothing"), "{e}");
 }
 
+/// pbrt-v4 turns a quadric's normal over where its transform swaps handedness (and back with
+/// ReverseOrientation); a triangle keeps the side its winding gives in object space.
+#[test]
+fn mirrored_quadrics_face_inward_as_in_pbrt() {
+    for (reverse, inward) in [("", true), ("ReverseOrientation\n", false)] {
+        let f = load(&format!(
+            "Camera \"perspective\"\nWorldBegin\n{reverse}Scale -1 1 1\nShape \"sphere\"\n\
+             Translate 0 5 0\nShape \"disk\"\nTranslate 0 5 0\nShape \"cylinder\"\nTranslate 0 5 0\n\
+             Shape \"trianglemesh\" \"point3 P\" [ -1 -1 0  1 -1 0  0 1 0 ] \"integer indices\" [ 0 1 2 ]\n"
+        ))
+        .unwrap();
+        // Rays from +z (x mirrored: the world's points are the object's with x negated).
+        let n = |x: f32, y: f32, z: f32| {
+            f.scene.intersect(&crate::math::Ray::new(Vec3::new(x, y, z), -Vec3::Z)).unwrap().ng
+        };
+        assert_eq!(n(0.1, 0.1, 5.0).z < 0.0, inward, "sphere, {reverse:?}");
+        assert_eq!(n(0.1, 5.1, 5.0).z < 0.0, inward, "disk, {reverse:?}");
+        // The cylinder along z: hit from the side.
+        let side = f.scene.intersect(&crate::math::Ray::new(Vec3::new(5.0, 10.0, 0.5), -Vec3::X)).unwrap();
+        assert_eq!(side.ng.x < 0.0, inward, "cylinder, {reverse:?}");
+        // The triangle (winding counter-clockwise seen from +z in object space): +z, mirrored
+        // or not, and -z only with ReverseOrientation.
+        assert_eq!(n(0.0, 14.9, 5.0).z < 0.0, !inward, "triangle, {reverse:?}");
+    }
+}
+
 #[test]
 fn errors_name_the_place_and_what_was_expected() {
     let head = "Camera \"perspective\"\nWorldBegin\n";

@@ -1190,7 +1190,11 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
     if let Some(t) = to_world {
         set(&mut o, "to_world", Value::Transform(t), &ps.loc);
     }
-    if p.gs.reverse {
+    // pbrt-v4 turns a quadric's normal over where its transform swaps handedness (`flipNormal =
+    // reverseOrientation ^ transformSwapsHandedness`). A triangle mesh keeps the side its
+    // winding gives in object space, as neumann's mesh transform does (it reverses the winding).
+    let swaps = matches!(ty, "sphere" | "disk" | "cylinder") && to_world.is_some_and(|t| t.swaps_handedness());
+    if p.gs.reverse ^ swaps {
         set(&mut o, "flip_normals", Value::Bool(true), &ps.loc);
     }
     for (side, name) in [("interior", p.gs.inside.clone()), ("exterior", p.gs.outside.clone())] {
