@@ -244,6 +244,13 @@ impl Parser {
                     self.place(file, child, obj, nested, loc, top)?;
                 }
                 t if PROPERTY_TAGS.contains(&t) => {
+                    let allowed: &[&str] = match t {
+                        "point" | "vector" => &["name", "value", "x", "y", "z"],
+                        "spectrum" => &["name", "value", "filename", "type", "id"],
+                        "transform" => &["name"],
+                        _ => &["name", "value"],
+                    };
+                    self.check_attributes(file, child, allowed)?;
                     // Named properties; a <spectrum type="…"> plugin reduces to a value here.
                     let name = self.upgraded_name(obj, self.attr(file, child, "name")?);
                     let value = self.property(file, child)?;
@@ -466,16 +473,7 @@ impl Parser {
                 }
             }
             "point" | "vector" => {
-                let p = if node.attribute("value").is_some() {
-                    let v = value()?;
-                    match parse_list(&v).as_deref() {
-                        Some([x, y, z]) => Vec3::new(*x as f32, *y as f32, *z as f32),
-                        Some([x]) => Vec3::splat(*x as f32),
-                        _ => return Err(bad("three numbers", &v)),
-                    }
-                } else {
-                    self.xyz(file, node, 0.0)?
-                };
+                let p = self.xyz_or_value(file, node, None)?;
                 if tag == "point" {
                     Value::Point(p)
                 } else {
@@ -619,6 +617,63 @@ impl Parser {
         Ok(Vec3::from_array(v))
     }
 
+    /// Mitsuba's `x`/`y`/`z` or `value` (one number for all three, or three) of a `<point>`,
+    /// `<vector>`, `<translate>`, `<rotate>` or `<scale>`: never both (Mitsuba refuses the
+    /// mix); components left out are `default`, or an error where `default` is `None` (Mitsuba
+    /// requires all three on points and vectors).
+    fn xyz_or_value(&self, file: &Arc<SourceFile>, node: roxmltree::Node, default: Option<f32>) -> Result<Vec3> {
+        let tag = node.tag_name().name();
+        let at = |offset: usize| Loc { file: file.clone(), offset };
+        if node.attribute("value").is_some() {
+            if let Some(a) = ["x", "y", "z"].into_iter().find_map(|k| node.attribute_node(k)) {
+                return Err(SceneError::at(
+                    &at(a.range().start),
+                    format!("<{tag}> cannot mix \"value\" and \"x\"/\"y\"/\"z\" attributes (as in Mitsuba)"),
+                ));
+            }
+            let v = self.attr(file, node, "value")?;
+            let offset = node.attribute_node("value").map_or(0, |a| a.range_value().start);
+            return match parse_list(&v).as_deref() {
+                Some([x]) => Ok(Vec3::splat(*x as f32)),
+                Some([x, y, z]) => Ok(Vec3::new(*x as f32, *y as f32, *z as f32)),
+                _ => {
+                    Err(SceneError::at(&at(offset), format!("<{tag} value> expects one or three numbers, found {v:?}")))
+                }
+            };
+        }
+        if default.is_none() {
+            if let Some(k) = ["x", "y", "z"].into_iter().find(|k| node.attribute(*k).is_none()) {
+                return Err(SceneError::at(
+                    &at(node.range().start),
+                    format!("<{tag}> needs \"{k}\" (with \"x\", \"y\", \"z\" all three are required, as in Mitsuba), or \"value\""),
+                ));
+            }
+        }
+        self.xyz(file, node, default.unwrap_or(0.0))
+    }
+
+    /// Refuses attributes of `node` outside `allowed`, as Mitsuba does (a misspelt one would
+    /// otherwise be dropped without a word).
+    fn check_attributes(&self, file: &Arc<SourceFile>, node: roxmltree::Node, allowed: &[&str]) -> Result<()> {
+        match node.attributes().find(|a| !allowed.contains(&a.name())) {
+            None => Ok(()),
+            Some(a) => {
+                let hint = nearest(a.name(), allowed.iter().copied())
+                    .map(|n| format!("; did you mean \"{n}\"?"))
+                    .unwrap_or_default();
+                Err(SceneError::at(
+                    &Loc { file: file.clone(), offset: a.range().start },
+                    format!(
+                        "unexpected attribute \"{}\" in <{}> (its attributes: {}){hint}",
+                        a.name(),
+                        node.tag_name().name(),
+                        allowed.join(", ")
+                    ),
+                ))
+            }
+        }
+    }
+
     fn vec3_attr(&self, file: &Arc<SourceFile>, node: roxmltree::Node, name: &str) -> Result<Vec3> {
         let s = self.attr(file, node, name)?;
         let offset = node.attribute_node(name).map_or(0, |a| a.range_value().start);
@@ -637,35 +692,25 @@ impl Parser {
         for op in node.children().filter(|c| c.is_element()) {
             let loc = Loc { file: file.clone(), offset: op.range().start };
             let invalid = |what: &str| SceneError::at(&loc, what.to_string());
+            let allowed: &[&str] = match op.tag_name().name() {
+                "translate" | "scale" => &["x", "y", "z", "value"],
+                "rotate" => &["x", "y", "z", "value", "angle"],
+                "matrix" => &["value"],
+                "lookat" => &["origin", "target", "up"],
+                _ => &[],
+            };
+            self.check_attributes(file, op, allowed)?;
             let step = match op.tag_name().name() {
-                "translate" => Transform::translate(if op.attribute("value").is_some() {
-                    self.vec3_attr(file, op, "value")?
-                } else {
-                    self.xyz(file, op, 0.0)?
-                }),
+                "translate" => Transform::translate(self.xyz_or_value(file, op, Some(0.0))?),
                 "scale" => {
-                    let s = if op.attribute("value").is_some() {
-                        let v = self.attr(file, op, "value")?;
-                        match parse_list(&v).as_deref() {
-                            Some([s]) => Vec3::splat(*s as f32),
-                            Some([x, y, z]) => Vec3::new(*x as f32, *y as f32, *z as f32),
-                            _ => {
-                                return Err(invalid(&format!(
-                                    "<scale value> expects one or three numbers, found {v:?}"
-                                )))
-                            }
-                        }
-                    } else {
-                        self.xyz(file, op, 1.0)?
-                    };
+                    let s = self.xyz_or_value(file, op, Some(1.0))?;
                     Transform::scale(s).ok_or_else(|| invalid("scale factors must be non-zero"))?
                 }
                 "rotate" => {
-                    let axis = if op.attribute("value").is_some() {
-                        self.vec3_attr(file, op, "value")?
-                    } else {
-                        self.xyz(file, op, 0.0)?
-                    };
+                    let axis = self.xyz_or_value(file, op, Some(0.0))?;
+                    if axis == Vec3::ZERO {
+                        return Err(invalid("the rotation axis is zero (give x, y, z or value)"));
+                    }
                     let angle = self.attr(file, op, "angle")?;
                     let angle = parse_f64(&angle)
                         .ok_or_else(|| invalid(&format!("expected a number of degrees for angle, found {angle:?}")))?;

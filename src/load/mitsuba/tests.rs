@@ -955,7 +955,7 @@ fn errors_name_the_place_and_the_expectation() {
         (
             r#"<shape type="sphere"><transform name="to_world"><rotate angle="90"/></transform></shape>"#,
             "test.xml:7:",
-            "the rotation is singular",
+            "the rotation axis is zero",
         ),
         (r#"<medium type="homogeneous"><float name="albedo" value="-1"/></medium>"#, "test.xml:7:", "albedo"),
         (
@@ -2127,8 +2127,9 @@ fn measured_bsdf_reads_its_tensor_file() {
 }
 
 /// Mitsuba 3's `<rotate>` does not normalize its axis: `x="1" y="1"` at 30° is the matrix
-/// Mitsuba 3.9.1 prints for it (a rotation that also stretches); a zero axis is cos θ times the
-/// identity, singular at 90°.
+/// Mitsuba 3.9.1 prints for it (a rotation that also stretches); a zero axis is an error, as
+/// in Mitsuba 3.9.1 ("rotation axis cannot be zero"); one number as `value` is that number on
+/// all three axes (Mitsuba's `value` expansion), and it cannot be mixed with `x`, `y`, `z`.
 #[test]
 fn rotate_keeps_the_axis_as_written() {
     let f = load(&scene(r#"<shape type="cube"><transform name="to_world"><rotate x="1" y="1" angle="30"/></transform></shape>"#)).unwrap();
@@ -2137,9 +2138,45 @@ fn rotate_keeps_the_axis_as_written() {
     // corner (1, 1, 1) goes to the rows' sums.
     let corner = m.positions.iter().copied().find(|p| (*p - Vec3::new(1.633975, 0.633975, 0.866025)).length() < 1e-5);
     assert!(corner.is_some(), "{:?}", m.positions);
-    let f = load(&scene(r#"<shape type="sphere"><transform name="to_world"><rotate angle="60"/></transform></shape>"#)).unwrap();
+    let e = err(&scene(r#"<shape type="sphere"><transform name="to_world"><rotate angle="60"/></transform></shape>"#));
+    assert!(e.contains("test.xml:7:") && e.contains("the rotation axis is zero"), "{e}");
+    let one = r#"<rotate value="1" angle="30"/>"#;
+    let f = load(&scene(&format!(r#"<shape type="cube"><transform name="to_world">{one}</transform></shape>"#))).unwrap();
+    let written = r#"<rotate x="1" y="1" z="1" angle="30"/>"#;
+    let g = load(&scene(&format!(r#"<shape type="cube"><transform name="to_world">{written}</transform></shape>"#))).unwrap();
+    let (Geometry::Mesh(a), Geometry::Mesh(b)) = (&f.scene.geometries()[0], &g.scene.geometries()[0]) else {
+        panic!("cubes are meshes")
+    };
+    assert_eq!(a.positions, b.positions);
+}
+
+/// Mitsuba 3.9.1's attribute rules (its parser's `check_attributes` and `value` expansion):
+/// an attribute an element does not take is a located error, `value` and `x`/`y`/`z` never
+/// mix, a `<point>` or `<vector>` needs all of `x`, `y`, `z` (or `value`), and one number as a
+/// `<translate>`'s `value` moves along all three axes. Each verdict is Mitsuba 3.9.1's on the
+/// same element.
+#[test]
+fn attributes_follow_mitsubas_rules() {
+    let sphere = |inner: &str| format!(r#"<shape type="sphere">{inner}</shape>"#);
+    let to_world = |op: &str| sphere(&format!(r#"<transform name="to_world">{op}</transform>"#));
+    for (body, expectation) in [
+        (to_world(r#"<scale x="2" foo="1"/>"#), r#"unexpected attribute "foo" in <scale>"#),
+        (sphere(r#"<float name="radius" value="2" foo="x"/>"#), r#"unexpected attribute "foo" in <float>"#),
+        (to_world(r#"<scale y="-1" value="0.7"/>"#), "cannot mix"),
+        (to_world(r#"<translate value="1" z="2"/>"#), "cannot mix"),
+        (sphere(r#"<point name="center" x="1"/>"#), r#"<point> needs "y""#),
+        (sphere(r#"<point name="center" value="1" x="1"/>"#), "cannot mix"),
+        (to_world(r#"<lookat origin="0,0,1" target="0,0,0" upp="0,1,0"/>"#), r#"did you mean "up"?"#),
+    ] {
+        let e = err(&scene(&body));
+        assert!(e.contains("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+    let f = load(&scene(&to_world(r#"<translate value="1"/>"#))).unwrap();
     let Geometry::Sphere(s) = &f.scene.geometries()[0] else { panic!("a sphere") };
-    assert!((s.radius - 0.5).abs() < 1e-6, "{}", s.radius);
+    assert_eq!(s.center, Vec3::ONE);
+    let f = load(&scene(&sphere(r#"<point name="center" value="2"/>"#))).unwrap();
+    let Geometry::Sphere(s) = &f.scene.geometries()[0] else { panic!("a sphere") };
+    assert_eq!(s.center, Vec3::splat(2.0));
 }
 
 /// Mitsuba 3.9.1's `ellipsoids` and `ellipsoidsmesh` on the same 3D-Gaussian file, placed by a
