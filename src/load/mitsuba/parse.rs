@@ -122,6 +122,7 @@ impl Parser {
                 format!("expected a <scene> root element, found <{}>", root.tag_name().name()),
             ));
         }
+        self.check_attributes(&file, root, &["version", "type", "id", "name"])?;
         let legacy = match root.attribute("version") {
             None => return Err(SceneError::at(&loc, "<scene> needs a version attribute, e.g. version=\"3.0.0\"")),
             Some(v) => match parse_version(v) {
@@ -329,6 +330,7 @@ impl Parser {
     fn object(&mut self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Obj> {
         let loc = Loc { file: file.clone(), offset: node.range().start };
         let tag = node.tag_name().name().to_string();
+        self.check_attributes(file, node, &["type", "id", "name"])?;
         let ty = match node.attribute("type") {
             Some(_) => self.attr(file, node, "type")?,
             None => return Err(SceneError::at(&loc, format!("<{tag}> needs a type attribute"))),

@@ -2167,6 +2167,7 @@ fn attributes_follow_mitsubas_rules() {
         (sphere(r#"<point name="center" x="1"/>"#), r#"<point> needs "y""#),
         (sphere(r#"<point name="center" value="1" x="1"/>"#), "cannot mix"),
         (to_world(r#"<lookat origin="0,0,1" target="0,0,0" upp="0,1,0"/>"#), r#"did you mean "up"?"#),
+        (r#"<shape type="sphere" idd="a"/>"#.to_string(), r#"unexpected attribute "idd" in <shape>"#),
     ] {
         let e = err(&scene(&body));
         assert!(e.contains("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
