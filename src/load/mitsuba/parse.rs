@@ -168,6 +168,7 @@ impl Parser {
             let tag = child.tag_name().name();
             match tag {
                 "default" if top => {
+                    self.check_attributes(file, child, &["name", "value"])?;
                     let name = self.attr(file, child, "name")?;
                     let value = self.raw_attr(file, child, "value")?;
                     if !self.overridden.contains(&name) {
@@ -225,6 +226,7 @@ impl Parser {
                     }
                 }
                 "ref" => {
+                    self.check_attributes(file, child, &["id", "name"])?;
                     let id = self.attr(file, child, "id")?;
                     // An id declared later (in this file, an included one or the file that
                     // includes this one) is bound once the whole scene is read.
@@ -442,9 +444,10 @@ impl Parser {
             }
             "boolean" => {
                 let v = value()?;
+                // As Mitsuba 3.9.1: "true" or "false" in any case, not 1 or 0.
                 Value::Bool(match v.trim().to_ascii_lowercase().as_str() {
-                    "true" | "1" => true,
-                    "false" | "0" => false,
+                    "true" => true,
+                    "false" => false,
                     _ => return Err(bad("true or false", &v)),
                 })
             }

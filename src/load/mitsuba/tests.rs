@@ -2168,6 +2168,12 @@ fn attributes_follow_mitsubas_rules() {
         (sphere(r#"<point name="center" value="1" x="1"/>"#), "cannot mix"),
         (to_world(r#"<lookat origin="0,0,1" target="0,0,0" upp="0,1,0"/>"#), r#"did you mean "up"?"#),
         (r#"<shape type="sphere" idd="a"/>"#.to_string(), r#"unexpected attribute "idd" in <shape>"#),
+        (
+            r#"<bsdf type="diffuse" id="b"/><shape type="sphere"><ref id="b" foo="1"/></shape>"#.to_string(),
+            r#"unexpected attribute "foo" in <ref>"#,
+        ),
+        (sphere(r#"<boolean name="flip_normals" value="1"/>"#), "expected true or false"),
+        (r#"<default name="r" value="1" foo="2"/>"#.to_string(), r#"unexpected attribute "foo" in <default>"#),
     ] {
         let e = err(&scene(&body));
         assert!(e.contains("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
