@@ -697,14 +697,17 @@ impl Parser {
         for op in node.children().filter(|c| c.is_element()) {
             let loc = Loc { file: file.clone(), offset: op.range().start };
             let invalid = |what: &str| SceneError::at(&loc, what.to_string());
-            let allowed: &[&str] = match op.tag_name().name() {
-                "translate" | "scale" => &["x", "y", "z", "value"],
-                "rotate" => &["x", "y", "z", "value", "angle"],
-                "matrix" => &["value"],
-                "lookat" => &["origin", "target", "up"],
-                _ => &[],
+            // An unknown operation is refused below, by name (not by its attributes).
+            let allowed: Option<&[&str]> = match op.tag_name().name() {
+                "translate" | "scale" => Some(&["x", "y", "z", "value"]),
+                "rotate" => Some(&["x", "y", "z", "value", "angle"]),
+                "matrix" => Some(&["value"]),
+                "lookat" => Some(&["origin", "target", "up"]),
+                _ => None,
             };
-            self.check_attributes(file, op, allowed)?;
+            if let Some(allowed) = allowed {
+                self.check_attributes(file, op, allowed)?;
+            }
             let step = match op.tag_name().name() {
                 "translate" => Transform::translate(self.xyz_or_value(file, op, Some(0.0))?),
                 "scale" => {

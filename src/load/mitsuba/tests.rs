@@ -2178,6 +2178,9 @@ fn attributes_follow_mitsubas_rules() {
         let e = err(&scene(&body));
         assert!(e.contains("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
     }
+    // A misspelt operation is named as such, not by its attributes.
+    let e = err(&scene(&to_world(r#"<translat x="1"/>"#)));
+    assert!(e.contains("unknown transform operation <translat>"), "{e}");
     let f = load(&scene(&to_world(r#"<translate value="1"/>"#))).unwrap();
     let Geometry::Sphere(s) = &f.scene.geometries()[0] else { panic!("a sphere") };
     assert_eq!(s.center, Vec3::ONE);
