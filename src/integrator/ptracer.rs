@@ -4,8 +4,10 @@
 //! (cosine-weighted for area lights, [`Light::sample_le`]), carrying power
 //! `β₀ = Lₑ |cos θ| / (p_light p_A p_ω)`. Every vertex `y` it reaches is connected to the camera
 //! ([`crate::camera::Camera::sample_wi`]) and adds `β f(y) |cos θ_y| Wₑ G / p` to the pixel it projects to
-//! (splatting); the path then continues by BSDF sampling with Russian roulette. The emitter
-//! itself is connected too (what the camera sees directly), unless `hide_emitters`.
+//! (splatting); the path then continues by BSDF sampling with Russian roulette. An area
+//! emitter's own point is connected too (what the camera sees directly), unless
+//! `hide_emitters`; as in Mitsuba's `ptracer`, delta lights (point, spot, projector,
+//! goniometric, directional) are not: no camera ray can meet them, so neither image shows them.
 //!
 //! Transport mode: light tracing transports importance, so BSDF values are those of the
 //! adjoint BSDF. For refraction that removes the `1/η²` radiance scaling
@@ -77,14 +79,10 @@ impl LightTracer {
         if !self.settings.hide_emitters && self.allows(1) {
             if let Some(pos) = light.sample_le_position(shapes, u_pos) {
                 if let Some(cs) = camera.sample_wi(pos.p, u_lens) {
-                    let cos = if pos.ng == Vec3::ZERO { 1.0 } else { pos.ng.dot(cs.wi).abs() };
+                    let cos = pos.ng.dot(cs.wi).abs();
                     let value = light.emitted_toward(&pos, cs.wi) * (cos * cs.weight * pos.inv_pdf / pmf);
                     if value.max_element() > 0.0 {
-                        let o = if pos.ng == Vec3::ZERO {
-                            pos.p
-                        } else {
-                            offset_ray_origin(pos.p, pos.p_error, pos.ng, cs.wi)
-                        };
+                        let o = offset_ray_origin(pos.p, pos.p_error, pos.ng, cs.wi);
                         if !scene.occluded(&Ray::bounded(o, cs.p_lens - o, 1.0 - SHADOW_EPSILON)) {
                             splat(cs.film, value);
                         }
@@ -207,6 +205,35 @@ mod tests {
         let hidden = LightTracer { settings: PathSettings { hide_emitters: true, ..Default::default() } };
         let im = render_light_paths(&scene, &hidden, &settings, &never).unwrap().film.image();
         assert_eq!(im[0], Rgb::ZERO, "hide_emitters hides the sky");
+    }
+
+    /// A point light in plain view: no camera ray meets it, so the path tracer's image has no
+    /// light there, and neither has the light tracer's (Mitsuba's `ptracer` connects no delta
+    /// light to the camera). Connecting it would put I / (r² Ω_pixel) in the pixel it
+    /// projects to (here ≈ 50), against ≈ 0.02 of lit wall (the light tracer noisier: 4×).
+    #[test]
+    fn point_lights_stay_invisible_as_in_the_path_tracer() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, TriangleMesh};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Transform, Vec3};
+        let never = AtomicBool::new(false);
+        let mut b = crate::scene::SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        // A wall at z = 6 facing the camera, lit by a point light halfway to it.
+        let mut wall = TriangleMesh::rectangle();
+        let flip = Transform::rotate(Vec3::Y, 180.0).unwrap();
+        wall.transform(&(Transform::translate(Vec3::new(0.0, 0.0, 6.0)) * Transform::scale(Vec3::splat(10.0)).unwrap() * flip));
+        b.add_shape(Geometry::Mesh(wall), m, None);
+        b.add_point_light(Vec3::new(0.0, 0.0, 3.0), Rgb::splat(1.0));
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 16, 16).unwrap());
+        let scene = b.build().unwrap();
+        let settings = RenderSettings { spp: 64, seed: 3, ..Default::default() };
+        let light = render_light_paths(&scene, &LightTracer::default(), &settings, &never).unwrap().film.image();
+        let path = render(&scene, &PathIntegrator::default(), &settings, &never).unwrap().film.image();
+        let brightest = |im: &[Rgb]| im.iter().map(|c| c.max_element()).fold(0.0f32, f32::max);
+        let (l, p) = (brightest(&light), brightest(&path));
+        assert!(p > 0.01 && l < 4.0 * p, "brightest pixel: light tracer {l}, path tracer {p}");
     }
 
     #[test]

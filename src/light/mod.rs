@@ -230,22 +230,16 @@ pub struct EmissionPosition {
     pub p: Vec3,
     /// Error bound of `p`.
     pub p_error: Vec3,
-    /// Geometric normal at `p` (zero for point lights).
+    /// Geometric normal at `p`.
     pub ng: Vec3,
     /// Shading normal (which side emits).
     pub ns: Vec3,
-    /// `1 / p_A(p)` (area lights) or 1 (point lights): divides the emitted radiance or intensity.
+    /// `1 / p_A(p)`: divides the emitted radiance.
     pub inv_pdf: f32,
     /// Texture coordinates of `p` (area lights with a textured radiance; zero otherwise).
     pub uv: Vec2,
 }
 
-impl EmissionPosition {
-    /// The position of a point-like light (point, spot, projector).
-    fn point(p: Vec3) -> EmissionPosition {
-        EmissionPosition { p, p_error: Vec3::ZERO, ng: Vec3::ZERO, ns: Vec3::ZERO, inv_pdf: 1.0, uv: Vec2::ZERO }
-    }
-}
 
 /// A point of an area emitter's shape, uniform by area, with its texture coordinates where the
 /// radiance is a texture (zero for a constant radiance, which then keeps the shapes' fastest
@@ -598,9 +592,11 @@ impl Light {
     }
 
     /// A position on the light for connecting it straight to the camera (the emitter vertex of
-    /// a light path seen directly): by area for area lights, the position of point and spot
-    /// lights; `None` for lights at infinity and lights that emit along one direction
-    /// (directional, directional area), which no pinhole or thin-lens camera can be connected to.
+    /// a light path seen directly): by area, for area lights only. As in Mitsuba's `ptracer`,
+    /// delta lights are never connected to the camera (point, spot, projector and goniometric
+    /// lights sit at a point no camera ray can meet, directional ones along one direction), so
+    /// the light tracer's image shows them exactly where the path tracer's does: nowhere. Lights
+    /// at infinity are seen by the camera rays that escape (`None` here too).
     pub fn sample_le_position(&self, shapes: &[Geometry], u_pos: Vec2) -> Option<EmissionPosition> {
         match self {
             Light::Area { shape, radiance, .. } => {
@@ -614,26 +610,17 @@ impl Light {
                     uv,
                 })
             }
-            Light::Point { position, .. } | Light::Spot { position, .. } => Some(EmissionPosition::point(*position)),
-            Light::Projector(p) => Some(EmissionPosition::point(p.position())),
-            Light::Goniometric(g) => Some(EmissionPosition::point(g.position())),
             _ => None,
         }
     }
 
-    /// What a light emits from `pos` toward the unit direction `d` (world): radiance for area
-    /// lights (front side only unless two-sided), intensity (W sr⁻¹) for point and spot lights.
+    /// The radiance an area light emits from `pos` toward the unit direction `d` (world): front
+    /// side only unless two-sided; zero for every other light (none has a position to connect).
     pub fn emitted_toward(&self, pos: &EmissionPosition, d: Vec3) -> Rgb {
         match self {
             Light::Area { radiance, two_sided, .. } if pos.ns.dot(d) > 0.0 || (*two_sided && pos.ns.dot(d) < 0.0) => {
                 radiance.eval(pos.uv)
             }
-            Light::Point { intensity, .. } => *intensity,
-            Light::Spot { frame, intensity, cutoff, beam, texture, falloff, .. } => {
-                *intensity * Self::spot_profile(frame.to_local(d), *cutoff, *beam, texture, *falloff)
-            }
-            Light::Projector(p) => p.intensity_toward(d),
-            Light::Goniometric(g) => g.intensity_toward(d),
             _ => Rgb::ZERO,
         }
     }
