@@ -22,7 +22,7 @@ use super::trace::{self, Mis, PathSettings, PrevVertex};
 use super::{Integrator, RadianceSample};
 use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::LightSampleContext;
-use crate::material::{Bsdf, TextureMemo};
+use crate::material::TextureMemo;
 use crate::math::float::offset_ray_origin;
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::medium::{FreeFlight, Medium};
@@ -55,14 +55,17 @@ pub(crate) fn medium_after(scene: &Scene, shape: u32, ng: Vec3, d: Vec3, current
     }
 }
 
-/// The factor light crossing the surface at `si` unscattered is multiplied by, if it is a null
-/// surface (`null`: 1; a polarizing filter: its share); `None` if it scatters.
-pub(super) fn null_transmission(scene: &Scene, si: &crate::geometry::SurfaceInteraction) -> Option<Rgb> {
-    match &scene.bsdfs()[scene.shapes()[si.shape as usize].bsdf as usize] {
-        Bsdf::Null => Some(Rgb::ONE),
-        b @ Bsdf::Filter(_) => b.null_transmission(&scene.bsdf_context(si)),
-        _ => None,
+/// How light travelling along `d` crosses the surface at `si` unscattered, as
+/// [`crate::material::Bsdf::null_transmission`] gives it: `(T, P)`, the factor it is multiplied by and the
+/// probability that BSDF sampling takes that crossing; `None` where nothing passes (an opaque
+/// BSDF, or `T = 0`).
+pub(super) fn null_transmission(scene: &Scene, si: &crate::geometry::SurfaceInteraction, d: Vec3) -> Option<(Rgb, f32)> {
+    let bsdf = &scene.bsdfs()[scene.shapes()[si.shape as usize].bsdf as usize];
+    if !bsdf.may_pass() {
+        return None;
     }
+    let cos_theta = si.ns.dot(d) / d.length();
+    bsdf.null_transmission(&scene.bsdf_context(si), cos_theta).filter(|(t, _)| *t != Rgb::ZERO)
 }
 
 /// Transmittance along the shadow ray `ray` (segment `t ∈ (0, t_max)`, its end at
@@ -77,9 +80,10 @@ pub fn transmittance(scene: &Scene, mut ray: Ray, mut medium: Option<u32>, rng: 
         let length = ray.d.length();
         let hit = scene.intersect(&ray);
         if let Some(si) = &hit {
-            // Null surfaces pass it on, a polarizing filter only a share of it.
-            match null_transmission(scene, si) {
-                Some(t) => tr *= t,
+            // Null surfaces pass it on; a filter, a thin dielectric or a mask's transparent
+            // part only a share of it (Mitsuba's `eval_null_transmission`).
+            match null_transmission(scene, si, ray.d) {
+                Some((t, _)) => tr *= t,
                 None => return Rgb::ZERO,
             }
         }
@@ -229,14 +233,19 @@ impl Integrator for VolPathIntegrator {
                 if crossings > MAX_NULL_CROSSINGS {
                     break;
                 }
-                if let Some(t) = null_transmission(scene, &si) {
-                    beta *= t;
+                if bsdf.is_null() {
+                    if let Some((t, _)) = null_transmission(scene, &si, ray.d) {
+                        beta *= t;
+                    }
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
                 ray = si.spawn_ray(ray.d);
                 continue;
             }
-            if depth + 1 >= max_depth {
+            // At the last vertex only a crossing that does not scatter (a thin dielectric's
+            // transmission, a mask's transparent part) can go on, as in Mitsuba.
+            let last = depth + 1 >= max_depth;
+            if last && !bsdf.may_pass() {
                 break;
             }
             let frame: Frame = si.frame();
@@ -247,7 +256,7 @@ impl Integrator for VolPathIntegrator {
             let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
-            if !bsdf.is_delta() {
+            if !bsdf.is_delta() && !last {
                 // The shadow ray starts in the medium on the light's side of the surface.
                 let side_medium = |wi: Vec3| {
                     if wi.dot(si.ng) * wo.dot(si.ng) > 0.0 {
@@ -263,14 +272,25 @@ impl Integrator for VolPathIntegrator {
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
             let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
+            if last && !bs.null {
+                break;
+            }
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
             if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
                 medium = medium_after(scene, si.shape, si.ng, wi, medium);
             }
-            prev = Some(PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta });
             ray = si.spawn_ray(wi);
+            if bs.null {
+                // Passed straight through: not a bounce, and not the vertex MIS refers to.
+                crossings += 1;
+                if crossings > MAX_NULL_CROSSINGS {
+                    break;
+                }
+                continue;
+            }
+            prev = Some(PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta });
             depth += 1;
             crossings = 0;
             if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
@@ -286,6 +306,7 @@ mod tests {
     use super::*;
     use crate::camera::{Camera, FovAxis};
     use crate::geometry::{Geometry, Sphere, TriangleMesh};
+    use crate::material::Bsdf;
     use crate::math::Transform;
     use crate::medium::PhaseFunction;
     use crate::render::{render, RenderSettings};
@@ -385,6 +406,51 @@ mod tests {
                 let err = (centre - expected).abs().max_element();
                 let tol = if ball { 0.02 * expected.max_element() } else { 1e-5 };
                 assert!(err <= tol, "{name} ball {ball}: centre {centre}, expected {expected}");
+            }
+        }
+    }
+
+    /// Surfaces light crosses unscattered — a thin dielectric's transmission, a mask's
+    /// transparent part — are not bounces for the volumetric path tracers, and shadow rays
+    /// cross them with their share (Mitsuba's `Null` lobe and `eval_null_transmission`): a
+    /// diffuse ball (albedo ½) inside a sphere that lets 0.6 through (an index-matched thin
+    /// dielectric with `specular_transmittance` 0.6; a mask of opacity 0.4 over a black
+    /// BSDF), under a uniform sky, at `max_depth` 2 (direct light only): through the sphere to
+    /// the ball and from it to the sky, ½ · 0.6 · 0.6 = 0.18. Were the crossing a bounce, the
+    /// ball would be black at this depth (and light sampling from it blocked).
+    #[test]
+    fn thin_dielectrics_and_masks_are_crossed_not_bounced() {
+        use crate::integrator::{Integrator, VolPathMisIntegrator};
+        use crate::material::{Diffuse, ThinDielectric};
+        use crate::texture::Texture;
+        let thin = Bsdf::ThinDielectric(ThinDielectric {
+            eta: 1.0,
+            specular_reflectance: Texture::Constant(Rgb::ONE),
+            specular_transmittance: Texture::Constant(Rgb::splat(0.6)),
+        });
+        let black = Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(Rgb::ZERO) });
+        let mask = Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.4)), bsdf: std::sync::Arc::new(black) };
+        let settings = PathSettings { max_depth: 2, ..Default::default() };
+        let integrators: [(&str, Box<dyn Integrator>); 2] = [
+            ("volpath", Box::new(VolPathIntegrator { settings: settings.clone() })),
+            ("volpathmis", Box::new(VolPathMisIntegrator { settings })),
+        ];
+        for shell in [thin, mask] {
+            let mut b = SceneBuilder::new();
+            let s = b.add_bsdf(shell.clone());
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), s, None);
+            let d = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) }));
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 0.5, false)), d, None);
+            b.add_constant_environment(Rgb::ONE);
+            b.set_camera(camera(12, 12, 30.0));
+            let scene = b.build().unwrap();
+            for (name, integrator) in &integrators {
+                let settings = RenderSettings { spp: 1024, seed: 5, ..Default::default() };
+                let image = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
+                let centre = (image[5 * 12 + 5] + image[5 * 12 + 6] + image[6 * 12 + 5] + image[6 * 12 + 6]) * 0.25;
+                let expected = 0.5 * 0.6 * 0.6;
+                let err = (centre - Rgb::splat(expected)).abs().max_element();
+                assert!(err <= 0.02 * expected, "{name} {}: centre {centre}, expected {expected}", shell.plugin_name());
             }
         }
     }

@@ -194,12 +194,13 @@ impl VolPathMisIntegrator {
             let length = ray.d.length();
             let hit = scene.intersect(&ray);
             if let Some(si) = &hit {
-                // Null surfaces pass it on, a polarizing filter only a share of it (the same
-                // factor in both techniques).
-                let t = null_transmission(scene, si)?;
-                if t != Rgb::ONE {
+                // Null surfaces pass it on; a filter, a thin dielectric or a mask's transparent
+                // part only a share T of it, which BSDF sampling would have chosen with
+                // probability P (1 for `null` and filters).
+                let (t, p) = null_transmission(scene, si, ray.d)?;
+                if t != Rgb::ONE || p != 1.0 {
                     nee.update_scalar(1.0, t);
-                    uni.update_scalar(1.0, t);
+                    uni.update_scalar(p, t);
                 }
             }
             if let Some(m) = medium {
@@ -352,17 +353,22 @@ impl Integrator for VolPathMisIntegrator {
                 if crossings > MAX_NULL_CROSSINGS {
                     break;
                 }
-                if let Some(t) = null_transmission(scene, &si) {
-                    if t != Rgb::ONE {
-                        path.update_scalar(1.0, t);
-                        path_nee.update_scalar(1.0, t);
+                if bsdf.is_null() {
+                    if let Some((t, _)) = null_transmission(scene, &si, ray.d) {
+                        if t != Rgb::ONE {
+                            path.update_scalar(1.0, t);
+                            path_nee.update_scalar(1.0, t);
+                        }
                     }
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
                 ray = si.spawn_ray(ray.d);
                 continue;
             }
-            if depth + 1 >= max_depth {
+            // At the last vertex only a crossing that does not scatter (a thin dielectric's
+            // transmission, a mask's transparent part) can go on, as in Mitsuba.
+            let at_last = depth + 1 >= max_depth;
+            if at_last && !bsdf.may_pass() {
                 break;
             }
             let frame = si.frame();
@@ -371,7 +377,7 @@ impl Integrator for VolPathMisIntegrator {
             let memo = TextureMemo::default();
             let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
-            if !bsdf.is_delta() {
+            if !bsdf.is_delta() && !at_last {
                 let origin = ShadowOrigin::Surface(si, wo);
                 if let Some(mut lp) =
                     self.sample_light(scene, &light_ctx, &origin, medium, &path, channel, sampler, &mut rng)
@@ -389,18 +395,33 @@ impl Integrator for VolPathMisIntegrator {
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
             let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
+            if at_last && !bs.null {
+                break;
+            }
             let f = bs.weight * bs.pdf;
-            path_nee = path;
+            if !bs.null {
+                // A real vertex: light sampling from here starts from the path's densities.
+                path_nee = path;
+            }
             path.update_scalar(bs.pdf, f);
             path_nee.update_scalar(1.0, f);
             eta *= bs.eta;
-            count_direct = bs.delta;
             let wi = frame.to_world(bs.wi);
             if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
                 medium = medium_after(scene, si.shape, si.ng, wi, medium);
             }
-            last = Some(light_ctx);
             ray = si.spawn_ray(wi);
+            if bs.null {
+                // Passed straight through: not a bounce, and not the vertex MIS refers to (a
+                // shadow ray from the last one crosses here with the same factor).
+                crossings += 1;
+                if crossings > MAX_NULL_CROSSINGS {
+                    break;
+                }
+                continue;
+            }
+            count_direct = bs.delta;
+            last = Some(light_ctx);
             depth += 1;
             crossings = 0;
             if !self.roulette(&mut path, eta, depth, sampler) {

@@ -64,7 +64,7 @@ impl Conductor {
             return None;
         }
         let weight = ctx.eval(&self.specular_reflectance) * ConductorIor::reflectance(&self.ior, ctx, wo.z);
-        Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight, delta: true, eta: 1.0 })
+        Some(BsdfSample { wi: reflect(wo), pdf: 1.0, weight, delta: true, null: false, eta: 1.0 })
     }
 }
 
@@ -153,7 +153,7 @@ impl RoughConductor {
         } else {
             self.eval(ctx, wo, wi) / pdf
         };
-        (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        (pdf > 0.0 && weight.is_finite()).then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 }
 

@@ -40,14 +40,14 @@ impl Dielectric {
         let (f, cos_t, eta_it, eta_ti) = fresnel_dielectric(wo.z, self.eta);
         if u1 <= f {
             let weight = ctx.eval(&self.specular_reflectance);
-            Some(BsdfSample { wi: reflect(wo), pdf: f, weight, delta: true, eta: 1.0 })
+            Some(BsdfSample { wi: reflect(wo), pdf: f, weight, delta: true, null: false, eta: 1.0 })
         } else {
             let wi = refract(wo, cos_t, eta_ti);
             Some(BsdfSample {
                 wi,
                 pdf: 1.0 - f,
                 weight: ctx.eval(&self.specular_transmittance) * (eta_ti * eta_ti),
-                delta: true,
+                delta: true, null: false,
                 eta: eta_it,
             })
         }
@@ -87,10 +87,10 @@ impl ThinDielectric {
         let r = self.reflectance(wo.z);
         if u1 <= r {
             let weight = ctx.eval(&self.specular_reflectance);
-            Some(BsdfSample { wi: reflect(wo), pdf: r, weight, delta: true, eta: 1.0 })
+            Some(BsdfSample { wi: reflect(wo), pdf: r, weight, delta: true, null: false, eta: 1.0 })
         } else {
             let weight = ctx.eval(&self.specular_transmittance);
-            Some(BsdfSample { wi: -wo, pdf: 1.0 - r, weight, delta: true, eta: 1.0 })
+            Some(BsdfSample { wi: -wo, pdf: 1.0 - r, weight, delta: true, null: true, eta: 1.0 })
         }
     }
 }

@@ -50,7 +50,7 @@ impl Diffuse {
             return None;
         }
         let s = sample_cosine_hemisphere_malley(u);
-        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: ctx.eval(&self.reflectance), delta: false, eta: 1.0 })
+        Some(BsdfSample { wi: s.value, pdf: s.pdf, weight: ctx.eval(&self.reflectance), delta: false, null: false, eta: 1.0 })
     }
 }
 

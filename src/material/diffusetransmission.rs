@@ -63,7 +63,7 @@ impl DiffuseTransmission {
         let wi = Vec3::new(s.x, s.y, s.z.copysign(same_side));
         let (albedo, p) = if reflect { (r, p_reflect) } else { (t, 1.0 - p_reflect) };
         let pdf = p * INV_PI * s.z;
-        (pdf > 0.0).then_some(BsdfSample { wi, pdf, weight: albedo / p, delta: false, eta: 1.0 })
+        (pdf > 0.0).then_some(BsdfSample { wi, pdf, weight: albedo / p, delta: false, null: false, eta: 1.0 })
     }
 
     /// pbrt-v4's `diffusetransmission`: `reflectance`, `transmittance` (0.25, texturable).

@@ -413,7 +413,7 @@ impl Hair {
             wi,
             pdf,
             weight: f / pdf,
-            delta: false,
+            delta: false, null: false,
             eta: 1.0,
         })
     }

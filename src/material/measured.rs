@@ -342,7 +342,7 @@ impl Measured {
             return None;
         }
         let weight = value / pdf;
-        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 
     /// Mitsuba's `measured`: `filename`, a `.bsdf` tensor file of the RGL material database

@@ -131,6 +131,11 @@ pub struct BsdfSample {
     /// Relative index of refraction crossed (`η_it` for refraction, 1 otherwise), for Russian
     /// roulette to see through the η² radiance scaling.
     pub eta: f32,
+    /// Whether the light passed straight through unscattered (`wi = -wo`: `null`, a filter, a
+    /// thin dielectric's transmission, a mask's transparent part) — Mitsuba's `Null` lobe
+    /// flag. The volumetric path tracers do not count such a crossing as a bounce (nor as the
+    /// vertex that light sampling and MIS refer to), as Mitsuba's `volpath` and `volpathmis`.
+    pub null: bool,
 }
 
 /// The BSDFs (closed set, dispatched by `match`).
@@ -243,15 +248,39 @@ impl Bsdf {
         matches!(self, Bsdf::Null | Bsdf::Filter(_))
     }
 
-    /// The factor light crossing a null surface ([`Bsdf::is_null`]) is multiplied by at `ctx`:
-    /// 1 for `null`, a [`Filter`]'s transmission; `None` for every other BSDF.
+    /// How light crosses the surface unscattered (along a straight line, Mitsuba's `Null`
+    /// lobe), arriving at angle `cos_theta` to the shading normal: `(T, P)`, the factor `T` it
+    /// is multiplied by (Mitsuba's `eval_null_transmission`, what a shadow ray of the
+    /// volumetric path tracers carries through) and the probability `P` that [`Bsdf::sample`]
+    /// chooses that crossing. `null` (1, 1); a filter its transmission, always; a thin
+    /// dielectric `T = (1 − R) t` with its pane reflectance `R` and `specular_transmittance`
+    /// `t`, chosen with `P = 1 − R`; a mask of opacity `a` over a BSDF crossed with `(T', P')`:
+    /// `T = 1 − a + a T'` and `P = 1 − a + a P'`. `None` for every other BSDF (opaque to
+    /// shadow rays, as Mitsuba's default `eval_null_transmission` of zero), `blendbsdf` and
+    /// `twosided` included, as in Mitsuba.
     #[inline]
-    pub fn null_transmission(&self, ctx: &BsdfContext) -> Option<Rgb> {
+    pub fn null_transmission(&self, ctx: &BsdfContext, cos_theta: f32) -> Option<(Rgb, f32)> {
         match self {
-            Bsdf::Null => Some(Rgb::ONE),
-            Bsdf::Filter(f) => Some(f.transmission(ctx)),
+            Bsdf::Null => Some((Rgb::ONE, 1.0)),
+            Bsdf::Filter(f) => Some((f.transmission(ctx), 1.0)),
+            Bsdf::ThinDielectric(b) => {
+                let p = 1.0 - b.reflectance(cos_theta);
+                Some((ctx.eval(&b.specular_transmittance) * p, p))
+            }
+            Bsdf::Mask { opacity, bsdf } => {
+                let a = blend_weight(opacity, ctx);
+                let (t, p) = bsdf.null_transmission(ctx, cos_theta).unwrap_or((Rgb::ZERO, 0.0));
+                Some((Rgb::splat(1.0 - a) + t * a, 1.0 - a + a * p))
+            }
             _ => None,
         }
+    }
+
+    /// Whether [`Bsdf::null_transmission`] can let light through (a cheap test before the
+    /// textures are looked up).
+    #[inline]
+    pub fn may_pass(&self) -> bool {
+        matches!(self, Bsdf::Null | Bsdf::Filter(_) | Bsdf::ThinDielectric(_) | Bsdf::Mask { .. })
     }
 
     /// Whether the BSDF can scatter light to the other side of the surface (transmission or a
@@ -402,10 +431,10 @@ impl Bsdf {
             Bsdf::PrincipledThin(b) => b.sample(ctx, wo, u1, u),
             Bsdf::Layered(b) => b.sample(ctx, wo, u1, u),
             Bsdf::ThinDielectric(b) => b.sample(ctx, wo, u1),
-            Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, eta: 1.0 }),
+            Bsdf::Null => Some(BsdfSample { wi: -wo, pdf: 1.0, weight: Rgb::ONE, delta: true, null: true, eta: 1.0 }),
             Bsdf::Filter(f) => {
                 let weight = f.transmission(ctx);
-                (weight != Rgb::ZERO).then_some(BsdfSample { wi: -wo, pdf: 1.0, weight, delta: true, eta: 1.0 })
+                (weight != Rgb::ZERO).then_some(BsdfSample { wi: -wo, pdf: 1.0, weight, delta: true, null: true, eta: 1.0 })
             }
             Bsdf::Blend { weight, bsdfs } => {
                 let w = blend_weight(weight, ctx);
@@ -426,7 +455,7 @@ impl Bsdf {
                     let s = bsdf.sample(ctx, wo, (u1 / a).min(crate::math::ONE_MINUS_EPSILON), u)?;
                     Some(BsdfSample { pdf: s.pdf * a, ..s })
                 } else {
-                    Some(BsdfSample { wi: -wo, pdf: 1.0 - a, weight: Rgb::ONE, delta: true, eta: 1.0 })
+                    Some(BsdfSample { wi: -wo, pdf: 1.0 - a, weight: Rgb::ONE, delta: true, null: true, eta: 1.0 })
                 }
             }
             Bsdf::Perturbed(n) => n.sample(ctx, wo, u1, u),

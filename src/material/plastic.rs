@@ -138,7 +138,7 @@ impl Plastic {
                 wi: reflect(wo),
                 pdf: ps,
                 weight: ctx.eval(&self.specular_reflectance) * (f / ps),
-                delta: true,
+                delta: true, null: false,
                 eta: 1.0,
             })
         } else {
@@ -147,7 +147,7 @@ impl Plastic {
             if pdf <= 0.0 {
                 return None;
             }
-            Some(BsdfSample { wi, pdf, weight: self.eval(ctx, wo, wi) / pdf, delta: false, eta: 1.0 })
+            Some(BsdfSample { wi, pdf, weight: self.eval(ctx, wo, wi) / pdf, delta: false, null: false, eta: 1.0 })
         }
     }
 }

@@ -113,7 +113,7 @@ impl PPlastic {
             return None;
         }
         let weight = f / pdf;
-        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 
     /// Mitsuba's `pplastic`: `diffuse_reflectance` (0.5), `specular_reflectance` (1), both

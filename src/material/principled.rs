@@ -476,7 +476,7 @@ impl Principled {
             return None;
         }
         let weight = self.eval_pair(ctx, &p, &q, wo, wi) / pdf;
-        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
+        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta })
     }
 
     /// Every texture of its parameters.

@@ -241,7 +241,7 @@ impl PrincipledThin {
             return None;
         }
         let weight = self.eval_with(ctx, &p, wo, wi) / pdf;
-        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta: 1.0 })
+        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 
     /// Every texture of its parameters.

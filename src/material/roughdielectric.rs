@@ -176,7 +176,7 @@ impl RoughDielectric {
                 return None;
             }
             let weight = self.eval(ctx, wo, wi) / pdf;
-            return weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta });
+            return weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta });
         }
         // Visible normals: pdf(m) = G1(wo, m) |wo·m| D(m) / |cos θₒ|, and the choice between
         // reflection and refraction has probability F or 1 − F, so [`RoughDielectric::pdf`] and
@@ -194,7 +194,7 @@ impl RoughDielectric {
         if pdf <= 0.0 || pdf.is_nan() || g1 <= 0.0 {
             return None;
         }
-        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, eta })
+        weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta })
     }
 }
 

@@ -273,7 +273,7 @@ impl RoughPlastic {
             return None;
         }
         let (f, pdf) = self.eval_pdf(ctx, wo, wi);
-        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: f / pdf, delta: false, eta: 1.0 })
+        (pdf > 0.0).then(|| BsdfSample { wi, pdf, weight: f / pdf, delta: false, null: false, eta: 1.0 })
     }
 }
 

@@ -481,6 +481,57 @@ fn mask_passes_light_through_with_probability_one_minus_opacity() {
     assert!((p - 0.75).abs() < 4.0 * (0.75f64 * 0.25 / n as f64).sqrt(), "{p}");
 }
 
+/// `null_transmission` agrees with `sample`: the share `P` it reports is how often sampling
+/// passes straight through (flagged `null`, `wi = -wo`), and each such sample's value
+/// `weight · pdf` is its factor `T` — for a thin dielectric at several angles, masks over it
+/// and over an opaque BSDF, `null` and a filter; opaque BSDFs report nothing and never sample
+/// a null crossing.
+#[test]
+fn null_transmission_is_what_sampling_passes_through() {
+    use crate::texture::Texture;
+    let thin = Arc::new(Bsdf::ThinDielectric(ThinDielectric {
+        eta: 1.5,
+        specular_reflectance: Texture::Constant(Rgb::ONE),
+        specular_transmittance: Texture::Constant(Rgb::new(0.9, 0.7, 0.5)),
+    }));
+    let diffuse = Arc::new(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+    let mask = |b: &Arc<Bsdf>| Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.3)), bsdf: b.clone() };
+    let filter = Bsdf::Filter(Filter {
+        kind: FilterKind::LinearPolarizer,
+        scale: 0.5,
+        transmittance: Texture::Constant(Rgb::splat(0.8)),
+    });
+    let cases = [(*thin).clone(), mask(&thin), mask(&diffuse), Bsdf::Null, filter, (*diffuse).clone()];
+    let mut rng = crate::sampling::Pcg32::new(3, 9);
+    let n = 40_000;
+    for b in &cases {
+        for cos in [0.95f32, 0.5, 0.1] {
+            let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+            let reported = b.null_transmission(&CTX, cos);
+            let (mut through, mut carried) = (0, [0f64; 3]);
+            for _ in 0..n {
+                let Some(s) = b.sample(&CTX, wo, rng.next_f32(), u2(&mut rng)) else { continue };
+                if s.null {
+                    through += 1;
+                    (0..3).for_each(|c| carried[c] += s.weight[c] as f64);
+                    assert_eq!(s.wi, -wo, "{}: a null crossing goes straight on", b.plugin_name());
+                }
+            }
+            let name = b.plugin_name();
+            let (t, p) = reported.map_or((Rgb::ZERO, 0.0), |(t, p)| (t, p as f64));
+            let f = through as f64 / n as f64;
+            let sigma = (p * (1.0 - p) / n as f64).sqrt();
+            assert!((f - p).abs() <= 4.0 * sigma + 1e-9, "{name} at cos {cos}: passes {f}, P {p}");
+            // E[weight · 1{null}] = T; weights lie in [0, 1], so the mean's deviation is
+            // bounded by the pass/fail count's.
+            let mean = carried.map(|c| c / n as f64);
+            let err = (0..3).map(|c| (mean[c] - t[c] as f64).abs()).fold(0.0, f64::max);
+            assert!(err <= 4.0 * sigma + 1e-6, "{name} at cos {cos}: carries {mean:?}, T {t}");
+        }
+    }
+    assert!(Bsdf::Diffuse(Diffuse::new(Rgb::ONE)).null_transmission(&CTX, 0.5).is_none());
+}
+
 /// A textured parameter acts where it is evaluated as the constant it evaluates to there: each
 /// BSDF with checkerboard parameters equals, at a point of each colour, the same BSDF with those
 /// colours as constants (eval, pdf and sample with the same random numbers). Roughness reads the

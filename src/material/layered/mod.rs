@@ -197,10 +197,10 @@ impl Layered {
             return None;
         }
         if s.specular {
-            return Some(BsdfSample { wi: s.wi, pdf: s.pdf, weight, delta: true, eta: 1.0 });
+            return Some(BsdfSample { wi: s.wi, pdf: s.pdf, weight, delta: true, null: false, eta: 1.0 });
         }
         let pdf = stack.pdf(wo, s.wi, Mode::Radiance);
-        (pdf > 0.0 && pdf.is_finite()).then_some(BsdfSample { wi: s.wi, pdf, weight, delta: false, eta: 1.0 })
+        (pdf > 0.0 && pdf.is_finite()).then_some(BsdfSample { wi: s.wi, pdf, weight, delta: false, null: false, eta: 1.0 })
     }
 
     /// Whether every walk is specular (smooth coating over a smooth conductor, no medium).
