@@ -432,7 +432,7 @@ mod tests {
         let mask = Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.4)), bsdf: std::sync::Arc::new(black) };
         let settings = PathSettings { max_depth: 2, ..Default::default() };
         let integrators: [(&str, Box<dyn Integrator>); 2] = [
-            ("volpath", Box::new(VolPathIntegrator { settings: settings.clone() })),
+            ("volpath", Box::new(VolPathIntegrator { settings })),
             ("volpathmis", Box::new(VolPathMisIntegrator { settings })),
         ];
         for shell in [thin, mask] {
