@@ -176,6 +176,7 @@ impl Parser {
                     }
                 }
                 "include" => {
+                    self.check_attributes(file, child, &["filename", "name"])?;
                     if self.depth >= 16 {
                         return Err(SceneError::at(&loc, "includes nested more than 16 deep (a cycle?)"));
                     }
@@ -201,6 +202,7 @@ impl Parser {
                 "path" if top => {
                     // Mitsuba's <path value>: a relative folder is looked for beside the file
                     // that names it, then through the search list; it must exist.
+                    self.check_attributes(file, child, &["value"])?;
                     let value = self.attr(file, child, "value")?;
                     let mut folder = PathBuf::from(&value);
                     if folder.is_relative() {
@@ -216,6 +218,7 @@ impl Parser {
                 }
                 "path" => return Err(SceneError::at(&loc, "a <path> must be a child of the <scene>")),
                 "alias" => {
+                    self.check_attributes(file, child, &["id", "as"])?;
                     let id = self.attr(file, child, "id")?;
                     let alias = self.attr(file, child, "as")?;
                     match self.ids.get(&id) {

@@ -2174,6 +2174,12 @@ fn attributes_follow_mitsubas_rules() {
         ),
         (sphere(r#"<boolean name="flip_normals" value="1"/>"#), "expected true or false"),
         (r#"<default name="r" value="1" foo="2"/>"#.to_string(), r#"unexpected attribute "foo" in <default>"#),
+        (r#"<include filename="x.xml" id="i"/>"#.to_string(), r#"unexpected attribute "id" in <include>"#),
+        (r#"<path value="." id="p"/>"#.to_string(), r#"unexpected attribute "id" in <path>"#),
+        (
+            r#"<bsdf type="diffuse" id="b"/><alias id="b" as="c" name="n"/>"#.to_string(),
+            r#"unexpected attribute "name" in <alias>"#,
+        ),
     ] {
         let e = err(&scene(&body));
         assert!(e.contains("test.xml:7:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
