@@ -1,6 +1,6 @@
-//! Image files as linear RGB: PNG (8- or 16-bit), JPEG, BMP and TGA (sRGB-decoded unless `raw`,
-//! as Mitsuba reads them), OpenEXR, Radiance HDR and PFM (float, linear). Used by bitmap textures
-//! and environment maps.
+//! Image files as linear RGB: PNG (8- or 16-bit), JPEG, BMP, TGA and binary PPM (sRGB-decoded
+//! unless `raw`, as Mitsuba reads them), OpenEXR, Radiance HDR and PFM (float, linear). Used by
+//! bitmap textures and environment maps.
 
 use super::{limits, LoadError};
 use crate::load::memory::{Channel, EncodedImage};
@@ -14,7 +14,7 @@ pub use crate::image::Image;
 /// roughness maps), in which case values are only scaled to [0, 1].
 pub fn load_image(path: &Path, raw: bool) -> Result<Image, LoadError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
-    if matches!(ext.as_deref(), Some("png" | "exr" | "jpg" | "jpeg" | "bmp" | "tga" | "hdr" | "pfm")) {
+    if matches!(ext.as_deref(), Some("png" | "exr" | "jpg" | "jpeg" | "bmp" | "tga" | "hdr" | "pfm" | "ppm")) {
         // A file that cannot be opened is an I/O error, not a malformed image.
         std::fs::File::open(path).map_err(|e| LoadError::io(path, e))?;
     }
@@ -22,6 +22,7 @@ pub fn load_image(path: &Path, raw: bool) -> Result<Image, LoadError> {
         Some("png") => load_png(path, raw).map_err(|e| LoadError::format(path, e)),
         Some("exr") => load_exr(path).map_err(|e| LoadError::format(path, e)),
         Some("jpg" | "jpeg" | "bmp" | "tga" | "hdr") => load_decoded(path, raw).map_err(|e| LoadError::format(path, e)),
+        Some("ppm") => load_ppm(path, raw).map_err(|e| LoadError::format(path, e)),
         Some("pfm") => {
             let (width, height, pixels) =
                 crate::film::output::read_pfm(path).map_err(|e| LoadError::format(path, e.to_string()))?;
@@ -29,7 +30,7 @@ pub fn load_image(path: &Path, raw: bool) -> Result<Image, LoadError> {
         }
         _ => Err(LoadError::Unsupported {
             path: path.to_path_buf(),
-            message: "unsupported image format (expected .png, .exr, .jpg, .bmp, .tga, .hdr or .pfm)".into(),
+            message: "unsupported image format (expected .png, .exr, .jpg, .bmp, .tga, .hdr, .pfm or .ppm)".into(),
         }),
     }
 }
@@ -151,6 +152,18 @@ fn load_decoded(path: &Path, raw: bool) -> Result<Image, String> {
     let decode = |v: f32| if raw || linear { v } else { srgb_decode(v) };
     let pixels = rgb.pixels().map(|p| Rgb::new(decode(p[0]), decode(p[1]), decode(p[2]))).collect();
     Ok(Image { width: rgb.width(), height: rgb.height(), pixels })
+}
+
+/// A binary PPM (`P6`, 8 or 16 bits per sample, the latter most significant byte first as the
+/// format defines it), sRGB-decoded unless `raw`, as Mitsuba reads PPM files; Mitsuba reads no
+/// other kind of PNM (ASCII `P3`, grey `P5`, …), and neither does neumann.
+fn load_ppm(path: &Path, raw: bool) -> Result<Image, String> {
+    let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES).map_err(message)?;
+    if !bytes.starts_with(b"P6") {
+        let magic = String::from_utf8_lossy(&bytes[..bytes.len().min(2)]).into_owned();
+        return Err(format!("not a binary PPM (its magic number is \"{magic}\"; Mitsuba reads only \"P6\")"));
+    }
+    load_decoded(path, raw)
 }
 
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
@@ -286,6 +299,25 @@ mod tests {
                 }
             }
         }
+        // Binary PPM, 8-bit and 16-bit (big-endian samples); an ASCII one is refused, as by Mitsuba.
+        let mut ppm = b"P6\n2 2\n255\n".to_vec();
+        ppm.extend_from_slice(&bytes);
+        std::fs::write(dir.join("a.ppm"), &ppm).unwrap();
+        let (img, raw) = (load_image(&dir.join("a.ppm"), false).unwrap(), load_image(&dir.join("a.ppm"), true).unwrap());
+        for (k, (p, q)) in img.pixels.iter().zip(&raw.pixels).enumerate() {
+            for c in 0..3 {
+                let v = bytes[3 * k + c] as f32 / 255.0;
+                assert!((q[c] - v).abs() <= 1e-6 && (p[c] - srgb_decode(v)).abs() <= 1e-6, "ppm pixel {k}");
+            }
+        }
+        let mut ppm16 = b"P6 1 1 65535\n".to_vec();
+        ppm16.extend_from_slice(&[0x80, 0x00, 0xff, 0xff, 0x00, 0x01]);
+        std::fs::write(dir.join("b.ppm"), &ppm16).unwrap();
+        let q = load_image(&dir.join("b.ppm"), true).unwrap().pixels[0];
+        assert!((q - Rgb::new(32768.0 / 65535.0, 1.0, 1.0 / 65535.0)).abs().max_element() < 1e-6, "{q}");
+        std::fs::write(dir.join("c.ppm"), b"P3\n1 1\n255\n1 2 3\n").unwrap();
+        let e = load_image(&dir.join("c.ppm"), false).unwrap_err().to_string();
+        assert!(e.contains("c.ppm") && e.contains("P6"), "{e}");
         let hdr = image::Rgb32FImage::from_raw(1, 1, vec![4.0, 0.5, 0.25]).unwrap();
         image::DynamicImage::ImageRgb32F(hdr).save(dir.join("a.hdr")).unwrap();
         let img = load_image(&dir.join("a.hdr"), false).unwrap();
