@@ -223,7 +223,9 @@ mod tests {
         // A wall at z = 6 facing the camera, lit by a point light halfway to it.
         let mut wall = TriangleMesh::rectangle();
         let flip = Transform::rotate(Vec3::Y, 180.0).unwrap();
-        wall.transform(&(Transform::translate(Vec3::new(0.0, 0.0, 6.0)) * Transform::scale(Vec3::splat(10.0)).unwrap() * flip));
+        wall.transform(
+            &(Transform::translate(Vec3::new(0.0, 0.0, 6.0)) * Transform::scale(Vec3::splat(10.0)).unwrap() * flip),
+        );
         b.add_shape(Geometry::Mesh(wall), m, None);
         b.add_point_light(Vec3::new(0.0, 0.0, 3.0), Rgb::splat(1.0));
         b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 16, 16).unwrap());

@@ -59,7 +59,11 @@ pub(crate) fn medium_after(scene: &Scene, shape: u32, ng: Vec3, d: Vec3, current
 /// [`crate::material::Bsdf::null_transmission`] gives it: `(T, P)`, the factor it is multiplied by and the
 /// probability that BSDF sampling takes that crossing; `None` where nothing passes (an opaque
 /// BSDF, or `T = 0`).
-pub(super) fn null_transmission(scene: &Scene, si: &crate::geometry::SurfaceInteraction, d: Vec3) -> Option<(Rgb, f32)> {
+pub(super) fn null_transmission(
+    scene: &Scene,
+    si: &crate::geometry::SurfaceInteraction,
+    d: Vec3,
+) -> Option<(Rgb, f32)> {
     let bsdf = &scene.bsdfs()[scene.shapes()[si.shape as usize].bsdf as usize];
     if !bsdf.may_pass() {
         return None;
@@ -446,7 +450,8 @@ mod tests {
             let scene = b.build().unwrap();
             for (name, integrator) in &integrators {
                 let settings = RenderSettings { spp: 1024, seed: 5, ..Default::default() };
-                let image = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
+                let image =
+                    render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
                 let centre = (image[5 * 12 + 5] + image[5 * 12 + 6] + image[6 * 12 + 5] + image[6 * 12 + 6]) * 0.25;
                 let expected = 0.5 * 0.6 * 0.6;
                 let err = (centre - Rgb::splat(expected)).abs().max_element();

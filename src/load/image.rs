@@ -303,7 +303,8 @@ mod tests {
         let mut ppm = b"P6\n2 2\n255\n".to_vec();
         ppm.extend_from_slice(&bytes);
         std::fs::write(dir.join("a.ppm"), &ppm).unwrap();
-        let (img, raw) = (load_image(&dir.join("a.ppm"), false).unwrap(), load_image(&dir.join("a.ppm"), true).unwrap());
+        let (img, raw) =
+            (load_image(&dir.join("a.ppm"), false).unwrap(), load_image(&dir.join("a.ppm"), true).unwrap());
         for (k, (p, q)) in img.pixels.iter().zip(&raw.pixels).enumerate() {
             for c in 0..3 {
                 let v = bytes[3 * k + c] as f32 / 255.0;
