@@ -330,6 +330,27 @@ mod tests {
         b.build().unwrap()
     }
 
+    /// A unit sphere of `shell` (around a diffuse ball of albedo ½ and radius ½ if `ball`)
+    /// under a uniform sky of radiance 1, seen by a 12×12 camera at z = 5.
+    fn shell_scene(shell: Bsdf, ball: bool) -> crate::scene::Scene {
+        use crate::material::Diffuse;
+        let mut b = SceneBuilder::new();
+        let s = b.add_bsdf(shell);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), s, None);
+        if ball {
+            let d = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 0.5, false)), d, None);
+        }
+        b.add_constant_environment(Rgb::ONE);
+        b.set_camera(camera(12, 12, 30.0));
+        b.build().unwrap()
+    }
+
+    /// The mean of a 12×12 image's four central pixels.
+    fn centre(image: &[Rgb]) -> Rgb {
+        (image[5 * 12 + 5] + image[5 * 12 + 6] + image[6 * 12 + 5] + image[6 * 12 + 6]) * 0.25
+    }
+
     fn camera(w: u32, h: u32, fov: f32) -> Camera {
         let t = Transform::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y).unwrap();
         Camera::perspective(t, fov, FovAxis::X, w, h).unwrap()
@@ -375,7 +396,7 @@ mod tests {
     #[test]
     fn polarizing_filters_pass_their_share() {
         use crate::integrator::{Integrator, PathIntegrator, VolPathMisIntegrator};
-        use crate::material::{Diffuse, Filter, FilterKind};
+        use crate::material::{Filter, FilterKind};
         use crate::texture::Texture;
         let t = Rgb::new(0.9, 0.6, 0.3);
         let filter = Bsdf::Filter(Filter { kind: FilterKind::LinearPolarizer, scale: 0.5, transmittance: Texture::Constant(t) });
@@ -385,23 +406,12 @@ mod tests {
             ("path", Box::new(PathIntegrator::default())),
         ];
         for ball in [false, true] {
-            let mut b = SceneBuilder::new();
-            let f = b.add_bsdf(filter.clone());
-            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), f, None);
-            if ball {
-                let d = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) }));
-                b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 0.5, false)), d, None);
-            }
-            b.add_constant_environment(Rgb::ONE);
-            b.set_camera(camera(12, 12, 30.0));
-            let scene = b.build().unwrap();
+            let scene = shell_scene(filter.clone(), ball);
             for (name, integrator) in &integrators {
                 let settings = RenderSettings { spp: 1024, seed: 3, ..Default::default() };
                 let out = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap();
                 let image = out.film.image();
-                // The four central pixels (on the ball when there is one).
-                let centre = (image[5 * 12 + 5] + image[5 * 12 + 6] + image[6 * 12 + 5] + image[6 * 12 + 6]) * 0.25;
-                let corner = image[0];
+                let (centre, corner) = (centre(&image), image[0]);
                 assert!((corner - Rgb::ONE).abs().max_element() < 1e-5, "{name}: corner {corner}");
                 // Through the filter twice; or once to the ball (albedo ½ under the sky seen
                 // through the filter, radiance ½ · T/2 everywhere on it: a convex ball does not
@@ -440,19 +450,12 @@ mod tests {
             ("volpathmis", Box::new(VolPathMisIntegrator { settings })),
         ];
         for shell in [thin, mask] {
-            let mut b = SceneBuilder::new();
-            let s = b.add_bsdf(shell.clone());
-            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), s, None);
-            let d = b.add_bsdf(Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(Rgb::splat(0.5)) }));
-            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 0.5, false)), d, None);
-            b.add_constant_environment(Rgb::ONE);
-            b.set_camera(camera(12, 12, 30.0));
-            let scene = b.build().unwrap();
+            let scene = shell_scene(shell.clone(), true);
             for (name, integrator) in &integrators {
                 let settings = RenderSettings { spp: 1024, seed: 5, ..Default::default() };
                 let image =
                     render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
-                let centre = (image[5 * 12 + 5] + image[5 * 12 + 6] + image[6 * 12 + 5] + image[6 * 12 + 6]) * 0.25;
+                let centre = centre(&image);
                 let expected = 0.5 * 0.6 * 0.6;
                 let err = (centre - Rgb::splat(expected)).abs().max_element();
                 assert!(err <= 0.02 * expected, "{name} {}: centre {centre}, expected {expected}", shell.plugin_name());
