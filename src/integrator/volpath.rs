@@ -399,7 +399,8 @@ mod tests {
         use crate::material::{Filter, FilterKind};
         use crate::texture::Texture;
         let t = Rgb::new(0.9, 0.6, 0.3);
-        let filter = Bsdf::Filter(Filter { kind: FilterKind::LinearPolarizer, scale: 0.5, transmittance: Texture::Constant(t) });
+        let filter =
+            Bsdf::Filter(Filter { kind: FilterKind::LinearPolarizer, scale: 0.5, transmittance: Texture::Constant(t) });
         let integrators: [(&str, Box<dyn Integrator>); 3] = [
             ("volpath", Box::new(VolPathIntegrator::default())),
             ("volpathmis", Box::new(VolPathMisIntegrator::default())),
