@@ -283,6 +283,28 @@ impl Bsdf {
         matches!(self, Bsdf::Null | Bsdf::Filter(_) | Bsdf::ThinDielectric(_) | Bsdf::Mask { .. })
     }
 
+    /// Whether the BSDF has a transmission or null lobe by Mitsuba's component flags, whatever
+    /// its parameters' values (a `principledthin` always has one; a `principled` has one where
+    /// `spec_trans` is given other than as the float 0): what Mitsuba's `twosided` refuses to
+    /// nest.
+    pub fn has_transmission_lobe(&self) -> bool {
+        match self {
+            Bsdf::Dielectric(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::Mask { .. }
+            | Bsdf::DiffuseTransmission(_)
+            | Bsdf::Hair(_)
+            | Bsdf::Null
+            | Bsdf::Filter(_)
+            | Bsdf::PrincipledThin(_) => true,
+            Bsdf::Principled(b) => b.spec_trans.is_some(),
+            Bsdf::Blend { bsdfs, .. } => distinct(bsdfs).iter().any(|c| c.has_transmission_lobe()),
+            Bsdf::Perturbed(n) => n.bsdf.has_transmission_lobe(),
+            _ => false,
+        }
+    }
+
     /// Whether the BSDF can scatter light to the other side of the surface (transmission or a
     /// null lobe), so that direct light may arrive from the whole sphere.
     pub fn transmits(&self) -> bool {

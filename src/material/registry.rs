@@ -67,15 +67,32 @@ pub fn bsdf_plugin(name: &str) -> Option<BsdfPlugin> {
     BSDF_PLUGINS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
 }
 
-/// Mitsuba's `twosided`: one nested BSDF for both sides, or two (front, back).
+/// Mitsuba's `twosided`: one nested BSDF for both sides, or two (front, back), neither with a
+/// transmission or null lobe (Mitsuba 3.9.1 refuses them: a surface that transmits has no
+/// separate front and back to mirror).
 fn two_sided(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
     let mut nested = b.nested_bsdfs(o, 1..=2)?;
+    if let Some(i) = nested.iter().position(|n| n.has_transmission_lobe()) {
+        let message = format!(
+            "a '{}' cannot be nested in a 'twosided': only BSDFs without transmission (or a null lobe) can, as in \
+             Mitsuba 3.9.1",
+            nested[i].plugin_name()
+        );
+        return Err(match o.nested("bsdf").get(i) {
+            Some(n) => n.error(message),
+            None => o.error(message),
+        });
+    }
     let back = if nested.len() == 2 { nested.pop().expect("two") } else { nested[0].clone() };
     Ok(Bsdf::TwoSided([nested.pop().expect("one"), back]))
 }
 
-/// Mitsuba's `blendbsdf`: `weight` (texturable, 0.5) toward the second of two nested BSDFs.
+/// Mitsuba's `blendbsdf`: `weight` (texturable, required: Mitsuba 3.9.1 has no default) toward
+/// the second of two nested BSDFs.
 fn blend(o: &Obj, b: &mut dyn BsdfBuilder) -> Result<Bsdf> {
+    if !o.has("weight") {
+        return Err(o.error("a 'blendbsdf' needs its 'weight' (a float or texture; Mitsuba 3.9.1 has no default)"));
+    }
     let weight = b.texture(o, "weight", Rgb::splat(0.5))?;
     let nested = b.nested_bsdfs(o, 2..=2)?;
     let bsdfs: [Arc<Bsdf>; 2] = nested.try_into().expect("two");

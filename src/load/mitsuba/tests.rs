@@ -1960,7 +1960,11 @@ fn resource_bombs_are_bounded() {
     timed("nested twosided", &scene(&format!("<shape type=\"sphere\">{nested}</shape>"))).unwrap();
     let mut chain = String::from(r#"<bsdf type="diffuse" id="b0"/>"#);
     for k in 1..=40 {
-        chain += &format!(r#"<bsdf type="blendbsdf" id="b{k}"><ref id="b{}"/><ref id="b{}"/></bsdf>"#, k - 1, k - 1);
+        chain += &format!(
+            r#"<bsdf type="blendbsdf" id="b{k}"><float name="weight" value="0.5"/><ref id="b{}"/><ref id="b{}"/></bsdf>"#,
+            k - 1,
+            k - 1
+        );
     }
     chain += r#"<shape type="sphere"><ref id="b40"/></shape>"#;
     let e = timed("blend chain", &scene(&chain)).unwrap_err();
@@ -2193,6 +2197,51 @@ fn attributes_follow_mitsubas_rules() {
     let f = load(&scene(&sphere(r#"<point name="center" value="2"/>"#))).unwrap();
     let Geometry::Sphere(s) = &f.scene.geometries()[0] else { panic!("a sphere") };
     assert_eq!(s.center, Vec3::splat(2.0));
+}
+
+/// What Mitsuba 3.9.1 refuses, checked against it: a `twosided` around a BSDF with a
+/// transmission or null lobe (by its flags: a `principled` with `spec_trans` given, any
+/// `principledthin`, a mask, a blend or normal map of one), and a `blendbsdf` without `weight`.
+#[test]
+fn twosided_and_blendbsdf_refuse_what_mitsuba_refuses() {
+    let shape = |bsdf: &str| format!(r#"<shape type="sphere">{bsdf}</shape>"#);
+    let two = |inner: &str| shape(&format!(r#"<bsdf type="twosided">{inner}</bsdf>"#));
+    for (inner, name) in [
+        (r#"<bsdf type="dielectric"/>"#, "dielectric"),
+        (r#"<bsdf type="thindielectric"/>"#, "thindielectric"),
+        (r#"<bsdf type="roughdielectric"/>"#, "roughdielectric"),
+        (r#"<bsdf type="null"/>"#, "null"),
+        (r#"<bsdf type="mask"><bsdf type="diffuse"/></bsdf>"#, "mask"),
+        (r#"<bsdf type="principled"><float name="spec_trans" value="0.5"/></bsdf>"#, "principled"),
+        (r#"<bsdf type="principledthin"/>"#, "principledthin"),
+        (r#"<bsdf type="hair"/>"#, "hair"),
+        (r#"<bsdf type="polarizer"/>"#, "polarizer"),
+        (r#"<bsdf type="diffuse"/><bsdf type="dielectric"/>"#, "dielectric"),
+        (
+            r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/><bsdf type="diffuse"/><bsdf type="dielectric"/></bsdf>"#,
+            "blendbsdf",
+        ),
+        (
+            r#"<bsdf type="normalmap"><rgb name="normalmap" value="0.5, 0.5, 1"/><bsdf type="dielectric"/></bsdf>"#,
+            "normalmap",
+        ),
+    ] {
+        let e = err(&scene(&two(inner)));
+        assert!(
+            e.contains("test.xml:7:") && e.contains(&format!("a '{name}' cannot be nested in a 'twosided'")),
+            "{inner}:\n{e}"
+        );
+    }
+    for inner in [
+        r#"<bsdf type="principled"/>"#,
+        r#"<bsdf type="principled"><float name="spec_trans" value="0"/></bsdf>"#,
+        r#"<bsdf type="plastic"/>"#,
+        r#"<bsdf type="diffuse"/><bsdf type="roughconductor"/>"#,
+    ] {
+        load(&scene(&two(inner))).unwrap_or_else(|e| panic!("{inner}: {e}"));
+    }
+    let e = err(&scene(&shape(r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#)));
+    assert!(e.contains("test.xml:7:") && e.contains("needs its 'weight'"), "{e}");
 }
 
 /// Mitsuba 3.9.1's `ellipsoids` and `ellipsoidsmesh` on the same 3D-Gaussian file, placed by a
