@@ -478,6 +478,7 @@ impl Roughness {
             let a = b.texture_of(o, "alpha", Rgb::splat(0.1), SpectrumKind::Unbounded)?;
             (a.clone(), a)
         } else {
+            both_alphas(o)?;
             let a = |b: &mut dyn TextureSource, n| b.texture_of(o, n, Rgb::splat(0.1), SpectrumKind::Unbounded);
             (a(b, "alpha_u")?, a(b, "alpha_v")?)
         };
@@ -524,6 +525,7 @@ impl Microfacet {
             if o.has("alpha") {
                 return Err(o.error_at("alpha", "give either 'alpha' or 'alpha_u'/'alpha_v'"));
             }
+            both_alphas(o)?;
             (rough("alpha_u", 0.1)?, rough("alpha_v", 0.1)?)
         } else {
             let a = rough("alpha", 0.1)?;
@@ -531,6 +533,15 @@ impl Microfacet {
         };
         o.bool("sample_visible", true)?;
         Ok(Microfacet::new(kind, au, av))
+    }
+}
+
+/// Anisotropic roughness needs both `alpha_u` and `alpha_v`, as Mitsuba 3.9.1 requires.
+fn both_alphas(o: &Obj) -> PropResult<()> {
+    match (o.has("alpha_u"), o.has("alpha_v")) {
+        (true, false) => Err(o.error_at("alpha_u", "'alpha_u' needs 'alpha_v' too (Mitsuba requires both)")),
+        (false, true) => Err(o.error_at("alpha_v", "'alpha_v' needs 'alpha_u' too (Mitsuba requires both)")),
+        _ => Ok(()),
     }
 }
 

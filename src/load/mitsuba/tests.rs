@@ -2201,7 +2201,8 @@ fn attributes_follow_mitsubas_rules() {
 
 /// What Mitsuba 3.9.1 refuses, checked against it: a `twosided` around a BSDF with a
 /// transmission or null lobe (by its flags: a `principled` with `spec_trans` given, any
-/// `principledthin`, a mask, a blend or normal map of one), and a `blendbsdf` without `weight`.
+/// `principledthin`, a mask, a blend or normal map of one), a `blendbsdf` without `weight`,
+/// and one of `alpha_u`, `alpha_v` without the other.
 #[test]
 fn twosided_and_blendbsdf_refuse_what_mitsuba_refuses() {
     let shape = |bsdf: &str| format!(r#"<shape type="sphere">{bsdf}</shape>"#);
@@ -2242,6 +2243,14 @@ fn twosided_and_blendbsdf_refuse_what_mitsuba_refuses() {
     }
     let e = err(&scene(&shape(r#"<bsdf type="blendbsdf"><bsdf type="diffuse"/><bsdf type="diffuse"/></bsdf>"#)));
     assert!(e.contains("test.xml:7:") && e.contains("needs its 'weight'"), "{e}");
+    // Anisotropic roughness comes in pairs, constant or textured.
+    for bsdf in ["roughconductor", "roughdielectric"] {
+        let e = err(&scene(&shape(&format!(r#"<bsdf type="{bsdf}"><float name="alpha_u" value="0.2"/></bsdf>"#))));
+        assert!(e.contains("test.xml:7:") && e.contains("'alpha_u' needs 'alpha_v' too"), "{e}");
+    }
+    let checker = r#"<texture type="checkerboard" name="alpha_v"/>"#;
+    let e = err(&scene(&shape(&format!(r#"<bsdf type="roughconductor">{checker}</bsdf>"#))));
+    assert!(e.contains("'alpha_v' needs 'alpha_u' too"), "{e}");
 }
 
 /// Mitsuba 3.9.1's `ellipsoids` and `ellipsoidsmesh` on the same 3D-Gaussian file, placed by a
