@@ -79,14 +79,15 @@ fn point(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 }
 
 /// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
-/// (20°), `beam_width` (¾ of the cutoff), `texture` (optional: an image projected over the
+/// (20°), `beam_width` (¾ of the cutoff; at most the cutoff, as Mitsuba clamps it), `texture` (optional: an image projected over the
 /// cutoff cone, multiplying the intensity; uv = ½ + ½ (x, y) / (z tan cutoff) in the local frame);
 /// neumann's `falloff`: `linear` in angle (Mitsuba's, the default) or `smoothstep` in cos θ
 /// (pbrt-v4's).
 fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
     let to_world = o.transform("to_world")?;
     let cutoff = o.float_checked("cutoff_angle", 20.0, |c| c > 0.0 && c <= 180.0, "in (0, 180] degrees")?;
-    let beam = o.float_checked("beam_width", cutoff * 0.75, |b| b >= 0.0 && b <= cutoff, "in [0, cutoff_angle]")?;
+    // A beam wider than the cutoff is the cutoff (a hard-edged cone), as Mitsuba 3.9.1 renders it.
+    let beam = o.float_checked("beam_width", cutoff * 0.75, |b| b >= 0.0 && b.is_finite(), "≥ 0")?.min(cutoff);
     let axis = to_world.apply_vector(Vec3::Z).normalize();
     // The local frame's x and y orient a texture: to_world's axes, made orthonormal.
     let frame = Frame::from_zx(axis, to_world.apply_vector(Vec3::X));

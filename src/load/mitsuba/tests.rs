@@ -2202,7 +2202,8 @@ fn attributes_follow_mitsubas_rules() {
 /// What Mitsuba 3.9.1 refuses, checked against it: a `twosided` around a BSDF with a
 /// transmission or null lobe (by its flags: a `principled` with `spec_trans` given, any
 /// `principledthin`, a mask, a blend or normal map of one), a `blendbsdf` without `weight`,
-/// and one of `alpha_u`, `alpha_v` without the other.
+/// and one of `alpha_u`, `alpha_v` without the other; and what it takes: a spot's
+/// `beam_width` beyond its `cutoff_angle`.
 #[test]
 fn twosided_and_blendbsdf_refuse_what_mitsuba_refuses() {
     let shape = |bsdf: &str| format!(r#"<shape type="sphere">{bsdf}</shape>"#);
@@ -2248,6 +2249,14 @@ fn twosided_and_blendbsdf_refuse_what_mitsuba_refuses() {
         let e = err(&scene(&shape(&format!(r#"<bsdf type="{bsdf}"><float name="alpha_u" value="0.2"/></bsdf>"#))));
         assert!(e.contains("test.xml:7:") && e.contains("'alpha_u' needs 'alpha_v' too"), "{e}");
     }
+    // A spot's beam wider than its cutoff is the cutoff, as Mitsuba renders it (not an error).
+    let spot = |beam: &str| {
+        let text = scene(&format!(
+            r#"<emitter type="spot"><float name="cutoff_angle" value="20"/><float name="beam_width" value="{beam}"/></emitter>"#
+        ));
+        format!("{:?}", load(&text).unwrap().scene.lights())
+    };
+    assert_eq!(spot("30"), spot("20"));
     let checker = r#"<texture type="checkerboard" name="alpha_v"/>"#;
     let e = err(&scene(&shape(&format!(r#"<bsdf type="roughconductor">{checker}</bsdf>"#))));
     assert!(e.contains("'alpha_v' needs 'alpha_u' too"), "{e}");
