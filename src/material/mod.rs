@@ -306,22 +306,15 @@ impl Bsdf {
     }
 
     /// Whether the BSDF can scatter light to the other side of the surface (transmission or a
-    /// null lobe), so that direct light may arrive from the whole sphere.
+    /// null lobe), so that direct light may arrive from the whole sphere: a transmission lobe
+    /// ([`Bsdf::has_transmission_lobe`]) with some weight (a `principledthin` without
+    /// `spec_trans` or `diff_trans` only reflects).
     pub fn transmits(&self) -> bool {
         match self {
-            Bsdf::Dielectric(_)
-            | Bsdf::RoughDielectric(_)
-            | Bsdf::ThinDielectric(_)
-            | Bsdf::Mask { .. }
-            | Bsdf::DiffuseTransmission(_)
-            | Bsdf::Hair(_)
-            | Bsdf::Null
-            | Bsdf::Filter(_) => true,
-            Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::PrincipledThin(b) => b.spec_trans.is_some() || b.diff_trans.is_some(),
             Bsdf::Blend { bsdfs, .. } => distinct(bsdfs).iter().any(|c| c.transmits()),
             Bsdf::Perturbed(n) => n.bsdf.transmits(),
-            _ => false,
+            _ => self.has_transmission_lobe(),
         }
     }
 }
