@@ -238,9 +238,9 @@ impl Integrator for VolPathIntegrator {
                     break;
                 }
                 if bsdf.is_null() {
-                    if let Some((t, _)) = null_transmission(scene, &si, ray.d) {
-                        beta *= t;
-                    }
+                    // (`None`: a filter that lets nothing through.)
+                    let Some((t, _)) = null_transmission(scene, &si, ray.d) else { break };
+                    beta *= t;
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
                 ray = si.spawn_ray(ray.d);
@@ -422,6 +422,18 @@ mod tests {
                 let tol = if ball { 0.02 * expected.max_element() } else { 1e-5 };
                 assert!(err <= tol, "{name} ball {ball}: centre {centre}, expected {expected}");
             }
+        }
+        // A filter that lets nothing through is black, not a hole.
+        let opaque = Bsdf::Filter(Filter {
+            kind: FilterKind::LinearPolarizer,
+            scale: 0.5,
+            transmittance: Texture::Constant(Rgb::ZERO),
+        });
+        let scene = shell_scene(opaque, true);
+        for (name, integrator) in &integrators {
+            let settings = RenderSettings { spp: 64, seed: 3, ..Default::default() };
+            let image = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
+            assert_eq!(centre(&image), Rgb::ZERO, "{name}: an opaque filter");
         }
     }
 

@@ -354,11 +354,11 @@ impl Integrator for VolPathMisIntegrator {
                     break;
                 }
                 if bsdf.is_null() {
-                    if let Some((t, _)) = null_transmission(scene, &si, ray.d) {
-                        if t != Rgb::ONE {
-                            path.update_scalar(1.0, t);
-                            path_nee.update_scalar(1.0, t);
-                        }
+                    // (`None`: a filter that lets nothing through.)
+                    let Some((t, _)) = null_transmission(scene, &si, ray.d) else { break };
+                    if t != Rgb::ONE {
+                        path.update_scalar(1.0, t);
+                        path_nee.update_scalar(1.0, t);
                     }
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
