@@ -444,7 +444,8 @@ mod tests {
     /// dielectric with `specular_transmittance` 0.6; a mask of opacity 0.4 over a black
     /// BSDF), under a uniform sky, at `max_depth` 2 (direct light only): through the sphere to
     /// the ball and from it to the sky, ½ · 0.6 · 0.6 = 0.18. Were the crossing a bounce, the
-    /// ball would be black at this depth (and light sampling from it blocked).
+    /// ball would be black at this depth (and light sampling from it blocked). A mask of
+    /// opacity ½ over that pane has two null lobes and lets 0.8 through: ½ · 0.8² = 0.32.
     #[test]
     fn thin_dielectrics_and_masks_are_crossed_not_bounced() {
         use crate::integrator::{Integrator, VolPathMisIntegrator};
@@ -457,19 +458,22 @@ mod tests {
         });
         let black = Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(Rgb::ZERO) });
         let mask = Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.4)), bsdf: std::sync::Arc::new(black) };
+        // Two null lobes in one BSDF: half the light passes the mask, half the pane (0.6 of it).
+        let masked_pane =
+            Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.5)), bsdf: std::sync::Arc::new(thin.clone()) };
         let settings = PathSettings { max_depth: 2, ..Default::default() };
         let integrators: [(&str, Box<dyn Integrator>); 2] = [
             ("volpath", Box::new(VolPathIntegrator { settings })),
             ("volpathmis", Box::new(VolPathMisIntegrator { settings })),
         ];
-        for shell in [thin, mask] {
+        for (shell, share) in [(thin, 0.6), (mask, 0.6), (masked_pane, 0.8)] {
             let scene = shell_scene(shell.clone(), true);
             for (name, integrator) in &integrators {
                 let settings = RenderSettings { spp: 1024, seed: 5, ..Default::default() };
                 let image =
                     render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
                 let centre = centre(&image);
-                let expected = 0.5 * 0.6 * 0.6;
+                let expected = 0.5 * share * share;
                 let err = (centre - Rgb::splat(expected)).abs().max_element();
                 assert!(err <= 0.02 * expected, "{name} {}: centre {centre}, expected {expected}", shell.plugin_name());
             }

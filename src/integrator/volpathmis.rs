@@ -399,12 +399,20 @@ impl Integrator for VolPathMisIntegrator {
                 break;
             }
             let f = bs.weight * bs.pdf;
-            if !bs.null {
+            if bs.null {
+                // Crossed unscattered: as both techniques see the crossing, chosen with
+                // probability P and carrying T, the ratio a shadow ray from the last vertex gets
+                // here too (the same as the lobe's own unless a mask over a thin dielectric
+                // offers two null lobes, which this averages).
+                let (t, p) = bsdf.null_transmission(&ctx, wo_local.z).unwrap_or((f, bs.pdf));
+                path.update_scalar(p, t);
+                path_nee.update_scalar(1.0, t);
+            } else {
                 // A real vertex: light sampling from here starts from the path's densities.
                 path_nee = path;
+                path.update_scalar(bs.pdf, f);
+                path_nee.update_scalar(1.0, f);
             }
-            path.update_scalar(bs.pdf, f);
-            path_nee.update_scalar(1.0, f);
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
             if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
