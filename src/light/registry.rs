@@ -79,8 +79,9 @@ fn point(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
 }
 
 /// Mitsuba's `spot`: `to_world` (shining along local +z), `intensity` (1), `cutoff_angle`
-/// (20°), `beam_width` (¾ of the cutoff; at most the cutoff, as Mitsuba clamps it), `texture` (optional: an image projected over the
-/// cutoff cone, multiplying the intensity; uv = ½ + ½ (x, y) / (z tan cutoff) in the local frame);
+/// (20°), `beam_width` (¾ of the cutoff; at most the cutoff, as Mitsuba clamps it), `texture`
+/// (optional: an image projected over the cutoff cone, multiplying the intensity; uv = ½ + ½
+/// (x, y) / (z tan cutoff) in the local frame);
 /// neumann's `falloff`: `linear` in angle (Mitsuba's, the default) or `smoothstep` in cos θ
 /// (pbrt-v4's).
 fn spot(o: &Obj, textures: &mut dyn TextureSource) -> Result<Light> {
