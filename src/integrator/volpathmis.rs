@@ -299,6 +299,10 @@ impl Integrator for VolPathMisIntegrator {
                             let value = phase.eval(p, wo, lp.sample.wi);
                             lp.nee.update_scalar(1.0, Rgb::splat(value));
                             lp.uni.update_scalar(if lp.sample.delta { 0.0 } else { value }, Rgb::splat(value));
+                            if !lp.sample.delta {
+                                let q = self.survival(&path, value, Rgb::splat(value), eta, depth);
+                                lp.uni.update_scalar(q, Rgb::ONE);
+                            }
                             l += lp.nee.combined_weight(&lp.uni) * lp.li;
                         }
                     }
@@ -390,6 +394,10 @@ impl Integrator for VolPathMisIntegrator {
                     };
                     lp.nee.update_scalar(1.0, f);
                     lp.uni.update_scalar(pdf, f);
+                    if pdf > 0.0 {
+                        let eta_after = eta * bsdf.eta_crossed(wo_local, wi_local);
+                        lp.uni.update_scalar(self.survival(&path, pdf, f, eta_after, depth + 1), Rgb::ONE);
+                    }
                     l += lp.nee.combined_weight(&lp.uni) * lp.li;
                 }
             }
@@ -460,6 +468,29 @@ impl VolPathMisIntegrator {
                 path.combined_weight(&nee)
             }
             _ => path.weight(),
+        }
+    }
+
+    /// The probability that a path continued in a light sample's direction (density `pdf`,
+    /// contribution `f`; `eta` the index ratio after it, `depth` the path's depth after the
+    /// vertex) survives the Russian roulette [`Self::roulette`] plays right after that sampling:
+    /// the unidirectional technique reaches the light only through it, so light sampling weighs
+    /// the same path with the same density (the roulette folds it into the path's densities on
+    /// the other side; without it here, deep paths lost up to 2.5 % of their light).
+    fn survival(&self, path: &Ratios, pdf: f32, f: Rgb, eta: f32, depth: u32) -> f32 {
+        if depth < self.settings.rr_depth {
+            return 1.0;
+        }
+        let mut after = *path;
+        after.update_scalar(pdf, f);
+        if after.is_zero() {
+            return 0.0;
+        }
+        let q = (after.weight().max_element() * eta * eta).min(0.95);
+        if q.is_nan() {
+            0.0
+        } else {
+            q.max(0.0)
         }
     }
 
@@ -566,6 +597,19 @@ mod tests {
         for (c, (mean, se)) in channel_means(&s, &VolPathMisIntegrator::default(), 512, 1).iter().enumerate() {
             println!("channel {c}: {mean:.5} ± {se:.5}");
             assert!(*se < 0.004 && (mean - 1.0).abs() < 3.0 * se + 1e-4, "channel {c}: {mean} ± {se}");
+        }
+    }
+
+    /// The same furnace with Russian roulette from the first vertex: light sampling must weigh
+    /// each path with the survival probability the unidirectional technique's path needed, or
+    /// every contribution loses some of its light (the image came out about 1.3 % dark).
+    #[test]
+    fn white_furnace_with_roulette_from_the_start() {
+        let s = scene(Rgb::ONE, false);
+        let integrator = VolPathMisIntegrator { settings: PathSettings { rr_depth: 0, ..Default::default() } };
+        for (c, (mean, se)) in channel_means(&s, &integrator, 2048, 4).iter().enumerate() {
+            println!("channel {c}: {mean:.5} ± {se:.5}");
+            assert!(*se < 0.002 && (mean - 1.0).abs() < 3.0 * se + 1e-4, "channel {c}: {mean} ± {se}");
         }
     }
 
