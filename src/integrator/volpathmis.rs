@@ -476,17 +476,28 @@ impl VolPathMisIntegrator {
     /// vertex) survives the Russian roulette [`Self::roulette`] plays right after that sampling:
     /// the unidirectional technique reaches the light only through it, so light sampling weighs
     /// the same path with the same density (the roulette folds it into the path's densities on
-    /// the other side; without it here, deep paths lost up to 2.5 % of their light).
+    /// the other side; without it here, deep paths lost light: 0.9 % of a medium of albedo 0.99).
     fn survival(&self, path: &Ratios, pdf: f32, f: Rgb, eta: f32, depth: u32) -> f32 {
         if depth < self.settings.rr_depth {
             return 1.0;
         }
         let mut after = *path;
         after.update_scalar(pdf, f);
-        if after.is_zero() {
+        self.survival_probability(&after, eta, depth)
+    }
+
+    /// The roulette's survival probability for a path with ratios `path` at `depth` segments
+    /// (index ratio `eta`): 1 before `rr_depth`, then `min(max_j weight_j · η², 0.95)`; 0 for
+    /// a path that carries nothing.
+    #[inline]
+    fn survival_probability(&self, path: &Ratios, eta: f32, depth: u32) -> f32 {
+        if path.is_zero() {
             return 0.0;
         }
-        let q = (after.weight().max_element() * eta * eta).min(0.95);
+        if depth < self.settings.rr_depth {
+            return 1.0;
+        }
+        let q = (path.weight().max_element() * eta * eta).min(0.95);
         if q.is_nan() {
             0.0
         } else {
@@ -500,14 +511,11 @@ impl VolPathMisIntegrator {
     #[inline]
     fn roulette(&self, path: &mut Ratios, eta: f32, depth: u32, sampler: &mut Sampler) -> bool {
         let u = sampler.next_1d();
-        if path.is_zero() {
+        let q = self.survival_probability(path, eta, depth);
+        if u >= q {
             return false;
         }
-        if depth >= self.settings.rr_depth {
-            let q = (path.weight().max_element() * eta * eta).min(0.95);
-            if u >= q || q.is_nan() {
-                return false;
-            }
+        if q < 1.0 {
             path.update_scalar(q, Rgb::ONE);
         }
         true
