@@ -75,6 +75,34 @@ pub enum Projection {
     Batch,
 }
 
+/// The rays one pixel to the right (`x`) and one pixel down (`y`) of a camera ray (Mitsuba's
+/// ray differentials): their origins and directions, world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayDifferentials {
+    /// Origin of the ray one pixel to the right.
+    pub o_x: Vec3,
+    /// Origin of the ray one pixel down.
+    pub o_y: Vec3,
+    /// Direction of the ray one pixel to the right.
+    pub d_x: Vec3,
+    /// Direction of the ray one pixel down.
+    pub d_y: Vec3,
+}
+
+impl RayDifferentials {
+    /// Mitsuba's `scale_differential`: the offset rays moved toward `ray` to the fraction `s`
+    /// of their offset (a render of N samples per pixel uses `s = 1/√N`, the spacing of its
+    /// samples).
+    pub fn scaled(self, ray: &Ray, s: f32) -> RayDifferentials {
+        RayDifferentials {
+            o_x: ray.o + (self.o_x - ray.o) * s,
+            o_y: ray.o + (self.o_y - ray.o) * s,
+            d_x: ray.d + (self.d_x - ray.d) * s,
+            d_y: ray.d + (self.d_y - ray.d) * s,
+        }
+    }
+}
+
 /// How a spherical camera lays the sphere of directions out on the film. With (u, v) the film
 /// position over its size (v down the image), θ, φ and the equal-area square are pbrt-v4's,
 /// about the camera's +y (up) axis: the direction is `(−sin θ cos φ, cos θ, sin θ sin φ)` in
@@ -352,6 +380,40 @@ impl Camera {
                 let column = (self.width as usize / self.batch.len()) as f32;
                 let k = ((film.x / column) as usize).min(self.batch.len() - 1);
                 self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens)
+            }
+        }
+    }
+
+    /// The ray differentials of the camera ray `ray` that [`Camera::generate_ray`] made from
+    /// `film` and `u_lens`, as Mitsuba 3.9.1's `sample_ray_differential` gives them: the rays
+    /// through the film position one pixel to the right and one pixel down. A pinhole's start
+    /// at `ray`'s origin (Mitsuba's perspective sensor); every other projection's are its own
+    /// rays from those film positions with the same lens sample (Mitsuba's generic sensor
+    /// rule, which its thin lens and orthographic sensors follow; a batch asks the camera of
+    /// the column). Where the film position does not choose the ray (radiance meter, distant
+    /// sensor) they are `ray` itself; an irradiance meter's wrap around its one pixel, where
+    /// Mitsuba extrapolates the shape's sampling beyond it.
+    pub fn ray_differentials(&self, film: Vec2, u_lens: Vec2, ray: &Ray) -> RayDifferentials {
+        match self.projection {
+            Projection::Perspective if self.lens_radius == 0.0 => {
+                let xy = self.plane_point(film);
+                let near = Vec3::new(xy.x, xy.y, 1.0);
+                let direction = |step: Vec3| self.to_world.apply_vector((near + step).normalize());
+                RayDifferentials {
+                    o_x: ray.o,
+                    o_y: ray.o,
+                    d_x: direction(Vec3::new(self.plane_scale.x, 0.0, 0.0)),
+                    d_y: direction(Vec3::new(0.0, self.plane_scale.y, 0.0)),
+                }
+            }
+            Projection::Batch => {
+                let column = (self.width as usize / self.batch.len()) as f32;
+                let k = ((film.x / column) as usize).min(self.batch.len() - 1);
+                self.batch[k].ray_differentials(Vec2::new(film.x - k as f32 * column, film.y), u_lens, ray)
+            }
+            _ => {
+                let (x, y) = (self.generate_ray(film + Vec2::X, u_lens), self.generate_ray(film + Vec2::Y, u_lens));
+                RayDifferentials { o_x: x.o, o_y: y.o, d_x: x.d, d_y: y.d }
             }
         }
     }

@@ -12,11 +12,19 @@
 //! hit nothing give 0 in every channel. Nested integrators (named by their `name` attribute,
 //! else `_arg_0`, `_arg_1`, …) come first as `n.R/G/B/A` (their radiance and coverage), then
 //! their own AOVs `n.<aov>`; the image is the first nested integrator's (black without one).
-//! The types `boundary_test`, `dp_du`, `dp_dv`, `duv_dx` and `duv_dy` (derivatives for
-//! differentiable rendering) are errors.
+//! `dp_du` and `dp_dv` (`name.X/Y/Z`) are the tangents `∂p/∂u`, `∂p/∂v` of the surface's
+//! parameterization (world space, not normalized), as Mitsuba's shapes define them; `duv_dx`
+//! and `duv_dy` (`name.U/V`) the change of (u, v) per pixel right and down, from the camera
+//! ray's differentials ([`crate::camera::Camera::ray_differentials`]) scaled by 1/√spp as
+//! Mitsuba scales them, and solved in the tangent plane
+//! as Mitsuba's `compute_uv_partials` solves it (zero where Mitsuba's solve gives NaN: on
+//! misses, degenerate parameterizations). `boundary_test` (projective differentiable
+//! rendering) is an error.
 
 use super::{nested_integrators, AnyIntegrator, Integrator, RadianceSample};
-use crate::math::{Ray, Rgb};
+use crate::camera::RayDifferentials;
+use crate::geometry::SurfaceInteraction;
+use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
@@ -40,6 +48,16 @@ pub enum AovKind {
     PrimIndex,
     /// Shape id (1-based).
     ShapeIndex,
+    /// `∂p/∂u`, the surface's tangent along its first texture coordinate (world space, not
+    /// normalized).
+    DpDu,
+    /// `∂p/∂v` (world space, not normalized).
+    DpDv,
+    /// `∂(u, v)/∂x`: the change of the texture coordinates per pixel to the right, from the
+    /// camera ray's differentials (Mitsuba's `duv_dx`).
+    DuvDx,
+    /// `∂(u, v)/∂y`: per pixel down (Mitsuba's `duv_dy`).
+    DuvDy,
     /// Radiance emitted toward the camera by the first surface (an area emitter's side facing
     /// it), or by the lights at infinity for a ray that escapes: the part of the image a
     /// denoiser leaves alone.
@@ -59,6 +77,10 @@ crate::choices!(AovKind, "AOV type", {
     AovKind::ShNormal => "sh_normal", "shading normal (X, Y, Z)";
     AovKind::PrimIndex => "prim_index", "primitive index within its shape (I)";
     AovKind::ShapeIndex => "shape_index", "1 + the shape's index in the scene (I)";
+    AovKind::DpDu => "dp_du", "world-space tangent ∂p/∂u of the surface's parameterization (X, Y, Z)";
+    AovKind::DpDv => "dp_dv", "world-space tangent ∂p/∂v (X, Y, Z)";
+    AovKind::DuvDx => "duv_dx", "change of (u, v) per pixel to the right, from ray differentials (U, V)";
+    AovKind::DuvDy => "duv_dy", "change of (u, v) per pixel down, from ray differentials (U, V)";
     AovKind::Emission => "emission", "radiance emitted toward the camera by the first surface or the sky (R, G, B)";
     AovKind::DenoisingAlbedo => "denoising_albedo", "albedo, or an emitter's normalised radiance: the denoiser's guide (R, G, B)";
 });
@@ -69,8 +91,10 @@ impl AovKind {
         match self {
             AovKind::Albedo | AovKind::DenoisingAlbedo | AovKind::Emission => &["R", "G", "B"],
             AovKind::Depth => &["T"],
-            AovKind::Position | AovKind::GeoNormal | AovKind::ShNormal => &["X", "Y", "Z"],
-            AovKind::Uv => &["U", "V"],
+            AovKind::Position | AovKind::GeoNormal | AovKind::ShNormal | AovKind::DpDu | AovKind::DpDv => {
+                &["X", "Y", "Z"]
+            }
+            AovKind::Uv | AovKind::DuvDx | AovKind::DuvDy => &["U", "V"],
             AovKind::PrimIndex | AovKind::ShapeIndex => &["I"],
         }
     }
@@ -105,10 +129,10 @@ impl AovIntegrator {
                 return Err(o.error_at("aovs", format!("AOV '{item}' is not a <name>:<type> pair")));
             }
             let kind = match ty {
-                "boundary_test" | "dp_du" | "dp_dv" | "duv_dx" | "duv_dy" => {
+                "boundary_test" => {
                     return Err(o.error_at(
                         "aovs",
-                        format!("AOV type '{ty}' (a derivative for differentiable rendering) is not implemented by neumann"),
+                        "AOV type 'boundary_test' (the distance to a silhouette, for projective differentiable rendering) is not implemented by neumann",
                     ))
                 }
                 _ => ty.parse::<AovKind>().map_err(|e| o.error_at("aovs", e))?,
@@ -136,6 +160,11 @@ impl AovIntegrator {
         } else {
             0
         }
+    }
+
+    /// Whether an AOV reads `∂p/∂v`, which hits compute only where asked to.
+    fn reads_dpdv(&self) -> bool {
+        self.aovs.iter().any(|(_, kind)| matches!(kind, AovKind::DpDv | AovKind::DuvDx | AovKind::DuvDy))
     }
 
     fn inner(&self, k: usize) -> &dyn Integrator {
@@ -178,10 +207,16 @@ impl Integrator for AovIntegrator {
         nested + self.aovs.iter().map(|(_, kind)| kind.channels().len()).sum::<usize>()
     }
 
+    fn wants_differentials(&self) -> bool {
+        self.aovs.iter().any(|(_, kind)| matches!(kind, AovKind::DuvDx | AovKind::DuvDy))
+            || (0..self.nested.len()).any(|k| self.inner(k).wants_differentials())
+    }
+
     fn sample_aovs(
         &self,
         scene: &Scene,
         ray: &Ray,
+        differentials: Option<&RayDifferentials>,
         sampler: &mut Sampler,
         terms: &mut [Rgb],
         aovs: &mut [f32],
@@ -194,7 +229,7 @@ impl Integrator for AovIntegrator {
             let (own, tail) = rest.split_at_mut(inner.aov_count());
             rest = tail;
             let terms: &mut [Rgb] = if k == 0 { terms } else { &mut [] };
-            let s = inner.sample_aovs(scene, ray, sampler, terms, own);
+            let s = inner.sample_aovs(scene, ray, differentials, sampler, terms, own);
             if self.image_layers {
                 rgba[4 * k..4 * k + 4].copy_from_slice(&[s.l.x, s.l.y, s.l.z, s.alpha]);
             }
@@ -202,7 +237,7 @@ impl Integrator for AovIntegrator {
                 result = s;
             }
         }
-        let Some(si) = scene.intersect(ray) else {
+        let Some(si) = (if self.reads_dpdv() { scene.intersect_complete(ray) } else { scene.intersect(ray) }) else {
             rest.fill(0.0);
             // Only the emission AOV sees anything of an escaping ray: the sky.
             let mut at = 0;
@@ -262,10 +297,42 @@ impl Integrator for AovIntegrator {
                     put(&[(si.prim / per) as f32])
                 }
                 AovKind::ShapeIndex => put(&[(si.shape + 1) as f32]),
+                AovKind::DpDu => put(&[si.dpdu.x, si.dpdu.y, si.dpdu.z]),
+                AovKind::DpDv => put(&[si.dpdv.x, si.dpdv.y, si.dpdv.z]),
+                AovKind::DuvDx | AovKind::DuvDy => {
+                    let (dx, dy) = differentials.map_or((Vec2::ZERO, Vec2::ZERO), |d| uv_partials(&si, d));
+                    let duv = if kind == AovKind::DuvDx { dx } else { dy };
+                    put(&[duv.x, duv.y])
+                }
             }
         }
         result
     }
+}
+
+/// Mitsuba's `SurfaceInteraction::compute_uv_partials`: where the two offset rays of
+/// `differentials` meet the tangent plane of `si` (through `si.p`, normal `si.ng`), and the
+/// least-squares (u, v) of those offsets in the basis `∂p/∂u`, `∂p/∂v`: `(∂(u, v)/∂x,
+/// ∂(u, v)/∂y)`. Zero where the parameterization is degenerate or an offset ray runs parallel
+/// to the plane (Mitsuba gives NaN there; no NaN reaches neumann's images).
+pub fn uv_partials(si: &SurfaceInteraction, differentials: &RayDifferentials) -> (Vec2, Vec2) {
+    let (n, p) = (si.ng, si.p);
+    let plane = n.dot(p);
+    let offset = |o: Vec3, d: Vec3| d * ((plane - n.dot(o)) / n.dot(d)) - p + o;
+    let (dp_dx, dp_dy) = (offset(differentials.o_x, differentials.d_x), offset(differentials.o_y, differentials.d_y));
+    let (a00, a01, a11) = (si.dpdu.dot(si.dpdu), si.dpdu.dot(si.dpdv), si.dpdv.dot(si.dpdv));
+    let inv_det = 1.0 / (a00 * a11 - a01 * a01);
+    let inv_det = if inv_det.is_finite() { inv_det } else { 0.0 };
+    let solve = |dp: Vec3| {
+        let (b0, b1) = (si.dpdu.dot(dp), si.dpdv.dot(dp));
+        let duv = Vec2::new(a11 * b0 - a01 * b1, a00 * b1 - a01 * b0) * inv_det;
+        if duv.is_finite() {
+            duv
+        } else {
+            Vec2::ZERO
+        }
+    };
+    (solve(dp_dx), solve(dp_dy))
 }
 
 #[cfg(test)]

@@ -180,4 +180,32 @@ mod tests {
         let (m_hidden, _) = mean_and_se(&scene, &hidden, 64, 3);
         assert!(m_hidden < reference);
     }
+
+    /// A delta light's share does not grow with the number of light samples: a point light of
+    /// intensity I at the centre of a diffuse sphere (albedo ρ, radius r, seen from inside)
+    /// gives every wall point `ρ I / (π r²)` whatever the split. (Mitsuba 3.9.1's `direct`
+    /// weighs each of its `emitter_samples` samples of a delta light by 1 instead of
+    /// 1 / `emitter_samples`, which multiplies point and spot lights by that count.)
+    #[test]
+    fn delta_lights_count_once_whatever_the_sample_counts() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, Sphere};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Transform, Vec3};
+        use crate::scene::SceneBuilder;
+        let (rho, intensity, r) = (0.5f32, 3.0f32, 1.5f32);
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(rho))));
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, r, true)), m, None);
+        b.add_point_light(Vec3::ZERO, Rgb::splat(intensity));
+        let to_world = Transform::look_at(Vec3::ZERO, Vec3::new(0.3, 0.2, 1.0), Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 90.0, FovAxis::X, 8, 6).unwrap());
+        let scene = b.build().unwrap();
+        let expected = f64::from(rho * intensity / (std::f32::consts::PI * r * r));
+        for (nl, nb) in [(1, 1), (3, 1), (3, 0), (2, 5)] {
+            let d = DirectIntegrator { emitter_samples: nl, bsdf_samples: nb, hide_emitters: false };
+            let (mean, _) = mean_and_se(&scene, &d, 4, 5);
+            assert!((mean / expected - 1.0).abs() < 1e-4, "({nl}, {nb}): {mean} vs {expected}");
+        }
+    }
 }

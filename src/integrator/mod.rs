@@ -25,6 +25,7 @@ pub use trace::{Mis, PathSettings};
 pub use volpath::VolPathIntegrator;
 pub use volpathmis::VolPathMisIntegrator;
 
+use crate::camera::RayDifferentials;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
@@ -74,12 +75,21 @@ pub trait Integrator: Sync {
         0
     }
 
+    /// Whether [`Integrator::sample_aovs`] reads the camera ray's differentials (the render
+    /// driver computes them only then).
+    fn wants_differentials(&self) -> bool {
+        false
+    }
+
     /// [`Integrator::sample`] that also writes one value per [`Integrator::aov_names`] entry
-    /// into `aovs` (which has that length). The render driver calls this one.
+    /// into `aovs` (which has that length). The render driver calls this one, with the camera
+    /// ray's differentials scaled to the spacing of the render's samples where
+    /// [`Integrator::wants_differentials`] and the camera has them.
     fn sample_aovs(
         &self,
         scene: &Scene,
         ray: &Ray,
+        _differentials: Option<&RayDifferentials>,
         sampler: &mut Sampler,
         terms: &mut [Rgb],
         _aovs: &mut [f32],
@@ -98,7 +108,7 @@ pub(crate) fn sample_without_aovs(
     terms: &mut [Rgb],
 ) -> RadianceSample {
     let mut aovs = vec![0.0; i.aov_count()];
-    i.sample_aovs(scene, ray, sampler, terms, &mut aovs)
+    i.sample_aovs(scene, ray, None, sampler, terms, &mut aovs)
 }
 
 /// Russian roulette for camera paths from `rr_depth` on: survival probability
@@ -152,7 +162,7 @@ crate::choices!(IntegratorKind, "integrator", {
     IntegratorKind::Volpath => "volpath", "volumetric path tracing: participating media (Mitsuba's `volpath`)";
     IntegratorKind::VolpathMis => "volpathmis", "volumetric path tracing with spectral and null-scattering MIS (Mitsuba's `volpathmis`)";
     IntegratorKind::Moment => "moment", "path tracing that also records each pixel's second moment as EXR layers (Mitsuba's `moment`)";
-    IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices) as EXR layers (Mitsuba's `aov`)";
+    IntegratorKind::Aov => "aov", "path tracing with every geometric AOV (albedo, depth, position, uv, normals, indices, tangents, uv derivatives) as EXR layers (Mitsuba's `aov`)";
     IntegratorKind::Depth => "depth", "the distance to the first surface along each camera ray, 0 where none (Mitsuba's `depth`)";
 });
 

@@ -11,6 +11,7 @@
 //! independent samples.
 
 use super::{nested_integrators, AnyIntegrator, Integrator, RadianceSample};
+use crate::camera::RayDifferentials;
 use crate::math::color::srgb_to_xyz;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
@@ -68,10 +69,15 @@ impl Integrator for MomentIntegrator {
         2 * self.nested.iter().map(|(_, i)| inner(i).aov_count() + 3).sum::<usize>()
     }
 
+    fn wants_differentials(&self) -> bool {
+        self.nested.iter().any(|(_, i)| inner(i).wants_differentials())
+    }
+
     fn sample_aovs(
         &self,
         scene: &Scene,
         ray: &Ray,
+        differentials: Option<&RayDifferentials>,
         sampler: &mut Sampler,
         terms: &mut [Rgb],
         aovs: &mut [f32],
@@ -84,7 +90,7 @@ impl Integrator for MomentIntegrator {
             let n = inner.aov_count();
             // Only the first (the image) keeps the Neumann-series terms.
             let terms: &mut [Rgb] = if k == 0 { terms } else { &mut [] };
-            let s = inner.sample_aovs(scene, ray, sampler, terms, &mut first[at..at + n]);
+            let s = inner.sample_aovs(scene, ray, differentials, sampler, terms, &mut first[at..at + n]);
             let xyz = srgb_to_xyz(s.l);
             first[at + n..at + n + 3].copy_from_slice(&[xyz.x, xyz.y, xyz.z]);
             at += n + 3;

@@ -369,6 +369,9 @@ pub fn render_from(
     let pixels = if adaptive.is_some() { width as usize * height as usize } else { 0 };
     let active: Vec<AtomicBool> = (0..pixels).map(|_| AtomicBool::new(true)).collect();
     let ray_weight = cam.ray_weight();
+    // Ray differentials where the integrator reads them, scaled to the spacing of the render's
+    // samples (Mitsuba's 1/√spp).
+    let differential_scale = integrator.wants_differentials().then(|| 1.0 / (settings.spp.max(1) as f32).sqrt());
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -398,7 +401,16 @@ pub fn render_from(
                     let ray = cam.generate_ray(film_pos, u_lens);
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
-                    let mut s = integrator.sample_aovs(scene, &ray, &mut sampler, &mut sample_terms, &mut aovs);
+                    let differentials =
+                        differential_scale.map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
+                    let mut s = integrator.sample_aovs(
+                        scene,
+                        &ray,
+                        differentials.as_ref(),
+                        &mut sampler,
+                        &mut sample_terms,
+                        &mut aovs,
+                    );
                     if ray_weight != 1.0 {
                         // An irradiance meter's rays (the AOVs stay unweighted, as in Mitsuba).
                         s.l *= ray_weight;

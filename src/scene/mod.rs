@@ -531,6 +531,21 @@ impl Scene {
     }
 
     fn interaction(&self, ray: &Ray, t: f32, kind: HitKind) -> SurfaceInteraction {
+        self.interaction_with(ray, t, kind, self.needs_uv, self.needs_dpdv)
+    }
+
+    /// The closest surface hit along `ray` within `(0, ray.t_max)` with every part of its
+    /// surface interaction computed, whatever the scene's BSDFs read: texture coordinates on
+    /// spheres and `∂p/∂v` everywhere (the `aov` integrator's `uv`, `dp_dv`, `duv_dx`).
+    pub fn intersect_complete(&self, ray: &Ray) -> Option<SurfaceInteraction> {
+        let (t, kind) = self.closest(ray)?;
+        Some(self.interaction_with(ray, t, kind, true, true))
+    }
+
+    /// [`Scene::interaction`], texture coordinates on spheres computed where `uv` says and
+    /// `∂p/∂v` where `dpdv` says.
+    #[inline(always)]
+    fn interaction_with(&self, ray: &Ray, t: f32, kind: HitKind, uv: bool, dpdv: bool) -> SurfaceInteraction {
         let (h, p, r) = match kind {
             HitKind::Block(h, b, lane) => {
                 let block = &self.blocks[b as usize];
@@ -546,7 +561,7 @@ impl Scene {
             | HitKind::SdfVoxel(r)
             | HitKind::Curve(_, r)
             | HitKind::Ellipsoid(r) => {
-                return self.analytic_interaction(ray, t, kind, self.refs[r as usize]);
+                return self.analytic_interaction(ray, t, kind, self.refs[r as usize], uv, dpdv);
             }
         };
         let r = self.refs[r as usize];
@@ -557,7 +572,7 @@ impl Scene {
         // by a cross product and a normalization instead.
         let ng = if self.cached_normals { m.face_normal(i) } else { m.normal_of(&p) };
         let crate::geometry::mesh::MeshSurface { ns, uv, dpdu, dpdv } =
-            m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, self.needs_dpdv);
+            m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, dpdv);
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
             p_error: triangle_point_error(&p, &h),
@@ -573,7 +588,15 @@ impl Scene {
         }
     }
 
-    fn analytic_interaction(&self, ray: &Ray, t: f32, kind: HitKind, r: PrimRef) -> SurfaceInteraction {
+    fn analytic_interaction(
+        &self,
+        ray: &Ray,
+        t: f32,
+        kind: HitKind,
+        r: PrimRef,
+        needs_uv: bool,
+        needs_dpdv: bool,
+    ) -> SurfaceInteraction {
         if let (HitKind::SdfVoxel(_), Geometry::SdfGrid(g)) = (kind, &self.geometries[r.shape as usize]) {
             // No parameterization: uv = 0 and a shading frame around the normal alone.
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
@@ -609,8 +632,8 @@ impl Scene {
         }
         let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
-                let surface = if self.needs_uv { s.surface(ray, t) } else { (s.surface_point(ray, t), Vec2::ZERO) };
-                (surface, s.dpduv(surface.0.p, self.needs_dpdv))
+                let surface = if needs_uv { s.surface(ray, t) } else { (s.surface_point(ray, t), Vec2::ZERO) };
+                (surface, s.dpduv(surface.0.p, needs_dpdv))
             }
             (HitKind::Disk(q, _), Geometry::Disk(d)) => (d.surface(q), d.dpduv(q)),
             (HitKind::Cylinder(q, _), Geometry::Cylinder(c)) => (c.surface(q), c.dpduv(q)),
