@@ -430,6 +430,16 @@ impl Parser {
 
     fn property(&self, file: &Arc<SourceFile>, node: roxmltree::Node) -> Result<Value> {
         let tag = node.tag_name().name();
+        // A property's value is in its attributes: an element inside one (but a transform's
+        // operations and a spectrum plugin's parameters) is an error, as in Mitsuba 3.9.1.
+        if tag != "transform" && !(tag == "spectrum" && node.attribute("type").is_some()) {
+            if let Some(c) = node.children().find(|c| c.is_element()) {
+                return Err(SceneError::at(
+                    &Loc { file: file.clone(), offset: c.range().start },
+                    format!("<{}> cannot be nested in the property <{tag}>", c.tag_name().name()),
+                ));
+            }
+        }
         let value_loc = |n: &str| Loc {
             file: file.clone(),
             offset: node.attribute_node(n).map_or(node.range().start, |a| a.range_value().start),

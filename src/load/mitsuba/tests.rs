@@ -2233,6 +2233,9 @@ fn attributes_follow_mitsubas_rules() {
         (sphere(r#"<point name="center" value="1" x="1"/>"#), "cannot mix"),
         (to_world(r#"<lookat origin="0,0,1" target="0,0,0" upp="0,1,0"/>"#), r#"did you mean "up"?"#),
         (r#"<shape type="sphere" idd="a"/>"#.to_string(), r#"unexpected attribute "idd" in <shape>"#),
+        // Nothing nests in a property (Mitsuba: "cannot occur as child of a property").
+        (sphere(r#"<float name="radius" value="1"><shape type="sphere"/></float>"#), "<shape> cannot be nested in the property <float>"),
+        (sphere(r#"<point name="center" value="1"><float name="x" value="1"/></point>"#), "<float> cannot be nested in the property <point>"),
         (
             r#"<bsdf type="diffuse" id="b"/><shape type="sphere"><ref id="b" foo="1"/></shape>"#.to_string(),
             r#"unexpected attribute "foo" in <ref>"#,
