@@ -653,6 +653,8 @@ pub struct FilmSettings {
     /// What the colour channels hold (`pixel_format` `rgb`, `luminance` or `xyz`, with or
     /// without alpha).
     pub colors: output::ColorChannels,
+    /// The number type of a written EXR's channels (`component_format`).
+    pub component: output::ComponentFormat,
     /// Reconstruction filter.
     pub filter: Filter,
     /// What each sample becomes before the film (white balance, clamp).
@@ -671,6 +673,7 @@ impl Default for FilmSettings {
             window: None,
             alpha: false,
             colors: output::ColorChannels::Rgb,
+            component: output::ComponentFormat::Float32,
             filter: Filter::gaussian(0.5).unwrap(),
             transform: sensor::SampleTransform::default(),
             sample_border: false,
@@ -682,7 +685,8 @@ impl FilmSettings {
     /// Mitsuba's `hdrfilm`: `width` (768) and `height` (576) (1 to 16384 each, at most 2²⁶
     /// pixels), `crop_offset_x/y`, `crop_width/height`, `pixel_format` (`rgb`, `rgba`,
     /// `luminance`, `luminance_alpha`, `xyz`, `xyza`: see [`output::ColorChannels`]), one
-    /// nested `<rfilter>`; `component_format`, `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
+    /// nested `<rfilter>`; `component_format` (`float32`, `float16`, `uint32`: an EXR's number
+    /// type, see [`output::ComponentFormat`]), `file_format` (`openexr`, `rgbe`, `pfm`, `png`),
     /// `sample_border` (false; true: the pixels outside the film or crop window within the
     /// filter's reach are sampled too, as Mitsuba samples them); `banner` and `compensate` are
     /// read (they cannot change the image: the output format follows the output file's
@@ -715,7 +719,8 @@ impl FilmSettings {
             "xyz" | "xyza" => output::ColorChannels::Xyz,
             _ => output::ColorChannels::Rgb,
         };
-        f.choice("component_format", &["float16", "float32", "uint32"])?;
+        let component = f.choice("component_format", &["float32", "float16", "uint32"])?;
+        let component = output::ComponentFormat::from_name(&component).expect("one of the choices");
         f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
         let sample_border = f.bool("sample_border", false)?;
         f.bool("banner", true)?;
@@ -746,7 +751,7 @@ impl FilmSettings {
         let matrix = (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin));
         let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
         let transform = sensor::SampleTransform { matrix, max_component };
-        Ok(FilmSettings { width, height, window, alpha, colors, filter, transform, sample_border })
+        Ok(FilmSettings { width, height, window, alpha, colors, component, filter, transform, sample_border })
     }
 }
 

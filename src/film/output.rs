@@ -1,4 +1,4 @@
-//! Image files: OpenEXR (float32 RGB or RGBA, linear, plus any named AOV channels such as
+//! Image files: OpenEXR (float32 — or float16, uint32 — RGB or RGBA, linear, plus any named AOV channels such as
 //! `albedo.R` or `m2__arg_0.X`), PNG (8-bit sRGB-encoded, with exposure; RGB or RGBA) and PFM
 //! (float32 RGB, linear), chosen by the file extension.
 
@@ -15,6 +15,50 @@ pub struct ImageInfo {
     pub exposure: f32,
     /// What the colour channels hold (the film's `pixel_format`).
     pub colors: ColorChannels,
+    /// The number type of an EXR's channels (the film's `component_format`).
+    pub component: ComponentFormat,
+}
+
+/// The number type of every channel of a written EXR: Mitsuba's `component_format`. PNG (8-bit
+/// sRGB) and PFM (float32) have their own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ComponentFormat {
+    /// 32-bit floats (`float32`, the default).
+    #[default]
+    Float32,
+    /// 16-bit floats (`float16`): values beyond the largest half float (65504) are written as
+    /// that largest value, not as infinity (which Mitsuba writes).
+    Float16,
+    /// 32-bit unsigned integers (`uint32`), as Mitsuba converts to them: each value clamped to
+    /// [0, 1] and scaled to [0, 2³² − 1], rounded to the nearest (in double precision; Mitsuba's
+    /// single-precision product differs in the last units, e.g. 1 → 4294967040).
+    UInt32,
+}
+
+impl ComponentFormat {
+    /// The format a film's `component_format` names (`float16`, `float32`, `uint32`).
+    pub fn from_name(name: &str) -> Option<ComponentFormat> {
+        match name {
+            "float32" => Some(ComponentFormat::Float32),
+            "float16" => Some(ComponentFormat::Float16),
+            "uint32" => Some(ComponentFormat::UInt32),
+            _ => None,
+        }
+    }
+
+    /// One channel's finite values in this format.
+    fn samples(self, values: impl Iterator<Item = f32>) -> exr::prelude::FlatSamples {
+        use exr::prelude::{f16, FlatSamples};
+        match self {
+            ComponentFormat::Float32 => FlatSamples::F32(values.collect()),
+            ComponentFormat::Float16 => {
+                FlatSamples::F16(values.map(|v| f16::from_f32(v.clamp(f16::MIN.to_f32(), f16::MAX.to_f32()))).collect())
+            }
+            ComponentFormat::UInt32 => {
+                FlatSamples::U32(values.map(|v| (f64::from(v.clamp(0.0, 1.0)) * 4_294_967_295.0).round() as u32).collect())
+            }
+        }
+    }
 }
 
 /// What the colour channels of a written image hold: Mitsuba's `pixel_format` without its
@@ -217,8 +261,9 @@ fn clean(c: Rgb) -> Rgb {
     )
 }
 
-/// An EXR (float32, lossless compression, the actual `spp` in the header) of R, G, B, (A) and
-/// then `channels` (the file lists them sorted by name, as OpenEXR requires).
+/// An EXR (channels of `info.component`, float32 by default; lossless compression; the actual
+/// `spp` in the header) of R, G, B, (A) and then `channels` (the file lists them sorted by
+/// name, as OpenEXR requires).
 fn write_exr(
     path: &Path,
     width: u32,
@@ -236,15 +281,17 @@ fn write_exr(
         .iter()
         .enumerate()
         .map(|(k, name)| {
-            AnyChannel::new(*name, FlatSamples::F32(pixels.iter().map(|&p| finite(colors.channel(clean(p), k))).collect()))
+            AnyChannel::new(*name, info.component.samples(pixels.iter().map(|&p| finite(colors.channel(clean(p), k)))))
         })
         .collect();
     if let Some(a) = alpha {
-        list.push(AnyChannel::new("A", FlatSamples::F32(a.iter().map(|&v| finite(v).clamp(0.0, 1.0)).collect())));
+        list.push(AnyChannel::new("A", info.component.samples(a.iter().map(|&v| finite(v).clamp(0.0, 1.0)))));
     }
     for (name, values) in channels {
         let text = Text::new_or_none(name.as_str()).ok_or_else(|| format!("channel name '{name}' is not ASCII"))?;
-        list.push(AnyChannel::new(text, FlatSamples::F32(values.iter().map(|&v| finite(v)).collect())));
+        // neumann's own per-pixel sample count stays float32 (a count, not a colour to clamp).
+        let component = if name == "spp" { ComponentFormat::Float32 } else { info.component };
+        list.push(AnyChannel::new(text, component.samples(values.iter().map(|&v| finite(v)))));
     }
     let mut attributes = LayerAttributes::named("");
     attributes.software_name = Some(Text::from("neumann"));
@@ -419,6 +466,62 @@ mod tests {
         assert_eq!(get("m2__arg_0.X"), [0.5, 0.0]);
         let e = write_image_layers(&dir.join("a.png"), 2, 1, &px, None, &channels, &info).unwrap_err();
         assert!(e.to_string().contains("only OpenEXR"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Mitsuba's component formats: every channel of the EXR in float16 (huge values clamped to
+    /// the largest half, not infinite as Mitsuba writes them) or in uint32 (clamped to [0, 1],
+    /// scaled to 2³² − 1 and rounded: Mitsuba 3.9.1 writes 0.2835 as 1217623168, its float32
+    /// product, and 1 as 4294967040); neumann's `spp` count channel stays float32.
+    #[test]
+    fn component_formats() {
+        use exr::prelude::{f16, FlatSamples};
+        let dir = std::env::temp_dir().join(format!("neumann-component-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let px = vec![Rgb::new(0.2835, -1.0, 1e6), Rgb::new(1.0, 0.5, f32::NAN)];
+        let channels: Vec<Channel> = vec![("spp".into(), vec![3.0, 70000.0]), ("d.T".into(), vec![2.5, 0.25])];
+        let samples = |component: ComponentFormat| {
+            let info = ImageInfo { component, ..Default::default() };
+            write_image_layers(&dir.join("c.exr"), 2, 1, &px, Some(&[1.0, 0.5]), &channels, &info).unwrap();
+            let image = exr::prelude::read_all_flat_layers_from_file(dir.join("c.exr")).unwrap();
+            let mut list: Vec<(String, FlatSamples)> = image.layer_data[0]
+                .channel_data
+                .list
+                .iter()
+                .map(|c| (c.name.to_string(), c.sample_data.clone()))
+                .collect();
+            list.sort_by(|a, b| a.0.cmp(&b.0));
+            list
+        };
+        let half = samples(ComponentFormat::Float16);
+        let h = |v: f32| f16::from_f32(v);
+        let want_half = [
+            ("A", vec![h(1.0), h(0.5)]),
+            ("B", vec![f16::MAX, h(0.0)]),
+            ("G", vec![h(-1.0), h(0.5)]),
+            ("R", vec![h(0.2835), h(1.0)]),
+            ("d.T", vec![h(2.5), h(0.25)]),
+        ];
+        for (name, values) in want_half {
+            let got = &half.iter().find(|c| c.0 == name).unwrap().1;
+            assert!(matches!(got, FlatSamples::F16(v) if *v == values), "{name}: {got:?}");
+        }
+        let spp = &half.iter().find(|c| c.0 == "spp").unwrap().1;
+        assert!(matches!(spp, FlatSamples::F32(v) if *v == [3.0, 70000.0]), "{spp:?}");
+        let ints = samples(ComponentFormat::UInt32);
+        let want_u32 = [
+            ("A", vec![4294967295, 2147483648]),
+            ("B", vec![4294967295, 0]),
+            ("G", vec![0, 2147483648]),
+            ("R", vec![1217623168, 4294967295]),
+            ("d.T", vec![4294967295, 1073741824]),
+        ];
+        for (name, values) in want_u32 {
+            let got = &ints.iter().find(|c| c.0 == name).unwrap().1;
+            assert!(matches!(got, FlatSamples::U32(v) if *v == values), "{name}: {got:?}");
+        }
+        assert_eq!(ComponentFormat::from_name("float16"), Some(ComponentFormat::Float16));
+        assert_eq!(ComponentFormat::from_name("half"), None);
         std::fs::remove_dir_all(&dir).ok();
     }
 

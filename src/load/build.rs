@@ -49,6 +49,7 @@ struct SensorSettings {
     window: Option<[u32; 4]>,
     alpha: bool,
     colors: crate::film::output::ColorChannels,
+    component: crate::film::output::ComponentFormat,
     transform: crate::film::sensor::SampleTransform,
     sample_border: bool,
 }
@@ -174,7 +175,7 @@ impl Builder {
             (None, Some((s, shape))) => (s, Some(shape)),
             _ => return Err(SceneError::at(&root.loc, "the scene has no <sensor> (camera)")),
         };
-        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, colors, transform, sample_border } =
+        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, colors, component, transform, sample_border } =
             self.sensor(&sensor, meter_shape.as_ref())?;
         self.sb.set_camera(camera);
         let mut scene =
@@ -204,6 +205,7 @@ impl Builder {
             window,
             alpha,
             colors,
+            component,
             sample_border,
             transform,
             time_limit: self.time_limit,
@@ -277,9 +279,21 @@ impl Builder {
             None if o.ty == "distant" => self.distant_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
-        let FilmSettings { filter, window, alpha, colors, transform, sample_border, .. } = film;
+        let FilmSettings { filter, window, alpha, colors, component, transform, sample_border, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
-        Ok(SensorSettings { camera, spp, sampler: kind, seed, filter, window, alpha, colors, transform, sample_border })
+        Ok(SensorSettings {
+            camera,
+            spp,
+            sampler: kind,
+            seed,
+            filter,
+            window,
+            alpha,
+            colors,
+            component,
+            transform,
+            sample_border,
+        })
     }
 
     /// Mitsuba's `distant` sensor: `direction` or `to_world` (not both; it looks along

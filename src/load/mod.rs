@@ -55,6 +55,8 @@ pub struct SceneFile {
     pub alpha: bool,
     /// What the written image's colour channels hold (the rest of `pixel_format`).
     pub colors: crate::film::output::ColorChannels,
+    /// The number type of the written EXR's channels (the film's `component_format`).
+    pub component: crate::film::output::ComponentFormat,
     /// Whether the pixels just outside the film (or crop window) within the filter's reach are
     /// sampled too (the film's `sample_border`).
     pub sample_border: bool,

@@ -77,6 +77,7 @@ pub fn builtin_job(name: &str, defines: &[(String, String)]) -> Result<Job, Fail
         window: None,
         alpha: false,
         colors: Default::default(),
+        component: Default::default(),
         sample_border: false,
         transform: Default::default(),
         time_limit: None,

@@ -460,7 +460,7 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
     }
     let (lo, hi) = out.film.spp_range();
     let alpha = job.file.alpha.then(|| out.film.alpha());
-    let info = ImageInfo { spp: lo, exposure: a.exposure, colors: job.file.colors };
+    let info = ImageInfo { spp: lo, exposure: a.exposure, colors: job.file.colors, component: job.file.component };
     let mut image = match (a.unbiased_adaptive, out.film.even_image()) {
         (true, Some(even)) => even,
         _ => out.film.image(),
@@ -473,6 +473,9 @@ pub fn run(a: RenderArgs) -> Result<(), Failure> {
         say!("denoised with Open Image Denoise in {:.2} s", start.elapsed().as_secs_f64());
     }
     let is_exr = Format::from_path(&output).ok() == Some(Format::Exr);
+    if job.file.component != neumann::film::output::ComponentFormat::Float32 && !is_exr {
+        say!("warning: the film's component_format applies to .exr output; {} has its own", output.display());
+    }
     let mut channels = if guides_only && !is_exr { Vec::new() } else { out.film.aov_channels() };
     if let (Some(noisy), true) = (&noisy, is_exr) {
         for (c, name) in ["noisy.R", "noisy.G", "noisy.B"].into_iter().enumerate() {
