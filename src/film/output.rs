@@ -104,13 +104,15 @@ pub enum Format {
     Png,
     /// Portable float map, float32 RGB.
     Pfm,
+    /// Radiance RGBE (`.hdr`, `.rgbe`): RGB of a shared 8-bit exponent, Mitsuba's `rgbe`.
+    Hdr,
 }
 
 /// An image that could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
     /// The file name's extension names no format neumann writes.
-    #[error("cannot tell the image format of '{}' from its extension {}: use .exr, .png or .pfm", path.display(), extension.as_ref().map_or("(none)".to_string(), |e| format!("'.{e}'")))]
+    #[error("cannot tell the image format of '{}' from its extension {}: use .exr, .png, .pfm or .hdr", path.display(), extension.as_ref().map_or("(none)".to_string(), |e| format!("'.{e}'")))]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -142,6 +144,7 @@ impl Format {
             Some("exr") => Ok(Format::Exr),
             Some("png") => Ok(Format::Png),
             Some("pfm") => Ok(Format::Pfm),
+            Some("hdr" | "rgbe") => Ok(Format::Hdr),
             other => Err(WriteError::UnknownFormat { path: path.to_path_buf(), extension: other.map(str::to_string) }),
         }
     }
@@ -202,16 +205,18 @@ pub fn write_image_layers(
             message: "only OpenEXR holds the X, Y, Z channels of pixel_format xyz: write .exr".into(),
         });
     }
-    if format == Format::Pfm && alpha.is_some() {
+    if matches!(format, Format::Pfm | Format::Hdr) && alpha.is_some() {
+        let name = if format == Format::Pfm { "PFM" } else { "RGBE" };
         return Err(WriteError::Unsupported {
             path: path.to_path_buf(),
-            message: "PFM has no alpha channel: write .exr or .png for pixel_format rgba".into(),
+            message: format!("{name} has no alpha channel: write .exr or .png for pixel_format rgba"),
         });
     }
     write_atomically(path, |tmp| match format {
         Format::Exr => write_exr(tmp, width, height, pixels, alpha, channels, info),
         Format::Png => write_png(tmp, width, height, pixels, alpha, info),
         Format::Pfm => write_pfm(tmp, width, height, pixels, info.colors),
+        Format::Hdr => write_rgbe(tmp, width, height, pixels, info.colors),
     })
     .map_err(fail)
 }
@@ -340,6 +345,26 @@ fn write_png(
     let mut writer = enc.write_header().map_err(|e| e.to_string())?;
     writer.write_image_data(&data).map_err(|e| e.to_string())?;
     writer.finish().map_err(|e| e.to_string())
+}
+
+/// Radiance RGBE, run-length encoded (the `image` crate's encoder): linear R, G, B, or the
+/// luminance in all three for `pixel_format` `luminance`; negative and non-finite values as 0.
+fn write_rgbe(path: &Path, width: u32, height: u32, pixels: &[Rgb], colors: ColorChannels) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let positive = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
+    let data: Vec<image::Rgb<f32>> = pixels
+        .iter()
+        .map(|&p| {
+            let c = clean(p);
+            let c = if colors == ColorChannels::Luminance { Rgb::splat(luminance(c)) } else { c };
+            image::Rgb([positive(c.x), positive(c.y), positive(c.z)])
+        })
+        .collect();
+    let mut out = std::io::BufWriter::new(file);
+    image::codecs::hdr::HdrEncoder::new(&mut out)
+        .encode(&data, width as usize, height as usize)
+        .map_err(|e| e.to_string())?;
+    std::io::Write::flush(&mut out).map_err(|e| e.to_string())
 }
 
 fn write_pfm(path: &Path, width: u32, height: u32, pixels: &[Rgb], colors: ColorChannels) -> Result<(), String> {
@@ -561,7 +586,7 @@ mod tests {
         assert_eq!(names, ["X", "Y", "Z"]);
         assert_eq!(channels[0].1[0], 0.412453);
         assert_eq!(channels[1].1, y);
-        for name in ["xyz.png", "xyz.pfm"] {
+        for name in ["xyz.png", "xyz.pfm", "xyz.hdr"] {
             let e = write_image(&dir.join(name), 2, 1, &px, &xyz).unwrap_err();
             assert!(e.to_string().contains("only OpenEXR holds the X, Y, Z"), "{e}");
         }
@@ -573,7 +598,8 @@ mod tests {
         assert_eq!(Format::from_path(Path::new("a.EXR")).unwrap(), Format::Exr);
         let jpg = Format::from_path(Path::new("a.jpg")).unwrap_err();
         assert!(matches!(&jpg, WriteError::UnknownFormat { extension: Some(e), .. } if e == "jpg"));
-        assert!(jpg.to_string().contains("'.jpg': use .exr, .png or .pfm"), "{jpg}");
+        assert!(jpg.to_string().contains("'.jpg': use .exr, .png, .pfm or .hdr"), "{jpg}");
+        assert_eq!(Format::from_path(Path::new("a.rgbe")).unwrap(), Format::Hdr);
         let none = Format::from_path(Path::new("noext")).unwrap_err();
         assert!(none.to_string().contains("extension (none)"), "{none}");
         let pfm_alpha = write_image_alpha(Path::new("x.pfm"), 1, 1, &[Rgb::ONE], Some(&[1.0]), &ImageInfo::default());
@@ -586,6 +612,24 @@ mod tests {
             write_image(&dir.join(name), 3, 2, &px, &info).unwrap();
             assert!(std::fs::metadata(dir.join(name)).unwrap().len() > 20);
         }
+        // Radiance RGBE: the colours to 8-bit mantissas of the pixel's shared exponent (within
+        // 1/128 of its largest channel), NaN and negatives as 0,
+        // the luminance in all three channels for pixel_format luminance; no alpha.
+        let rgbe = [Rgb::new(0.25, 3.0, f32::NAN), Rgb::new(-1.0, 1000.0, 0.01), Rgb::new(1.0, 0.5, 0.2)];
+        write_image(&dir.join("t.hdr"), 3, 1, &rgbe, &info).unwrap();
+        let back = image::open(dir.join("t.hdr")).unwrap().to_rgb32f();
+        let want = [[0.25, 3.0, 0.0], [0.0, 1000.0, 0.01], [1.0, 0.5, 0.2]];
+        for (p, w) in back.pixels().zip(want) {
+            let largest = w.iter().fold(0.0f32, |m, &c| m.max(c));
+            assert!((0..3).all(|k| (p[k] - w[k]).abs() <= largest / 128.0), "{:?} vs {w:?}", p.0);
+        }
+        let luma = ImageInfo { colors: ColorChannels::Luminance, ..Default::default() };
+        write_image(&dir.join("y.hdr"), 3, 1, &rgbe, &luma).unwrap();
+        let grey = image::open(dir.join("y.hdr")).unwrap().to_rgb32f();
+        let y = luminance(rgbe[2]);
+        assert!(grey.pixels().nth(2).unwrap().0.iter().all(|&c| (c - y).abs() < 0.01 * y), "{:?}", grey.pixels().nth(2));
+        let hdr_alpha = write_image_alpha(&dir.join("a.hdr"), 1, 1, &[Rgb::ONE], Some(&[1.0]), &ImageInfo::default());
+        assert!(matches!(hdr_alpha, Err(WriteError::Unsupported { .. })));
         let (w, h, back) = read_pfm(&dir.join("t.pfm")).unwrap();
         assert_eq!((w, h), (3, 2));
         assert_eq!(back[4], Rgb::new(4.0, 0.5, 0.0), "NaN written as 0, rows in order");
