@@ -54,9 +54,9 @@ impl ComponentFormat {
             ComponentFormat::Float16 => {
                 FlatSamples::F16(values.map(|v| f16::from_f32(v.clamp(f16::MIN.to_f32(), f16::MAX.to_f32()))).collect())
             }
-            ComponentFormat::UInt32 => {
-                FlatSamples::U32(values.map(|v| (f64::from(v.clamp(0.0, 1.0)) * 4_294_967_295.0).round() as u32).collect())
-            }
+            ComponentFormat::UInt32 => FlatSamples::U32(
+                values.map(|v| (f64::from(v.clamp(0.0, 1.0)) * 4_294_967_295.0).round() as u32).collect(),
+            ),
         }
     }
 }
@@ -627,7 +627,11 @@ mod tests {
         write_image(&dir.join("y.hdr"), 3, 1, &rgbe, &luma).unwrap();
         let grey = image::open(dir.join("y.hdr")).unwrap().to_rgb32f();
         let y = luminance(rgbe[2]);
-        assert!(grey.pixels().nth(2).unwrap().0.iter().all(|&c| (c - y).abs() < 0.01 * y), "{:?}", grey.pixels().nth(2));
+        assert!(
+            grey.pixels().nth(2).unwrap().0.iter().all(|&c| (c - y).abs() < 0.01 * y),
+            "{:?}",
+            grey.pixels().nth(2)
+        );
         let hdr_alpha = write_image_alpha(&dir.join("a.hdr"), 1, 1, &[Rgb::ONE], Some(&[1.0]), &ImageInfo::default());
         assert!(matches!(hdr_alpha, Err(WriteError::Unsupported { .. })));
         let (w, h, back) = read_pfm(&dir.join("t.pfm")).unwrap();

@@ -401,8 +401,8 @@ pub fn render_from(
                     let ray = cam.generate_ray(film_pos, u_lens);
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
-                    let differentials =
-                        differential_scale.map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
+                    let differentials = differential_scale
+                        .map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
                     let mut s = integrator.sample_aovs(
                         scene,
                         &ray,

@@ -1271,10 +1271,15 @@ fn aov_derivatives_match_mitsuba() {
     use crate::math::Vec2;
     let film = r#"<film type="hdrfilm"><integer name="width" value="40"/><integer name="height" value="30"/></film>"#;
     let view = r#"<lookat origin="1,3,7" target="0,0.5,0" up="0,1,0"/>"#;
+    let sensor = |ty: &str, params: &str, scale: &str| {
+        format!(r#"<sensor type="{ty}">{params}{film}<transform name="to_world">{scale}{view}</transform></sensor>"#)
+    };
+    let fov = r#"<float name="fov" value="50"/>"#;
+    let lens = r#"<float name="aperture_radius" value="0.2"/><float name="focus_distance" value="6"/>"#;
     let sensors = [
-        ("persp", format!(r#"<sensor type="perspective"><float name="fov" value="50"/>{film}<transform name="to_world">{view}</transform></sensor>"#)),
-        ("thin", format!(r#"<sensor type="thinlens"><float name="fov" value="50"/><float name="aperture_radius" value="0.2"/><float name="focus_distance" value="6"/>{film}<transform name="to_world">{view}</transform></sensor>"#)),
-        ("ortho", format!(r#"<sensor type="orthographic">{film}<transform name="to_world"><scale x="3" y="3"/>{view}</transform></sensor>"#)),
+        ("persp", sensor("perspective", fov, "")),
+        ("thin", sensor("thinlens", &format!("{fov}{lens}"), "")),
+        ("ortho", sensor("orthographic", "", r#"<scale x="3" y="3"/>"#)),
     ];
     let shapes = r#"<shape type="rectangle"><transform name="to_world"><scale x="5" y="3"/><rotate x="1" angle="-90"/><rotate y="1" angle="20"/></transform></shape>
         <shape type="sphere"><point name="center" x="-1.5" y="1" z="0"/><float name="radius" value="1"/></shape>
@@ -2234,8 +2239,14 @@ fn attributes_follow_mitsubas_rules() {
         (to_world(r#"<lookat origin="0,0,1" target="0,0,0" upp="0,1,0"/>"#), r#"did you mean "up"?"#),
         (r#"<shape type="sphere" idd="a"/>"#.to_string(), r#"unexpected attribute "idd" in <shape>"#),
         // Nothing nests in a property (Mitsuba: "cannot occur as child of a property").
-        (sphere(r#"<float name="radius" value="1"><shape type="sphere"/></float>"#), "<shape> cannot be nested in the property <float>"),
-        (sphere(r#"<point name="center" value="1"><float name="x" value="1"/></point>"#), "<float> cannot be nested in the property <point>"),
+        (
+            sphere(r#"<float name="radius" value="1"><shape type="sphere"/></float>"#),
+            "<shape> cannot be nested in the property <float>",
+        ),
+        (
+            sphere(r#"<point name="center" value="1"><float name="x" value="1"/></point>"#),
+            "<float> cannot be nested in the property <point>",
+        ),
         (
             r#"<bsdf type="diffuse" id="b"/><shape type="sphere"><ref id="b" foo="1"/></shape>"#.to_string(),
             r#"unexpected attribute "foo" in <ref>"#,
