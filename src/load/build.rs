@@ -13,7 +13,6 @@
 use super::SceneFile;
 use crate::camera::{look_along, require_one_pixel, Camera, DistantTarget};
 use crate::choice::Choice;
-use crate::film::filter::Filter;
 use crate::film::FilmSettings;
 use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGINS};
 use crate::image::{GridVolume, Image, ImageSource, VolumeSource};
@@ -45,13 +44,7 @@ struct SensorSettings {
     spp: u32,
     sampler: SamplerKind,
     seed: u64,
-    filter: Filter,
-    window: Option<[u32; 4]>,
-    alpha: bool,
-    colors: crate::film::output::ColorChannels,
-    component: crate::film::output::ComponentFormat,
-    transform: crate::film::sensor::SampleTransform,
-    sample_border: bool,
+    film: FilmSettings,
 }
 
 /// Builds the scene from the parsed root object.
@@ -175,8 +168,7 @@ impl Builder {
             (None, Some((s, shape))) => (s, Some(shape)),
             _ => return Err(SceneError::at(&root.loc, "the scene has no <sensor> (camera)")),
         };
-        let SensorSettings { camera, spp, sampler, seed, filter, window, alpha, colors, component, transform, sample_border } =
-            self.sensor(&sensor, meter_shape.as_ref())?;
+        let SensorSettings { camera, spp, sampler, seed, film } = self.sensor(&sensor, meter_shape.as_ref())?;
         self.sb.set_camera(camera);
         let mut scene =
             self.sb.build().map_err(|e| SceneError::at(&root.loc, format!("cannot build the scene: {e}")))?;
@@ -201,13 +193,13 @@ impl Builder {
             spp,
             sampler,
             seed,
-            filter,
-            window,
-            alpha,
-            colors,
-            component,
-            sample_border,
-            transform,
+            filter: film.filter,
+            window: film.window,
+            alpha: film.alpha,
+            colors: film.colors,
+            component: film.component,
+            sample_border: film.sample_border,
+            transform: film.transform,
             time_limit: self.time_limit,
             warnings,
         })
@@ -279,21 +271,8 @@ impl Builder {
             None if o.ty == "distant" => self.distant_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
-        let FilmSettings { filter, window, alpha, colors, component, transform, sample_border, .. } = film;
         let SamplerSettings { kind, spp, seed } = sampler;
-        Ok(SensorSettings {
-            camera,
-            spp,
-            sampler: kind,
-            seed,
-            filter,
-            window,
-            alpha,
-            colors,
-            component,
-            transform,
-            sample_border,
-        })
+        Ok(SensorSettings { camera, spp, sampler: kind, seed, film })
     }
 
     /// Mitsuba's `distant` sensor: `direction` or `to_world` (not both; it looks along
