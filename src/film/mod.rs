@@ -719,8 +719,10 @@ impl FilmSettings {
             "xyz" | "xyza" => output::ColorChannels::Xyz,
             _ => output::ColorChannels::Rgb,
         };
-        let component = f.choice("component_format", &["float32", "float16", "uint32"])?;
-        let component = output::ComponentFormat::from_name(&component).expect("one of the choices");
+        let component = match f.string_opt("component_format")? {
+            Some(v) => v.parse::<output::ComponentFormat>().map_err(|e| f.error_at("component_format", e))?,
+            None => output::ComponentFormat::Float32,
+        };
         f.choice("file_format", &["openexr", "rgbe", "pfm", "png"])?;
         let sample_border = f.bool("sample_border", false)?;
         f.bool("banner", true)?;

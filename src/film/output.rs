@@ -35,17 +35,13 @@ pub enum ComponentFormat {
     UInt32,
 }
 
-impl ComponentFormat {
-    /// The format a film's `component_format` names (`float16`, `float32`, `uint32`).
-    pub fn from_name(name: &str) -> Option<ComponentFormat> {
-        match name {
-            "float32" => Some(ComponentFormat::Float32),
-            "float16" => Some(ComponentFormat::Float16),
-            "uint32" => Some(ComponentFormat::UInt32),
-            _ => None,
-        }
-    }
+crate::choices!(ComponentFormat, "component format", {
+    ComponentFormat::Float32 => "float32", "32-bit floats";
+    ComponentFormat::Float16 => "float16", "16-bit floats, clamped to ±65504";
+    ComponentFormat::UInt32 => "uint32", "32-bit unsigned integers: [0, 1] scaled to 2³² − 1";
+});
 
+impl ComponentFormat {
     /// One channel's finite values in this format.
     fn samples(self, values: impl Iterator<Item = f32>) -> exr::prelude::FlatSamples {
         use exr::prelude::{f16, FlatSamples};
@@ -545,8 +541,8 @@ mod tests {
             let got = &ints.iter().find(|c| c.0 == name).unwrap().1;
             assert!(matches!(got, FlatSamples::U32(v) if *v == values), "{name}: {got:?}");
         }
-        assert_eq!(ComponentFormat::from_name("float16"), Some(ComponentFormat::Float16));
-        assert_eq!(ComponentFormat::from_name("half"), None);
+        assert_eq!("float16".parse::<ComponentFormat>(), Ok(ComponentFormat::Float16));
+        assert!("half".parse::<ComponentFormat>().is_err());
         std::fs::remove_dir_all(&dir).ok();
     }
 

@@ -16,10 +16,9 @@
 //! parameterization (world space, not normalized), as Mitsuba's shapes define them; `duv_dx`
 //! and `duv_dy` (`name.U/V`) the change of (u, v) per pixel right and down, from the camera
 //! ray's differentials ([`crate::camera::Camera::ray_differentials`]) scaled by 1/√spp as
-//! Mitsuba scales them, and solved in the tangent plane
-//! as Mitsuba's `compute_uv_partials` solves it (zero where Mitsuba's solve gives NaN: on
-//! misses, degenerate parameterizations). `boundary_test` (projective differentiable
-//! rendering) is an error.
+//! Mitsuba scales them, and solved in the tangent plane as Mitsuba's `compute_uv_partials`
+//! solves it (zero where Mitsuba's solve gives NaN: on misses, degenerate parameterizations).
+//! `boundary_test` (projective differentiable rendering) is an error.
 
 use super::{nested_integrators, AnyIntegrator, Integrator, RadianceSample};
 use crate::camera::RayDifferentials;
@@ -257,6 +256,7 @@ impl Integrator for AovIntegrator {
                 *out.next().expect("one slot per AOV channel") = v;
             }
         };
+        let mut partials: Option<(Vec2, Vec2)> = None;
         for &(_, kind) in &self.aovs {
             match kind {
                 AovKind::Albedo | AovKind::DenoisingAlbedo => {
@@ -300,7 +300,9 @@ impl Integrator for AovIntegrator {
                 AovKind::DpDu => put(&[si.dpdu.x, si.dpdu.y, si.dpdu.z]),
                 AovKind::DpDv => put(&[si.dpdv.x, si.dpdv.y, si.dpdv.z]),
                 AovKind::DuvDx | AovKind::DuvDy => {
-                    let (dx, dy) = differentials.map_or((Vec2::ZERO, Vec2::ZERO), |d| uv_partials(&si, d));
+                    // Solved once for both.
+                    let (dx, dy) = *partials
+                        .get_or_insert_with(|| differentials.map_or((Vec2::ZERO, Vec2::ZERO), |d| uv_partials(&si, d)));
                     let duv = if kind == AovKind::DuvDx { dx } else { dy };
                     put(&[duv.x, duv.y])
                 }

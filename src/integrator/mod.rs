@@ -84,7 +84,7 @@ pub trait Integrator: Sync {
     /// [`Integrator::sample`] that also writes one value per [`Integrator::aov_names`] entry
     /// into `aovs` (which has that length). The render driver calls this one, with the camera
     /// ray's differentials scaled to the spacing of the render's samples where
-    /// [`Integrator::wants_differentials`] and the camera has them.
+    /// [`Integrator::wants_differentials`] (`None` elsewhere).
     fn sample_aovs(
         &self,
         scene: &Scene,
