@@ -1324,6 +1324,23 @@ fn aov_derivatives_match_mitsuba() {
         close(&duv_dx.to_array(), &dx, "duv_dx", row);
         close(&duv_dy.to_array(), &dy, "duv_dy", row);
     }
+    // The render hands the differentials, scaled by 1/√spp, through a `moment` to its nested
+    // `aov`: the pixel of the fourth row above (well inside the rectangle) equals it to within
+    // the change across the pixel.
+    let f = load(&format!(
+        r#"<scene version="3.0.0">{}{shapes}
+           <integrator type="moment"><integrator type="aov" name="a"><string name="aovs" value="d:duv_dx"/></integrator></integrator>
+           </scene>"#,
+        sensors[0].1
+    ))
+    .unwrap();
+    let settings = crate::render::RenderSettings { spp: 16, filter: Filter::BOX, ..Default::default() };
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let out = crate::render::render_integrator(&f.scene, &f.integrator, &settings, &never).unwrap();
+    let channels = out.film.aov_channels();
+    let u = &channels.iter().find(|c| c.0 == "a.d.U").expect("the nested aov's channel").1;
+    let (pixel, want) = (u[25 * 40 + 19], expected[3].6[0]);
+    assert!((pixel / want - 1.0).abs() < 0.05, "duv_dx.U {pixel} vs {want}");
 }
 
 /// `moment` and `aov` nest camera-ray integrators, named as Mitsuba names them; a light tracer
