@@ -141,12 +141,17 @@ pub fn decode_encoded(name: &Path, bytes: &[u8]) -> Result<EncodedImage, String>
 /// JPEG, BMP, TGA (8-bit, sRGB-encoded unless `raw`, as Mitsuba reads them) and Radiance HDR
 /// (RGBE, linear), through the `image` crate's decoders (which bound their allocations).
 fn load_decoded(path: &Path, raw: bool) -> Result<Image, String> {
-    let decoded = image::ImageReader::open(path)
+    let reader = image::ImageReader::open(path)
         .map_err(|e| format!("cannot open: {e}"))?
         .with_guessed_format()
-        .map_err(|e| format!("cannot read: {e}"))?
-        .decode()
-        .map_err(|e| format!("not a readable image: {e}"))?;
+        .map_err(|e| format!("cannot read: {e}"))?;
+    decode_rgb(reader, raw)
+}
+
+/// The image `reader` decodes, as linear RGB: 8- and 16-bit samples sRGB-decoded unless `raw`,
+/// float samples as they are.
+fn decode_rgb<R: std::io::BufRead + std::io::Seek>(reader: image::ImageReader<R>, raw: bool) -> Result<Image, String> {
+    let decoded = reader.decode().map_err(|e| format!("not a readable image: {e}"))?;
     let linear = matches!(decoded, image::DynamicImage::ImageRgb32F(_) | image::DynamicImage::ImageRgba32F(_));
     let rgb = decoded.to_rgb32f();
     let decode = |v: f32| if raw || linear { v } else { srgb_decode(v) };
@@ -163,7 +168,8 @@ fn load_ppm(path: &Path, raw: bool) -> Result<Image, String> {
         let magic = String::from_utf8_lossy(&bytes[..bytes.len().min(2)]).into_owned();
         return Err(format!("not a binary PPM (its magic number is \"{magic}\"; Mitsuba reads only \"P6\")"));
     }
-    load_decoded(path, raw)
+    // Decoded from the bytes already read (not a second read of the file).
+    decode_rgb(image::ImageReader::with_format(std::io::Cursor::new(&bytes[..]), image::ImageFormat::Pnm), raw)
 }
 
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
