@@ -6,12 +6,12 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-targets=${*:-xml obj ply image vol tensor part gltf pbrt}
+targets=${*:-xml render obj ply image vol tensor part gltf pbrt}
 mkdir -p fuzz/corpus
 for t in $targets; do
     mkdir -p "fuzz/corpus/$t"
     case $t in
-        xml) cp -n scenes/*.xml "fuzz/corpus/$t/" ;;
+        xml|render) cp -n scenes/*.xml "fuzz/corpus/$t/" ;;
         obj) cp -n scenes/assets/*.obj "fuzz/corpus/$t/" ;;
         ply) cp -n scenes/assets/*.ply "fuzz/corpus/$t/" ;;
         vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
@@ -27,7 +27,7 @@ for t in $targets; do
                for f in scenes/assets/*.exr; do [ -e "fuzz/corpus/$t/exr-$(basename "$f")" ] || { printf '\x01' | cat - "$f" > "fuzz/corpus/$t/exr-$(basename "$f")"; }; done ;;
     esac
     dict=()
-    [ "$t" = xml ] && dict=(-dict=fuzz/xml.dict)
+    case $t in xml|render) dict=(-dict=fuzz/xml.dict) ;; esac
     echo "fuzzing $t for $secs s"
     cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=20 "${dict[@]}" 2>&1 | tail -4
 done

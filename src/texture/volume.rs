@@ -99,7 +99,7 @@ impl Grid {
                 let i0 = x.map(crate::math::floor);
                 let f = [0, 1, 2].map(|a| x[a] - i0[a]);
                 let lo = [0, 1, 2].map(|a| w.apply(i0[a] as i64, res[a]));
-                let hi = [0, 1, 2].map(|a| w.apply(i0[a] as i64 + 1, res[a]));
+                let hi = [0, 1, 2].map(|a| w.apply((i0[a] as i64).saturating_add(1), res[a]));
                 let mut v = [0.0; N];
                 for corner in 0..8 {
                     let pick = |a: usize| corner >> a & 1 == 1;
