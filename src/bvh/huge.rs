@@ -33,10 +33,20 @@ unsafe impl<T: Copy + Sync> Sync for HugeArray<T> {}
 impl<T: Copy> HugeArray<T> {
     /// A copy of `items`.
     pub fn from_slice(items: &[T]) -> HugeArray<T> {
-        let bytes = size_of_val(items);
+        HugeArray::from_exact_iter(items.len(), items.iter().copied())
+    }
+
+    /// The `len` items of `iter`, written straight into the array's memory (no intermediate
+    /// vector: the peak memory of building it is the array's). Panics if `iter` yields another
+    /// number of items.
+    pub fn from_exact_iter(len: usize, iter: impl IntoIterator<Item = T>) -> HugeArray<T> {
+        let bytes = len.checked_mul(size_of::<T>()).expect("array size overflows");
+        let mut iter = iter.into_iter();
         if bytes == 0 {
             // Nothing to allocate (no items, or zero-sized ones): a dangling, aligned pointer.
-            return HugeArray { ptr: NonNull::dangling(), len: items.len(), layout: None };
+            let n = iter.by_ref().take(len.saturating_add(1)).count();
+            assert_eq!(n, len, "the iterator yielded {n} items, not {len}");
+            return HugeArray { ptr: NonNull::dangling(), len, layout: None };
         }
         let huge = bytes >= HUGE_PAGE;
         let align = if huge { HUGE_PAGE.max(align_of::<T>()) } else { align_of::<T>() };
@@ -48,10 +58,19 @@ impl<T: Copy> HugeArray<T> {
             // The whole huge pages; the tail, less than one, stays in ordinary pages.
             advise_huge_pages(raw, bytes / HUGE_PAGE * HUGE_PAGE);
         }
-        // SAFETY: the allocation holds `items.len()` elements of `T` (its size, at T's alignment
-        // or more) and does not overlap `items`.
-        unsafe { std::ptr::copy_nonoverlapping(items.as_ptr(), ptr.as_ptr(), items.len()) };
-        HugeArray { ptr, len: items.len(), layout: Some(layout) }
+        let mut written = 0;
+        for item in iter.by_ref().take(len) {
+            // SAFETY: the allocation holds `len` elements of `T` (its size, at T's alignment or
+            // more) and `written < len`.
+            unsafe { ptr.as_ptr().add(written).write(item) };
+            written += 1;
+        }
+        if written != len || iter.next().is_some() {
+            // SAFETY: allocated above with this layout; the elements are `Copy` (no drop).
+            unsafe { dealloc(raw, layout) };
+            panic!("the iterator yielded {} than {len} items", if written == len { "more" } else { "fewer" });
+        }
+        HugeArray { ptr, len, layout: Some(layout) }
     }
 
     /// Whether the array's memory was advised as huge pages (it spans at least one).
@@ -141,6 +160,18 @@ mod tests {
             let b = a.clone();
             drop(a);
             assert_eq!(&b[..], &items[..]);
+        }
+    }
+
+    #[test]
+    fn fills_from_an_iterator_of_the_stated_length() {
+        let n = HUGE_PAGE / 4 + 3;
+        let a = HugeArray::from_exact_iter(n, (0..n as u32).map(|i| i ^ 0x5a5a));
+        assert!(a.huge() && a.len() == n);
+        assert!(a.iter().enumerate().all(|(i, &v)| v == i as u32 ^ 0x5a5a));
+        for (len, items) in [(3usize, 2u32), (3, 4), (0, 1)] {
+            let r = std::panic::catch_unwind(|| HugeArray::from_exact_iter(len, 0..items));
+            assert!(r.is_err(), "{items} items for a length of {len} must be refused");
         }
     }
 

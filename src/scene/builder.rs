@@ -3,7 +3,7 @@
 
 use super::BuildError;
 use super::{LeafPrim, PrimRef, Primitive, Scene, Shape, TRIANGLE_BLOCKS};
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, HugeArray};
 use crate::camera::Camera;
 use crate::geometry::triangle8::{Triangle8, LANES};
 use crate::geometry::Geometry;
@@ -149,8 +149,11 @@ impl SceneBuilder {
             }
         }
         // Primitives and their bounds.
-        let mut refs = Vec::new();
-        let mut bounds = Vec::new();
+        // (The vectors below are sized exactly and dropped as soon as they are used: a scene of
+        // millions of triangles peaks at what its BVH build holds.)
+        let total: usize = self.geometries.iter().map(Geometry::primitive_count).sum();
+        let mut refs = Vec::with_capacity(total);
+        let mut bounds = Vec::with_capacity(total);
         for (s, g) in self.geometries.iter().enumerate() {
             for i in 0..g.primitive_count() {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
@@ -166,18 +169,24 @@ impl SceneBuilder {
             }
         };
         let pieces = crate::bvh::presplit::presplit(&bounds, triangle, PRESPLIT_BUDGET);
-        let piece_bounds: Vec<_> = pieces.iter().map(|p| p.bounds).collect();
+        drop(bounds);
+        let (piece_bounds, piece_prims): (Vec<_>, Vec<_>) = pieces.iter().map(|p| (p.bounds, p.prim)).unzip();
+        drop(pieces);
         let costs: Vec<f32> = self.geometries.iter().map(Geometry::test_cost).collect();
         // (None where every shape is a mesh: all triangles are tested in blocks.)
         let weights: Vec<f32> = if costs.iter().any(|&c| c > 0.0) {
-            pieces.iter().map(|p| costs[refs[p.prim as usize].shape as usize]).collect()
+            piece_prims.iter().map(|&p| costs[refs[p as usize].shape as usize]).collect()
         } else {
             Vec::new()
         };
-        let mut bvh = Bvh::build_weighted(&piece_bounds, &weights, &super::bvh_options(bounds.len()));
-        let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[pieces[k as usize].prim as usize]).collect();
-        // Leaves of triangles only become blocks of eight; the others keep a primitive list.
-        let (mut blocks, mut prims) = (Vec::new(), Vec::new());
+        let mut bvh = Bvh::build_weighted(&piece_bounds, &weights, &super::bvh_options(total));
+        drop((piece_bounds, weights));
+        let refs: Vec<PrimRef> = bvh.order().iter().map(|&k| refs[piece_prims[k as usize] as usize]).collect();
+        drop(piece_prims);
+        // Leaves of triangles only become blocks of eight, written after the leaves are
+        // numbered (their count known, straight into their array); the others keep a primitive
+        // list.
+        let (mut block_leaves, mut block_count, mut prims) = (Vec::new(), 0usize, Vec::new());
         let primitive = |k: u32| {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
@@ -191,23 +200,29 @@ impl SceneBuilder {
             }
         };
         bvh.remap_leaves(|first, count| {
-            let leaf: Vec<LeafPrim> = (first..first + count).map(|k| LeafPrim { prim: primitive(k), r: k }).collect();
-            let tris: Option<Vec<([Vec3; 3], u32)>> = leaf
-                .iter()
-                .map(|lp| match lp.prim {
-                    Primitive::Triangle(p) => Some((p, lp.r)),
-                    _ => None,
-                })
-                .collect();
-            if let Some(tris) = tris {
-                let start = blocks.len() as u32;
-                blocks.extend(tris.chunks(LANES).map(Triangle8::new));
-                return (start, (blocks.len() as u32 - start) | TRIANGLE_BLOCKS);
+            if (first..first + count).all(|k| matches!(primitive(k), Primitive::Triangle(_))) {
+                let (start, n) = (block_count as u32, count.div_ceil(LANES as u32));
+                block_leaves.push((first, count));
+                block_count += n as usize;
+                return (start, n | TRIANGLE_BLOCKS);
             }
             let start = prims.len() as u32;
-            prims.extend(leaf);
+            prims.extend((first..first + count).map(|k| LeafPrim { prim: primitive(k), r: k }));
             (start, count)
         });
+        let blocks = HugeArray::from_exact_iter(
+            block_count,
+            block_leaves.iter().flat_map(|&(first, count)| {
+                let tris: Vec<([Vec3; 3], u32)> = (first..first + count)
+                    .filter_map(|k| match primitive(k) {
+                        Primitive::Triangle(p) => Some((p, k)),
+                        _ => None,
+                    })
+                    .collect();
+                tris.chunks(LANES).map(Triangle8::new).collect::<Vec<_>>()
+            }),
+        );
+        drop(block_leaves);
         // Infinite lights need the scene's extent.
         let (center, radius) = bvh.bounds().bounding_sphere();
         for l in &mut self.lights {
@@ -234,7 +249,7 @@ impl SceneBuilder {
         Ok(Scene {
             needs_dpdv,
             needs_uv,
-            cached_normals: bounds.len() <= super::SMALL_SCENE_PRIMITIVES,
+            cached_normals: total <= super::SMALL_SCENE_PRIMITIVES,
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,
@@ -247,10 +262,10 @@ impl SceneBuilder {
             camera_medium: self.camera_medium,
             shape_labels: self.shape_labels,
             bvh,
-            blocks: blocks.into(),
+            blocks,
             prims: prims.into(),
             refs: refs.into(),
-            primitives: bounds.len(),
+            primitives: total,
             camera,
         })
     }
