@@ -5,7 +5,6 @@
 use super::LoadError;
 use crate::geometry::TriangleMesh;
 use crate::math::{Vec2, Vec3};
-use std::collections::HashMap;
 use std::path::Path;
 
 /// Loads an OBJ file.
@@ -18,6 +17,47 @@ pub fn load_obj(path: &Path) -> Result<TriangleMesh, LoadError> {
     })
 }
 
+/// The vertices a mesh gets: one per distinct (position, texture, normal) triple of the
+/// faces, numbered in order of first use. Found without hashing: each position lists the
+/// vertices made from it (most positions have one, a seam's a few).
+#[derive(Default)]
+struct Unified {
+    /// Per position: its most recent vertex, or [`NONE`].
+    head: Vec<u32>,
+    /// Per vertex: its texture and normal indices (or [`NONE`]) and the position's previous
+    /// vertex (or [`NONE`]).
+    keys: Vec<[u32; 3]>,
+}
+
+/// No index.
+const NONE: u32 = u32::MAX;
+
+impl Unified {
+    /// The vertex of (`p`, `t`, `n`), if there is one already.
+    fn find(&self, p: u32, t: u32, n: u32) -> Option<u32> {
+        let mut k = self.head.get(p as usize).copied().unwrap_or(NONE);
+        while k != NONE {
+            let [kt, kn, next] = self.keys[k as usize];
+            if (kt, kn) == (t, n) {
+                return Some(k);
+            }
+            k = next;
+        }
+        None
+    }
+
+    /// Adds the vertex of (`p`, `t`, `n`) (not there yet) as the next one; returns its number.
+    fn add(&mut self, p: u32, t: u32, n: u32) -> u32 {
+        if p as usize >= self.head.len() {
+            self.head.resize(p as usize + 1, NONE);
+        }
+        let id = self.keys.len() as u32;
+        self.keys.push([t, n, self.head[p as usize]]);
+        self.head[p as usize] = id;
+        id
+    }
+}
+
 /// Parses OBJ text; errors carry the 1-based line number.
 pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
     let (mut v, mut vt, mut vn) = (Vec::new(), Vec::new(), Vec::new());
@@ -25,43 +65,45 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
     let mut uvs = Vec::new();
     let mut normals = Vec::new();
     let mut indices = Vec::new();
-    let mut unified: HashMap<(usize, Option<usize>, Option<usize>), u32> = HashMap::new();
+    let mut unified = Unified::default();
+    let mut corner = Vec::new();
     let (mut any_uv, mut any_n) = (false, false);
     for (ln, raw) in text.lines().enumerate() {
         let line_no = ln + 1;
-        let line = raw.split('#').next().unwrap_or("").trim();
+        let line = raw.split_once('#').map_or(raw, |(before, _)| before).trim();
         let mut it = line.split_whitespace();
         let Some(tag) = it.next() else { continue };
-        let floats = |it: std::str::SplitWhitespace, n: usize, what: &str| -> Result<Vec<f32>, (usize, String)> {
-            let vals: Vec<f32> = it
-                .take(n)
-                .map(|s| {
-                    s.parse::<f32>()
-                        .ok()
-                        .filter(|x| x.is_finite())
-                        .ok_or_else(|| (line_no, format!("expected a finite number in '{what}' record, found '{s}'")))
-                })
-                .collect::<Result<_, _>>()?;
-            if vals.len() < n {
-                return Err((line_no, format!("'{what}' record needs {n} numbers, found {}", vals.len())));
+        let floats = |it: std::str::SplitWhitespace, what: &str| -> Result<[f32; 3], (usize, String)> {
+            let n = if what == "vt" { 2 } else { 3 };
+            let mut vals = [0.0; 3];
+            let mut found = 0;
+            for s in it.take(n) {
+                vals[found] =
+                    s.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                        (line_no, format!("expected a finite number in '{what}' record, found '{s}'"))
+                    })?;
+                found += 1;
+            }
+            if found < n {
+                return Err((line_no, format!("'{what}' record needs {n} numbers, found {found}")));
             }
             Ok(vals)
         };
         match tag {
             "v" => {
-                let f = floats(it, 3, "v")?;
+                let f = floats(it, "v")?;
                 v.push(Vec3::new(f[0], f[1], f[2]));
             }
             "vt" => {
-                let f = floats(it, 2, "vt")?;
+                let f = floats(it, "vt")?;
                 vt.push(Vec2::new(f[0], f[1]));
             }
             "vn" => {
-                let f = floats(it, 3, "vn")?;
+                let f = floats(it, "vn")?;
                 vn.push(Vec3::new(f[0], f[1], f[2]));
             }
             "f" => {
-                let mut corner = Vec::new();
+                corner.clear();
                 for tok in it {
                     let mut parts = tok.split('/');
                     let resolve = |s: Option<&str>, len: usize, what: &str| -> Result<Option<usize>, (usize, String)> {
@@ -84,13 +126,21 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
                     let n = resolve(parts.next(), vn.len(), "normal")?;
                     any_uv |= t.is_some();
                     any_n |= n.is_some();
-                    let key = (p, t, n);
-                    let id = *unified.entry(key).or_insert_with(|| {
-                        positions.push(v[p]);
-                        uvs.push(t.map_or(Vec2::ZERO, |t| vt[t]));
-                        normals.push(n.map_or(Vec3::ZERO, |n| vn[n]));
-                        positions.len() as u32 - 1
-                    });
+                    // (Indices below u32::MAX: a file of 4 billion records is refused below.)
+                    let small =
+                        |i: Option<usize>| i.map_or(Some(NONE), |i| u32::try_from(i).ok().filter(|&i| i != NONE));
+                    let (Some(pk), Some(tk), Some(nk)) = (small(Some(p)), small(t), small(n)) else {
+                        return Err((line_no, "more than 4 billion vertices, texture coordinates or normals".into()));
+                    };
+                    let id = match unified.find(pk, tk, nk) {
+                        Some(id) => id,
+                        None => {
+                            positions.push(v[p]);
+                            uvs.push(t.map_or(Vec2::ZERO, |t| vt[t]));
+                            normals.push(n.map_or(Vec3::ZERO, |n| vn[n]));
+                            unified.add(pk, tk, nk)
+                        }
+                    };
                     corner.push(id);
                 }
                 if corner.len() < 3 {
@@ -125,6 +175,30 @@ mod tests {
         assert_eq!(m.uvs.len(), 4);
         assert_eq!(m.normals.len(), 4);
         assert!((m.area() - 1.0).abs() < 1e-6);
+    }
+
+    /// One vertex per distinct (position, uv, normal) triple, numbered in order of first use: a
+    /// position met again with another uv (a seam) or another normal is a new vertex, the same
+    /// triple met again is the same one, whichever records come between.
+    #[test]
+    fn vertices_are_unified_per_triple_in_order_of_first_use() {
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\nvn 0 0 1\nvn 0 0 -1\n\
+                    f 1/1/1 2/2/1 3/3/1\nf 2/4/1 4/2/1 3/3/1\nf 3/3/2 2/2/1 1/1/1\nf 1/1/1 2/2/1 3/3/1\n";
+        let m = parse_obj(text).unwrap();
+        assert_eq!(m.indices, vec![[0, 1, 2], [3, 4, 2], [5, 1, 0], [0, 1, 2]]);
+        assert_eq!(
+            m.positions,
+            vec![
+                Vec3::new(0.0, 0.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(1.0, 0.0, 0.0),
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::new(0.0, 1.0, 0.0),
+            ]
+        );
+        assert_eq!(m.uvs[3], Vec2::new(0.5, 0.5));
+        assert_eq!(m.normals[5], Vec3::new(0.0, 0.0, -1.0));
     }
 
     #[test]
