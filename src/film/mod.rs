@@ -732,9 +732,10 @@ impl FilmSettings {
         if f.has("crop_width") || f.has("crop_height") || f.has("crop_offset_x") || f.has("crop_offset_y") {
             let ox = f.int("crop_offset_x", 0)?;
             let oy = f.int("crop_offset_y", 0)?;
-            let cw = f.int("crop_width", width as i64 - ox)?;
-            let ch = f.int("crop_height", height as i64 - oy)?;
-            if ox < 0 || oy < 0 || cw < 1 || ch < 1 || ox + cw > width as i64 || oy + ch > height as i64 {
+            let cw = f.int("crop_width", (width as i64).saturating_sub(ox))?;
+            let ch = f.int("crop_height", (height as i64).saturating_sub(oy))?;
+            let fits = |o: i64, c: i64, n: u32| o >= 0 && c >= 1 && o.saturating_add(c) <= n as i64;
+            if !fits(ox, cw, width) || !fits(oy, ch, height) {
                 return Err(f.error(format!(
                     "crop window {cw}x{ch} at ({ox}, {oy}) does not fit in the {width}x{height} film"
                 )));

@@ -327,7 +327,7 @@ impl SdfGrid {
         let n = [self.res[0] as i64, self.res[1] as i64, self.res[2] as i64];
         // The lower corner of the 2×2×2 voxels around the nearest grid point, and p relative to
         // their centres.
-        let v = [0, 1, 2].map(|a| crate::math::round(scaled[a]) as i64 - 1);
+        let v = [0, 1, 2].map(|a| (crate::math::round(scaled[a]) as i64).saturating_sub(1));
         let mut uvw = [0, 1, 2].map(|a| scaled[a] - v[a] as f32 - 0.5);
         // The cell holding p, and p in it.
         let cell = [0, 1, 2].map(|a| (crate::math::floor(scaled[a]) as i64).clamp(0, n[a] - 2));

@@ -49,7 +49,10 @@ impl Splatter {
     fn splat(&self, film: Vec2, value: Rgb, out: &mut Vec<(u32, Rgb)>) {
         let [wx, wy, w, h] = self.window;
         if self.filter.is_pixel_box() {
-            let (x, y) = (crate::math::floor(film.x) as i64 - wx as i64, crate::math::floor(film.y) as i64 - wy as i64);
+            let (x, y) = (
+                (crate::math::floor(film.x) as i64).saturating_sub(wx as i64),
+                (crate::math::floor(film.y) as i64).saturating_sub(wy as i64),
+            );
             if x >= 0 && y >= 0 && x < w as i64 && y < h as i64 {
                 out.push(((y as u32) * w + x as u32, value));
             }

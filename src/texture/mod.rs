@@ -197,6 +197,14 @@ impl Texture {
     }
 }
 
+/// A texel index from a whole number of texels: the number itself within ±2⁶², beyond it the
+/// nearest bound, so that the neighbours, mirrors and wraps of an index computed from it never
+/// overflow (a lookup at a coordinate near f32's limits, where no texel is meant anyway).
+#[inline]
+fn texel_index(x: f32) -> i64 {
+    (x as i64).clamp(-(1 << 62), 1 << 62)
+}
+
 /// The texture coordinates the mesh attribute `attribute` holds at `mesh` (its x and y), or `uv`.
 #[inline]
 fn attribute_uv(attribute: &str, uv: Vec2, mesh: Option<&MeshPoint>) -> Vec2 {
@@ -279,7 +287,7 @@ impl Bitmap {
     fn bilinear_cell(&self, uv: Vec2) -> (i64, i64, f32, f32) {
         let (x, y) = (uv.x * self.image.width as f32 - 0.5, uv.y * self.image.height as f32 - 0.5);
         let (x0, y0) = (floor(x), floor(y));
-        (x0 as i64, y0 as i64, x - x0, y - y0)
+        (texel_index(x0), texel_index(y0), x - x0, y - y0)
     }
 
     /// The filtered value at `uv` (v down the rows).
@@ -287,7 +295,7 @@ impl Bitmap {
         match self.filter {
             Filter::Nearest => {
                 let (w, h) = (self.image.width as f32, self.image.height as f32);
-                self.texel(floor(uv.x * w) as i64, floor(uv.y * h) as i64)
+                self.texel(texel_index(floor(uv.x * w)), texel_index(floor(uv.y * h)))
             }
             Filter::Bilinear => {
                 let (x0, y0, fx, fy) = self.bilinear_cell(uv);

@@ -193,7 +193,7 @@ impl Procedural {
             Procedural::PolkaDots => Rgb::splat(if in_polka_dot(st) { 1.0 } else { 0.0 }),
             Procedural::Checker3d { from_world } => {
                 let q = from_world.transform_point3(p).map(crate::math::floor);
-                let odd = (q.x as i64 + q.y as i64 + q.z as i64).rem_euclid(2) == 1;
+                let odd = (q.x as i64).wrapping_add(q.y as i64).wrapping_add(q.z as i64).rem_euclid(2) == 1;
                 Rgb::splat(if odd { 1.0 } else { 0.0 })
             }
             Procedural::Fbm { from_world, omega, octaves } => {
