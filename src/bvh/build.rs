@@ -379,27 +379,18 @@ fn best_split_in<T: Tally, const N: usize>(
     let mut best = (f32::INFINITY, 0usize, 0usize);
     let mut right_area = [0.0f32; N];
     let mut right_count = [T::default(); N];
-    let bins = |mut mask: u64| {
-        std::iter::from_fn(move || {
-            (mask != 0).then(|| {
-                let b = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                b
-            })
-        })
-    };
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
         // Suffix sweep: the right side from filled bin q holds bins q..nb.
-        let (mut b, mut c) = (Box4::EMPTY, T::default());
-        let mut order = [0usize; N];
-        let mut m = 0;
-        for q in bins(filled[axis]) {
-            order[m] = q;
+        let (mut order, mut m, mut mask) = ([0usize; N], 0, filled[axis]);
+        while mask != 0 {
+            order[m] = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
             m += 1;
         }
+        let (mut b, mut c) = (Box4::EMPTY, T::default());
         for &q in order[..m].iter().rev() {
             b = b.union(&boxes[q][axis]);
             c = c.add(counts[q][axis]);
