@@ -199,8 +199,9 @@ impl SceneBuilder {
                 Geometry::Ellipsoids(_) => Primitive::Ellipsoid,
             }
         };
+        let is_triangle = |k: u32| matches!(geometries[refs[k as usize].shape as usize], Geometry::Mesh(_));
         bvh.remap_leaves(|first, count| {
-            if (first..first + count).all(|k| matches!(primitive(k), Primitive::Triangle(_))) {
+            if (first..first + count).all(is_triangle) {
                 let (start, n) = (block_count as u32, count.div_ceil(LANES as u32));
                 block_leaves.push((first, count));
                 block_count += n as usize;
