@@ -73,8 +73,8 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
         let line = raw.split_once('#').map_or(raw, |(before, _)| before).trim();
         let mut it = line.split_whitespace();
         let Some(tag) = it.next() else { continue };
-        let floats = |it: std::str::SplitWhitespace, what: &str| -> Result<[f32; 3], (usize, String)> {
-            let n = if what == "vt" { 2 } else { 3 };
+        // The first `n` (at most 3) numbers of a record.
+        let floats = |it: std::str::SplitWhitespace, n: usize, what: &str| -> Result<[f32; 3], (usize, String)> {
             let mut vals = [0.0; 3];
             let mut found = 0;
             for s in it.take(n) {
@@ -91,15 +91,15 @@ pub fn parse_obj(text: &str) -> Result<TriangleMesh, (usize, String)> {
         };
         match tag {
             "v" => {
-                let f = floats(it, "v")?;
+                let f = floats(it, 3, "v")?;
                 v.push(Vec3::new(f[0], f[1], f[2]));
             }
             "vt" => {
-                let f = floats(it, "vt")?;
+                let f = floats(it, 2, "vt")?;
                 vt.push(Vec2::new(f[0], f[1]));
             }
             "vn" => {
-                let f = floats(it, "vn")?;
+                let f = floats(it, 3, "vn")?;
                 vn.push(Vec3::new(f[0], f[1], f[2]));
             }
             "f" => {
