@@ -31,6 +31,7 @@ use crate::props::{Obj, Value};
 use crate::sampling::sampler::{SamplerKind, SamplerSettings};
 use crate::scene::SceneBuilder;
 use crate::texture::{texture_plugin, Texture, TextureSource, TEXTURE_PLUGINS};
+use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
 use std::rc::Rc;
@@ -74,6 +75,9 @@ pub struct Builder {
     shape_sensor: Option<(Rc<Obj>, Geometry)>,
     /// The scene's sensor's `shutter_open` and `shutter_close` (0, 0 without one).
     shutter: (f32, f32),
+    /// Mesh files read before the build, in parallel ([`Builder::prefetch_meshes`]): per file,
+    /// the uses left and what reading it gave.
+    prefetched: HashMap<MeshKey, (usize, std::result::Result<MeshFile, crate::load::LoadError>)>,
 }
 
 impl Builder {
@@ -96,6 +100,7 @@ impl Builder {
             memory: MemoryFiles::default(),
             shape_sensor: None,
             shutter: (0.0, 0.0),
+            prefetched: HashMap::new(),
         }
     }
 
@@ -108,6 +113,7 @@ impl Builder {
     /// Builds everything under `root` (a `<scene>`).
     pub fn build(mut self, root: &Obj) -> Result<SceneFile> {
         root.built.set(true);
+        self.prefetch_meshes(root);
         // The sensor's shutter (the time of its rays), for the emitters that depend on time.
         if let Some(sensor) = root.children.iter().find(|c| c.tag == "sensor") {
             self.shutter = (sensor.float("shutter_open", 0.0)?, sensor.float("shutter_close", 0.0)?);
@@ -816,28 +822,96 @@ impl MeshSource for Builder {
             return Ok(MeshFile { mesh, face_normals: false });
         }
         let path = self.resolver.resolve(&o.string(name)?);
-        let located = |e: crate::load::LoadError| o.error_at(name, e.to_string());
-        match o.ty.as_str() {
-            "obj" => Ok(MeshFile { mesh: crate::load::obj::load_obj(&path).map_err(located)?, face_normals: false }),
-            "ply" => Ok(MeshFile { mesh: crate::load::ply::load_ply(&path).map_err(located)?, face_normals: false }),
+        let index = match o.ty.as_str() {
+            "obj" | "ply" => 0,
             _ => {
                 let index = o.int("shape_index", 0)?;
-                let index = usize::try_from(index)
-                    .map_err(|_| o.error_at("shape_index", format!("shape_index must be ≥ 0, got {index}")))?;
-                let s = crate::load::serialized::load_serialized(&path, index).map_err(located)?;
-                let mut mesh = s.mesh;
-                if !s.colors.is_empty() {
-                    // Mitsuba names a serialized mesh's vertex colours `vertex_color`.
-                    let values = s.colors;
-                    mesh.attributes.push(crate::geometry::mesh::MeshAttribute {
-                        name: "vertex_color".into(),
-                        per_face: false,
-                        values,
-                    });
+                usize::try_from(index)
+                    .map_err(|_| o.error_at("shape_index", format!("shape_index must be ≥ 0, got {index}")))?
+            }
+        };
+        let key = (path, o.ty.clone(), index);
+        let read = match self.prefetched.remove(&key) {
+            Some((uses, Ok(file))) if uses > 1 => {
+                let copy = MeshFile { mesh: file.mesh.clone(), face_normals: file.face_normals };
+                self.prefetched.insert(key, (uses - 1, Ok(file)));
+                Ok(copy)
+            }
+            Some((_, read)) => read,
+            None => read_mesh_file(&key),
+        };
+        read.map_err(|e| o.error_at(name, e.to_string()))
+    }
+}
+
+/// A mesh file as the shapes name it: its path, the shape's type (`obj`, `ply` or
+/// `serialized`) and, in a serialized file, the mesh's index.
+type MeshKey = (PathBuf, String, usize);
+
+/// Reads the mesh file `key` names.
+fn read_mesh_file((path, ty, index): &MeshKey) -> std::result::Result<MeshFile, crate::load::LoadError> {
+    match ty.as_str() {
+        "obj" => Ok(MeshFile { mesh: crate::load::obj::load_obj(path)?, face_normals: false }),
+        "ply" => Ok(MeshFile { mesh: crate::load::ply::load_ply(path)?, face_normals: false }),
+        _ => {
+            let s = crate::load::serialized::load_serialized(path, *index)?;
+            let mut mesh = s.mesh;
+            if !s.colors.is_empty() {
+                // Mitsuba names a serialized mesh's vertex colours `vertex_color`.
+                let values = s.colors;
+                mesh.attributes.push(crate::geometry::mesh::MeshAttribute {
+                    name: "vertex_color".into(),
+                    per_face: false,
+                    values,
+                });
+            }
+            Ok(MeshFile { mesh, face_normals: s.face_normals })
+        }
+    }
+}
+
+impl Builder {
+    /// Reads every mesh file the scene's shapes name (OBJ, PLY, serialized), in parallel, before
+    /// the build takes them one by one in document order: a scene of many meshes loads on every
+    /// core, as Mitsuba's loads them. A file named by several shapes is read once and copied
+    /// for all but its last use. Nothing here can fail: a shape whose file or index cannot be
+    /// read is left to its own build, which reports it where it is.
+    fn prefetch_meshes(&mut self, root: &Obj) {
+        fn walk(o: &Obj, seen: &mut std::collections::HashSet<*const Obj>, found: &mut Vec<Rc<Obj>>) {
+            let nested = o.children.iter().chain(o.props.iter().filter_map(|p| match &p.value {
+                Value::Object(c) => Some(c),
+                _ => None,
+            }));
+            for c in nested {
+                if seen.insert(Rc::as_ptr(c)) {
+                    if c.tag == "shape" && matches!(c.ty.as_str(), "obj" | "ply" | "serialized") {
+                        found.push(c.clone());
+                    }
+                    walk(c, seen, found);
                 }
-                Ok(MeshFile { mesh, face_normals: s.face_normals })
             }
         }
+        let mut shapes = Vec::new();
+        walk(root, &mut std::collections::HashSet::new(), &mut shapes);
+        let mut uses: HashMap<MeshKey, usize> = HashMap::new();
+        for o in &shapes {
+            let Some(Value::String(file)) = o.props.iter().find(|p| p.name == "filename").map(|p| &p.value) else {
+                continue;
+            };
+            let index = match o.props.iter().find(|p| p.name == "shape_index").map(|p| &p.value) {
+                _ if o.ty != "serialized" => 0,
+                None => 0,
+                Some(Value::Integer(i)) if *i >= 0 => *i as usize,
+                Some(_) => continue,
+            };
+            *uses.entry((self.resolver.resolve(file), o.ty.clone(), index)).or_default() += 1;
+        }
+        if uses.len() < 2 {
+            return; // (One file or none: read where it is used.)
+        }
+        let keys: Vec<MeshKey> = uses.keys().cloned().collect();
+        let read: Vec<_> = keys.par_iter().map(read_mesh_file).collect();
+        self.prefetched = keys.into_iter().zip(read).map(|(k, r)| (k.clone(), (uses[&k], r))).collect();
     }
 }
 

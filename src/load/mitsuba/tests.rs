@@ -1037,6 +1037,38 @@ fn meshes_load_relative_to_the_scene_with_mitsuba_options() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A scene of several mesh files reads them in parallel before the build: each shape still gets
+/// its own file with its own options (a file named twice is copied for its first use, moved for
+/// its last, each placed by its own `to_world`), and a file that cannot be read is reported at
+/// the shape naming it, after the shapes before it were read.
+#[test]
+fn mesh_files_read_ahead_keep_their_shapes_and_errors() {
+    let dir = std::env::temp_dir().join(format!("neumann-xml-prefetch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tri.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n").unwrap();
+    std::fs::write(dir.join("quad.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
+    let shapes = r#"<shape type="obj"><string name="filename" value="tri.obj"/></shape>
+        <shape type="obj"><string name="filename" value="quad.obj"/></shape>
+        <shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" value="false"/>
+            <transform name="to_world"><translate z="5"/></transform></shape>"#;
+    std::fs::write(dir.join("s.xml"), scene(shapes)).unwrap();
+    let f = load_scene_file(&dir.join("s.xml"), &[]).unwrap();
+    let mesh = |k: usize| match &f.scene.geometries()[k] {
+        Geometry::Mesh(m) => m.clone(),
+        g => panic!("{g:?}"),
+    };
+    let (a, b, c) = (mesh(0), mesh(1), mesh(2));
+    assert_eq!((a.len(), b.len(), c.len()), (1, 2, 1));
+    assert_eq!(a.uvs[0], crate::math::Vec2::new(0.0, 1.0), "flipped by default");
+    assert_eq!(c.uvs[0], crate::math::Vec2::new(0.0, 0.0), "this shape's own option");
+    assert_eq!((a.positions[1].z, c.positions[1].z), (0.0, 5.0), "each placed by its own to_world");
+    let broken = format!("{shapes}\n<shape type=\"obj\"><string name=\"filename\" value=\"missing.obj\"/></shape>");
+    std::fs::write(dir.join("t.xml"), scene(&broken)).unwrap();
+    let e = load_scene_file(&dir.join("t.xml"), &[]).unwrap_err().to_string();
+    assert!(e.contains("t.xml:") && e.contains("missing.obj"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Mitsuba's default BSDFs: diffuse 0.5 on plain shapes, black on emitters (a light source that
 /// reflected light would add a bounce Mitsuba does not have).
 #[test]
