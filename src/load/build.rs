@@ -877,41 +877,44 @@ impl Builder {
     /// for all but its last use. Nothing here can fail: a shape whose file or index cannot be
     /// read is left to its own build, which reports it where it is.
     fn prefetch_meshes(&mut self, root: &Obj) {
-        fn walk(o: &Obj, seen: &mut std::collections::HashSet<*const Obj>, found: &mut Vec<Rc<Obj>>) {
+        // Every object once (references make a graph of the tree), without recursion (a chain of
+        // references is as long as the file makes it).
+        let mut uses: HashMap<MeshKey, usize> = HashMap::new();
+        let (mut seen, mut todo) = (std::collections::HashSet::new(), vec![root]);
+        while let Some(o) = todo.pop() {
             let nested = o.children.iter().chain(o.props.iter().filter_map(|p| match &p.value {
                 Value::Object(c) => Some(c),
                 _ => None,
             }));
-            for c in nested {
-                if seen.insert(Rc::as_ptr(c)) {
-                    if c.tag == "shape" && matches!(c.ty.as_str(), "obj" | "ply" | "serialized") {
-                        found.push(c.clone());
-                    }
-                    walk(c, seen, found);
+            for c in nested.filter(|c| seen.insert(Rc::as_ptr(c))) {
+                todo.push(c);
+                if c.tag != "shape" || !matches!(c.ty.as_str(), "obj" | "ply" | "serialized") {
+                    continue;
                 }
+                let value = |name: &str| c.props.iter().find(|p| p.name == name).map(|p| &p.value);
+                let Some(Value::String(file)) = value("filename") else { continue };
+                let index = match value("shape_index") {
+                    _ if c.ty != "serialized" => 0,
+                    None => 0,
+                    Some(Value::Integer(i)) if *i >= 0 => *i as usize,
+                    Some(_) => continue,
+                };
+                *uses.entry((self.resolver.resolve(file), c.ty.clone(), index)).or_default() += 1;
             }
-        }
-        let mut shapes = Vec::new();
-        walk(root, &mut std::collections::HashSet::new(), &mut shapes);
-        let mut uses: HashMap<MeshKey, usize> = HashMap::new();
-        for o in &shapes {
-            let Some(Value::String(file)) = o.props.iter().find(|p| p.name == "filename").map(|p| &p.value) else {
-                continue;
-            };
-            let index = match o.props.iter().find(|p| p.name == "shape_index").map(|p| &p.value) {
-                _ if o.ty != "serialized" => 0,
-                None => 0,
-                Some(Value::Integer(i)) if *i >= 0 => *i as usize,
-                Some(_) => continue,
-            };
-            *uses.entry((self.resolver.resolve(file), o.ty.clone(), index)).or_default() += 1;
         }
         if uses.len() < 2 {
             return; // (One file or none: read where it is used.)
         }
         let keys: Vec<MeshKey> = uses.keys().cloned().collect();
         let read: Vec<_> = keys.par_iter().map(read_mesh_file).collect();
-        self.prefetched = keys.into_iter().zip(read).map(|(k, r)| (k.clone(), (uses[&k], r))).collect();
+        self.prefetched = keys
+            .into_iter()
+            .zip(read)
+            .map(|(k, r)| {
+                let n = uses[&k];
+                (k, (n, r))
+            })
+            .collect();
     }
 }
 
