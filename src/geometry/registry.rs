@@ -12,7 +12,7 @@ use crate::props::{Obj, Result};
 
 /// A mesh read from a file, and whether the file asks for flat shading (Mitsuba's serialized
 /// format has a flag for it).
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct MeshFile {
     /// The mesh, in its own coordinates.
     pub mesh: TriangleMesh,

@@ -833,9 +833,8 @@ impl MeshSource for Builder {
         let key = (path, o.ty.clone(), index);
         let read = match self.prefetched.remove(&key) {
             Some((uses, Ok(file))) if uses > 1 => {
-                let copy = MeshFile { mesh: file.mesh.clone(), face_normals: file.face_normals };
-                self.prefetched.insert(key, (uses - 1, Ok(file)));
-                Ok(copy)
+                self.prefetched.insert(key, (uses - 1, Ok(file.clone())));
+                Ok(file)
             }
             Some((_, read)) => read,
             None => read_mesh_file(&key),
