@@ -99,16 +99,51 @@ fn checked(image: Arc<Image>, scale: f32, square: bool) -> Result<Arc<Image>, En
     Ok(image)
 }
 
+/// The amount Mitsuba's `mis_compensation` subtracts from every texel's sampling weight: the
+/// mean of the texels' `values` (Karlík et al. 2019, "MIS compensation: optimizing sampling
+/// techniques in multiple importance sampling"), or 0 for a map whose mean is within 1 % of its
+/// minimum (near-constant: nothing would be left to sample), as Mitsuba's `envmap` decides.
+/// Where the offset removes a direction's density, only BSDF sampling reaches it: unbiased
+/// under MIS, as Mitsuba documents the option for.
+fn mis_offset(values: impl Iterator<Item = f32>) -> f32 {
+    let (mut sum, mut n, mut min) = (0.0f64, 0usize, f32::INFINITY);
+    for v in values {
+        sum += f64::from(v);
+        n += 1;
+        min = min.min(v);
+    }
+    let mean = (sum / n.max(1) as f64) as f32;
+    if mean - min <= 0.01 * mean {
+        0.0
+    } else {
+        mean
+    }
+}
+
 impl EnvMap {
     /// An environment from `image` (owned or shared), radiance multiplied by `scale`, rotated by
     /// `to_world`.
     pub fn new(image: impl Into<Arc<Image>>, scale: f32, to_world: Transform) -> Result<EnvMap, EnvMapError> {
+        EnvMap::new_latlong(image, scale, to_world, false)
+    }
+
+    /// [`EnvMap::new`], its sampling density MIS-compensated where `mis_compensation` (Mitsuba's
+    /// parameter; see [`mis_offset`]): each cell weighted by `max(luminance − mean, 0)` instead
+    /// of its luminance, so directions no brighter than the map's mean are left to BSDF
+    /// sampling. The radiance and its integral are the same.
+    pub fn new_latlong(
+        image: impl Into<Arc<Image>>,
+        scale: f32,
+        to_world: Transform,
+        mis_compensation: bool,
+    ) -> Result<EnvMap, EnvMapError> {
         let image = checked(image.into(), scale, false)?;
         if image.height < 2 {
             return Err(EnvMapError::TooLow);
         }
         let (w, h) = (image.width as usize, image.height as usize);
         let lum = |x: usize, y: usize| luminance(image.pixels[y * w + x % w]);
+        let offset = if mis_compensation { mis_offset(image.pixels.iter().map(|&p| luminance(p))) } else { 0.0 };
         let theta = |y: usize| PI * y as f32 / (h - 1) as f32;
         let mut func = Vec::with_capacity(w * (h - 1));
         let mut integral = 0.0f64;
@@ -118,7 +153,7 @@ impl EnvMap {
             let sin_mid = (0.5 * (t0 + t1)).sin();
             for x in 0..w {
                 let c = [lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1)];
-                func.push(c.iter().fold(0.0f32, |a, &b| a.max(b)) * sin_max);
+                func.push((c.iter().fold(0.0f32, |a, &b| a.max(b)) - offset).max(0.0) * sin_max);
                 integral += (c.iter().sum::<f32>() * 0.25 * sin_mid) as f64;
             }
         }
@@ -203,14 +238,22 @@ impl EnvMap {
 
     /// pbrt-v4's equal-area environment: a square `image` (see the module notes), radiance
     /// multiplied by `scale`, local +z (the square's centre) turned by `to_world`.
+    /// `mis_compensation` as in [`EnvMap::new_latlong`], on pbrt's per-texel channel averages
+    /// (pbrt-v4's own `compensatedDistribution`, which its path tracer samples, subtracts their
+    /// mean likewise).
     pub fn new_equal_area(
         image: impl Into<Arc<Image>>,
         scale: f32,
         to_world: Transform,
+        mis_compensation: bool,
     ) -> Result<EnvMap, EnvMapError> {
         let image = checked(image.into(), scale, true)?;
         let (w, h) = (image.width as usize, image.height as usize);
-        let func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+        let mut func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+        if mis_compensation {
+            let offset = mis_offset(func.iter().copied());
+            func.iter_mut().for_each(|v| *v = (*v - offset).max(0.0));
+        }
         let distribution = PiecewiseConstant2D::new(&func, w, h).ok_or(EnvMapError::Black)?;
         let sum: f64 = image.pixels.iter().map(|&p| luminance(p) as f64).sum();
         let integral = (sum * 4.0 * PI as f64 / (w * h) as f64) as f32;
@@ -470,7 +513,7 @@ mod tests {
         let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
         let maps = [
             EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap(),
-            EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap(),
+            EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world, false).unwrap(),
         ];
         let mut rng = crate::sampling::Pcg32::new(4, 4);
         for env in &maps {
@@ -487,7 +530,7 @@ mod tests {
     #[test]
     fn equal_area_maps_sample_as_their_pdf_and_radiance_say() {
         let to_world = Transform::rotate(Vec3::new(0.3, 0.2, 1.0), 70.0).unwrap();
-        let env = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world).unwrap();
+        let env = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world, false).unwrap();
         assert_eq!(env.layout(), Layout::EqualArea);
         assert_samples_match_pdf_and_eval(&env, 3);
         // Texel (x, y) holds the direction of the square's point ((x + ½)/W, (y + ½)/H) in
@@ -500,12 +543,98 @@ mod tests {
         }
         assert_power_estimate(&env, 5);
         assert!(matches!(
-            EnvMap::new_equal_area(test_sky(16, 8), 1.0, Transform::IDENTITY),
+            EnvMap::new_equal_area(test_sky(16, 8), 1.0, Transform::IDENTITY, false),
             Err(EnvMapError::NotSquare(16, 8))
         ));
         // pbrt's illuminance of a white map: half of π (see pbrt_illuminance).
         let white = Image { width: 64, height: 64, pixels: vec![Rgb::ONE; 64 * 64] };
         assert!((EnvMap::pbrt_illuminance(&white) - 0.5 * PI).abs() < 0.01, "{}", EnvMap::pbrt_illuminance(&white));
+    }
+
+    /// Mitsuba's `mis_compensation`: in both layouts the sampling still follows its pdf and the
+    /// radiance (χ²), only texels brighter than the map's mean keep density, the radiance and
+    /// its integral are unchanged, and a near-constant map is left as it was.
+    #[test]
+    fn mis_compensation_samples_only_what_is_brighter_than_the_mean() {
+        let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
+        let plain = EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap();
+        let compensated = EnvMap::new_latlong(test_sky(16, 8), 2.0, to_world, true).unwrap();
+        assert_samples_match_pdf_and_eval(&compensated, 6);
+        assert_eq!(compensated.integral_luminance(), plain.integral_luminance());
+        // The sun (texel 5, 2, about 40× the mean) keeps its density, the sky around it (about
+        // 1, below the mean of about 40) loses it: only the sun's four cells are sampled.
+        let (sun, _) = EnvMap::direction(Vec2::new(5.5 / 16.0 + 0.01, 2.0 / 7.0 + 0.01));
+        let (sky, _) = EnvMap::direction(Vec2::new(0.8, 0.1));
+        let (sun, sky) = (to_world.apply_vector(sun), to_world.apply_vector(sky));
+        assert!(compensated.pdf(sun) > plain.pdf(sun), "{} vs {}", compensated.pdf(sun), plain.pdf(sky));
+        assert_eq!(compensated.pdf(sky), 0.0);
+        assert!(plain.pdf(sky) > 0.0);
+        assert_eq!(compensated.eval(sky), plain.eval(sky));
+        let mut rng = crate::sampling::Pcg32::new(5, 5);
+        for _ in 0..1000 {
+            let (d, ..) = compensated.sample(u2(&mut rng)).unwrap();
+            let uv = EnvMap::uv(to_world.inverse().apply_vector(d));
+            assert!(
+                (uv.x - 5.5 / 16.0).abs() < 1.0 / 16.0 + 1e-4 && (uv.y - 2.0 / 7.0).abs() < 1.0 / 7.0 + 1e-4,
+                "{uv}"
+            );
+        }
+        let square = EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world, true).unwrap();
+        assert_samples_match_pdf_and_eval(&square, 7);
+        let bright = square.sample(Vec2::new(0.5, 0.5)).unwrap().0;
+        assert!(square.pdf(bright) > 0.0 && square.pdf(sky) == 0.0);
+        // A map whose mean is within 1 % of its minimum keeps its whole density.
+        let mut flat = Image { width: 8, height: 4, pixels: vec![Rgb::ONE; 32] };
+        flat.pixels[5] = Rgb::splat(1.2);
+        let (a, b) = (
+            EnvMap::new(flat.clone(), 1.0, Transform::IDENTITY).unwrap(),
+            EnvMap::new_latlong(flat, 1.0, Transform::IDENTITY, true).unwrap(),
+        );
+        for d in [Vec3::X, Vec3::Y, Vec3::new(0.3, -0.4, 0.5).normalize()] {
+            assert_eq!(a.pdf(d).to_bits(), b.pdf(d).to_bits());
+        }
+    }
+
+    /// What the option is for: irradiance at an upward-facing point from one cosine-weighted
+    /// sample and one light sample per estimate, combined by the balance heuristic. With the
+    /// compensated density the estimate is the same within noise (unbiased: BSDF sampling covers
+    /// what light sampling left out) and its variance lower (measured: 0.15 of it).
+    #[test]
+    fn mis_compensation_lowers_the_variance_of_mis() {
+        let frame = crate::math::Frame::from_z(Vec3::Y);
+        let estimate = |env: &EnvMap, seed: u64| {
+            let mut rng = crate::sampling::Pcg32::new(9, seed);
+            crate::estimators::Estimate::from_values((0..40_000).map(|_| {
+                let mut f = 0.0f64;
+                let s = crate::sampling::sample_cosine_hemisphere_malley(u2(&mut rng));
+                let d = frame.to_world(s.value);
+                f += (luminance(env.eval(d)) * s.value.z / (s.pdf + env.pdf(d))) as f64;
+                if let Some((d, l, pdf)) = env.sample(u2(&mut rng)) {
+                    if d.y > 0.0 {
+                        f += (luminance(l) * d.y / (pdf + d.y / PI)) as f64;
+                    }
+                }
+                f
+            }))
+        };
+        // A sky without a sun: a gradient with a brighter patch, where light sampling alone
+        // spends most samples on the dim majority.
+        let mut sky = test_sky(64, 32);
+        for (i, p) in sky.pixels.iter_mut().enumerate() {
+            if *p == Rgb::splat(5000.0) || (i % 64 > 10 && i % 64 < 22 && i / 64 > 4 && i / 64 < 10) {
+                *p = Rgb::splat(8.0);
+            }
+        }
+        let plain = estimate(&EnvMap::new(sky.clone(), 1.0, Transform::IDENTITY).unwrap(), 1);
+        let compensated = estimate(&EnvMap::new_latlong(sky, 1.0, Transform::IDENTITY, true).unwrap(), 2);
+        let sigma = (plain.std_error().powi(2) + compensated.std_error().powi(2)).sqrt();
+        assert!((plain.value - compensated.value).abs() < 4.0 * sigma, "{} vs {}", plain.value, compensated.value);
+        assert!(
+            compensated.sample_variance < 0.5 * plain.sample_variance,
+            "compensated {} vs plain {}",
+            compensated.sample_variance,
+            plain.sample_variance
+        );
     }
 
     #[test]

@@ -337,16 +337,16 @@ pub fn timed_sunsky(o: &Obj, textures: &mut dyn TextureSource, ray_time: f32) ->
     sunsky_with(o, textures, SunPlacement::Time(time, place))
 }
 
-/// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`
-/// (`mis_compensation` is read and has no effect on the expected image); neumann's `mapping`
+/// Mitsuba's `envmap`: `filename` (lat-long PNG or EXR), `scale` (1), `to_world`,
+/// `mis_compensation` (false: the sampling density leaves directions no brighter than the
+/// map's mean to BSDF sampling, as Mitsuba's; see `EnvMap::new_latlong`); neumann's `mapping`
 /// (`latlong`, or pbrt-v4's `equal_area` square, which may take pbrt-v4's `illuminance`, or
 /// `pbrt`: the equal-area square if the image is square, else pbrt-v3's latitude-longitude
 /// layout, `u = φ/2π` with `φ = atan2(y, x)` and `v = θ/π` from the local +z).
 fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
     let image = images.image(o, "filename", false)?;
     let scale = o.float("scale", 1.0)?;
-    // Mitsuba's `mis_compensation` only reshapes the sampling density (not the expected image).
-    o.bool("mis_compensation", false)?;
+    let mis_compensation = o.bool("mis_compensation", false)?;
     let mut to_world = o.transform("to_world")?;
     let mut mapping = o.choice("mapping", &["latlong", "equal_area", "pbrt"])?;
     if mapping == "pbrt" {
@@ -382,9 +382,9 @@ fn envmap(o: &Obj, images: &mut dyn TextureSource) -> Result<Light> {
                 }
                 scale *= e / k;
             }
-            EnvMap::new_equal_area(image, scale, to_world)
+            EnvMap::new_equal_area(image, scale, to_world, mis_compensation)
         }
-        _ => EnvMap::new(image, scale, to_world),
+        _ => EnvMap::new_latlong(image, scale, to_world, mis_compensation),
     }
     .map_err(|e| o.error(e.to_string()))?;
     // neumann's `portal_p0` … `portal_p3` (pbrt-v4's portal: the map shines only through that
