@@ -30,7 +30,7 @@ use crate::props::SceneError;
 use crate::props::{Obj, Value};
 use crate::sampling::sampler::{SamplerKind, SamplerSettings};
 use crate::scene::SceneBuilder;
-use crate::texture::{texture_plugin, Texture, TextureSource, TEXTURE_PLUGINS};
+use crate::texture::{texture_plugin, Texture, TextureAttributes, TextureSource, TEXTURE_PLUGINS};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -362,6 +362,7 @@ impl Builder {
         let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let geometry = self.geometry(o, outer, &["shapegroup", "instance", "merge"])?;
+        let textures = self.texture_attributes(o, &geometry)?;
         for sensor in o.nested("sensor") {
             if sensor.ty != "irradiancemeter" {
                 return Err(sensor.error("only an irradiancemeter can be nested in a <shape> (it measures that shape)"));
@@ -484,11 +485,11 @@ impl Builder {
         };
         // Mitsuba: a mesh_attribute texture on a shape without that attribute is an error.
         for name in self.sb.bsdf(bsdf).mesh_attributes() {
-            let has = matches!(&geometry, Geometry::Mesh(m) if m.attributes.iter().any(|a| a.name == name));
-            if !has {
+            if !mesh_has(&geometry, name) && textures.get(name).is_none() {
                 return Err(o.error(format!(
                     "the shape's BSDF reads the mesh attribute '{name}', which this {} does not have \
-                     (a PLY file's vertex and face properties give them: r g b → vertex_color / face_color, NAME_x NAME_y NAME_z → vertex_NAME, …)",
+                     (a PLY file's vertex and face properties give them: r g b → vertex_color / face_color, NAME_x NAME_y NAME_z → vertex_NAME, …; \
+                     a <texture name=\"{name}\"> nested in the shape gives it on any shape)",
                     o.ty
                 )));
             }
@@ -497,10 +498,56 @@ impl Builder {
             return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
         }
         let index = self.sb.add_emitting_shape(geometry, bsdf, emission);
+        if !textures.is_empty() {
+            self.sb.set_shape_textures(index, textures);
+        }
         self.sb.set_shape_media(index, interior, exterior);
         let id = o.id.as_deref().map_or(String::new(), |id| format!(" '{id}'"));
         self.sb.set_shape_label(index, format!("the {} shape{id}", o.ty), Some(o.loc.clone()));
         Ok(())
+    }
+
+    /// Mitsuba's texture attributes of the shape `o`: every texture nested in it by name (the
+    /// `mesh_attribute` textures of its BSDF read them where `geometry`, a mesh, has no
+    /// attribute of that name). Each attribute's own `mesh_attribute` reads must be answered by
+    /// the mesh or another attribute, without a cycle.
+    fn texture_attributes(&mut self, o: &Obj, geometry: &Geometry) -> Result<TextureAttributes> {
+        let mut textures = TextureAttributes::default();
+        let mut locs = Vec::new();
+        for p in &o.props {
+            let Value::Object(t) = &p.value else { continue };
+            if t.tag != "texture" {
+                continue;
+            }
+            p.used.set(true);
+            let texture = self.texture_obj(t)?;
+            textures.insert(p.name.clone(), texture);
+            locs.push((p.name.as_str(), &p.loc));
+        }
+        for (name, loc) in &locs {
+            let texture = textures.get(name).expect("inserted");
+            if let Some(missing) =
+                texture.mesh_attributes().into_iter().find(|n| !mesh_has(geometry, n) && textures.get(n).is_none())
+            {
+                return Err(SceneError::at(
+                    loc,
+                    format!(
+                        "the texture attribute '{name}' reads the attribute '{missing}', which this {} does not have",
+                        o.ty
+                    ),
+                ));
+            }
+        }
+        if let Some(name) = textures.cycle(|n| mesh_has(geometry, n)) {
+            let loc = locs.iter().find(|(n, _)| *n == name).map(|(_, l)| *l).unwrap_or(&o.loc);
+            return Err(SceneError::at(
+                loc,
+                format!(
+                    "the texture attribute '{name}' reads itself (through mesh_attribute textures): it has no value"
+                ),
+            ));
+        }
+        Ok(textures)
     }
 
     // ---------------------------------------------------------------- media
@@ -686,6 +733,11 @@ impl Builder {
         self.sb.add_light(light);
         Ok(())
     }
+}
+
+/// Whether `geometry` is a mesh with the vertex or face attribute `name`.
+fn mesh_has(geometry: &Geometry, name: &str) -> bool {
+    matches!(geometry, Geometry::Mesh(m) if m.attributes.iter().any(|a| a.name == name))
 }
 
 /// Whether an emitter of plugin `ty` belongs to the shape it is nested in (or that references it).

@@ -508,7 +508,7 @@ mod tests {
     }
 
     fn at(v: f32) -> BsdfContext<'static> {
-        BsdfContext { uv: Vec2::new(0.3, v), mesh: None, si: None, memo: None }
+        BsdfContext { uv: Vec2::new(0.3, v), mesh: None, textures: None, si: None, memo: None }
     }
 
     fn directions() -> Vec<Vec3> {

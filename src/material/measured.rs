@@ -410,7 +410,7 @@ pub(super) mod tests {
     use super::*;
     use crate::material::tests::{assert_matches_mitsuba, MitsubaRow};
 
-    const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None, memo: None };
+    const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, textures: None, si: None, memo: None };
 
     /// The synthetic materials of `scenes/assets` (tools/mitsuba/make_measured.py): `I` isotropic,
     /// `A` anisotropic, tabulated over a quarter circle of incident azimuths.

@@ -57,6 +57,8 @@ pub struct BsdfContext<'a> {
     pub uv: Vec2,
     /// The mesh point, for `mesh_attribute` textures (None off meshes with attributes).
     pub mesh: Option<crate::geometry::mesh::MeshPoint<'a>>,
+    /// The shape's texture attributes, for `mesh_attribute` textures (None on shapes without).
+    pub textures: Option<&'a crate::texture::TextureAttributes>,
     /// The surface interaction, for BSDFs that perturb the shading frame (bump maps).
     pub si: Option<&'a crate::geometry::SurfaceInteraction>,
     /// Where lookups made at this point are kept for the next call of the BSDF here (see
@@ -113,7 +115,7 @@ impl<'a> BsdfContext<'a> {
     #[inline]
     pub fn point(&self) -> crate::texture::TexPoint<'_> {
         let (p, n) = self.si.map_or((Vec3::ZERO, Vec3::Z), |si| (si.p, si.ng));
-        crate::texture::TexPoint { uv: self.uv, p, n, mesh: self.mesh.as_ref() }
+        crate::texture::TexPoint { uv: self.uv, p, n, mesh: self.mesh.as_ref(), textures: self.textures }
     }
 }
 

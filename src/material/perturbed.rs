@@ -348,7 +348,7 @@ mod tests {
         let bits = |c: Rgb| c.to_array().map(f32::to_bits);
         for k in 0..50 {
             let si = flat_hit(Vec2::new(0.02 * k as f32, 0.5));
-            let plain = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
+            let plain = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&si), memo: None };
             let memo = TextureMemo::default();
             let kept = plain.with_memo(&memo);
             let wo = Vec3::new(0.3 - 0.01 * k as f32, 0.2, 0.8).normalize();
@@ -379,12 +379,12 @@ mod tests {
         // Slope of the height field along u: 1, times scale 0.3.
         let bump = perturbed(Perturbation::BumpMap { height: ramp(glam::Mat3::IDENTITY), scale: 0.3 });
         let si = flat_hit(Vec2::new(0.5, 0.5));
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&si), memo: None };
         let n = bump.frame(&ctx, Vec3::Z).n;
         let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();
         assert!((n - expected).length() < 1e-5, "{n} vs {expected}");
         let below = crate::geometry::SurfaceInteraction { ng: -Vec3::Z, ..si };
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&below), memo: None };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&below), memo: None };
         assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
 
@@ -396,7 +396,7 @@ mod tests {
     fn displacement_tilts_by_its_forward_difference() {
         let displaced = |displacement: Texture| perturbed(Perturbation::Displacement { displacement });
         let si = flat_hit(Vec2::new(0.5, 0.4));
-        let ctx = BsdfContext { uv: si.uv, mesh: None, si: Some(&si), memo: None };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&si), memo: None };
         let along_u = displaced(ramp(glam::Mat3::IDENTITY).times(Texture::Constant(Rgb::splat(0.3))));
         let n = along_u.frame(&ctx, Vec3::Z).n;
         let expected = Vec3::new(-0.15, 0.0, 1.0).normalize();

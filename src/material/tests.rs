@@ -7,7 +7,7 @@ use super::*;
 use crate::testkit::{chi2_2d, u2, Chi2Config, SPHERE};
 use std::sync::Arc;
 
-const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None, memo: None };
+const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, textures: None, si: None, memo: None };
 
 /// A value Mitsuba 3.9.1 (scalar_rgb) gave through its Python BSDF API for a configuration
 /// (named by a letter): its `si.wi` (our `wo`), its `wo` (our `wi`), `eval` and `pdf`.
@@ -632,7 +632,7 @@ fn textured_parameters_act_as_their_local_value() {
         let values: Vec<Rgb> = [Vec2::new(0.25, 0.25), Vec2::new(0.75, 0.25)]
             .into_iter()
             .map(|uv| {
-                let ctx = BsdfContext { uv, mesh: None, si: None, memo: None };
+                let ctx = BsdfContext { uv, mesh: None, textures: None, si: None, memo: None };
                 let constant = constant_at(uv);
                 let mut rng = crate::sampling::Pcg32::new(17, 3);
                 let mut sum = Rgb::ZERO;

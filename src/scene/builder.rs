@@ -11,7 +11,7 @@ use crate::light::{Light, LightSampler, LightSamplerKind, ShapeEmission};
 use crate::material::Bsdf;
 use crate::math::{Rgb, Vec3};
 use crate::sampling::AliasTable;
-use crate::texture::Texture;
+use crate::texture::{Texture, TextureAttributes};
 
 /// Extra BVH references for split triangles, relative to the primitive count
 /// ([`crate::bvh::presplit`]): Karras and Aila's 30 %.
@@ -31,9 +31,21 @@ pub struct SceneBuilder {
     /// description and where the shape was written, formatted only when a message needs it
     /// (finding a line and column in a large file for every shape would cost more than loading).
     shape_labels: Vec<(String, Option<crate::props::Loc>)>,
+    /// Each shape's texture attributes (by index; missing ones have none).
+    texture_attributes: Vec<TextureAttributes>,
 }
 
 impl SceneBuilder {
+    /// Gives shape `index` its texture attributes (Mitsuba's textures nested in a `<shape>`),
+    /// which the `mesh_attribute` textures of its BSDF read after its mesh's own attributes.
+    pub fn set_shape_textures(&mut self, index: u32, textures: TextureAttributes) {
+        let i = index as usize;
+        if self.texture_attributes.len() <= i {
+            self.texture_attributes.resize(i + 1, TextureAttributes::default());
+        }
+        self.texture_attributes[i] = textures;
+    }
+
     /// Names shape `index` for messages, e.g. `the obj shape 'floor'` written at `loc`
     /// (messages say `the obj shape 'floor' at scene.xml:12:5`).
     pub fn set_shape_label(&mut self, index: u32, label: String, loc: Option<crate::props::Loc>) {
@@ -262,6 +274,7 @@ impl SceneBuilder {
             media: self.media,
             camera_medium: self.camera_medium,
             shape_labels: self.shape_labels,
+            texture_attributes: self.texture_attributes,
             bvh,
             blocks,
             prims: prims.into(),

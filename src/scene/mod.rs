@@ -232,6 +232,8 @@ pub struct Scene {
     media: Vec<crate::medium::Medium>,
     camera_medium: Option<u32>,
     shape_labels: Vec<(String, Option<crate::props::Loc>)>,
+    /// Each shape's texture attributes (by index; shapes past the end have none).
+    texture_attributes: Vec<crate::texture::TextureAttributes>,
     bvh: Bvh,
     /// Triangles of all-triangle leaves, eight per block. This and the next two arrays, like
     /// the BVH's nodes, are [`HugeArray`]s: where large, backed by 2 MiB pages.
@@ -376,7 +378,8 @@ impl Scene {
     }
 
     /// What the BSDF at the hit `si` evaluates its textures with: the texture coordinates and,
-    /// on meshes that carry attributes, the point for `mesh_attribute` lookups.
+    /// for `mesh_attribute` lookups, the point on meshes that carry attributes and the shape's
+    /// texture attributes.
     #[inline]
     pub fn bsdf_context<'a>(&'a self, si: &'a SurfaceInteraction) -> crate::material::BsdfContext<'a> {
         let mesh = match &self.geometries[si.shape as usize] {
@@ -385,7 +388,8 @@ impl Scene {
             }
             _ => None,
         };
-        crate::material::BsdfContext { uv: si.uv, mesh, si: Some(si), memo: None }
+        let textures = self.texture_attributes.get(si.shape as usize).filter(|t| !t.is_empty());
+        crate::material::BsdfContext { uv: si.uv, mesh, textures, si: Some(si), memo: None }
     }
 
     /// Texture coordinates of `si`, the hit [`Scene::intersect`] gave for `ray`: `si.uv`, which

@@ -19,10 +19,12 @@ use crate::math::{floor, Mat3, Rgb, Vec2, Vec3};
 use crate::props::{Obj, Result as PropResult};
 use std::sync::Arc;
 
+pub mod attributes;
 pub mod noise;
 pub mod procedural;
 pub mod volume;
 
+pub use attributes::TextureAttributes;
 pub use procedural::{Procedural, Projection};
 
 /// Where a texture is looked up.
@@ -36,13 +38,16 @@ pub struct TexPoint<'a> {
     pub n: Vec3,
     /// The mesh point, for `mesh_attribute` textures (None off meshes with attributes).
     pub mesh: Option<&'a MeshPoint<'a>>,
+    /// The shape's texture attributes, which `mesh_attribute` textures read after the mesh's
+    /// (None on shapes without them).
+    pub textures: Option<&'a TextureAttributes>,
 }
 
 impl TexPoint<'_> {
     /// A lookup by texture coordinates alone (position at the origin, normal +z): right for
     /// every texture that does not [`Texture::uses_position`].
     pub fn at_uv(uv: Vec2) -> TexPoint<'static> {
-        TexPoint { uv, p: Vec3::ZERO, n: Vec3::Z, mesh: None }
+        TexPoint { uv, p: Vec3::ZERO, n: Vec3::Z, mesh: None, textures: None }
     }
 }
 
@@ -326,9 +331,11 @@ impl Texture {
     pub fn eval_at(&self, at: &TexPoint) -> Rgb {
         let uv = at.uv;
         match self {
-            Texture::MeshAttribute { name, scale } => {
-                at.mesh.and_then(|m| m.attribute(name)).map_or(Rgb::ZERO, |v| v * *scale)
-            }
+            Texture::MeshAttribute { name, scale } => at
+                .mesh
+                .and_then(|m| m.attribute(name))
+                .or_else(|| at.textures.and_then(|t| t.eval(name, at)))
+                .map_or(Rgb::ZERO, |v| v * *scale),
             Texture::Constant(c) => *c,
             Texture::Bitmap { bitmap, to_uv } => bitmap.eval(to_uv.transform_point2(uv)),
             Texture::Scale(t) => t[0].eval_at(at) * t[1].eval_at(at),
@@ -393,6 +400,11 @@ impl Texture {
     /// there.
     pub fn eval_scalar(&self, at: &TexPoint) -> f32 {
         match self {
+            // A shape's texture attribute as a scalar is its own scalar lookup (Mitsuba's
+            // `eval_attribute_1`); a mesh's attribute, its luminance.
+            Texture::MeshAttribute { name, scale } if at.mesh.and_then(|m| m.attribute(name)).is_none() => {
+                at.textures.and_then(|t| t.eval_scalar(name, at)).map_or(0.0, |v| v * scale)
+            }
             Texture::Checkerboard { color0, color1, to_uv } => {
                 if Texture::checker_cell0(to_uv, at.uv) {
                     color1.eval_scalar(at)

@@ -358,7 +358,7 @@ fn volume_texture_is_looked_up_by_position() {
             <transform name="to_world"><scale value="2"/></transform></volume>"#,
     ));
     assert!(matches!(ramp, Texture::Volume(_)) && ramp.uses_position());
-    let at = |p: Vec3| TexPoint { uv: Vec2::new(0.9, 0.1), p, n: Vec3::Z, mesh: None };
+    let at = |p: Vec3| TexPoint { uv: Vec2::new(0.9, 0.1), p, n: Vec3::Z, mesh: None, textures: None };
     for (x, want) in [(0.25, 0.0), (0.5, 0.0), (1.0, 0.5), (1.5, 1.0), (3.0, 1.0)] {
         let got = ramp.eval_at(&at(Vec3::new(x, 0.5, 0.5)));
         assert!((got - Vec3::splat(want)).abs().max_element() < 1e-6, "x = {x}: {got}");
@@ -1564,6 +1564,74 @@ fn mesh_attribute_textures() {
     let e = load_scene_text(&dir.join("s.xml"), &plastic, &[]).unwrap_err().to_string();
     assert!(e.contains("specular_reflectance cannot be a mesh_attribute"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Mitsuba's texture attributes: a texture nested by name in a shape (any shape: a sphere, a
+/// cube mesh) is what the shape's `mesh_attribute` textures of that name read — colour and
+/// scalar parameters, nested BSDFs, a referenced texture — so that a scene reading them renders
+/// bit for bit as the same scene with the textures in place. Reads of an attribute the shape
+/// lacks, and attributes that read themselves, are located errors.
+#[test]
+fn shape_texture_attributes() {
+    let checker = r#"<rgb name="color0" value="0.9, 0.1, 0.1"/><rgb name="color1" value="0.1, 0.2, 0.8"/>
+        <transform name="to_uv"><scale x="4" y="3"/></transform>"#;
+    let rough = r#"<float name="color0" value="0.05"/><float name="color1" value="0.4"/>"#;
+    let read = |param: &str, attr: &str| {
+        format!(r#"<texture type="mesh_attribute" name="{param}"><string name="name" value="{attr}"/></texture>"#)
+    };
+    let lit = r#"<emitter type="constant"><rgb name="radiance" value="0.5, 0.6, 0.7"/></emitter>
+        <emitter type="point"><point name="position" x="2" y="3" z="4"/><rgb name="intensity" value="20, 20, 20"/></emitter>
+        <texture type="checkerboard" id="tiles"><rgb name="color0" value="0.7, 0.7, 0.2"/><rgb name="color1" value="0.2, 0.5, 0.5"/></texture>"#;
+    let attributes = scene(&format!(
+        r#"{lit}
+        <shape type="sphere"><transform name="to_world"><translate x="-0.9"/></transform>
+            <texture type="checkerboard" name="face_albedo">{checker}</texture>
+            <texture type="checkerboard" name="vertex_alpha">{rough}</texture>
+            <bsdf type="blendbsdf">{}<bsdf type="diffuse">{}</bsdf><bsdf type="roughconductor">{}</bsdf></bsdf></shape>
+        <shape type="cube"><transform name="to_world"><scale value="0.6"/><rotate y="1" angle="30"/><translate x="1"/></transform>
+            <ref name="face_tiles" id="tiles"/>
+            <bsdf type="diffuse">{}</bsdf></shape>"#,
+        read("weight", "vertex_alpha"),
+        read("reflectance", "face_albedo"),
+        read("alpha", "vertex_alpha"),
+        read("reflectance", "face_tiles"),
+    ));
+    let in_place = scene(&format!(
+        r#"{lit}
+        <shape type="sphere"><transform name="to_world"><translate x="-0.9"/></transform>
+            <bsdf type="blendbsdf"><texture type="checkerboard" name="weight">{rough}</texture>
+            <bsdf type="diffuse"><texture type="checkerboard" name="reflectance">{checker}</texture></bsdf>
+            <bsdf type="roughconductor"><texture type="checkerboard" name="alpha">{rough}</texture></bsdf></bsdf></shape>
+        <shape type="cube"><transform name="to_world"><scale value="0.6"/><rotate y="1" angle="30"/><translate x="1"/></transform>
+            <bsdf type="diffuse"><ref name="reflectance" id="tiles"/></bsdf></shape>"#
+    ));
+    let (a, b) = (load(&attributes).unwrap(), load(&in_place).unwrap());
+    let (ia, ib) = (crate::load::test_support::render(&a, 4, 3), crate::load::test_support::render(&b, 4, 3));
+    assert!(crate::load::test_support::mean(&ib) > 0.05);
+    assert!(ia.iter().zip(&ib).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+    // Without the attribute the read is an error at the shape, naming the way to give it.
+    let missing = scene(&format!(
+        r#"<shape type="sphere"><bsdf type="diffuse">{}</bsdf></shape>"#,
+        read("reflectance", "face_albedo")
+    ));
+    let e = err(&missing);
+    assert!(e.contains("test.xml:7:") && e.contains("'face_albedo'") && e.contains("nested in the shape"), "{e}");
+    // An attribute may read another; one that reads itself has no value.
+    let chain = |second: &str| {
+        scene(&format!(
+            r#"<shape type="sphere">
+            <texture type="checkerboard" name="face_a">{}</texture>
+            <texture type="checkerboard" name="face_b">{second}</texture>
+            <bsdf type="diffuse">{}</bsdf></shape>"#,
+            read("color0", "face_b"),
+            read("reflectance", "face_a"),
+        ))
+    };
+    assert!(load(&chain(checker)).is_ok());
+    let e = err(&chain(&read("color1", "face_a")));
+    assert!(e.contains("test.xml:8:") && e.contains("reads itself"), "{e}");
+    let e = err(&chain(&read("color1", "face_c")));
+    assert!(e.contains("test.xml:9:") && e.contains("'face_b' reads the attribute 'face_c'"), "{e}");
 }
 
 /// `-D` parameters the scene never substitutes come back as warnings (Mitsuba reports unused

@@ -744,7 +744,7 @@ fn procedural_textures_and_mappings() {
         Material \"conductor\" \"texture roughness\" \"pl\"\nShape \"sphere\"\n\
         Material \"conductor\" \"texture roughness\" \"n\"\nShape \"sphere\"\n";
     let f = load(text).unwrap_or_else(|e| panic!("{e}"));
-    let at = |p: Vec3, n: Vec3, uv: Vec2| TexPoint { uv, p, n, mesh: None };
+    let at = |p: Vec3, n: Vec3, uv: Vec2| TexPoint { uv, p, n, mesh: None, textures: None };
     // 3D checkerboard: tex1 (0.25) where ⌊x⌋+⌊y⌋+⌊z⌋ is even; the mix blends red to blue by it.
     let m = diffuse_texture(&f, 0);
     assert_eq!(m.eval_at(&at(Vec3::splat(0.5), Vec3::Z, Vec2::ZERO)), Rgb::new(0.75, 0.0, 0.25));

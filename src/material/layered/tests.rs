@@ -21,7 +21,7 @@ use crate::material::microfacet::MicrofacetType;
 use crate::sampling::{sample_uniform_hemisphere, Pcg32};
 use crate::testkit::u2;
 
-const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, si: None, memo: None };
+const CTX: BsdfContext = BsdfContext { uv: Vec2::ZERO, mesh: None, textures: None, si: None, memo: None };
 
 fn c(v: f32) -> Texture {
     Texture::Constant(Rgb::splat(v))
