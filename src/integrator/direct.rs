@@ -181,6 +181,53 @@ mod tests {
         assert!(m_hidden < reference);
     }
 
+    /// Light sampling alone (no BSDF samples) under an MIS-compensated environment map draws
+    /// from the map's complete density, so it stays unbiased: the same mean as with the plain
+    /// map, where the compensated density alone would miss the sky dimmer than its mean.
+    #[test]
+    fn light_sampling_alone_ignores_mis_compensation() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, Sphere};
+        use crate::light::{EnvMap, Light};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Transform, Vec3};
+        use crate::scene::SceneBuilder;
+        // A dim gradient with a bright patch well above its mean.
+        let (w, h) = (32usize, 16usize);
+        let pixels = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if (4..10).contains(&x) && (2..6).contains(&y) {
+                    Rgb::splat(20.0)
+                } else {
+                    Rgb::new(0.2 + x as f32 / w as f32, 0.4, 0.3 + y as f32 / h as f32)
+                }
+            })
+            .collect();
+        let sky = crate::load::image::Image { width: w as u32, height: h as u32, pixels };
+        let scene = |compensated: bool| {
+            let mut b = SceneBuilder::new();
+            let m = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.7))));
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), m, None);
+            let map = EnvMap::new_latlong(sky.clone(), 1.0, Transform::IDENTITY, compensated).unwrap();
+            assert_eq!(map.is_compensated(), compensated);
+            b.add_light(Light::EnvMap { map: Box::new(map), center: Vec3::ZERO, radius: 0.0 });
+            let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y).unwrap();
+            b.set_camera(Camera::perspective(to_world, 30.0, FovAxis::X, 8, 8).unwrap());
+            b.build().unwrap()
+        };
+        let light_only = DirectIntegrator { emitter_samples: 1, bsdf_samples: 0, hide_emitters: true };
+        let (plain, se_plain) = mean_and_se(&scene(false), &light_only, 256, 1);
+        let (compensated, se) = mean_and_se(&scene(true), &light_only, 256, 2);
+        let z = (compensated - plain) / (se * se + se_plain * se_plain).sqrt();
+        assert!(z.abs() < 4.0 && plain > 0.01, "{compensated} vs {plain}, z = {z:.2}");
+        // Combined with BSDF sampling the compensated density is what light sampling draws.
+        let (mis, se_mis) =
+            mean_and_se(&scene(true), &DirectIntegrator { hide_emitters: true, ..Default::default() }, 256, 3);
+        let z = (mis - plain) / (se_mis * se_mis + se_plain * se_plain).sqrt();
+        assert!(z.abs() < 4.0, "{mis} vs {plain}, z = {z:.2}");
+    }
+
     /// A delta light's share does not grow with the number of light samples: a point light of
     /// intensity I at the centre of a diffuse sphere (albedo ρ, radius r, seen from inside)
     /// gives every wall point `ρ I / (π r²)` whatever the split. (Mitsuba 3.9.1's `direct`

@@ -260,7 +260,12 @@ pub fn sample_direct(
     };
     let Some((index, pmf)) = scene.sample_light(ctx, u) else { return Rgb::ZERO };
     let light = &scene.lights()[index as usize];
-    let Some(ls) = light.sample_li(scene.geometries(), ctx.p, u2) else { return Rgb::ZERO };
+    // An MIS-compensated density leaves directions to BSDF sampling: only where it is combined.
+    let ls = match *mis {
+        Mis::Combine { n_bsdf, .. } if n_bsdf > 0 => light.sample_li(scene.geometries(), ctx.p, u2),
+        _ => light.sample_li_complete(scene.geometries(), ctx.p, u2),
+    };
+    let Some(ls) = ls else { return Rgb::ZERO };
     // The density is computed with the value, before the shadow ray (Mitsuba traces that
     // first): sharing their terms costs less than the density alone after the shadow ray, even
     // where the light turns out occluded.

@@ -48,7 +48,13 @@ pub enum Layout {
 pub struct EnvMap {
     layout: Layout,
     image: Arc<Image>,
+    /// What light sampling under MIS draws from ([`EnvMap::sample`], [`EnvMap::pdf`]):
+    /// MIS-compensated where asked.
     distribution: Arc<PiecewiseConstant2D>,
+    /// The uncompensated density where `distribution` is compensated: what estimators that
+    /// do not combine with BSDF sampling draw from ([`EnvMap::sample_complete`]: light tracing,
+    /// light sampling alone), so that every direction with radiance keeps a density there.
+    complete: Option<Arc<PiecewiseConstant2D>>,
     /// `∫ luminance dω` of the unscaled map.
     integral: f32,
     scale: f32,
@@ -144,6 +150,7 @@ impl EnvMap {
         let (w, h) = (image.width as usize, image.height as usize);
         let lum = |x: usize, y: usize| luminance(image.pixels[y * w + x % w]);
         let offset = if mis_compensation { mis_offset(image.pixels.iter().map(|&p| luminance(p))) } else { 0.0 };
+        let mut complete = Vec::with_capacity(if offset > 0.0 { w * (h - 1) } else { 0 });
         let theta = |y: usize| PI * y as f32 / (h - 1) as f32;
         let mut func = Vec::with_capacity(w * (h - 1));
         let mut integral = 0.0f64;
@@ -153,21 +160,34 @@ impl EnvMap {
             let sin_mid = (0.5 * (t0 + t1)).sin();
             for x in 0..w {
                 let c = [lum(x, y), lum(x + 1, y), lum(x, y + 1), lum(x + 1, y + 1)];
-                func.push((c.iter().fold(0.0f32, |a, &b| a.max(b)) - offset).max(0.0) * sin_max);
+                let top = c.iter().fold(0.0f32, |a, &b| a.max(b));
+                func.push((top - offset).max(0.0) * sin_max);
+                if offset > 0.0 {
+                    complete.push(top * sin_max);
+                }
                 integral += (c.iter().sum::<f32>() * 0.25 * sin_mid) as f64;
             }
         }
         let distribution = PiecewiseConstant2D::new(&func, w, h - 1).ok_or(EnvMapError::Black)?;
+        let complete = (offset > 0.0).then(|| PiecewiseConstant2D::new(&complete, w, h - 1)).flatten();
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
-        Ok(EnvMap::assemble(Layout::LatLong, image, distribution, integral, scale, to_world))
+        Ok(EnvMap::assemble(
+            Layout::LatLong,
+            image,
+            [distribution].into_iter().chain(complete),
+            integral,
+            scale,
+            to_world,
+        ))
     }
 
     /// The map from its parts.
+    /// `densities`: the light-sampling density, then the complete one if that is compensated.
     fn assemble(
         layout: Layout,
         image: Arc<Image>,
-        distribution: PiecewiseConstant2D,
+        mut densities: impl Iterator<Item = PiecewiseConstant2D>,
         integral: f32,
         scale: f32,
         to_world: Transform,
@@ -175,7 +195,8 @@ impl EnvMap {
         EnvMap {
             layout,
             image,
-            distribution: Arc::new(distribution),
+            distribution: Arc::new(densities.next().expect("a density")),
+            complete: densities.next().map(Arc::new),
             integral,
             scale,
             to_world,
@@ -249,15 +270,25 @@ impl EnvMap {
     ) -> Result<EnvMap, EnvMapError> {
         let image = checked(image.into(), scale, true)?;
         let (w, h) = (image.width as usize, image.height as usize);
-        let mut func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
-        if mis_compensation {
-            let offset = mis_offset(func.iter().copied());
-            func.iter_mut().for_each(|v| *v = (*v - offset).max(0.0));
-        }
-        let distribution = PiecewiseConstant2D::new(&func, w, h).ok_or(EnvMapError::Black)?;
+        let func: Vec<f32> = image.pixels.iter().map(|p| (p.x + p.y + p.z) / 3.0).collect();
+        let offset = if mis_compensation { mis_offset(func.iter().copied()) } else { 0.0 };
+        let complete = PiecewiseConstant2D::new(&func, w, h).ok_or(EnvMapError::Black)?;
+        let (distribution, complete) = if offset > 0.0 {
+            let compensated: Vec<f32> = func.iter().map(|v| (v - offset).max(0.0)).collect();
+            (PiecewiseConstant2D::new(&compensated, w, h).ok_or(EnvMapError::Black)?, Some(complete))
+        } else {
+            (complete, None)
+        };
         let sum: f64 = image.pixels.iter().map(|&p| luminance(p) as f64).sum();
         let integral = (sum * 4.0 * PI as f64 / (w * h) as f64) as f32;
-        Ok(EnvMap::assemble(Layout::EqualArea, image, distribution, integral, scale, to_world))
+        Ok(EnvMap::assemble(
+            Layout::EqualArea,
+            image,
+            [distribution].into_iter().chain(complete),
+            integral,
+            scale,
+            to_world,
+        ))
     }
 
     /// pbrt-v4's illuminance of an equal-area map at a point facing its +z, which its
@@ -381,21 +412,64 @@ impl EnvMap {
     /// image coordinates `c`.
     #[inline]
     fn pdf_at(&self, local: Vec3, c: Vec2) -> f32 {
+        self.pdf_in(&self.distribution, local, c)
+    }
+
+    /// [`EnvMap::pdf_at`] of the density `dist` (one of the map's two).
+    #[inline]
+    fn pdf_in(&self, dist: &PiecewiseConstant2D, local: Vec3, c: Vec2) -> f32 {
         if self.layout == Layout::EqualArea {
-            return self.distribution.pdf(c) * INV_4PI;
+            return dist.pdf(c) * INV_4PI;
         }
         let sin_theta = (local.x * local.x + local.z * local.z).sqrt();
         if sin_theta <= 0.0 {
             return 0.0;
         }
-        self.distribution.pdf(self.to_grid(c)) / (2.0 * PI * PI * sin_theta)
+        dist.pdf(self.to_grid(c)) / (2.0 * PI * PI * sin_theta)
     }
 
-    /// A world direction sampled proportionally to luminance, its radiance and its solid-angle
-    /// pdf.
+    /// A world direction sampled proportionally to luminance (less the map's mean where
+    /// MIS-compensated), its radiance and its solid-angle pdf: what light sampling under MIS
+    /// draws.
     #[inline]
     pub fn sample(&self, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
-        let s = self.distribution.sample(u);
+        self.sample_in(&self.distribution, u)
+    }
+
+    /// [`EnvMap::sample`] from the complete density: the same unless the map is
+    /// MIS-compensated, where every direction with radiance has a density here (for light
+    /// tracing and light sampling that no BSDF sampling complements).
+    #[inline]
+    pub fn sample_complete(&self, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
+        self.sample_in(self.complete.as_deref().unwrap_or(&self.distribution), u)
+    }
+
+    /// Solid-angle density of [`EnvMap::sample_complete`] for world direction `d`.
+    pub fn pdf_complete(&self, d: Vec3) -> f32 {
+        let local = self.to_local.apply_vector(d).normalize();
+        self.pdf_in(self.complete.as_deref().unwrap_or(&self.distribution), local, self.coords(local))
+    }
+
+    /// Whether light sampling leaves the directions no brighter than the map's mean to BSDF
+    /// sampling (Mitsuba's `mis_compensation`, in effect).
+    pub fn is_compensated(&self) -> bool {
+        self.complete.is_some()
+    }
+
+    /// [`EnvMap::sample_from`] from the complete density ([`EnvMap::sample_complete`]; through
+    /// a portal, the portal's own sampling, which has no compensation).
+    #[inline]
+    pub fn sample_from_complete(&self, p_ref: Vec3, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
+        match &self.portal {
+            None => self.sample_complete(u),
+            Some(_) => self.sample_from(p_ref, u),
+        }
+    }
+
+    /// A direction drawn from the density `dist`, its radiance and solid-angle pdf.
+    #[inline]
+    fn sample_in(&self, dist: &PiecewiseConstant2D, u: Vec2) -> Option<(Vec3, Rgb, f32)> {
+        let s = dist.sample(u);
         if self.layout == Layout::EqualArea {
             if s.pdf <= 0.0 {
                 return None;
@@ -592,6 +666,38 @@ mod tests {
         );
         for d in [Vec3::X, Vec3::Y, Vec3::new(0.3, -0.4, 0.5).normalize()] {
             assert_eq!(a.pdf(d).to_bits(), b.pdf(d).to_bits());
+        }
+    }
+
+    /// A compensated map keeps its complete density for the estimators that light sampling
+    /// carries alone: `sample_complete` and `pdf_complete` are the uncompensated map's `sample`
+    /// and `pdf` bit for bit, in both layouts, and only its MIS density differs.
+    #[test]
+    fn mis_compensated_maps_keep_the_complete_density() {
+        let to_world = Transform::rotate(Vec3::new(0.2, 1.0, 0.1), 40.0).unwrap();
+        let pairs = [
+            (
+                EnvMap::new(test_sky(16, 8), 2.0, to_world).unwrap(),
+                EnvMap::new_latlong(test_sky(16, 8), 2.0, to_world, true).unwrap(),
+            ),
+            (
+                EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world, false).unwrap(),
+                EnvMap::new_equal_area(test_sky(16, 16), 1.5, to_world, true).unwrap(),
+            ),
+        ];
+        let mut rng = crate::sampling::Pcg32::new(8, 8);
+        for (plain, compensated) in &pairs {
+            assert!(compensated.is_compensated() && !plain.is_compensated());
+            let mut differ = 0;
+            for _ in 0..500 {
+                let u = u2(&mut rng);
+                let (a, b) = (plain.sample(u), compensated.sample_complete(u));
+                assert_eq!(format!("{a:?}"), format!("{b:?}"));
+                let d = crate::sampling::sample_uniform_sphere(u2(&mut rng)).value;
+                assert_eq!(plain.pdf(d).to_bits(), compensated.pdf_complete(d).to_bits());
+                differ += usize::from(plain.pdf(d) != compensated.pdf(d));
+            }
+            assert!(differ > 300, "{differ}");
         }
     }
 

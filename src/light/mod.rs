@@ -377,6 +377,21 @@ impl Light {
         }
     }
 
+    /// [`Light::sample_li`] for an estimator that light sampling carries alone (no BSDF
+    /// sampling MIS-combined with it: `direct` without BSDF samples, the light-only
+    /// strategies): the same, except that an MIS-compensated environment map draws from its
+    /// complete density ([`EnvMap::sample_complete`]), which leaves no direction with radiance
+    /// out. Its pdf is then that density's, which no `pdf_li` reports (none is needed: such
+    /// an estimator weighs nothing by it).
+    pub fn sample_li_complete(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::EnvMap { map, center, radius } if map.is_compensated() => {
+                Some(sample_at_infinity(p_ref, *center, *radius, map.sample_from_complete(p_ref, u)?))
+            }
+            _ => self.sample_li(shapes, p_ref, u),
+        }
+    }
+
     /// Samples incident light at `p_ref`. `None` when nothing can arrive (back side, degenerate).
     #[inline]
     pub fn sample_li(&self, shapes: &[Geometry], p_ref: Vec3, u: Vec2) -> Option<LightSample> {
@@ -571,8 +586,10 @@ impl Light {
                 from_infinity((wi.value, *radiance, wi.pdf), *center, *radius)
             }
             Light::SunSky { sky, center, radius } => from_infinity(sky.sample(u_dir)?, *center, *radius),
+            // Light tracing draws from the map's complete density: nothing else would reach
+            // what an MIS-compensated one leaves out.
             Light::EnvMap { map, center, radius } => match map.portal() {
-                None => from_infinity(map.sample(u_dir)?, *center, *radius),
+                None => from_infinity(map.sample_complete(u_dir)?, *center, *radius),
                 Some(portal) => {
                     // Through the portal: a point uniform on it, a direction from the map's
                     // distribution (rays that do not enter through it carry nothing). The ray
