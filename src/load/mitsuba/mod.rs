@@ -43,6 +43,7 @@ pub fn load_scene_text(path: &Path, text: &str, overrides: &[(String, String)]) 
 
 fn finish(parser: parse::Parser, root: std::rc::Rc<crate::props::Obj>) -> Result<SceneFile, SceneError> {
     let mut file = crate::load::build::Builder::new(parser.resolver.clone()).build(&root)?;
+    file.warnings.extend(parser.warnings.take());
     for name in parser.unused_overrides() {
         file.warnings.push(format!("warning: -D {name}: the scene has no ${name} to substitute"));
     }

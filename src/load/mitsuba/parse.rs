@@ -51,6 +51,9 @@ pub struct Parser {
     /// include): Mitsuba's scene takes every nested object whatever its name (the Blender
     /// exporter names them all), so a name there only has to be unique.
     scene_names: HashMap<String, Loc>,
+    /// What the file does that Mitsuba reads in a way its author may not expect (formatted
+    /// messages, each with its position), for the loaded scene's warnings.
+    pub warnings: std::cell::RefCell<Vec<String>>,
 }
 
 impl Parser {
@@ -69,6 +72,7 @@ impl Parser {
             aliases: Vec::new(),
             legacy: Vec::new(),
             scene_names: HashMap::new(),
+            warnings: Default::default(),
         }
     }
 
@@ -736,6 +740,19 @@ impl Parser {
                     let angle = parse_f64(&angle)
                         .ok_or_else(|| invalid(&format!("expected a number of degrees for angle, found {angle:?}")))?;
                     // As Mitsuba 3: the axis is not normalized (a non-unit one scales too).
+                    if (axis.length_squared() - 1.0).abs() > 1e-4 {
+                        self.warnings.borrow_mut().push(format!(
+                            "warning: {}: the rotation axis ({}, {}, {}) is not a unit vector: Mitsuba 3 does not \
+                             normalize it, so this <rotate> scales and shears as well as turns (neumann builds the same \
+                             matrix; Mitsuba 3.9.1 also stores that matrix as its own inverse transpose, so its disks, \
+                             cylinders, vertex normals and light directions under it differ again); give a unit axis \
+                             for a rotation",
+                            loc.position(),
+                            axis.x,
+                            axis.y,
+                            axis.z
+                        ));
+                    }
                     Transform::rotate_unnormalized(axis, angle as f32)
                         .ok_or_else(|| invalid("the rotation is singular (Mitsuba uses the axis as given, not normalized: cos θ I + (1 − cos θ) a aᵀ + sin θ [a]×)"))?
                 }

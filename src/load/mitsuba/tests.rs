@@ -2320,6 +2320,12 @@ fn measured_bsdf_reads_its_tensor_file() {
 #[test]
 fn rotate_keeps_the_axis_as_written() {
     let f = load(&scene(r#"<shape type="cube"><transform name="to_world"><rotate x="1" y="1" angle="30"/></transform></shape>"#)).unwrap();
+    // Said, with the position, since it is rarely what the author meant.
+    assert!(
+        f.warnings.len() == 1 && f.warnings[0].contains("test.xml:7:") && f.warnings[0].contains("not a unit vector"),
+        "{:?}",
+        f.warnings
+    );
     let Geometry::Mesh(m) = &f.scene.geometries()[0] else { panic!("a cube is a mesh") };
     // Mitsuba: [[1, 0.133975, 0.5], [0.133975, 1, -0.5], [-0.5, 0.5, 0.866025]]; the cube's
     // corner (1, 1, 1) goes to the rows' sums.
@@ -2335,6 +2341,10 @@ fn rotate_keeps_the_axis_as_written() {
         panic!("cubes are meshes")
     };
     assert_eq!(a.positions, b.positions);
+    // A unit axis, even one written to six digits, is a rotation: nothing to say.
+    let unit = r#"<rotate x="0.584436" y="0.528244" z="0.615949" angle="30"/>"#;
+    let f = load(&scene(&format!(r#"<shape type="cube"><transform name="to_world">{unit}</transform></shape>"#))).unwrap();
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
 }
 
 /// Mitsuba 3.9.1's attribute rules (its parser's `check_attributes` and `value` expansion):
