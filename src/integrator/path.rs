@@ -140,7 +140,8 @@ impl PathIntegrator {
     /// One sample of the radiance along `camera_ray`, handing each contribution to `record`
     /// with the number of path segments it took (`k`: the term `Tᵏ⁻¹ Lₑ` of the Neumann
     /// series, k = 1 for emitters seen directly). [`Integrator::sample`] sums them in order.
-    /// Returns whether the camera ray hit a surface (its coverage).
+    /// Returns the sample's coverage (Mitsuba 3.9.1's `valid_ray`): whether the path went on
+    /// from a surface by a BSDF sample other than a null crossing.
     #[inline]
     pub fn trace(
         &self,
@@ -153,7 +154,13 @@ impl PathIntegrator {
         if max_depth == 0 {
             return scene.intersect_deferred(camera_ray).is_some();
         }
+        // Coverage, Mitsuba 3.9.1's `valid_ray`: set at the first vertex where the path goes on
+        // by a BSDF sample that is not a null crossing (a `null` surface, a mask's cut-out).
         let mut covered = false;
+        // Whether every vertex so far was a null crossing: camera rays see through those, so
+        // with `hide_emitters` the environment they reach stays hidden as if seen directly
+        // (Mitsuba 3.9.1's `path`; emitting shapes behind them show, as there).
+        let mut null_only = true;
         let hide = self.settings.hide_emitters;
         let mis = self.mis();
         let mut beta = Rgb::ONE;
@@ -166,15 +173,13 @@ impl PathIntegrator {
         loop {
             let hit = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                let (hit, through, touched) = trace::skip_hidden_emitters(scene, &ray);
+                let (hit, through, _) = trace::skip_hidden_emitters(scene, &ray);
                 ray = through;
-                covered = touched;
                 hit
             } else {
                 match scene.intersect_deferred(&ray) {
                     None => None,
                     Some(hit) => {
-                        covered |= depth == 0;
                         // At the path's last vertex only emission counts: the surface
                         // interaction of a shape that does not emit is not needed.
                         if depth + 1 >= max_depth && hit.light().is_none() {
@@ -185,9 +190,14 @@ impl PathIntegrator {
                 }
             };
             let Some(si) = hit else {
-                // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling.
-                let d = ray.d.normalize();
-                trace::escaped(scene, ray.o, d, prev.as_ref(), hide, &mis, |le, w| record(depth + 1, beta * le * w));
+                // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling
+                // (hidden, where asked, from camera rays that crossed null surfaces only).
+                if !(hide && null_only) {
+                    let d = ray.d.normalize();
+                    trace::escaped(scene, ray.o, d, prev.as_ref(), hide, &mis, |le, w| {
+                        record(depth + 1, beta * le * w)
+                    });
+                }
                 break;
             };
             let wo = -ray.d.normalize();
@@ -247,6 +257,9 @@ impl PathIntegrator {
             }
 
             // Continue the path by BSDF sampling.
+            let crossed = bs.as_ref().is_some_and(|b| b.null);
+            covered |= !crossed;
+            null_only &= crossed;
             let Some(bs) = bs else { break };
             beta *= bs.weight;
             eta *= bs.eta;
@@ -555,6 +568,46 @@ mod tests {
             assert!((hidden - seen).abs() < 0.01 * seen, "direct={direct}: hidden {hidden} vs floor {seen}");
             assert_eq!(radiance(through_sphere, false, direct), 7.0);
         }
+    }
+
+    /// Null surfaces are crossed as Mitsuba 3.9.1's `path` crosses them: behind a `null`
+    /// sphere (two crossings) a white sky hidden from the camera stays hidden, and a sample is
+    /// covered (alpha) only where the path goes on from a surface by a sample that is not a
+    /// null crossing — behind the sphere, a diffuse wall with `max_depth` 4 (crossing, crossing,
+    /// wall, on), not 3 (the wall is the last vertex). Measured against Mitsuba: the same rgb
+    /// and alpha in all four cases.
+    #[test]
+    fn null_crossings_hide_what_the_camera_does_not_see_and_cover_nothing() {
+        let mut b = SceneBuilder::new();
+        let null = b.add_bsdf(Bsdf::Null);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
+        let wall = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        let mut plane = TriangleMesh::rectangle();
+        let place = Transform::translate(Vec3::new(0.0, 0.0, -2.0)) * Transform::scale(Vec3::splat(0.4)).unwrap();
+        plane.transform(&place);
+        b.add_shape(Geometry::Mesh(plane), wall, None);
+        b.add_constant_environment(Rgb::ONE);
+        let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 12.0, FovAxis::X, 2, 1).unwrap());
+        let scene = b.build().unwrap();
+        // One sample along the ray from the camera through `target` (every such ray here
+        // crosses the sphere twice).
+        let sample = |hide: bool, max_depth: i32, target: Vec3| {
+            let settings = PathSettings { max_depth, hide_emitters: hide, ..Default::default() };
+            let path = PathIntegrator { settings, ..Default::default() };
+            let ray = Ray::new(Vec3::new(0.0, 0.0, 4.0), (target - Vec3::new(0.0, 0.0, 4.0)).normalize());
+            let mut sampler = SamplerKind::Independent.make(64, 0);
+            sampler.start_pixel_sample([0, 0], 0, 0);
+            path.sample(&scene, &ray, &mut sampler, &mut [])
+        };
+        let sky = Vec3::new(0.0, 0.6, 0.0);
+        let hidden = sample(true, 4, sky);
+        assert_eq!((hidden.l, hidden.alpha), (Rgb::ZERO, 0.0));
+        let seen = sample(false, 4, sky);
+        assert_eq!((seen.l, seen.alpha), (Rgb::ONE, 1.0));
+        let at_wall = Vec3::new(0.0, 0.0, -2.0);
+        assert_eq!(sample(true, 3, at_wall).alpha, 0.0);
+        assert_eq!(sample(true, 4, at_wall).alpha, 1.0);
     }
 
     /// Directional and spot lights on a diffuse floor, direct light only: the reflected
