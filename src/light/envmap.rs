@@ -134,9 +134,10 @@ impl EnvMap {
     }
 
     /// [`EnvMap::new`], its sampling density MIS-compensated where `mis_compensation` (Mitsuba's
-    /// parameter; see [`mis_offset`]): each cell weighted by `max(luminance − mean, 0)` instead
-    /// of its luminance, so directions no brighter than the map's mean are left to BSDF
-    /// sampling. The radiance and its integral are the same.
+    /// parameter, after Karlík et al. 2019): each cell weighted by `max(luminance − mean, 0)`
+    /// instead of its luminance — no offset for a map whose mean is within 1 % of its minimum —,
+    /// so directions no brighter than the map's mean are left to BSDF sampling; the complete
+    /// density stays for [`EnvMap::sample_complete`]. The radiance and its integral are the same.
     pub fn new_latlong(
         image: impl Into<Arc<Image>>,
         scale: f32,
