@@ -54,7 +54,10 @@ impl DirectIntegrator {
         let mis = Mis::Combine { heuristic: MisHeuristic::Power, n_light: nl, n_bsdf: nb };
         // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
         let (hit, ray, covered) = if hide {
-            trace::skip_hidden_emitters(scene, camera_ray)
+            // Covered where a surface is hit behind the hidden emitters (Mitsuba's `direct`).
+            let (hit, ray) = trace::skip_hidden_emitters(scene, camera_ray);
+            let covered = hit.is_some();
+            (hit, ray, covered)
         } else {
             let hit = scene.intersect(camera_ray);
             let covered = hit.is_some();

@@ -173,7 +173,7 @@ impl PathIntegrator {
         loop {
             let hit = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                let (hit, through, _) = trace::skip_hidden_emitters(scene, &ray);
+                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
                 ray = through;
                 hit
             } else {

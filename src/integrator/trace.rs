@@ -342,19 +342,19 @@ pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnc
 
 /// Follows a camera ray through emitters hidden from the camera (`hide_emitters`): the first
 /// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them (`None` if the
-/// ray escapes or gives up), the ray that reached it (to take its direction), and whether the
-/// camera ray hit anything at all (its coverage, hidden emitters included).
+/// ray escapes or gives up), and the ray that reached it (to take its direction). The hidden
+/// emitters passed through do not cover the pixel (Mitsuba's `valid_ray`).
 #[inline]
-pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray, bool) {
+pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray) {
     let mut ray = *ray;
-    for k in 0..=MAX_HIDDEN_SKIPS {
-        let Some(si) = scene.intersect(&ray) else { return (None, ray, k > 0) };
+    for _ in 0..=MAX_HIDDEN_SKIPS {
+        let Some(si) = scene.intersect(&ray) else { return (None, ray) };
         if scene.shapes()[si.shape as usize].light.is_none() {
-            return (Some(si), ray, true);
+            return (Some(si), ray);
         }
         ray = si.spawn_ray(ray.d);
     }
-    (None, ray, true)
+    (None, ray)
 }
 
 impl PathSettings {

@@ -144,7 +144,6 @@ impl Integrator for VolPathIntegrator {
         }
         loop {
             let hit = scene.intersect(&ray);
-            covered |= depth == 0 && crossings == 0 && hit.is_some();
             let t_surface = hit.as_ref().map_or(f32::INFINITY, |si| si.t);
 
             // Free flight through the current medium.
@@ -160,6 +159,7 @@ impl Integrator for VolPathIntegrator {
                         if depth + 1 >= max_depth || beta == Rgb::ZERO {
                             break;
                         }
+                        covered = true;
                         let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
                         // A point in a medium has no normal.
                         let light_ctx = LightSampleContext { p, n: Vec3::ZERO };
@@ -250,6 +250,7 @@ impl Integrator for VolPathIntegrator {
             // transmission, a mask's transparent part) can go on, as in Mitsuba.
             let last = depth + 1 >= max_depth;
             if last && !bsdf.may_pass() {
+                covered = true;
                 break;
             }
             let frame: Frame = si.frame();
@@ -275,7 +276,12 @@ impl Integrator for VolPathIntegrator {
                     });
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
-            let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
+            let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
+            // Coverage, Mitsuba 3.9.1's `valid_ray` in its volumetric path tracers: a surface
+            // vertex whose sample is not a null crossing, the last one too (or a scattering in a
+            // medium the path goes on from).
+            covered |= !bs.as_ref().is_some_and(|b| b.null);
+            let Some(bs) = bs else { break };
             if last && !bs.null {
                 break;
             }
@@ -435,6 +441,39 @@ mod tests {
             let image = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap().film.image();
             assert_eq!(centre(&image), Rgb::ZERO, "{name}: an opaque filter");
         }
+    }
+
+    /// Coverage as Mitsuba 3.9.1's volumetric path tracers have it (measured there): null
+    /// crossings cover nothing — a null sphere against a hidden white sky gives alpha 0 and no
+    /// light —, and a surface behind them covers the sample even at `max_depth` 1, where the
+    /// surface is the last vertex (its emission alone counts).
+    #[test]
+    fn null_crossings_cover_nothing_and_a_last_surface_does() {
+        use crate::material::Diffuse;
+        use crate::sampling::sampler::SamplerKind;
+        let mut b = SceneBuilder::new();
+        let null = b.add_bsdf(Bsdf::Null);
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
+        let wall = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        let mut plane = TriangleMesh::rectangle();
+        let place = Transform::translate(Vec3::new(0.0, 0.0, -2.0)) * Transform::scale(Vec3::splat(0.4)).unwrap();
+        plane.transform(&place);
+        b.add_shape(Geometry::Mesh(plane), wall, None);
+        b.add_constant_environment(Rgb::ONE);
+        let eye = Vec3::new(0.0, 0.0, 4.0);
+        let to_world = Transform::look_at(eye, Vec3::ZERO, Vec3::Y).unwrap();
+        b.set_camera(Camera::perspective(to_world, 12.0, FovAxis::X, 2, 1).unwrap());
+        let scene = b.build().unwrap();
+        let sample = |max_depth: i32, target: Vec3| {
+            let settings = PathSettings { max_depth, hide_emitters: true, ..Default::default() };
+            let integrator = VolPathIntegrator { settings };
+            let mut sampler = SamplerKind::Independent.make(64, 0);
+            sampler.start_pixel_sample([0, 0], 0, 0);
+            integrator.sample(&scene, &Ray::new(eye, (target - eye).normalize()), &mut sampler, &mut [])
+        };
+        let sky = sample(4, Vec3::new(0.0, 0.6, 0.0));
+        assert_eq!((sky.l, sky.alpha), (Rgb::ZERO, 0.0));
+        assert_eq!(sample(1, Vec3::new(0.0, 0.0, -2.0)).alpha, 1.0);
     }
 
     /// Surfaces light crosses unscattered — a thin dielectric's transmission, a mask's

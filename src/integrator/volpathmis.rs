@@ -252,7 +252,6 @@ impl Integrator for VolPathMisIntegrator {
         let mut crossings = 0u32;
         'path: loop {
             let hit = scene.intersect(&ray);
-            covered |= depth == 0 && crossings == 0 && hit.is_some();
             let t_surface = hit.as_ref().map_or(f32::INFINITY, |si| si.t);
 
             // Tracking through the current medium up to the surface.
@@ -286,6 +285,7 @@ impl Integrator for VolPathMisIntegrator {
                     if depth >= max_depth || path.is_zero() {
                         break;
                     }
+                    covered = true;
                     let wo = -ray.d;
                     let phase = &medium_ref.phase;
                     let ctx = LightSampleContext { p, n: Vec3::ZERO };
@@ -373,6 +373,7 @@ impl Integrator for VolPathMisIntegrator {
             // transmission, a mask's transparent part) can go on, as in Mitsuba.
             let at_last = depth + 1 >= max_depth;
             if at_last && !bsdf.may_pass() {
+                covered = true;
                 break;
             }
             let frame = si.frame();
@@ -402,7 +403,12 @@ impl Integrator for VolPathMisIntegrator {
                 }
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
-            let Some(bs) = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2) else { break };
+            let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
+            // Coverage, Mitsuba 3.9.1's `valid_ray` in its volumetric path tracers: a surface
+            // vertex whose sample is not a null crossing, the last one too (or a scattering in a
+            // medium the path goes on from).
+            covered |= !bs.as_ref().is_some_and(|b| b.null);
+            let Some(bs) = bs else { break };
             if at_last && !bs.null {
                 break;
             }
