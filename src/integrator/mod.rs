@@ -7,6 +7,8 @@
 pub mod aov;
 pub mod depth;
 pub mod direct;
+#[cfg(test)]
+pub(crate) mod fixtures;
 pub mod moment;
 pub mod path;
 pub mod ptracer;

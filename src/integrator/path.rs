@@ -578,27 +578,11 @@ mod tests {
     /// and alpha in all four cases.
     #[test]
     fn null_crossings_hide_what_the_camera_does_not_see_and_cover_nothing() {
-        let mut b = SceneBuilder::new();
-        let null = b.add_bsdf(Bsdf::Null);
-        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
-        let wall = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        let mut plane = TriangleMesh::rectangle();
-        let place = Transform::translate(Vec3::new(0.0, 0.0, -2.0)) * Transform::scale(Vec3::splat(0.4)).unwrap();
-        plane.transform(&place);
-        b.add_shape(Geometry::Mesh(plane), wall, None);
-        b.add_constant_environment(Rgb::ONE);
-        let to_world = Transform::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y).unwrap();
-        b.set_camera(Camera::perspective(to_world, 12.0, FovAxis::X, 2, 1).unwrap());
-        let scene = b.build().unwrap();
-        // One sample along the ray from the camera through `target` (every such ray here
-        // crosses the sphere twice).
+        use crate::integrator::fixtures::{null_sphere_before_a_wall, sample_toward};
+        let scene = null_sphere_before_a_wall();
         let sample = |hide: bool, max_depth: i32, target: Vec3| {
             let settings = PathSettings { max_depth, hide_emitters: hide, ..Default::default() };
-            let path = PathIntegrator { settings, ..Default::default() };
-            let ray = Ray::new(Vec3::new(0.0, 0.0, 4.0), (target - Vec3::new(0.0, 0.0, 4.0)).normalize());
-            let mut sampler = SamplerKind::Independent.make(64, 0);
-            sampler.start_pixel_sample([0, 0], 0, 0);
-            path.sample(&scene, &ray, &mut sampler, &mut [])
+            sample_toward(&scene, &PathIntegrator { settings, ..Default::default() }, target)
         };
         let sky = Vec3::new(0.0, 0.6, 0.0);
         let hidden = sample(true, 4, sky);

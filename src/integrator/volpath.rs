@@ -449,27 +449,11 @@ mod tests {
     /// surface is the last vertex (its emission alone counts).
     #[test]
     fn null_crossings_cover_nothing_and_a_last_surface_does() {
-        use crate::material::Diffuse;
-        use crate::sampling::sampler::SamplerKind;
-        let mut b = SceneBuilder::new();
-        let null = b.add_bsdf(Bsdf::Null);
-        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
-        let wall = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
-        let mut plane = TriangleMesh::rectangle();
-        let place = Transform::translate(Vec3::new(0.0, 0.0, -2.0)) * Transform::scale(Vec3::splat(0.4)).unwrap();
-        plane.transform(&place);
-        b.add_shape(Geometry::Mesh(plane), wall, None);
-        b.add_constant_environment(Rgb::ONE);
-        let eye = Vec3::new(0.0, 0.0, 4.0);
-        let to_world = Transform::look_at(eye, Vec3::ZERO, Vec3::Y).unwrap();
-        b.set_camera(Camera::perspective(to_world, 12.0, FovAxis::X, 2, 1).unwrap());
-        let scene = b.build().unwrap();
+        use crate::integrator::fixtures::{null_sphere_before_a_wall, sample_toward};
+        let scene = null_sphere_before_a_wall();
         let sample = |max_depth: i32, target: Vec3| {
             let settings = PathSettings { max_depth, hide_emitters: true, ..Default::default() };
-            let integrator = VolPathIntegrator { settings };
-            let mut sampler = SamplerKind::Independent.make(64, 0);
-            sampler.start_pixel_sample([0, 0], 0, 0);
-            integrator.sample(&scene, &Ray::new(eye, (target - eye).normalize()), &mut sampler, &mut [])
+            sample_toward(&scene, &VolPathIntegrator { settings }, target)
         };
         let sky = sample(4, Vec3::new(0.0, 0.6, 0.0));
         assert_eq!((sky.l, sky.alpha), (Rgb::ZERO, 0.0));
