@@ -170,25 +170,20 @@ impl EnvMap {
             }
         }
         let distribution = PiecewiseConstant2D::new(&func, w, h - 1).ok_or(EnvMapError::Black)?;
-        let complete = (offset > 0.0).then(|| PiecewiseConstant2D::new(&complete, w, h - 1)).flatten();
+        // (Where the compensated density has mass, the complete one, never smaller, has too.)
+        let complete = if offset > 0.0 { PiecewiseConstant2D::new(&complete, w, h - 1) } else { None };
         // ∫ luminance dω ≈ Σ cells (mean corner luminance) sin θ_mid · 2π² / (W (H - 1)).
         let integral = (integral * 2.0 * (PI * PI) as f64 / (w * (h - 1)) as f64) as f32;
-        Ok(EnvMap::assemble(
-            Layout::LatLong,
-            image,
-            [distribution].into_iter().chain(complete),
-            integral,
-            scale,
-            to_world,
-        ))
+        Ok(EnvMap::assemble(Layout::LatLong, image, distribution, complete, integral, scale, to_world))
     }
 
-    /// The map from its parts.
-    /// `densities`: the light-sampling density, then the complete one if that is compensated.
+    /// The map from its parts: `distribution`, the light-sampling density, and `complete`, the
+    /// uncompensated one where that is MIS-compensated.
     fn assemble(
         layout: Layout,
         image: Arc<Image>,
-        mut densities: impl Iterator<Item = PiecewiseConstant2D>,
+        distribution: PiecewiseConstant2D,
+        complete: Option<PiecewiseConstant2D>,
         integral: f32,
         scale: f32,
         to_world: Transform,
@@ -196,8 +191,8 @@ impl EnvMap {
         EnvMap {
             layout,
             image,
-            distribution: Arc::new(densities.next().expect("a density")),
-            complete: densities.next().map(Arc::new),
+            distribution: Arc::new(distribution),
+            complete: complete.map(Arc::new),
             integral,
             scale,
             to_world,
@@ -282,14 +277,7 @@ impl EnvMap {
         };
         let sum: f64 = image.pixels.iter().map(|&p| luminance(p) as f64).sum();
         let integral = (sum * 4.0 * PI as f64 / (w * h) as f64) as f32;
-        Ok(EnvMap::assemble(
-            Layout::EqualArea,
-            image,
-            [distribution].into_iter().chain(complete),
-            integral,
-            scale,
-            to_world,
-        ))
+        Ok(EnvMap::assemble(Layout::EqualArea, image, distribution, complete, integral, scale, to_world))
     }
 
     /// pbrt-v4's illuminance of an equal-area map at a point facing its +z, which its
