@@ -154,12 +154,12 @@ impl PathIntegrator {
         if max_depth == 0 {
             return scene.intersect_deferred(camera_ray).is_some();
         }
-        // Coverage, Mitsuba 3.9.1's `valid_ray`: set at the first vertex where the path goes on
-        // by a BSDF sample that is not a null crossing (a `null` surface, a mask's cut-out).
-        let mut covered = false;
-        // Whether every vertex so far was a null crossing: camera rays see through those, so
-        // with `hide_emitters` the environment they reach stays hidden as if seen directly
-        // (Mitsuba 3.9.1's `path`; emitting shapes behind them show, as there).
+        // Whether every vertex the path went on from so far was a null crossing (a `null`
+        // surface, a mask's cut-out): camera rays see through those, so with `hide_emitters` the
+        // environment they reach stays hidden as if seen directly (Mitsuba 3.9.1's `path`;
+        // emitting shapes behind them show, as there). Its negation is the sample's coverage,
+        // Mitsuba's `valid_ray`: set at the first vertex the path goes on from by a BSDF sample
+        // that is not a null crossing.
         let mut null_only = true;
         let hide = self.settings.hide_emitters;
         let mis = self.mis();
@@ -257,9 +257,7 @@ impl PathIntegrator {
             }
 
             // Continue the path by BSDF sampling.
-            let crossed = bs.as_ref().is_some_and(|b| b.null);
-            covered |= !crossed;
-            null_only &= crossed;
+            null_only &= bs.as_ref().is_some_and(|b| b.null);
             let Some(bs) = bs else { break };
             beta *= bs.weight;
             eta *= bs.eta;
@@ -273,7 +271,7 @@ impl PathIntegrator {
                 break;
             }
         }
-        covered
+        !null_only
     }
 }
 
