@@ -261,9 +261,10 @@ pub fn sample_direct(
     let Some((index, pmf)) = scene.sample_light(ctx, u) else { return Rgb::ZERO };
     let light = &scene.lights()[index as usize];
     // An MIS-compensated density leaves directions to BSDF sampling: only where it is combined.
-    let ls = match *mis {
-        Mis::Combine { n_bsdf, .. } if n_bsdf > 0 => light.sample_li(scene.geometries(), ctx.p, u2),
-        _ => light.sample_li_complete(scene.geometries(), ctx.p, u2),
+    let ls = if mis.needs_bsdf_pdf() {
+        light.sample_li(scene.geometries(), ctx.p, u2)
+    } else {
+        light.sample_li_complete(scene.geometries(), ctx.p, u2)
     };
     let Some(ls) = ls else { return Rgb::ZERO };
     // The density is computed with the value, before the shadow ray (Mitsuba traces that
