@@ -400,11 +400,12 @@ impl Texture {
     /// there.
     pub fn eval_scalar(&self, at: &TexPoint) -> f32 {
         match self {
-            // A shape's texture attribute as a scalar is its own scalar lookup (Mitsuba's
-            // `eval_attribute_1`); a mesh's attribute, its luminance.
-            Texture::MeshAttribute { name, scale } if at.mesh.and_then(|m| m.attribute(name)).is_none() => {
-                at.textures.and_then(|t| t.eval_scalar(name, at)).map_or(0.0, |v| v * scale)
-            }
+            // A mesh's attribute as a scalar is its luminance; a shape's texture attribute, its
+            // own scalar lookup (Mitsuba's `eval_attribute_1`).
+            Texture::MeshAttribute { name, scale } => match at.mesh.and_then(|m| m.attribute(name)) {
+                Some(v) => crate::math::luminance(v * *scale),
+                None => at.textures.and_then(|t| t.eval_scalar(name, at)).map_or(0.0, |v| v * scale),
+            },
             Texture::Checkerboard { color0, color1, to_uv } => {
                 if Texture::checker_cell0(to_uv, at.uv) {
                     color1.eval_scalar(at)
