@@ -485,7 +485,7 @@ impl Builder {
         };
         // Mitsuba: a mesh_attribute texture on a shape without that attribute is an error.
         for name in self.sb.bsdf(bsdf).mesh_attributes() {
-            if !mesh_has(&geometry, name) && textures.get(name).is_none() {
+            if !has_attribute(&geometry, &textures, name) {
                 return Err(o.error(format!(
                     "the shape's BSDF reads the mesh attribute '{name}', which this {} does not have \
                      (a PLY file's vertex and face properties give them: r g b → vertex_color / face_color, NAME_x NAME_y NAME_z → vertex_NAME, …; \
@@ -527,7 +527,7 @@ impl Builder {
         for (name, loc) in &locs {
             let texture = textures.get(name).expect("inserted");
             if let Some(missing) =
-                texture.mesh_attributes().into_iter().find(|n| !mesh_has(geometry, n) && textures.get(n).is_none())
+                texture.mesh_attributes().into_iter().find(|n| !has_attribute(geometry, &textures, n))
             {
                 return Err(SceneError::at(
                     loc,
@@ -738,6 +738,12 @@ impl Builder {
 /// Whether `geometry` is a mesh with the vertex or face attribute `name`.
 fn mesh_has(geometry: &Geometry, name: &str) -> bool {
     matches!(geometry, Geometry::Mesh(m) if m.attributes.iter().any(|a| a.name == name))
+}
+
+/// Whether a `mesh_attribute` texture of the shape `geometry` with texture attributes `textures`
+/// finds the attribute `name` (the mesh's own, or a texture attribute).
+fn has_attribute(geometry: &Geometry, textures: &TextureAttributes, name: &str) -> bool {
+    mesh_has(geometry, name) || textures.get(name).is_some()
 }
 
 /// Whether an emitter of plugin `ty` belongs to the shape it is nested in (or that references it).
