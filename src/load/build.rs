@@ -520,6 +520,15 @@ impl Builder {
                 continue;
             }
             p.used.set(true);
+            if locs.len() == crate::load::limits::MAX_TEXTURE_ATTRIBUTES {
+                return Err(SceneError::at(
+                    &p.loc,
+                    format!(
+                        "a shape takes at most {} texture attributes (neumann's limit: each may read another)",
+                        crate::load::limits::MAX_TEXTURE_ATTRIBUTES
+                    ),
+                ));
+            }
             let texture = self.texture_obj(t)?;
             textures.insert(p.name.clone(), texture);
             locs.push((p.name.as_str(), &p.loc));

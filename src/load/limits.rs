@@ -21,6 +21,9 @@ pub const MAX_SCENE_BYTES: usize = 1 << 30;
 pub const MAX_ACCESSOR_VALUES: usize = 1 << 28;
 /// How deeply objects may nest in a scene file.
 pub const MAX_NESTING: usize = 128;
+/// Texture attributes one shape may carry: each may read another, so this bounds how deep a
+/// lookup recurses (chain × texture nesting) and keeps the per-shape checks small.
+pub const MAX_TEXTURE_ATTRIBUTES: usize = 16;
 
 /// The bytes of the regular file `path`, if it is at most `max` bytes. Devices, pipes and
 /// folders are refused before reading (`/dev/zero` would never end).

@@ -1632,6 +1632,18 @@ fn shape_texture_attributes() {
     assert!(e.contains("test.xml:8:") && e.contains("reads itself"), "{e}");
     let e = err(&chain(&read("color1", "face_c")));
     assert!(e.contains("test.xml:9:") && e.contains("'face_b' reads the attribute 'face_c'"), "{e}");
+    // A bounded number per shape (each may read another: lookups recurse along the chain).
+    let many = |n: usize| {
+        let attrs: String =
+            (0..n).map(|k| format!(r#"<texture type="checkerboard" name="face_{k}">{checker}</texture>"#)).collect();
+        let bsdf = read("reflectance", "face_0");
+        scene(&format!(r#"<shape type="sphere">{attrs}<bsdf type="diffuse">{bsdf}</bsdf></shape>"#))
+    };
+    let limit = crate::load::limits::MAX_TEXTURE_ATTRIBUTES;
+    assert!(load(&many(limit)).is_ok());
+    let e = err(&many(limit + 1));
+    // Located at the attribute one past the limit.
+    assert!(e.contains("test.xml:") && e.contains("at most 16 texture attributes") && e.contains("face_16"), "{e}");
 }
 
 /// `-D` parameters the scene never substitutes come back as warnings (Mitsuba reports unused
