@@ -3,9 +3,10 @@
 //! and `constvolume`).
 //!
 //! Both live in the unit cube `[0, 1]³` of their local space, placed in the world by `to_world`.
-//! Their world bounding box is Mitsuba's: the box spanned by the images of the two corners
-//! `(0,0,0)` and `(1,1,1)` (not of all eight: under a rotation it is smaller than the rotated
-//! cube, as in Mitsuba 3.9.1). A medium built on a volume exists only inside that box.
+//! Their world bounding box is Mitsuba 3.9.1's: the axis-aligned box of the images of the unit
+//! cube's eight corners (under a rotation, larger than the rotated cube; there the values are
+//! the wrap mode's, as Mitsuba looks them up). A medium built on a volume exists only inside
+//! that box.
 //!
 //! `gridvolume` reads a `.vol` grid ([`crate::image::GridVolume`]; its stated bounding box is
 //! ignored unless `use_grid_bbox` is set) and interpolates it as Dr.Jit's 3D textures do: texel
@@ -143,7 +144,7 @@ pub struct Volume {
     data: VolumeData,
     /// World to the unit cube of the data.
     to_local: Transform,
-    /// Where the volume is (Mitsuba's box of two corners; module docs).
+    /// Where the volume is (the transformed unit cube's box; module docs).
     bounds: Bounds3,
     /// The largest value of any channel anywhere (≥ every interpolated value).
     max: f32,
@@ -156,8 +157,8 @@ impl Volume {
     }
 
     fn with_data(data: VolumeData, to_world: Transform, max: f32) -> Volume {
-        let (a, b) = (to_world.apply_point(Vec3::ZERO), to_world.apply_point(Vec3::ONE));
-        Volume { data, to_local: to_world.inverse(), bounds: Bounds3::new(a.min(b), a.max(b)), max }
+        let bounds = to_world.apply_bounds(&Bounds3::new(Vec3::ZERO, Vec3::ONE));
+        Volume { data, to_local: to_world.inverse(), bounds, max }
     }
 
     /// A grid volume (one or three channels) over the unit cube under `to_world`; `None` for
@@ -433,14 +434,15 @@ mod tests {
         }
     }
 
-    /// Mitsuba's bounding box: the two transformed corners (a rotated grid's box is not the
-    /// rotated cube's), and the constant volume's unit cube.
+    /// Mitsuba 3.9.1's bounding box: that of the transformed unit cube's eight corners (its
+    /// `bbox()` of a `constvolume` or `gridvolume` under rotate(z, 45°) · scale(2, 1, 1) is
+    /// [-0.707107, 0, 0] to [1.41421, 2.12132, 1]), and the constant volume's unit cube.
     #[test]
     fn bounds_are_mitsubas() {
         let t = Transform::rotate(Vec3::Z, 45.0).unwrap() * Transform::scale(Vec3::new(2.0, 1.0, 1.0)).unwrap();
         let b = Volume::constant(Rgb::ONE, t).bounds();
         let s = std::f32::consts::FRAC_1_SQRT_2;
-        for (got, want) in [(b.min, Vec3::new(0.0, 0.0, 0.0)), (b.max, Vec3::new(s, 3.0 * s, 1.0))] {
+        for (got, want) in [(b.min, Vec3::new(-s, 0.0, 0.0)), (b.max, Vec3::new(2.0 * s, 3.0 * s, 1.0))] {
             assert!((got - want).abs().max_element() < 1e-5, "{got} vs {want}");
         }
         assert_eq!(Volume::constant(Rgb::ONE, Transform::IDENTITY).bounds(), Bounds3::new(Vec3::ZERO, Vec3::ONE));
