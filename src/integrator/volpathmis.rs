@@ -111,8 +111,8 @@ impl Ratios {
 enum ShadowOrigin {
     /// From a point in a medium (no surface offset).
     Medium(Vec3),
-    /// From a surface interaction, reached from direction `wo` (unit, world).
-    Surface(crate::geometry::SurfaceInteraction, Vec3),
+    /// From a surface interaction.
+    Surface(crate::geometry::SurfaceInteraction),
 }
 
 /// One light sample's ratios: light sampling's (`nee`) and the unidirectional technique's
@@ -188,10 +188,8 @@ impl VolPathMisIntegrator {
                 let target = if ls.n == Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.p_error, ls.n, *p - ls.p) };
                 Ray::bounded(*p, target - *p, 1.0 - SHADOW_EPSILON)
             }
-            ShadowOrigin::Surface(si, wo) => {
-                if ls.wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
-                    medium = medium_after(scene, si.shape, si.ng, ls.wi, medium);
-                }
+            ShadowOrigin::Surface(si) => {
+                medium = medium_after(scene, si.shape, si.ng, ls.wi, medium);
                 si.spawn_ray_to(ls.p, ls.n, ls.p_error)
             }
         };
@@ -389,7 +387,7 @@ impl Integrator for VolPathMisIntegrator {
             let ctx = scene.bsdf_context(&si).with_memo(&memo);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             if !bsdf.is_delta() && !at_last {
-                let origin = ShadowOrigin::Surface(si, wo);
+                let origin = ShadowOrigin::Surface(si);
                 if let Some(mut lp) =
                     self.sample_light(scene, &light_ctx, &origin, medium, &path, channel, sampler, &mut rng)
                 {
@@ -435,9 +433,7 @@ impl Integrator for VolPathMisIntegrator {
             }
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
-            if wi.dot(si.ng) * wo.dot(si.ng) < 0.0 {
-                medium = medium_after(scene, si.shape, si.ng, wi, medium);
-            }
+            medium = medium_after(scene, si.shape, si.ng, wi, medium);
             ray = si.spawn_ray(wi);
             if bs.null {
                 // Passed straight through: not a bounce, and not the vertex MIS refers to (a

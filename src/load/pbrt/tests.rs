@@ -342,9 +342,16 @@ AttributeBegin
   Material "interface"
   Shape "sphere"
 AttributeEnd
+AttributeBegin
+  MediumInterface "fog" "fog"
+  Shape "sphere"
+AttributeEnd
 "#,
     )
     .unwrap();
+    // The same medium on both sides is no transition: that sphere keeps the ray's medium.
+    let same = &f.scene.shapes()[1];
+    assert_eq!((same.interior, same.exterior), (None, None));
     assert_eq!(
         f.integrator.kind(),
         crate::integrator::IntegratorKind::Volpath,

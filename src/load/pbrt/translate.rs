@@ -1197,9 +1197,13 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
     if p.gs.reverse ^ swaps {
         set(&mut o, "flip_normals", Value::Bool(true), &ps.loc);
     }
-    for (side, name) in [("interior", p.gs.inside.clone()), ("exterior", p.gs.outside.clone())] {
-        if let Some(m) = name.and_then(|n| p.media.get(&n).cloned()) {
-            set(&mut o, side, Value::Object(m), &ps.loc);
+    // pbrt-v4: a shape whose interface has the same medium on both sides is no transition (the
+    // ray keeps the medium it is in).
+    if p.gs.inside != p.gs.outside {
+        for (side, name) in [("interior", p.gs.inside.clone()), ("exterior", p.gs.outside.clone())] {
+            if let Some(m) = name.and_then(|n| p.media.get(&n).cloned()) {
+                set(&mut o, side, Value::Object(m), &ps.loc);
+            }
         }
     }
     let material = p.current_material()?;
