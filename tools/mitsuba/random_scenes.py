@@ -58,7 +58,21 @@ def tex(r, name, lo=0.05, hi=0.95, scalar=False):
         return f'<texture type="checkerboard" name="{name}">{c0}{c1}<transform name="to_uv"><scale x="{r.randint(1,6)}" y="{r.randint(1,6)}"/></transform></texture>'
     if scalar:
         return f'<float name="{name}" value="{r.uniform(lo, hi):.3f}"/>'
-    return f'<texture type="bitmap" name="{name}"><string name="filename" value="{ASSETS}/tiles.png"/></texture>'
+    return bitmap(r, name)
+
+
+def bitmap(r, name):
+    """The tiles image with random lookup settings: filter, wrap mode, a to_uv placement."""
+    extra = ''
+    if r.random() < 0.5:
+        extra += f'<string name="filter_type" value="{r.choice(["bilinear", "nearest"])}"/>'
+        extra += f'<string name="wrap_mode" value="{r.choice(["repeat", "mirror", "clamp"])}"/>'
+    if r.random() < 0.5:
+        extra += (f'<transform name="to_uv"><scale x="{r.uniform(0.5, 3):.2f}" y="{r.uniform(0.5, 3):.2f}"/>'
+                  f'<rotate z="1" angle="{r.uniform(0, 90):.0f}"/><translate x="{r.uniform(-0.5, 0.5):.2f}" '
+                  f'y="{r.uniform(-0.5, 0.5):.2f}"/></transform>')
+    return f'<texture type="bitmap" name="{name}"><string name="filename" value="{ASSETS}/tiles.png"/>{extra}</texture>'
+
 
 def bsdf(r, depth=0):
     kinds = ['diffuse', 'roughplastic', 'plastic', 'conductor', 'roughconductor', 'dielectric', 'roughdielectric',
