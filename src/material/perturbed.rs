@@ -388,6 +388,49 @@ mod tests {
         assert!(bump.frame(&ctx, Vec3::Z).n.z < 0.0, "turned to the geometric normal's side");
     }
 
+    /// A bump map of zero height leaves even a strongly anisotropic BSDF as it is, on a surface
+    /// whose tangent has any orientation in the world: the perturbed frame is built in the
+    /// shading frame (its tangent the shading tangent made perpendicular to the new normal).
+    /// Mitsuba 3.9.1 builds that tangent from the world ∂p/∂u read as local coordinates (its
+    /// `bumpmap` and `normalmap` `frame()`), so there a bump of scale 0 changes the BSDF:
+    /// measured, a rectangle turned 60° about z and −60° about x under an Ag conductor of α
+    /// (0.05, 0.5) lit by a point light renders 0.0137 plain and 9e-19 under the bump map.
+    #[test]
+    fn a_zero_bump_leaves_an_anisotropic_bsdf_unchanged_whatever_the_tangent() {
+        use crate::material::microfacet::{Microfacet, MicrofacetType};
+        use crate::material::{ConductorIor, RoughConductor};
+        let conductor = Arc::new(Bsdf::RoughConductor(RoughConductor {
+            roughness: Microfacet::new(MicrofacetType::Beckmann, 0.05, 0.5).into(),
+            ior: Some(ConductorIor::constant(Rgb::new(0.155, 0.117, 0.138), Rgb::new(4.83, 3.12, 2.15))),
+            specular_reflectance: Rgb::ONE.into(),
+        }));
+        let bump = Bsdf::Perturbed(Perturbed {
+            perturbation: Perturbation::BumpMap { height: ramp(glam::Mat3::IDENTITY), scale: 0.0 },
+            bsdf: conductor.clone(),
+            flip_invalid_normals: true,
+            shadowing: true,
+        });
+        let n = Vec3::new(0.0, 0.866_025_4, 0.5);
+        let dpdu = Vec3::new(0.5, 0.433_012_7, -0.75);
+        let si = crate::geometry::SurfaceInteraction { ng: n, ns: n, dpdu, dpdv: n.cross(dpdu), ..flat_hit(Vec2::splat(0.5)) };
+        let ctx = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&si), memo: None };
+        let mut rng = crate::sampling::Pcg32::new(3, 0);
+        let mut compared = 0;
+        for _ in 0..200 {
+            let mut dir = || {
+                let (a, b) = (rng.next_f32() * std::f32::consts::TAU, rng.next_f32());
+                Vec3::new(a.cos() * (1.0 - b * b).sqrt(), a.sin() * (1.0 - b * b).sqrt(), b.max(0.05)).normalize()
+            };
+            let (wo, wi) = (dir(), dir());
+            let (a, b) = (bump.eval(&ctx, wo, wi), conductor.eval(&ctx, wo, wi));
+            assert!((a - b).abs().max_element() <= 1e-4 * b.max_element().max(1e-3), "{wo} {wi}: {a} vs {b}");
+            let (pa, pb) = (bump.pdf(&ctx, wo, wi), conductor.pdf(&ctx, wo, wi));
+            assert!((pa - pb).abs() <= 1e-4 * pb.max(1e-3), "{wo} {wi}: pdf {pa} vs {pb}");
+            compared += usize::from(b.max_element() > 1e-3);
+        }
+        assert!(compared > 20, "{compared}");
+    }
+
     /// pbrt-v4's displacement: the same ramp as a displacement of 0.3 world units per unit of
     /// u tilts the normal as the bump map's slope does (forward differences agree with the
     /// bilinear slope inside a texel), a constant displacement tilts nothing, and a ramp along v

@@ -18,7 +18,7 @@ element at a time) down to an analytic case: the differences found so far were n
 or Mitsuba 3.9.1's own, listed in the README ("Mitsuba 3 scenes"), which this generator avoids:
 fractional `mask` opacity under `path`, `blendbsdf` of a delta and a smooth lobe, `direct` with
 several emitter samples and a delta light, `ptracer` under a rotated envmap, non-unit rotation
-axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift. Known and not avoided: Mitsuba 3.9.1's `principledthin`
+axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under normal and bump maps. Known and not avoided: Mitsuba 3.9.1's `principledthin`
 with `diff_trans` under two lights renders up to 1 % darker than the sum of its images under each. `ptracer` scenes are noisy (caustics
 through the BSDFs' delta lobes): re-run a flagged one at more spp before bisecting it.
 
@@ -74,7 +74,7 @@ def bitmap(r, name):
     return f'<texture type="bitmap" name="{name}"><string name="filename" value="{ASSETS}/tiles.png"/>{extra}</texture>'
 
 
-def bsdf(r, depth=0):
+def bsdf(r, depth=0, perturbed=False):
     kinds = ['diffuse', 'roughplastic', 'plastic', 'conductor', 'roughconductor', 'dielectric', 'roughdielectric',
              'thindielectric', 'principled', 'twosided', 'blendbsdf', 'mask', 'pplastic', 'principledthin', 'null',
              'normalmap', 'bumpmap', 'texrough']
@@ -99,6 +99,8 @@ def bsdf(r, depth=0):
         return f'<bsdf type="conductor"><string name="material" value="{r.choice(["Au","Cu","Al","Ag","Cr","none"])}"/></bsdf>'
     if k == 'roughconductor':
         an = f'<float name="alpha_u" value="{alpha:.3f}"/><float name="alpha_v" value="{r.uniform(0.02,0.6):.3f}"/>' if r.random() < 0.3 else f'<float name="alpha" value="{alpha:.3f}"/>'
+        if perturbed:  # Mitsuba 3.9.1 orients anisotropy under a normal or bump map by the world tangent
+            an = f'<float name="alpha" value="{alpha:.3f}"/>'
         return f'<bsdf type="roughconductor">{dist}{an}<string name="material" value="{r.choice(["Au","Cu","Al","Ag","Cr"])}"/><boolean name="sample_visible" value="{r.choice(["true","false"])}"/></bsdf>'
     if k == 'dielectric':
         return f'<bsdf type="dielectric"><float name="int_ior" value="{r.uniform(1.1, 2.2):.3f}"/></bsdf>'
@@ -122,9 +124,9 @@ def bsdf(r, depth=0):
     if k == 'null':
         return '<bsdf type="null"/>'
     if k == 'normalmap':
-        return f'<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{ASSETS}/bumps_normal.png"/><boolean name="raw" value="true"/></texture>{bsdf(r, 2)}</bsdf>'
+        return f'<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{ASSETS}/bumps_normal.png"/><boolean name="raw" value="true"/></texture>{bsdf(r, 2, True)}</bsdf>'
     if k == 'bumpmap':
-        return f'<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="{ASSETS}/tiles.png"/><boolean name="raw" value="true"/></texture><float name="scale" value="{r.uniform(0.1, 2):.2f}"/>{bsdf(r, 2)}</bsdf>'
+        return f'<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="{ASSETS}/tiles.png"/><boolean name="raw" value="true"/></texture><float name="scale" value="{r.uniform(0.1, 2):.2f}"/>{bsdf(r, 2, True)}</bsdf>'
     if k == 'texrough':
         return f'<bsdf type="roughconductor">{dist}<texture type="bitmap" name="alpha"><string name="filename" value="{ASSETS}/tiles.png"/></texture><string name="material" value="{r.choice(["Au","Cu","Al"])}"/></bsdf>'
 
