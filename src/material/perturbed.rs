@@ -412,7 +412,13 @@ mod tests {
         });
         let n = Vec3::new(0.0, 0.866_025_4, 0.5);
         let dpdu = Vec3::new(0.5, 0.433_012_7, -0.75);
-        let si = crate::geometry::SurfaceInteraction { ng: n, ns: n, dpdu, dpdv: n.cross(dpdu), ..flat_hit(Vec2::splat(0.5)) };
+        let si = crate::geometry::SurfaceInteraction {
+            ng: n,
+            ns: n,
+            dpdu,
+            dpdv: n.cross(dpdu),
+            ..flat_hit(Vec2::splat(0.5))
+        };
         let ctx = BsdfContext { uv: si.uv, mesh: None, textures: None, si: Some(&si), memo: None };
         let mut rng = crate::sampling::Pcg32::new(3, 0);
         let mut compared = 0;
