@@ -11,7 +11,7 @@
 //!
 //! Transport mode: light tracing transports importance, so BSDF values are those of the
 //! adjoint BSDF. For refraction that removes the `1/η²` radiance scaling
-//! ([`crate::material::Bsdf::eta_crossed`]), and shading normals get Veach's correction
+//! ([`crate::material::Bsdf::eval_adjoint`], lobe by lobe), and shading normals get Veach's correction
 //! `|ωₚ·nₛ| |ωₙ·n_g| / (|ωₚ·n_g| |ωₙ·nₛ|)` (ωₚ toward the previous vertex, ωₙ the next one).
 //!
 //! As in Mitsuba, vertices on purely specular surfaces cannot be connected (their BSDF is a
@@ -116,8 +116,7 @@ impl LightTracer {
             if self.allows(segments + 1) && !bsdf.is_delta() {
                 if let Some(cs) = camera.sample_wi(si.p, u_lens) {
                     let wi = frame.to_local(cs.wi);
-                    let eta = bsdf.eta_crossed(wo, wi);
-                    let f = bsdf.eval(&ctx, wo, wi) * (eta * eta * shading_correction(si.ns, si.ng, w_prev, cs.wi));
+                    let f = bsdf.eval_adjoint(&ctx, wo, wi) * shading_correction(si.ns, si.ng, w_prev, cs.wi);
                     let value = beta * f * cs.weight;
                     if value.max_element() > 0.0 && !scene.occluded(&si.spawn_ray_to(cs.p_lens, Vec3::ZERO, Vec3::ZERO))
                     {
@@ -132,7 +131,7 @@ impl LightTracer {
             // Continue by sampling the adjoint BSDF.
             let Some(bs) = bsdf.sample(&ctx, wo, u_lobe, u_bsdf) else { break };
             let w_next = frame.to_world(bs.wi);
-            beta = beta * bs.weight * (bs.eta * bs.eta * shading_correction(si.ns, si.ng, w_prev, w_next));
+            beta = beta * bsdf.adjoint_sample_weight(&ctx, wo, &bs) * shading_correction(si.ns, si.ng, w_prev, w_next);
             if beta.max_element() <= 0.0 || !beta.is_finite() {
                 break;
             }
@@ -343,10 +342,21 @@ mod tests {
 
     /// Through rough glass (seen directly and casting light on a floor) the light tracer must
     /// use the adjoint BSDF: without removing refraction's 1/η² radiance scaling the sphere
-    /// would come out 1.5² times too dark or bright. Means agree with the path tracer.
+    /// would come out 1.5² times too dark or bright. Means agree with the path tracer. The same
+    /// for a blend of two rough glasses of indices 1.5 and 2: each component's adjoint takes its
+    /// own η² (one factor for the blend, the product of the two indices, made this image 15 %
+    /// too dark; on a random scene with such a blend Mitsuba 3.9.1's `ptracer` gives 0.443,
+    /// neumann's 0.442 now and 0.388 before).
     #[test]
     fn rough_glass_uses_the_adjoint_bsdf() {
-        let text = r#"<scene version="3.0.0">
+        let glass = r#"<bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf>"#;
+        let blend = r#"<bsdf type="blendbsdf"><float name="weight" value="0.5"/>
+                <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf>
+                <bsdf type="roughdielectric"><float name="alpha" value="0.2"/><float name="int_ior" value="2"/></bsdf>
+            </bsdf>"#;
+        for bsdf in [glass, blend] {
+            let text = format!(
+                r#"<scene version="3.0.0">
             <sensor type="perspective">
                 <float name="fov" value="35"/>
                 <transform name="to_world"><lookat origin="0, 2, 5" target="0, 0.6, 0" up="0, 1, 0"/></transform>
@@ -358,36 +368,38 @@ mod tests {
             </shape>
             <shape type="sphere">
                 <point name="center" x="0" y="0.8" z="0"/><float name="radius" value="0.8"/>
-                <bsdf type="roughdielectric"><float name="alpha" value="0.3"/><float name="int_ior" value="1.5"/></bsdf>
+                {bsdf}
             </shape>
             <shape type="rectangle">
                 <transform name="to_world"><scale value="4"/><rotate x="1" angle="-90"/></transform>
                 <bsdf type="diffuse"/>
             </shape>
-        </scene>"#;
-        let file = crate::load::mitsuba::load_scene_text(std::path::Path::new("glass.xml"), text, &[]).unwrap();
-        let scene = file.scene;
-        let never = AtomicBool::new(false);
-        let reference = render(
-            &scene,
-            &PathIntegrator::default(),
-            &RenderSettings { spp: 4096, seed: 7, ..Default::default() },
-            &never,
-        )
-        .unwrap();
-        let light = render_light_paths(
-            &scene,
-            &LightTracer::default(),
-            &RenderSettings { spp: 4096, seed: 8, ..Default::default() },
-            &never,
-        )
-        .unwrap();
-        let (m_ref, se_ref) = reference.film.mean_and_std_error();
-        let (m_lt, se_lt) = light.film.mean_and_std_error();
-        let sigma = (se_lt * se_lt + se_ref * se_ref).sqrt();
-        println!("rough glass: ptracer {m_lt:.5} ± {se_lt:.5}, path {m_ref:.5} ± {se_ref:.5}");
-        assert!(sigma < 0.01 * m_ref, "too noisy: ± {sigma}");
-        assert!((m_lt - m_ref).abs() < 4.0 * sigma, "ptracer {m_lt} vs path {m_ref} (± {sigma})");
+        </scene>"#
+            );
+            let file = crate::load::mitsuba::load_scene_text(std::path::Path::new("glass.xml"), &text, &[]).unwrap();
+            let scene = file.scene;
+            let never = AtomicBool::new(false);
+            let reference = render(
+                &scene,
+                &PathIntegrator::default(),
+                &RenderSettings { spp: 4096, seed: 7, ..Default::default() },
+                &never,
+            )
+            .unwrap();
+            let light = render_light_paths(
+                &scene,
+                &LightTracer::default(),
+                &RenderSettings { spp: 4096, seed: 8, ..Default::default() },
+                &never,
+            )
+            .unwrap();
+            let (m_ref, se_ref) = reference.film.mean_and_std_error();
+            let (m_lt, se_lt) = light.film.mean_and_std_error();
+            let sigma = (se_lt * se_lt + se_ref * se_ref).sqrt();
+            println!("rough glass: ptracer {m_lt:.5} ± {se_lt:.5}, path {m_ref:.5} ± {se_ref:.5}");
+            assert!(sigma < 0.01 * m_ref, "too noisy: ± {sigma}");
+            assert!((m_lt - m_ref).abs() < 4.0 * sigma, "ptracer {m_lt} vs path {m_ref} (± {sigma})");
+        }
     }
 
     /// Mitsuba's `directionalarea` emitter: a square sending radiance 2 straight down onto a

@@ -498,6 +498,8 @@ impl Bsdf {
             Bsdf::Dielectric(b) => b.eta,
             Bsdf::RoughDielectric(b) => b.eta,
             Bsdf::Principled(b) => b.eta,
+            // No single index describes two refracting components (light tracing takes
+            // `eval_adjoint`, lobe by lobe); the product is exact when at most one refracts.
             Bsdf::Blend { bsdfs, .. } => return bsdfs[0].eta_crossed(wo, wi) * bsdfs[1].eta_crossed(wo, wi),
             // The sides of the perturbed frame decide; without the context, those of the
             // original one (they agree for every direction the normal map lets through).
@@ -508,6 +510,40 @@ impl Bsdf {
             eta
         } else {
             1.0 / eta
+        }
+    }
+
+    /// The adjoint BSDF's value (light tracing's importance transport) for light arriving from
+    /// `wo` and leaving toward `wi` (local frame): the value with refraction's `1/η²` radiance
+    /// scaling removed, lobe by lobe — a blend's is the blend of its components' adjoints, so
+    /// components that refract with different indices each get their own `η_it²`.
+    pub fn eval_adjoint(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
+        match self {
+            Bsdf::Blend { weight, bsdfs } => {
+                let w = blend_weight(weight, ctx);
+                bsdfs[0].eval_adjoint(ctx, wo, wi) * (1.0 - w) + bsdfs[1].eval_adjoint(ctx, wo, wi) * w
+            }
+            Bsdf::Mask { opacity, bsdf } => bsdf.eval_adjoint(ctx, wo, wi) * blend_weight(opacity, ctx),
+            Bsdf::Perturbed(n) => n.eval_adjoint(ctx, wo, wi),
+            _ => {
+                let eta = self.eta_crossed(wo, wi);
+                self.eval(ctx, wo, wi) * (eta * eta)
+            }
+        }
+    }
+
+    /// The weight of a light-tracing (importance) sample `s` drawn by [`Bsdf::sample`] from
+    /// `wo`: the adjoint value over the density. `s.weight · η²` of the sampled lobe, except
+    /// where a blend mixes lobes at a smooth sample's direction (its weight is the mixture's
+    /// value over the mixture's density), which takes [`Bsdf::eval_adjoint`] over the density.
+    pub fn adjoint_sample_weight(&self, ctx: &BsdfContext, wo: Vec3, s: &BsdfSample) -> Rgb {
+        if s.delta || !self.any_nested(&|b| matches!(b, Bsdf::Blend { .. })) {
+            return s.weight * (s.eta * s.eta);
+        }
+        if s.pdf > 0.0 {
+            self.eval_adjoint(ctx, wo, s.wi) / s.pdf
+        } else {
+            Rgb::ZERO
         }
     }
 

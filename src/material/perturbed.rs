@@ -195,6 +195,17 @@ impl Perturbed {
         self.bsdf.eval(ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
     }
 
+    /// [`Perturbed::eval`] of the nested BSDF's adjoint ([`Bsdf::eval_adjoint`]), its sides
+    /// those of the perturbed frame.
+    pub fn eval_adjoint(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
+        let f = self.frame(ctx, wo);
+        let wi_p = f.to_local(wi);
+        if wi.z * wi_p.z <= 0.0 {
+            return Rgb::ZERO;
+        }
+        self.bsdf.eval_adjoint(ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
+    }
+
     /// Density of [`Perturbed::sample`] choosing `wi` (the nested BSDF's).
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         let f = self.frame(ctx, wo);
