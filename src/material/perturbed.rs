@@ -187,23 +187,31 @@ impl Perturbed {
 
     /// `f(wo, wi) |cos θᵢ|` of the nested BSDF in the perturbed frame, shadowed.
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
-        let f = self.frame(ctx, wo);
-        let wi_p = f.to_local(wi);
-        if wi.z * wi_p.z <= 0.0 {
-            return Rgb::ZERO;
-        }
-        self.bsdf.eval(ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
+        self.eval_nested(ctx, wo, wi, Bsdf::eval)
     }
 
     /// [`Perturbed::eval`] of the nested BSDF's adjoint ([`Bsdf::eval_adjoint`]), its sides
     /// those of the perturbed frame.
     pub fn eval_adjoint(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_nested(ctx, wo, wi, Bsdf::eval_adjoint)
+    }
+
+    /// `nested(bsdf, ctx, wo, wi)` in the perturbed frame, shadowed; 0 for a `wi` on different
+    /// sides of the two normals.
+    #[inline]
+    fn eval_nested(
+        &self,
+        ctx: &BsdfContext,
+        wo: Vec3,
+        wi: Vec3,
+        nested: impl Fn(&Bsdf, &BsdfContext, Vec3, Vec3) -> Rgb,
+    ) -> Rgb {
         let f = self.frame(ctx, wo);
         let wi_p = f.to_local(wi);
         if wi.z * wi_p.z <= 0.0 {
             return Rgb::ZERO;
         }
-        self.bsdf.eval_adjoint(ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
+        nested(&self.bsdf, ctx, f.to_local(wo), wi_p) * self.shadow(&f, wi)
     }
 
     /// Density of [`Perturbed::sample`] choosing `wi` (the nested BSDF's).
