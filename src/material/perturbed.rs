@@ -410,8 +410,9 @@ mod tests {
     /// A bump map of zero height leaves even a strongly anisotropic BSDF as it is, on a surface
     /// whose tangent has any orientation in the world: the perturbed frame is built in the
     /// shading frame (its tangent the shading tangent made perpendicular to the new normal).
-    /// Mitsuba 3.9.1 builds that tangent from the world ∂p/∂u read as local coordinates (its
-    /// `bumpmap` and `normalmap` `frame()`), so there a bump of scale 0 changes the BSDF:
+    /// Mitsuba 3.9.1's `normalmap` builds it so (an identity map leaves its BSDFs as they are);
+    /// its `bumpmap` builds that tangent from the world ∂p/∂u read as local coordinates (its
+    /// `frame()`), so there a bump of scale 0 changes the BSDF:
     /// measured, a rectangle turned 60° about z and −60° about x under an Ag conductor of α
     /// (0.05, 0.5) lit by a point light renders 0.0137 plain and 9e-19 under the bump map.
     #[test]

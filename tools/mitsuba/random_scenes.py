@@ -18,7 +18,7 @@ element at a time) down to an analytic case: the differences found so far were n
 or Mitsuba 3.9.1's own, listed in the README ("Mitsuba 3 scenes"), which this generator avoids:
 fractional `mask` opacity under `path`, `blendbsdf` of a delta and a smooth lobe, `direct` with
 several emitter samples and a delta light, `ptracer` under a rotated envmap, non-unit rotation
-axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under normal and bump maps. Known and not avoided: Mitsuba 3.9.1's `principledthin`
+axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under bump maps. Known and not avoided: Mitsuba 3.9.1's `principledthin`
 with `diff_trans` under two lights renders up to 1 % darker than the sum of its images under each. `ptracer` scenes are noisy (caustics
 through the BSDFs' delta lobes): re-run a flagged one at more spp before bisecting it.
 
@@ -99,7 +99,7 @@ def bsdf(r, depth=0, perturbed=False):
         return f'<bsdf type="conductor"><string name="material" value="{r.choice(["Au","Cu","Al","Ag","Cr","none"])}"/></bsdf>'
     if k == 'roughconductor':
         an = f'<float name="alpha_u" value="{alpha:.3f}"/><float name="alpha_v" value="{r.uniform(0.02,0.6):.3f}"/>' if r.random() < 0.3 else f'<float name="alpha" value="{alpha:.3f}"/>'
-        if perturbed:  # Mitsuba 3.9.1 orients anisotropy under a normal or bump map by the world tangent
+        if perturbed:  # Mitsuba 3.9.1 orients anisotropy under a bump map by the world tangent
             an = f'<float name="alpha" value="{alpha:.3f}"/>'
         return f'<bsdf type="roughconductor">{dist}{an}<string name="material" value="{r.choice(["Au","Cu","Al","Ag","Cr"])}"/><boolean name="sample_visible" value="{r.choice(["true","false"])}"/></bsdf>'
     if k == 'dielectric':
@@ -124,7 +124,7 @@ def bsdf(r, depth=0, perturbed=False):
     if k == 'null':
         return '<bsdf type="null"/>'
     if k == 'normalmap':
-        return f'<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{ASSETS}/bumps_normal.png"/><boolean name="raw" value="true"/></texture>{bsdf(r, 2, True)}</bsdf>'
+        return f'<bsdf type="normalmap"><texture type="bitmap" name="normalmap"><string name="filename" value="{ASSETS}/bumps_normal.png"/><boolean name="raw" value="true"/></texture>{bsdf(r, 2)}</bsdf>'
     if k == 'bumpmap':
         return f'<bsdf type="bumpmap"><texture type="bitmap"><string name="filename" value="{ASSETS}/tiles.png"/><boolean name="raw" value="true"/></texture><float name="scale" value="{r.uniform(0.1, 2):.2f}"/>{bsdf(r, 2, True)}</bsdf>'
     if k == 'texrough':
