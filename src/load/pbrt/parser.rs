@@ -244,6 +244,30 @@ impl Cursor<'_> {
 }
 
 impl Parser {
+    /// Reads the spectrum files a parameter list names: a `spectrum` parameter whose value is
+    /// one string that is not one of pbrt-v4's named spectra names a file of `wavelength value`
+    /// pairs (whitespace-separated, `#` comments; pbrt-v4's `PiecewiseLinearSpectrum::Read`),
+    /// looked for as other files are, and becomes those pairs, as if written inline.
+    fn spectrum_files(&self, mut ps: ParamSet) -> Result<ParamSet> {
+        for p in ps.params.iter_mut().filter(|p| p.ty == "spectrum") {
+            let [PVal::Str(name)] = &p.values[..] else { continue };
+            if translate::is_named_spectrum(name) {
+                continue;
+            }
+            let path = self.resolver.resolve(name);
+            let text = crate::load::limits::read_text(&path).map_err(|e| {
+                SceneError::at(
+                    &p.loc,
+                    format!("\"spectrum {}\": \"{name}\" is neither one of pbrt-v4's named spectra nor a readable spectrum file: {e}", p.name),
+                )
+            })?;
+            let samples = parse_spectrum_file(&text)
+                .map_err(|m| SceneError::at(&p.loc, format!("spectrum file {}: {m}", path.display())))?;
+            p.values = samples.into_iter().flat_map(|(l, v)| [PVal::Num(l), PVal::Num(v)]).collect();
+        }
+        Ok(ps)
+    }
+
     /// A parser for the scene file `path`.
     pub fn new(path: &Path) -> Parser {
         let default_material = Rc::new(translate::default_material());
@@ -504,7 +528,7 @@ impl Parser {
             "WorldEnd" => {}
             "MakeNamedMedium" => {
                 let medium = c.string("the medium's name")?;
-                let mut ps = c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?;
+                let mut ps = self.spectrum_files(c.params(format!("MakeNamedMedium \"{medium}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "medium");
                 let obj = translate::medium(self, &ps)?;
                 ps.check_unused()?;
@@ -547,7 +571,8 @@ impl Parser {
                 let tex_name = c.string("the texture's name")?;
                 let class = c.string("the texture's type (\"spectrum\" or \"float\")")?;
                 let ty = c.string("the texture's class (imagemap, checkerboard, …)")?;
-                let mut ps = c.params(format!("Texture \"{tex_name}\" \"{class}\" \"{ty}\""), loc.clone())?;
+                let mut ps = self
+                    .spectrum_files(c.params(format!("Texture \"{tex_name}\" \"{class}\" \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "texture");
                 let obj = translate::texture(self, &ty, &class, &ps)?;
                 ps.check_unused()?;
@@ -564,7 +589,7 @@ impl Parser {
             }
             "Material" => {
                 let ty = c.string("the material type")?;
-                let mut ps = c.params(format!("Material \"{ty}\""), loc.clone())?;
+                let mut ps = self.spectrum_files(c.params(format!("Material \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "material");
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
@@ -572,7 +597,7 @@ impl Parser {
             }
             "MakeNamedMaterial" => {
                 let mat = c.string("the material's name")?;
-                let mut ps = c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?;
+                let mut ps = self.spectrum_files(c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "material");
                 let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
                 let obj = translate::material(self, &ty, &ps)?;
@@ -585,7 +610,7 @@ impl Parser {
             }
             "LightSource" => {
                 let ty = c.string("the light type")?;
-                let mut ps = c.params(format!("LightSource \"{ty}\""), loc.clone())?;
+                let mut ps = self.spectrum_files(c.params(format!("LightSource \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "light");
                 let obj = translate::light(self, &ty, &ps)?;
                 ps.check_unused()?;
@@ -593,7 +618,7 @@ impl Parser {
             }
             "AreaLightSource" => {
                 let ty = c.string("the area light type")?;
-                let ps = c.params(format!("AreaLightSource \"{ty}\""), loc.clone())?;
+                let ps = self.spectrum_files(c.params(format!("AreaLightSource \"{ty}\""), loc.clone())?)?;
                 if ty != "diffuse" {
                     return Err(ps.error("the only area light is \"diffuse\""));
                 }
@@ -601,7 +626,7 @@ impl Parser {
             }
             "Shape" => {
                 let ty = c.string("the shape type")?;
-                let mut ps = c.params(format!("Shape \"{ty}\""), loc.clone())?;
+                let mut ps = self.spectrum_files(c.params(format!("Shape \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "shape");
                 let shapes = translate::shape(self, &ty, &ps)?;
                 ps.check_unused()?;
@@ -760,4 +785,26 @@ fn type_param(ty: &str, loc: &Loc) -> Param {
         loc: loc.clone(),
         used: Cell::new(false),
     }
+}
+
+/// The (wavelength, value) pairs of a spectrum file: numbers separated by white space, `#`
+/// comments to the end of a line, an even count, wavelengths increasing (pbrt-v4's rules).
+fn parse_spectrum_file(text: &str) -> std::result::Result<Vec<(f64, f64)>, String> {
+    let mut nums = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        for word in line.split('#').next().unwrap_or("").split_whitespace() {
+            match word.parse::<f64>() {
+                Ok(x) if x.is_finite() => nums.push(x),
+                _ => return Err(format!("line {}: expected a number, found {word:?}", i + 1)),
+            }
+        }
+    }
+    if nums.is_empty() || nums.len() % 2 != 0 {
+        return Err(format!("expected (wavelength, value) pairs, found {} numbers", nums.len()));
+    }
+    let pairs: Vec<(f64, f64)> = nums.chunks(2).map(|c| (c[0], c[1])).collect();
+    if let Some(w) = pairs.windows(2).find(|w| w[1].0 <= w[0].0) {
+        return Err(format!("wavelengths must increase: {} nm follows {} nm", w[1].0, w[0].0));
+    }
+    Ok(pairs)
 }

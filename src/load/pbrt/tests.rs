@@ -1248,3 +1248,40 @@ fn medium_presets() {
     assert!((st - Rgb::splat(4.0)).abs().max_element() < 1e-5);
     assert!(warnings.iter().any(|w| w.contains("the nearest is 'Skin1'")), "{warnings:?}");
 }
+
+/// A `spectrum` parameter naming a file (pbrt-v4-scenes' `killeroo-coated-gold` gives its gold
+/// as `"spds/Au.eta.spd"`) reads the file's (wavelength, value) pairs, the same as writing them
+/// inline; a missing or malformed file is a located error, and pbrt's named spectra stay names.
+#[test]
+fn spectrum_files_read_as_their_pairs() {
+    let dir = tmp("spd");
+    std::fs::create_dir_all(dir.join("spds")).unwrap();
+    std::fs::write(dir.join("spds/eta.spd"), "# gold-ish\n400 1.5  500 0.9\n600 0.25\t700 0.16 # red\n").unwrap();
+    std::fs::write(dir.join("spds/k.spd"), "400 1.9\n500 1.9\n600 3.0\n700 4.0\n").unwrap();
+    std::fs::write(dir.join("spds/odd.spd"), "400 1.9 500\n").unwrap();
+    std::fs::write(dir.join("spds/down.spd"), "500 1.9 400 2.0\n").unwrap();
+    let bsdf = |eta: &str, k: &str| -> Result<String> {
+        let text = format!(
+            "Camera \"perspective\"\nWorldBegin\nMaterial \"conductor\" \"spectrum eta\" {eta} \"spectrum k\" {k}\nShape \"sphere\"\n"
+        );
+        std::fs::write(dir.join("main.pbrt"), text).unwrap();
+        let f = load_pbrt_file(&dir.join("main.pbrt"), &Overrides::default())?;
+        Ok(format!("{:?}", f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize]))
+    };
+    let from_files = bsdf("\"spds/eta.spd\"", "\"spds/k.spd\"").unwrap();
+    let inline = bsdf("[400 1.5 500 0.9 600 0.25 700 0.16]", "[400 1.9 500 1.9 600 3.0 700 4.0]").unwrap();
+    assert_eq!(from_files, inline);
+    assert_ne!(from_files, bsdf("\"metal-Au-eta\"", "\"metal-Au-k\"").unwrap());
+    let e = bsdf("\"spds/none.spd\"", "\"spds/k.spd\"").unwrap_err().to_string();
+    assert!(e.contains("main.pbrt:3:") && e.contains("spds/none.spd") && e.contains("named spectra"), "{e}");
+    let e = bsdf("\"spds/odd.spd\"", "\"spds/k.spd\"").unwrap_err().to_string();
+    assert!(e.contains("odd.spd") && e.contains("3 numbers"), "{e}");
+    let e = bsdf("\"spds/down.spd\"", "\"spds/k.spd\"").unwrap_err().to_string();
+    assert!(e.contains("must increase"), "{e}");
+    for named in ["metal-CuZn-k", "stdillum-F12", "glass-BAF10", "illum-acesD60", "canon_eos_5d_mkii_g"] {
+        assert!(translate::is_named_spectrum(named), "{named}");
+    }
+    for file in ["spds/Au.eta.spd", "metal-Au-x", "stdillum-F13", "glass-XYZ"] {
+        assert!(!translate::is_named_spectrum(file), "{file}");
+    }
+}

@@ -530,6 +530,24 @@ fn two_sided(o: Obj) -> Obj {
     t
 }
 
+/// Whether `name` is one of pbrt-v4's named spectra (its `GetNamedSpectrum`: glasses, metals,
+/// standard illuminants, camera sensors' responses); any other string given for a `spectrum`
+/// parameter names a spectrum file.
+pub fn is_named_spectrum(name: &str) -> bool {
+    const METALS: &[&str] = &["Ag", "Al", "Au", "Cu", "CuZn", "MgO", "TiO2"];
+    const SENSORS: &[&str] = &["canon_eos_", "hasselblad_", "nikon_", "sony_ilce_"];
+    if let Some(metal) = name.strip_prefix("metal-") {
+        return METALS.iter().any(|m| metal == format!("{m}-eta") || metal == format!("{m}-k"));
+    }
+    if let Some(illum) = name.strip_prefix("stdillum-") {
+        return matches!(illum, "A" | "D50" | "D65")
+            || illum.strip_prefix('F').and_then(|n| n.parse::<u32>().ok()).is_some_and(|n| (1..=12).contains(&n));
+    }
+    named_ior(name).is_some()
+        || name == "illum-acesD60"
+        || (SENSORS.iter().any(|p| name.starts_with(p)) && ["_r", "_g", "_b"].iter().any(|c| name.ends_with(c)))
+}
+
 /// pbrt's named glasses at the d line (587.6 nm): neumann's dielectrics do not disperse.
 fn named_ior(name: &str) -> Option<f32> {
     Some(match name {
