@@ -86,6 +86,9 @@ pub struct Parser {
     pub(super) curve_pieces: usize,
 }
 
+/// The plugin type of a stand-in for a named material defined later in the file.
+const NAMED_LATER: &str = "pbrt named material";
+
 /// A token cursor over one file.
 struct Cursor<'a> {
     tokens: &'a [Token],
@@ -600,6 +603,10 @@ impl Parser {
                 let mut ps = self.spectrum_files(c.params(format!("MakeNamedMaterial \"{mat}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "material");
                 let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
+                if self.named_materials.contains_key(&mat) {
+                    // pbrt-v4 refuses a second definition too ("named material redefined").
+                    return Err(SceneError::at(&loc, format!("MakeNamedMaterial: \"{mat}\" is defined twice")));
+                }
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
                 self.named_materials.insert(mat, Rc::new(obj));
@@ -747,16 +754,73 @@ impl Parser {
     }
 
     /// The material object shapes get now.
-    pub(super) fn current_material(&self) -> Result<Rc<Obj>> {
+    pub(super) fn current_material(&self) -> Rc<Obj> {
         match &self.gs.material {
-            MaterialRef::Object(o) => Ok(o.clone()),
-            MaterialRef::Named(n, loc) => self.named_materials.get(n).cloned().ok_or_else(|| {
-                SceneError::at(
-                    loc,
-                    format!("NamedMaterial: no material named \"{n}\" (MakeNamedMaterial defines them)"),
-                )
-            }),
+            MaterialRef::Object(o) => o.clone(),
+            MaterialRef::Named(n, loc) => self.named_material(n, loc),
         }
+    }
+
+    /// The named material `name`, or, where it is not defined yet, a stand-in that
+    /// [`Parser::resolve_named`] replaces once the whole file is read: pbrt-v4 creates named
+    /// materials after parsing, so `NamedMaterial` (and a `mix`) may name one defined further
+    /// on (pbrt-v4-scenes' `contemporary-bathroom` uses its materials before including them).
+    pub(super) fn named_material(&self, name: &str, loc: &Loc) -> Rc<Obj> {
+        match self.named_materials.get(name) {
+            Some(m) => m.clone(),
+            None => {
+                let mut o = Obj::new("bsdf", NAMED_LATER, loc.clone());
+                o.set("name", crate::props::Value::String(name.into()), loc.clone());
+                Rc::new(o)
+            }
+        }
+    }
+
+    /// Replaces the stand-ins inside the named materials themselves (a `mix` of materials
+    /// defined after it) by [`Parser::resolve_named`].
+    pub(super) fn resolve_named_materials(&mut self) -> Result<()> {
+        let mut names: Vec<String> = self.named_materials.keys().cloned().collect();
+        names.sort();
+        for n in names {
+            let m = self.named_materials[&n].clone();
+            let resolved = self.resolve_named(&m, 0)?;
+            self.named_materials.insert(n, resolved);
+        }
+        Ok(())
+    }
+
+    /// `o` with every stand-in of [`Parser::named_material`] replaced by the material of that
+    /// name (the object itself where it holds none); an error names the first that is
+    /// defined nowhere, or a cycle of mixes.
+    pub(super) fn resolve_named(&self, o: &Rc<Obj>, depth: usize) -> Result<Rc<Obj>> {
+        if o.ty == NAMED_LATER && o.tag == "bsdf" {
+            let name = match o.props.first().map(|p| &p.value) {
+                Some(crate::props::Value::String(n)) => n.clone(),
+                _ => unreachable!("a stand-in holds its name"),
+            };
+            let Some(m) = self.named_materials.get(&name) else {
+                return Err(SceneError::at(
+                    &o.loc,
+                    format!("no material named \"{name}\" (MakeNamedMaterial defines them)"),
+                ));
+            };
+            if depth > 64 {
+                return Err(SceneError::at(&o.loc, format!("the named material \"{name}\" contains itself")));
+            }
+            return self.resolve_named(m, depth + 1);
+        }
+        let mut children = Vec::with_capacity(o.children.len());
+        let mut changed = false;
+        for c in &o.children {
+            let r = self.resolve_named(c, depth)?;
+            changed |= !Rc::ptr_eq(&r, c);
+            children.push(r);
+        }
+        if !changed {
+            return Ok(o.clone());
+        }
+        let props = o.props.iter().map(|p| crate::props::Prop::new(&p.name, p.value.clone(), p.loc.clone())).collect();
+        Ok(Rc::new(Obj { props, children, id: o.id.clone(), ..Obj::new(&o.tag, &o.ty, o.loc.clone()) }))
     }
 
     /// Checks the end state: balanced blocks, a camera.

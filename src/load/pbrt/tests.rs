@@ -1285,3 +1285,34 @@ fn spectrum_files_read_as_their_pairs() {
         assert!(!translate::is_named_spectrum(file), "{file}");
     }
 }
+
+/// pbrt-v4 creates named materials once the whole scene is read, so a `NamedMaterial` (or a
+/// `mix`) may use one defined further on — pbrt-v4-scenes' `contemporary-bathroom` includes its
+/// `materials.pbrt` after the lights that use them. Such a scene loads the same materials as
+/// the one with the definitions first; a name defined nowhere is an error at its use, a second
+/// definition an error (as in pbrt-v4), and a mix that contains itself an error.
+#[test]
+fn named_materials_may_be_defined_after_their_use() {
+    let defs = "MakeNamedMaterial \"red\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.8 0.1 0.1]\n\
+                MakeNamedMaterial \"both\" \"string type\" \"mix\" \"string materials\" [\"red\" \"gold\"] \"float amount\" 0.3\n\
+                MakeNamedMaterial \"gold\" \"string type\" \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\"\n";
+    let uses = "AttributeBegin\nNamedMaterial \"red\"\nShape \"sphere\"\nAttributeEnd\n\
+                AttributeBegin\nNamedMaterial \"both\"\nTranslate 3 0 0\nShape \"sphere\" \"float alpha\" 0.5\nAttributeEnd\n";
+    let bsdfs = |text: String| -> Vec<String> {
+        let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        f.scene.shapes().iter().map(|s| format!("{:?}", f.scene.bsdfs()[s.bsdf as usize])).collect()
+    };
+    let before = bsdfs(format!("Camera \"perspective\"\nWorldBegin\n{defs}{uses}"));
+    let after = bsdfs(format!("Camera \"perspective\"\nWorldBegin\n{uses}{defs}"));
+    assert_eq!(before, after);
+    assert!(after[0].contains("Diffuse") && after[1].contains("Blend") && after[1].contains("Mask"), "{after:?}");
+    let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{uses}"));
+    assert!(e.contains("test.pbrt:4:1") && e.contains("no material named \"red\""), "{e}");
+    let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{defs}{defs}"));
+    assert!(e.contains("test.pbrt:6:1") && e.contains("\"red\" is defined twice"), "{e}");
+    let e = err(
+        "Camera \"perspective\"\nWorldBegin\nNamedMaterial \"loop\"\nShape \"sphere\"\n\
+         MakeNamedMaterial \"loop\" \"string type\" \"mix\" \"string materials\" [\"loop\" \"loop\"]\n",
+    );
+    assert!(e.contains("contains itself"), "{e}");
+}

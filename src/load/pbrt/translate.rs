@@ -664,17 +664,12 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let [a, b] = &names[..] else {
                 return Err(ps.error_at("materials", "a mix needs \"string materials\" with two names"));
             };
-            let get = |n: &str| {
-                p.named_materials
-                    .get(n)
-                    .cloned()
-                    .ok_or_else(|| ps.error_at("materials", format!("no material named \"{n}\"")))
-            };
+            let at = ploc(ps, "materials");
             let mut o = obj("bsdf", "blendbsdf", l);
             let w = texturable(p, ps, "amount", true)?.unwrap_or(Value::Float(0.5));
             set(&mut o, "weight", w, &ploc(ps, "amount"));
-            o.children.push(get(a)?);
-            o.children.push(get(b)?);
+            o.children.push(p.named_material(a, &at));
+            o.children.push(p.named_material(b, &at));
             o
         }
         "interface" => obj("bsdf", "null", l),
@@ -1224,7 +1219,7 @@ fn shape_obj(p: &mut Parser, ty: &str, ps: &ParamSet, to_world: Option<Transform
             }
         }
     }
-    let material = p.current_material()?;
+    let material = p.current_material();
     let mut cut_out = None;
     match texturable(p, ps, "alpha", true)? {
         // pbrt-v4: a constant alpha of 1 is no cut-out.
