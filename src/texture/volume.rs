@@ -136,6 +136,9 @@ pub enum VolumeData {
     Constant(Rgb),
     /// Mitsuba's `gridvolume`.
     Grid(Grid),
+    /// neumann's `pbrt_cloud`: pbrt-v4's procedural cloud density (in [0, 1]) times a colour,
+    /// looked up in the cloud's own space (not a unit cube: its box is given).
+    Cloud(super::cloud::CloudDensity, Rgb),
 }
 
 /// A volume texture: values over its box in the world.
@@ -161,6 +164,18 @@ impl Volume {
         Volume { data, to_local: to_world.inverse(), bounds, max }
     }
 
+    /// pbrt-v4's cloud density times `value` over the box `bounds` of its own space, placed
+    /// in the world by `to_world` (the density is looked up at the point's coordinates in that
+    /// space).
+    pub fn cloud(cloud: super::cloud::CloudDensity, value: Rgb, bounds: Bounds3, to_world: Transform) -> Volume {
+        Volume {
+            data: VolumeData::Cloud(cloud, value),
+            to_local: to_world.inverse(),
+            bounds: to_world.apply_bounds(&bounds),
+            max: value.max_element(),
+        }
+    }
+
     /// A grid volume (one or three channels) over the unit cube under `to_world`; `None` for
     /// another channel count.
     pub fn grid(data: Arc<GridVolume>, filter: GridFilter, wrap: GridWrap, to_world: Transform) -> Option<Volume> {
@@ -178,6 +193,7 @@ impl Volume {
         match &self.data {
             VolumeData::Constant(v) => *v,
             VolumeData::Grid(g) => g.eval(self.to_local.apply_point(p)),
+            VolumeData::Cloud(c, v) => *v * c.at(self.to_local.apply_point(p)),
         }
     }
 
@@ -196,6 +212,17 @@ impl Volume {
     pub fn mean(&self) -> Rgb {
         match &self.data {
             VolumeData::Constant(v) => *v,
+            VolumeData::Cloud(..) => {
+                // The density's average over a 16³ lattice of the box's points.
+                let (lo, hi) = (self.bounds.min, self.bounds.max);
+                let n = 16;
+                let mut sum = Rgb::ZERO;
+                for k in 0..n * n * n {
+                    let f = Vec3::new((k % n) as f32, (k / n % n) as f32, (k / (n * n)) as f32) + Vec3::splat(0.5);
+                    sum += self.eval(lo + (hi - lo) * f / n as f32);
+                }
+                sum / (n * n * n) as f32
+            }
             VolumeData::Grid(g) => {
                 let (ch, data) = (g.data.channels, &g.data.data);
                 let n = (data.len() / ch.max(1)).max(1) as f64;
@@ -214,6 +241,7 @@ impl Volume {
         match &self.data {
             VolumeData::Constant(v) => v.min_element(),
             VolumeData::Grid(g) => g.data.data.iter().copied().fold(f32::INFINITY, f32::min),
+            VolumeData::Cloud(_, v) => v.min_element().min(0.0),
         }
     }
 
@@ -222,6 +250,9 @@ impl Volume {
         match &self.data {
             VolumeData::Constant(v) => v.is_finite(),
             VolumeData::Grid(g) => g.data.data.iter().all(|v| v.is_finite()),
+            VolumeData::Cloud(c, v) => {
+                v.is_finite() && [c.density, c.wispiness, c.frequency].iter().all(|x| x.is_finite())
+            }
         }
     }
 
@@ -279,6 +310,23 @@ impl Volume {
         let to_world = o.transform("to_world")?;
         match o.ty.as_str() {
             "constvolume" => Ok(Volume::constant(o.rgb("value", Rgb::ONE, kind)?, to_world)),
+            "pbrt_cloud" => {
+                let d = super::cloud::CloudDensity::default();
+                let cloud = super::cloud::CloudDensity {
+                    density: o.float("density", d.density)?,
+                    wispiness: o.float("wispiness", d.wispiness)?,
+                    frequency: o.float("frequency", d.frequency)?,
+                };
+                let (p0, p1) = (o.point_opt("p0")?.unwrap_or(Vec3::ZERO), o.point_opt("p1")?.unwrap_or(Vec3::ONE));
+                if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
+                    return Err(o.error_at("p1", format!("the cloud's box p0 {p0} – p1 {p1} is empty")));
+                }
+                let v = Volume::cloud(cloud, o.rgb("value", Rgb::ONE, kind)?, Bounds3::new(p0, p1), to_world);
+                if !v.is_finite() {
+                    return Err(o.error("the cloud's parameters must be finite"));
+                }
+                Ok(v)
+            }
             "gridvolume" => {
                 let (data, filter, wrap, to_world) = grid_from_props(o, files)?;
                 let channels = data.channels;
@@ -296,7 +344,7 @@ impl Volume {
                 }
                 Ok(v)
             }
-            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume"])),
+            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume", "pbrt_cloud"])),
         }
     }
 }

@@ -566,6 +566,7 @@ fn named_ior(name: &str) -> Option<f32> {
 pub fn material(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     let displacement = texturable(p, ps, "displacement", true)?;
     let mut bsdf = material_bsdf(p, ty, ps)?;
+    let ty = if ty.is_empty() || ty == "none" { "interface" } else { ty };
     if displacement.is_some() && (ty == "interface" || ty == "mix") {
         return Err(ps.error_at("displacement", format!("a \"{ty}\" material takes no displacement")));
     }
@@ -672,7 +673,8 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             o.children.push(p.named_material(b, &at));
             o
         }
-        "interface" => obj("bsdf", "null", l),
+        // pbrt-v4: no material ("" or "none") is an interface too, a medium boundary only.
+        "interface" | "" | "none" => obj("bsdf", "null", l),
         "coateddiffuse" => {
             let mut o = obj("bsdf", "coateddiffuse", l);
             let r = texturable(p, ps, "reflectance", false)?.unwrap_or(Value::Float(0.5));
@@ -1009,15 +1011,77 @@ pub fn medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     match ty.as_str() {
         "homogeneous" => homogeneous_medium(p, ps),
         "uniformgrid" | "rgbgrid" => grid_medium(p, ps, ty == "rgbgrid"),
-        "nanovdb" | "cloud" => Err(ps.error_at(
+        "cloud" => cloud_medium(p, ps),
+        "nanovdb" => Err(ps.error_at(
             "type",
-            format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous, uniformgrid, rgbgrid)"),
+            format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous, uniformgrid, rgbgrid, cloud)"),
         )),
         other => Err(ps.error_at(
             "type",
             format!("unknown medium \"{other}\" (homogeneous, uniformgrid, rgbgrid, nanovdb, cloud)"),
         )),
     }
+}
+
+/// A medium's coefficient `name` (`sigma_a`, `sigma_s`), `default` where absent: an rgb, a
+/// constant, or a sampled spectrum (pairs or a file) reduced to RGB as an unbounded quantity
+/// (pbrt-v4 reads them as `SpectrumType::Unbounded`); negative values are an error.
+fn medium_coefficient(ps: &ParamSet, name: &str, default: Rgb) -> Result<Rgb> {
+    let c = match ps.spectrum(name)? {
+        None => default,
+        Some(SpectrumParam::Rgb(c)) => c,
+        Some(SpectrumParam::Constant(v)) => Rgb::splat(v),
+        Some(SpectrumParam::Samples(v)) => {
+            crate::math::spectrum::spectrum_to_rgb(&v, crate::math::spectrum::SpectrumKind::Unbounded)
+        }
+        Some(SpectrumParam::Named(n)) => {
+            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is no medium coefficient")))
+        }
+        Some(SpectrumParam::Blackbody(_)) => {
+            return Err(ps.error_at(name, "a blackbody spectrum is for emitted light only"))
+        }
+    };
+    if !(c.is_finite() && c.min_element() >= 0.0) {
+        return Err(ps.error_at(name, format!("\"{name}\" must be finite and ≥ 0, got {c}")));
+    }
+    Ok(c)
+}
+
+/// pbrt-v4's `cloud` medium: its procedural density ([`crate::texture::cloud`]: `density` (1),
+/// `wispiness` (1), `frequency` (5)) times `sigma_a` and `sigma_s` (1 each) over the box
+/// `p0`–`p1` ((0,0,0)–(1,1,1)) of the medium's space (the current transform), `g` →
+/// Mitsuba's `heterogeneous` whose σₜ is neumann's `pbrt_cloud` volume (the density times
+/// σₐ + σₛ, its peak as `scale`) and whose albedo is σₛ / σₜ.
+fn cloud_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
+    let (sa, ss) = (medium_coefficient(ps, "sigma_a", Rgb::ONE)?, medium_coefficient(ps, "sigma_s", Rgb::ONE)?);
+    let st = sa + ss;
+    let peak = st.max_element();
+    let (p0, p1) = (ps.point("p0", Vec3::ZERO)?, ps.point("p1", Vec3::ONE)?);
+    if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
+        return Err(ps.error_at("p1", format!("the cloud's box p0 {p0} – p1 {p1} is empty")));
+    }
+    let mut v = obj("volume", "pbrt_cloud", &ps.loc);
+    for name in ["density", "wispiness", "frequency"] {
+        if ps.has(name) {
+            let x = ps.float(name, 0.0)?;
+            if !x.is_finite() {
+                return Err(ps.error_at(name, format!("\"{name}\" must be finite")));
+            }
+            set(&mut v, name, Value::Float(x as f64), &ploc(ps, name));
+        }
+    }
+    set(&mut v, "p0", Value::Point(p0), &ploc(ps, "p0"));
+    set(&mut v, "p1", Value::Point(p1), &ploc(ps, "p1"));
+    let unit = if peak > 0.0 { st / peak } else { Rgb::ZERO };
+    set(&mut v, "value", Value::Rgb(unit), &ploc(ps, "sigma_a"));
+    set(&mut v, "to_world", Value::Transform(transform(p.gs.ctm, ps)?), &ps.loc);
+    let mut o = obj("medium", "heterogeneous", &ps.loc);
+    set(&mut o, "sigma_t", Value::Object(Rc::new(v)), &ps.loc);
+    set(&mut o, "scale", Value::Float(peak as f64), &ploc(ps, "sigma_a"));
+    let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
+    set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
+    phase_g(ps, &mut o)?;
+    Ok(o)
 }
 
 /// pbrt-v4's phase function parameter `g` on the medium `o` (Henyey–Greenstein; none at 0).
@@ -1100,15 +1164,7 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     } else {
         let density =
             values("density", 1, &["float"])?.ok_or_else(|| ps.error("a uniformgrid needs its \"float density\""))?;
-        let coefficient = |name: &str| -> Result<Rgb> {
-            match ps.spectrum(name)? {
-                None => Ok(Rgb::ONE),
-                Some(SpectrumParam::Rgb(c)) if c.min_element() >= 0.0 => Ok(c),
-                Some(SpectrumParam::Constant(v)) if v >= 0.0 => Ok(Rgb::splat(v)),
-                Some(_) => Err(ps.error_at(name, "give a non-negative rgb or constant")),
-            }
-        };
-        let (sa, ss) = (coefficient("sigma_a")?, coefficient("sigma_s")?);
+        let (sa, ss) = (medium_coefficient(ps, "sigma_a", Rgb::ONE)?, medium_coefficient(ps, "sigma_s", Rgb::ONE)?);
         let st = sa + ss;
         let st_grid = density.iter().flat_map(|d| (st * *d).to_array()).collect();
         let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
@@ -1162,17 +1218,9 @@ fn homogeneous_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
             }
         },
     };
-    let rgb = |name: &str, default: Rgb| -> Result<Rgb> {
-        match ps.spectrum(name)? {
-            None => Ok(default),
-            Some(SpectrumParam::Rgb(c)) => Ok(c),
-            Some(SpectrumParam::Constant(v)) => Ok(Rgb::splat(v)),
-            Some(_) => Err(ps.error_at(name, "give an rgb or a constant")),
-        }
-    };
     let (sigma_s, sigma_a) = match preset {
         Some(c) => c,
-        None => (rgb("sigma_s", Rgb::ONE)?, rgb("sigma_a", Rgb::ONE)?),
+        None => (medium_coefficient(ps, "sigma_s", Rgb::ONE)?, medium_coefficient(ps, "sigma_a", Rgb::ONE)?),
     };
     let scale = ps.float("scale", 1.0)?;
     if let Some(le) = ps.spectrum("Le")? {
