@@ -115,7 +115,7 @@ fn decode_png(path: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
             _ => [sample(base), sample(base + 1), sample(base + 2), sample(base + 3)],
         });
     }
-    Ok(EncodedImage { width: w, height: h, rgba })
+    Ok(EncodedImage { width: w, height: h, rgba, linear: false })
 }
 
 /// An 8- or 16-bit PNG or JPEG held in memory (glTF's images), as stored: sRGB values not yet
@@ -135,7 +135,7 @@ pub fn decode_encoded(name: &Path, bytes: &[u8]) -> Result<EncodedImage, String>
     reader.set_format(image::ImageFormat::Jpeg);
     let decoded = reader.decode().map_err(|e| format!("not a readable JPEG: {e}"))?.to_rgba32f();
     let rgba = decoded.pixels().map(|p| p.0).collect();
-    Ok(EncodedImage { width: decoded.width(), height: decoded.height(), rgba })
+    Ok(EncodedImage { width: decoded.width(), height: decoded.height(), rgba, linear: false })
 }
 
 /// JPEG, BMP, TGA (8-bit, sRGB-encoded unless `raw`, as Mitsuba reads them) and Radiance HDR

@@ -18,6 +18,9 @@ pub struct EncodedImage {
     pub height: u32,
     /// RGBA, row-major from the top-left.
     pub rgba: Vec<[f32; 4]>,
+    /// Whether the colour is linear already (an image a scene format made from its own
+    /// values), never sRGB-decoded; else it is as an 8- or 16-bit file stores it.
+    pub linear: bool,
 }
 
 /// One channel of an [`EncodedImage`], or its colour.
@@ -37,7 +40,7 @@ impl EncodedImage {
             .rgba
             .iter()
             .map(|p| match channel {
-                Channel::Rgb if raw => Rgb::new(p[0], p[1], p[2]),
+                Channel::Rgb if raw || self.linear => Rgb::new(p[0], p[1], p[2]),
                 Channel::Rgb => Rgb::new(srgb_decode(p[0]), srgb_decode(p[1]), srgb_decode(p[2])),
                 Channel::Single(c) => Rgb::splat(p[c.min(3)]),
             })
@@ -77,7 +80,10 @@ mod tests {
     #[test]
     fn channels_and_decoding() {
         let mut files = MemoryFiles::default();
-        files.images.insert("img".into(), EncodedImage { width: 1, height: 1, rgba: vec![[0.5, 0.25, 1.0, 0.75]] });
+        files.images.insert(
+            "img".into(),
+            EncodedImage { width: 1, height: 1, rgba: vec![[0.5, 0.25, 1.0, 0.75]], linear: false },
+        );
         let rgb = files.image("img", false).unwrap().pixels[0];
         assert!((rgb.x - srgb_decode(0.5)).abs() < 1e-7 && rgb.z == 1.0);
         assert_eq!(files.image("img", true).unwrap().pixels[0], Rgb::new(0.5, 0.25, 1.0));

@@ -1365,3 +1365,35 @@ fn cloud_media() {
     assert!(expected > 0.05 && expected < 0.95, "a test that can tell: {expected}");
     assert!((mean - expected).abs() < 0.01, "{mean} vs {expected}");
 }
+
+/// pbrt-v4's infinite light with "L" and a portal (pbrt-v4-scenes' `kroken`: a blackbody sky
+/// through its window) is a one-texel image of L's colour behind the portal: an rgb as given
+/// (the same light as a 1 × 1 image file of it), a black body at its XYZ with pbrt's peak
+/// normalisation — not at luminance 1 as the same "L" without a portal is.
+#[test]
+fn portal_lights_of_a_uniform_colour() {
+    use crate::math::{luminance, Vec3};
+    let dir = tmp("portal-l");
+    crate::film::output::write_image(&dir.join("one.exr"), 1, 1, &[Rgb::new(0.5, 0.6, 0.7)], &Default::default())
+        .unwrap();
+    let corners = "\"point3 portal\" [1 -1 -1  1 -1 1  1 1 1  1 1 -1]";
+    let light = |params: &str| {
+        let f = load(&format!("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" {params}\n"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let d = Vec3::new(1.0, 0.2, 0.1).normalize();
+        f.scene.lights()[0].le_escaped(Vec3::ZERO, d)
+    };
+    let file = light(&format!("\"string filename\" \"{}\" {corners} \"float scale\" 3", dir.join("one.exr").display()));
+    assert_eq!(light(&format!("\"rgb L\" [0.5 0.6 0.7] {corners} \"float scale\" 3")), file);
+    assert!((file - Rgb::new(1.5, 1.8, 2.1)).abs().max_element() < 1e-5, "{file}");
+    let (portal, uniform) = (
+        light(&format!("\"blackbody L\" 6500 {corners} \"float scale\" 2")),
+        light("\"blackbody L\" 6500 \"float scale\" 2"),
+    );
+    assert!((luminance(uniform) - 2.0).abs() < 1e-4, "{uniform}");
+    let ratio = luminance(portal) / luminance(uniform);
+    assert!(ratio > 0.8 && ratio < 0.98, "peak-normalised: {ratio}");
+    assert!((portal / luminance(portal) - uniform / luminance(uniform)).abs().max_element() < 1e-4, "{portal} {uniform}");
+    let e = err(&format!("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" {corners}\n"));
+    assert!(e.contains("\"L\" or a \"filename\""), "{e}");
+}

@@ -106,21 +106,43 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
     })
 }
 
-/// The linear sRGB colour of a black body at `kelvin`, at luminance 1 (pbrt-v4 normalises a
-/// light's spectrum to 1 nit, which its sRGB film shows as Y = 1).
-pub fn blackbody_rgb(kelvin: f32) -> Rgb {
+/// The linear sRGB colour of an emission spectrum as pbrt-v4's `SpectrumToXYZ` gives it, not
+/// normalised: an rgb as given, a constant or sampled spectrum integrated against the CIE
+/// curves, a black body normalised to 1 at its peak (pbrt-v4's `BlackbodySpectrum`).
+fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
+    use crate::math::spectrum::{spectrum_to_rgb, SpectrumKind};
+    Ok(match s {
+        SpectrumParam::Rgb(c) => c,
+        SpectrumParam::Constant(v) => spectrum_to_rgb(&[(360.0, v), (830.0, v)], SpectrumKind::Illuminant),
+        SpectrumParam::Samples(v) => spectrum_to_rgb(&v, SpectrumKind::Illuminant),
+        SpectrumParam::Blackbody(t) => spectrum_to_rgb(&blackbody_samples(t, true), SpectrumKind::Illuminant),
+        SpectrumParam::Named(n) if n == "stdillum-D65" => Rgb::ONE,
+        SpectrumParam::Named(n) => {
+            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here")))
+        }
+    })
+}
+
+/// Planck's law at `kelvin` sampled every 5 nm over 360–830 nm: in W m⁻³ sr⁻¹ × 10⁻¹³, or
+/// divided by its value at the peak wavelength (Wien's law) where `peak_one`.
+fn blackbody_samples(kelvin: f32, peak_one: bool) -> Vec<(f32, f32)> {
     const H: f64 = 6.626_070_15e-34;
     const C: f64 = 299_792_458.0;
     const K: f64 = 1.380_649e-23;
-    let samples: Vec<(f32, f32)> = (0..=94)
+    let planck = |l: f64| 2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * kelvin as f64)).exp() - 1.0);
+    let norm = if peak_one { planck(2.897_771_955e-3 / kelvin as f64) } else { 1e13 };
+    (0..=94)
         .map(|i| {
             let nm = 360.0 + 5.0 * i as f64;
-            let l = nm * 1e-9;
-            let b = 2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * kelvin as f64)).exp() - 1.0);
-            (nm as f32, (b * 1e-13) as f32)
+            (nm as f32, (planck(nm * 1e-9) / norm) as f32)
         })
-        .collect();
-    unit_luminance(&samples)
+        .collect()
+}
+
+/// The linear sRGB colour of a black body at `kelvin`, at luminance 1 (pbrt-v4 normalises a
+/// light's spectrum to 1 nit, which its sRGB film shows as Y = 1).
+pub fn blackbody_rgb(kelvin: f32) -> Rgb {
+    unit_luminance(&blackbody_samples(kelvin, false))
 }
 
 /// The linear sRGB colour of an emission spectrum (wavelength nm, value) at luminance 1: pbrt-v4
@@ -914,14 +936,30 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                     )
                 }
             };
-            if portal.is_some() && !ps.has("filename") {
-                return Err(
-                    ps.error_at("portal", "portals are for infinite lights with a \"filename\" (as in pbrt-v4)")
-                );
-            }
             let e = ps.float("illuminance", -1.0)?;
-            if let Some(file) = ps.string("filename")? {
-                if ps.has("L") {
+            // pbrt-v4: "L" with a portal is a one-texel image of L's colour (its XYZ in sRGB,
+            // not normalised to luminance 1 as a uniform "L" is) behind the portal.
+            let portal_l = match (portal.is_some(), ps.has("filename"), ps.spectrum("L")?) {
+                (true, false, Some(l)) => {
+                    let c = absolute_rgb(ps, "L", l)?;
+                    let name = format!("pbrt-portal-L-{}", p.mesh_count);
+                    p.mesh_count += 1;
+                    let image = crate::load::memory::EncodedImage {
+                        width: 1,
+                        height: 1,
+                        rgba: vec![[c.x, c.y, c.z, 1.0]],
+                        linear: true,
+                    };
+                    p.memory.images.insert(name.clone(), image);
+                    Some(name)
+                }
+                (true, false, None) => {
+                    return Err(ps.error_at("portal", "a portal needs an \"L\" or a \"filename\" (as in pbrt-v4)"))
+                }
+                _ => None,
+            };
+            if let Some(file) = portal_l.or(ps.string("filename")?) {
+                if ps.has("L") && ps.has("filename") {
                     return Err(ps.error_at("L", "give either \"L\" or \"filename\" (as pbrt-v4 requires)"));
                 }
                 // pbrt-v4's equal-area octahedral square around the light's +z (or, for an image
