@@ -174,6 +174,10 @@ pub enum Texture {
     /// One minus a texture's value per channel, negative results giving 0 (of its scalar as a
     /// scalar): pbrt-v4's `invert` of image textures, `max(0, 1 − scale · v)`.
     Invert(Box<Texture>),
+    /// pbrt-v4's conductor of a given reflectance r at normal incidence: the extinction
+    /// `k = 2√r / √(1 − r)` (with η = 1) of a texture's value per channel, r clamped to
+    /// [0, 0.9999] (of its scalar as a scalar).
+    ConductorK(Box<Texture>),
     /// Mitsuba's `volume`: a volume texture ([`volume::Volume`]: `gridvolume`, `constvolume`)
     /// looked up at the point's world position; its scalar is the mean of its channels, as
     /// Mitsuba's `eval_1`.
@@ -362,6 +366,7 @@ impl Texture {
             Texture::Procedural(p) => p.eval(uv, at.p),
             Texture::Sqrt(t) => t.eval_at(at).max(Rgb::ZERO).powf(0.5),
             Texture::Invert(t) => (Rgb::ONE - t.eval_at(at)).max(Rgb::ZERO),
+            Texture::ConductorK(t) => t.eval_at(at).map(conductor_k),
             Texture::Volume(v) => v.eval(at.p),
         }
     }
@@ -425,6 +430,7 @@ impl Texture {
             }
             Texture::Sqrt(t) => t.eval_scalar(at).max(0.0).sqrt(),
             Texture::Invert(t) => (1.0 - t.eval_scalar(at)).max(0.0),
+            Texture::ConductorK(t) => conductor_k(t.eval_scalar(at)),
             Texture::Volume(v) => {
                 let c = v.eval(at.p);
                 (c.x + c.y + c.z) / 3.0
@@ -440,7 +446,7 @@ impl Texture {
         match self {
             Texture::Constant(_) | Texture::Bitmap { .. } | Texture::MeshAttribute { .. } => false,
             Texture::AttributeUv { texture, .. } | Texture::Threshold { texture, .. } => texture.uses_position(),
-            Texture::Sqrt(t) | Texture::Invert(t) => t.uses_position(),
+            Texture::Sqrt(t) | Texture::Invert(t) | Texture::ConductorK(t) => t.uses_position(),
             Texture::Scale(t) => t[0].uses_position() || t[1].uses_position(),
             Texture::Checkerboard { color0, color1, .. } => color0.uses_position() || color1.uses_position(),
             Texture::Projected { projection, texture } => projection.uses_position() || texture.uses_position(),
@@ -498,6 +504,7 @@ impl Texture {
             Texture::Sqrt(t) => t.mean().max(Rgb::ZERO).powf(0.5),
             // Exact where the texture stays within [0, 1] (no clamping).
             Texture::Invert(t) => (Rgb::ONE - t.mean()).max(Rgb::ZERO),
+            Texture::ConductorK(t) => t.mean().map(conductor_k),
             // The average over the volume's box (its grid's values).
             Texture::Volume(v) => v.mean(),
         }
@@ -529,6 +536,7 @@ impl Texture {
             Texture::DirectionMix { tex, .. } => tex[0].is_reflectance() && tex[1].is_reflectance(),
             Texture::Procedural(p) => p.is_reflectance(),
             Texture::Sqrt(t) | Texture::Invert(t) => t.is_reflectance(),
+            Texture::ConductorK(_) => false,
             Texture::Volume(v) => v.min() >= 0.0 && v.max() <= 1.0,
             Texture::Scale(t) => {
                 let bound = |t: &Texture| match t {
@@ -597,6 +605,7 @@ pub const TEXTURE_PLUGINS: &[(&str, TexturePlugin)] =
         ("threshold", threshold_from_props),
         ("sqrt", sqrt_from_props),
         ("invert", invert_from_props),
+        ("conductor_k", conductor_k_from_props),
         ("mix", procedural::mix_from_props),
         ("directionmix", procedural::directionmix_from_props),
         ("bilerp", procedural::bilerp_from_props),
@@ -759,6 +768,25 @@ fn invert_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> 
     })
 }
 
+/// The extinction coefficient `2√r / √(1 − r)` of pbrt-v4's conductor of reflectance `r` at
+/// normal incidence (with η = 1), `r` clamped to [0, 0.9999].
+pub fn conductor_k(r: f32) -> f32 {
+    let r = if r > 0.0 { r.min(0.9999) } else { 0.0 };
+    2.0 * r.sqrt() / (1.0 - r).sqrt()
+}
+
+/// neumann's `conductor_k`: [`conductor_k`] of `tex` (required, a reflectance) per channel —
+/// pbrt-v4's conductor given a (textured) `reflectance` instead of η and k.
+fn conductor_k_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
+    if !o.has("tex") {
+        return Err(o.error("a conductor_k texture needs its 'tex'"));
+    }
+    Ok(match b.texture_of(o, "tex", Rgb::ONE, SpectrumKind::Reflectance)? {
+        Texture::Constant(c) => Texture::Constant(c.map(conductor_k)),
+        t => Texture::ConductorK(Box::new(t)),
+    })
+}
+
 /// Mitsuba's `checkerboard`: `color0` (0.4), `color1` (0.2), both texturable, `to_uv`; and
 /// neumann's `mapping` (pbrt-v4's 2D mappings, [`procedural::projection_from_props`]).
 fn checkerboard_from_props(o: &Obj, b: &mut dyn TextureSource) -> PropResult<Texture> {
@@ -802,7 +830,7 @@ impl Texture {
                 v
             }
             Texture::Threshold { texture, .. } | Texture::Projected { texture, .. } => texture.mesh_attributes(),
-            Texture::Sqrt(t) | Texture::Invert(t) => t.mesh_attributes(),
+            Texture::Sqrt(t) | Texture::Invert(t) | Texture::ConductorK(t) => t.mesh_attributes(),
             Texture::Mix { amount, tex } => {
                 let mut v = amount.mesh_attributes();
                 v.extend(tex[0].mesh_attributes());

@@ -1397,3 +1397,30 @@ fn portal_lights_of_a_uniform_colour() {
     let e = err(&format!("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" {corners}\n"));
     assert!(e.contains("\"L\" or a \"filename\""), "{e}");
 }
+
+/// A conductor given a textured `reflectance` (pbrt-v4-scenes' `kroken`: its rusty teapot) takes
+/// η = 1 and k = 2√r / √(1 − r) per lookup, as pbrt-v4 does: the same BSDF as the rgb
+/// reflectance where the texture is constant, a `ConductorK` texture where it varies.
+#[test]
+fn conductors_of_a_textured_reflectance() {
+    let bsdf = |defs: &str, mat: &str| {
+        let f = load(&format!("Camera \"perspective\"\nWorldBegin\n{defs}\nMaterial {mat}\nShape \"sphere\"\n"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        format!("{:?}", f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize])
+    };
+    for ty in ["\"conductor\"", "\"coatedconductor\""] {
+        let rgb = bsdf("", &format!("{ty} \"rgb reflectance\" [0.9 0.5 0.2]"));
+        let constant = bsdf(
+            "Texture \"r\" \"spectrum\" \"constant\" \"rgb value\" [0.9 0.5 0.2]",
+            &format!("{ty} \"texture reflectance\" \"r\""),
+        );
+        assert_eq!(rgb, constant);
+        let varying = bsdf(
+            "Texture \"r\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.9 0.5 0.2] \"rgb tex2\" [0.1 0.1 0.1]",
+            &format!("{ty} \"texture reflectance\" \"r\""),
+        );
+        assert!(varying.contains("ConductorK"), "{varying}");
+    }
+    assert!((crate::texture::conductor_k(0.75) - 2.0 * 0.75f32.sqrt() / 0.5).abs() < 1e-6);
+    assert_eq!(crate::texture::conductor_k(-1.0), 0.0);
+}

@@ -479,18 +479,32 @@ fn roughness(p: &Parser, ps: &ParamSet) -> Result<Option<(Value, Value)>> {
 
 /// A conductor's complex index from `{prefix}eta` / `{prefix}k` (pbrt's default: copper) or
 /// `reflectance`, set on `o` as Mitsuba's `material` or `eta` / `k`.
-fn conductor_ior(ps: &ParamSet, o: &mut Obj, prefix: &str) -> Result<()> {
+fn conductor_ior(p: &Parser, ps: &ParamSet, o: &mut Obj, prefix: &str) -> Result<()> {
     let (eta_name, k_name) = (format!("{prefix}eta"), format!("{prefix}k"));
     if ps.has("reflectance") {
-        // pbrt-v4: η = 1 and k = 2√r / √(1 − r), which reflects r at normal incidence.
-        let r = match ps.spectrum("reflectance")? {
-            Some(SpectrumParam::Rgb(c)) => c,
-            Some(SpectrumParam::Constant(v)) => Rgb::splat(v),
-            _ => return Err(ps.error_at("reflectance", "a conductor's reflectance must be an rgb or a constant")),
+        // pbrt-v4: η = 1 and k = 2√r / √(1 − r), which reflects r at normal incidence; a
+        // textured reflectance gives k per lookup (neumann's `conductor_k` texture).
+        let at = ploc(ps, "reflectance");
+        let k = match texturable(p, ps, "reflectance", false)?.expect("present") {
+            Value::Rgb(c) => Value::Rgb(c.map(crate::texture::conductor_k)),
+            Value::Float(v) => Value::Float(crate::texture::conductor_k(v as f32) as f64),
+            Value::Spectrum(SpectrumValue::Samples(v)) => Value::Rgb(
+                crate::math::spectrum::spectrum_to_rgb(&v, crate::math::spectrum::SpectrumKind::Reflectance)
+                    .map(crate::texture::conductor_k),
+            ),
+            t @ Value::Object(_) => {
+                let mut k = obj("texture", "conductor_k", &at);
+                set(&mut k, "tex", t, &at);
+                Value::Object(Rc::new(k))
+            }
+            _ => {
+                return Err(
+                    ps.error_at("reflectance", "a conductor's reflectance must be an rgb, a constant or a texture")
+                )
+            }
         };
-        let k = r.map(|x| 2.0 * x.clamp(0.0, 0.9999).sqrt() / (1.0 - x.clamp(0.0, 0.9999)).sqrt());
-        set(o, "eta", Value::Float(1.0), &ploc(ps, "reflectance"));
-        set(o, "k", Value::Rgb(k), &ploc(ps, "reflectance"));
+        set(o, "eta", Value::Float(1.0), &at);
+        set(o, "k", k, &at);
         return Ok(());
     }
     let eta = ps.spectrum(&eta_name)?.unwrap_or(SpectrumParam::Named("metal-Cu-eta".into()));
@@ -652,7 +666,7 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
                 set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
                 set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
             }
-            conductor_ior(ps, &mut o, "")?;
+            conductor_ior(p, ps, &mut o, "")?;
             two_sided(o)
         }
         "dielectric" | "thindielectric" => {
@@ -718,7 +732,7 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             let (u, v) = roughness_pair(p, ps, "conductor.")?;
             set(&mut o, "conductor_alpha_u", u, &ploc(ps, "conductor.roughness"));
             set(&mut o, "conductor_alpha_v", v, &ploc(ps, "conductor.roughness"));
-            conductor_ior(ps, &mut o, "conductor.")?;
+            conductor_ior(p, ps, &mut o, "conductor.")?;
             layer_params(p, ps, &mut o)?;
             o
         }
