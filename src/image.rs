@@ -54,4 +54,9 @@ pub trait VolumeSource {
 pub trait ImageSource {
     /// The image named by parameter `name` of `o`; errors are located at the parameter.
     fn image(&mut self, o: &Obj, name: &str, raw: bool) -> Result<Arc<Image>>;
+
+    /// The image named by parameter `name` of `o` read as pbrt-v4 reads a float image texture
+    /// (grey: the alpha where an RGBA image's is not all 1, else the mean of the colour), its
+    /// 8- and 16-bit values decoded as sRGB, linear (`raw`) or by the power `gamma`.
+    fn pbrt_scalar_image(&mut self, o: &Obj, name: &str, raw: bool, gamma: Option<f32>) -> Result<Arc<Image>>;
 }

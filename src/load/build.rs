@@ -386,12 +386,14 @@ impl Builder {
                 }
                 Geometry::Curves(_) => Some(("curves".to_string(), "pbrt-v4: they have")),
                 Geometry::Ellipsoids(_) => Some(("ellipsoids".to_string(), "Mitsuba: they have")),
-                Geometry::Cylinder(c) if c.is_elliptic() => return Err(e.error(format!(
+                Geometry::Cylinder(c) if c.is_elliptic() => {
+                    return Err(e.error(format!(
                     "an elliptic cylinder (a to_world that scales unevenly across its axis or shears) cannot be {}: \
                          its area has no closed form and uniform (φ, z) points are not uniform in area (Mitsuba \
                          samples it as if they were, a biased estimate)",
                     emitter_name(&e.ty)
-                ))),
+                )))
+                }
                 // Mitsuba's ellipsoid shells skip the mesh's area table.
                 Geometry::Mesh(_) if o.ty == "ellipsoidsmesh" => {
                     Some(("an ellipsoidsmesh".to_string(), "Mitsuba: its shells have"))
@@ -834,6 +836,31 @@ impl ImageSource for Builder {
             return Ok(i.clone());
         }
         let img = Arc::new(load_image(&path, raw).map_err(|e| o.error_at(name, e.to_string()))?);
+        self.images.insert(key, img.clone());
+        Ok(img)
+    }
+
+    fn pbrt_scalar_image(&mut self, o: &Obj, name: &str, raw: bool, gamma: Option<f32>) -> Result<Arc<Image>> {
+        let file = o.string(name)?;
+        let path = self.resolver.resolve(&file);
+        // Cached apart from the colour images of the same file (a suffix no file name has).
+        let tag = match (raw, gamma) {
+            (true, _) => "linear".to_string(),
+            (_, Some(g)) => format!("gamma {g}"),
+            _ => "sRGB".to_string(),
+        };
+        let key = (PathBuf::from(format!("{}\0pbrt-scalar {tag}", path.display())), raw);
+        if let Some(i) = self.images.get(&key) {
+            return Ok(i.clone());
+        }
+        let decode = |v: f32| match (raw, gamma) {
+            (true, _) => v,
+            (_, Some(g)) => v.max(0.0).powf(g),
+            _ => crate::math::color::srgb_decode(v),
+        };
+        let img = Arc::new(
+            crate::load::image::load_pbrt_scalar(&path, &decode).map_err(|e| o.error_at(name, e.to_string()))?,
+        );
         self.images.insert(key, img.clone());
         Ok(img)
     }

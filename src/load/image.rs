@@ -59,7 +59,9 @@ fn check_png(path: &Path, bytes: &[u8]) -> Result<(), String> {
                 limits::check_image_size(path, w.into(), h.into()).map_err(message)?;
             }
             b"PLTE" if !len.is_multiple_of(3) || len > 768 => {
-                return Err(bad(&format!("the PNG palette has {len} bytes (whole RGB entries, at most 256, are needed)")));
+                return Err(bad(&format!(
+                    "the PNG palette has {len} bytes (whole RGB entries, at most 256, are needed)"
+                )));
             }
             b"IEND" => break,
             _ => {}
@@ -86,6 +88,12 @@ fn load_png(path: &Path, raw: bool) -> Result<Image, String> {
 /// A PNG's values as stored (grey replicated to RGB; alpha 1 where it has none), checked first
 /// ([`check_png`]); `path` names it in size-limit messages.
 fn decode_png(path: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
+    decode_png_channels(path, bytes).map(|(image, _)| image)
+}
+
+/// [`decode_png`] and the file's channel count (1 grey, 2 grey and alpha, 3 RGB, 4 RGBA; a
+/// palette counts as its expansion).
+fn decode_png_channels(path: &Path, bytes: &[u8]) -> Result<(EncodedImage, usize), String> {
     check_png(path, bytes)?;
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
@@ -115,7 +123,53 @@ fn decode_png(path: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
             _ => [sample(base), sample(base + 1), sample(base + 2), sample(base + 3)],
         });
     }
-    Ok(EncodedImage { width: w, height: h, rgba, linear: false })
+    Ok((EncodedImage { width: w, height: h, rgba, linear: false }, channels))
+}
+
+/// An image read as pbrt-v4 reads a float image texture (its `MIPMap` of the file): one value
+/// per pixel, in every channel of the result — the alpha of an RGBA file whose alpha is not 1
+/// everywhere, else the mean of its red, green and blue, else its one grey channel (a grey PNG
+/// with alpha is read as grey: pbrt-v4 drops that alpha). `decode` maps the stored 8- and 16-bit
+/// values to linear ones (pbrt-v4's encoding: sRGB, linear or a gamma), alpha included, as
+/// pbrt-v4 decodes every channel of such images; float files (EXR, HDR, PFM) are linear and
+/// read as RGB (the mean of their colour; an EXR's alpha is not read).
+pub fn load_pbrt_scalar(path: &Path, decode: &dyn Fn(f32) -> f32) -> Result<Image, LoadError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+    let (width, height, channels, rgba) = match ext.as_deref() {
+        Some("png") => {
+            let bytes = limits::read_bounded(path, limits::MAX_FILE_BYTES)?;
+            let (image, channels) = decode_png_channels(path, &bytes).map_err(|e| LoadError::format(path, e))?;
+            (image.width, image.height, channels, image.rgba)
+        }
+        Some("jpg" | "jpeg" | "bmp" | "tga") => {
+            std::fs::File::open(path).map_err(|e| LoadError::io(path, e))?;
+            let decoded = image::ImageReader::open(path)
+                .and_then(|r| r.with_guessed_format())
+                .map_err(|e| LoadError::format(path, format!("cannot read: {e}")))?
+                .decode()
+                .map_err(|e| LoadError::format(path, format!("not a readable image: {e}")))?;
+            let channels = decoded.color().channel_count() as usize;
+            let rgba = decoded.to_rgba32f();
+            (rgba.width(), rgba.height(), channels, rgba.pixels().map(|p| p.0).collect())
+        }
+        _ => {
+            let rgb = load_image(path, true)?;
+            let pixels = rgb.pixels.iter().map(|c| Rgb::splat((c.x + c.y + c.z) / 3.0)).collect();
+            return Ok(Image { width: rgb.width, height: rgb.height, pixels });
+        }
+    };
+    let alpha = channels == 4 && rgba.iter().any(|p| decode(p[3]) != 1.0);
+    let pixels = rgba
+        .iter()
+        .map(|p| {
+            Rgb::splat(match channels {
+                _ if alpha => decode(p[3]),
+                1 | 2 => decode(p[0]),
+                _ => (decode(p[0]) + decode(p[1]) + decode(p[2])) / 3.0,
+            })
+        })
+        .collect();
+    Ok(Image { width, height, pixels })
 }
 
 /// An 8- or 16-bit PNG or JPEG held in memory (glTF's images), as stored: sRGB values not yet
@@ -175,7 +229,8 @@ fn load_ppm(path: &Path, raw: bool) -> Result<Image, String> {
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
     use exr::prelude::*;
     // The sizes the header claims, checked before any pixel memory is allocated.
-    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
+    let meta =
+        exr::meta::MetaData::read_from_file(path, false).map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
     for header in &meta.headers {
         let size = header.layer_size;
         limits::check_image_size(path, size.width() as u64, size.height() as u64).map_err(message)?;
@@ -198,6 +253,52 @@ fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A PNG of `w × h` pixels of `channels` 8-bit samples each (1 grey, 2 grey and alpha, 3
+    /// RGB, 4 RGBA).
+    fn png_bytes(w: u32, h: u32, channels: usize, samples: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut out, w, h);
+            enc.set_color(match channels {
+                1 => png::ColorType::Grayscale,
+                2 => png::ColorType::GrayscaleAlpha,
+                3 => png::ColorType::Rgb,
+                _ => png::ColorType::Rgba,
+            });
+            enc.set_depth(png::BitDepth::Eight);
+            enc.write_header().unwrap().write_image_data(samples).unwrap();
+        }
+        out
+    }
+
+    /// pbrt-v4's float image textures: an RGBA file's alpha where it is not 1 everywhere
+    /// (decoded like the colour, as pbrt-v4 decodes every channel of 8-bit images), else the
+    /// mean of the colour — not its luminance —, a grey file's grey (its alpha dropped, as pbrt
+    /// reads grey PNGs); linear where asked.
+    #[test]
+    fn pbrt_scalar_images() {
+        let dir = std::env::temp_dir().join(format!("neumann-pbrt-scalar-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let read = |name: &str, channels: usize, samples: &[u8], raw: bool| {
+            let path = dir.join(name);
+            std::fs::write(&path, png_bytes(2, 1, channels, samples)).unwrap();
+            let decode = |v: f32| if raw { v } else { srgb_decode(v) };
+            load_pbrt_scalar(&path, &decode).unwrap().pixels.iter().map(|c| c.x).collect::<Vec<f32>>()
+        };
+        let d = |b: u8| srgb_decode(b as f32 / 255.0);
+        let close = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+        let cut = read("cut.png", 4, &[255, 0, 0, 128, 0, 255, 0, 255], false);
+        assert!(close(&cut, &[d(128), 1.0]), "{cut:?}");
+        let cut_raw = read("cut.png", 4, &[255, 0, 0, 128, 0, 255, 0, 255], true);
+        assert!(close(&cut_raw, &[128.0 / 255.0, 1.0]), "{cut_raw:?}");
+        let opaque = read("opaque.png", 4, &[255, 0, 0, 255, 0, 51, 204, 255], false);
+        assert!(close(&opaque, &[1.0 / 3.0, (d(51) + d(204)) / 3.0]), "{opaque:?}");
+        let rgb = read("rgb.png", 3, &[255, 0, 0, 10, 20, 30], true);
+        assert!(close(&rgb, &[1.0 / 3.0, 20.0 / 255.0]), "{rgb:?}");
+        let grey_alpha = read("ga.png", 2, &[100, 0, 200, 50], true);
+        assert!(close(&grey_alpha, &[100.0 / 255.0, 200.0 / 255.0]), "{grey_alpha:?}");
+    }
     use crate::film::output::{write_image, ImageInfo};
 
     #[test]

@@ -669,8 +669,15 @@ fn bitmap_from_props(o: &Obj, images: &mut dyn TextureSource) -> PropResult<Text
             return Err(o.error_at("gamma", format!("'gamma' must be positive and without 'raw', got {g}")));
         }
     }
-    let mut image = images.image(o, "filename", raw || gamma.is_some())?;
-    if let Some(g) = gamma {
+    // neumann's `pbrt_scalar`: the image read as pbrt-v4 reads a float texture (its alpha,
+    // or the mean of its colour, decoded as `raw` and `gamma` say).
+    let pbrt_scalar = o.bool("pbrt_scalar", false)?;
+    let mut image = if pbrt_scalar {
+        images.pbrt_scalar_image(o, "filename", raw, gamma)?
+    } else {
+        images.image(o, "filename", raw || gamma.is_some())?
+    };
+    if let (Some(g), false) = (gamma, pbrt_scalar) {
         let name = o.string("filename")?.to_ascii_lowercase();
         if ![".exr", ".hdr", ".pfm"].iter().any(|e| name.ends_with(e)) {
             let pixels = image.pixels.iter().map(|c| c.max(Rgb::ZERO).powf(g)).collect();

@@ -1209,7 +1209,10 @@ fn curves_and_hair() {
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"string type\" \"ribbon\"", "normals"),
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"integer degree\" 4", "degree"),
         ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0] \"string basis\" \"bezeir\"", "the nearest is 'bezier'"),
-        ("AreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]", "cannot be an area emitter"),
+        (
+            "AreaLightSource \"diffuse\"\nShape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]",
+            "cannot be an area emitter",
+        ),
     ] {
         let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{bad}\n"));
         assert!(e.contains(what), "{bad}: {e}");
@@ -1310,10 +1313,8 @@ fn named_materials_may_be_defined_after_their_use() {
     assert!(e.contains("test.pbrt:4:1") && e.contains("no material named \"red\""), "{e}");
     let e = err(&format!("Camera \"perspective\"\nWorldBegin\n{defs}{defs}"));
     assert!(e.contains("test.pbrt:6:1") && e.contains("\"red\" is defined twice"), "{e}");
-    let e = err(
-        "Camera \"perspective\"\nWorldBegin\nNamedMaterial \"loop\"\nShape \"sphere\"\n\
-         MakeNamedMaterial \"loop\" \"string type\" \"mix\" \"string materials\" [\"loop\" \"loop\"]\n",
-    );
+    let e = err("Camera \"perspective\"\nWorldBegin\nNamedMaterial \"loop\"\nShape \"sphere\"\n\
+         MakeNamedMaterial \"loop\" \"string type\" \"mix\" \"string materials\" [\"loop\" \"loop\"]\n");
     assert!(e.contains("contains itself"), "{e}");
 }
 
@@ -1393,7 +1394,10 @@ fn portal_lights_of_a_uniform_colour() {
     assert!((luminance(uniform) - 2.0).abs() < 1e-4, "{uniform}");
     let ratio = luminance(portal) / luminance(uniform);
     assert!(ratio > 0.8 && ratio < 0.98, "peak-normalised: {ratio}");
-    assert!((portal / luminance(portal) - uniform / luminance(uniform)).abs().max_element() < 1e-4, "{portal} {uniform}");
+    assert!(
+        (portal / luminance(portal) - uniform / luminance(uniform)).abs().max_element() < 1e-4,
+        "{portal} {uniform}"
+    );
     let e = err(&format!("Camera \"perspective\"\nWorldBegin\nLightSource \"infinite\" {corners}\n"));
     assert!(e.contains("\"L\" or a \"filename\""), "{e}");
 }
@@ -1423,4 +1427,46 @@ fn conductors_of_a_textured_reflectance() {
     }
     assert!((crate::texture::conductor_k(0.75) - 2.0 * 0.75f32.sqrt() / 0.5).abs() < 1e-6);
     assert_eq!(crate::texture::conductor_k(-1.0), 0.0);
+}
+
+/// A float imagemap reads its file as pbrt-v4's float textures do: an RGBA image's alpha (not
+/// the colour: pbrt-v4-scenes' bistro cuts its foliage out by the alpha of its colour maps), an
+/// RGB image's mean (not its luminance); a spectrum imagemap of the same file keeps the colour.
+#[test]
+fn float_imagemaps_read_alpha_or_the_mean() {
+    let dir = tmp("float-imagemap");
+    let png = |name: &str, rgba: [u8; 4]| {
+        let mut out = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut out, 1, 1);
+            enc.set_color(png::ColorType::Rgba);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.write_header().unwrap().write_image_data(&rgba).unwrap();
+        }
+        std::fs::write(dir.join(name), out).unwrap();
+        dir.join(name).display().to_string()
+    };
+    let (cut, opaque) = (png("cut.png", [200, 50, 10, 64]), png("opaque.png", [200, 50, 10, 255]));
+    let reflectance = |file: &str, class: &str| {
+        let tex = if class == "float" {
+            format!(
+                "Texture \"f\" \"float\" \"imagemap\" \"string filename\" \"{file}\" \"string encoding\" \"linear\"\n\
+                     Texture \"t\" \"spectrum\" \"scale\" \"rgb tex\" [1 1 1] \"texture scale\" \"f\""
+            )
+        } else {
+            format!(
+                "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"{file}\" \"string encoding\" \"linear\""
+            )
+        };
+        let f = load(&format!("Camera \"perspective\"\nWorldBegin\n{tex}\nMaterial \"diffuse\" \"texture reflectance\" \"t\"\nShape \"sphere\"\n"))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Bsdf::TwoSided(sides) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!() };
+        let Bsdf::Diffuse(d) = &*sides[0] else { panic!() };
+        d.reflectance.eval(crate::math::Vec2::splat(0.5))
+    };
+    let v = |b: u8| b as f32 / 255.0;
+    assert!((reflectance(&cut, "float") - Rgb::splat(v(64))).abs().max_element() < 1e-6);
+    let mean = (v(200) + v(50) + v(10)) / 3.0;
+    assert!((reflectance(&opaque, "float") - Rgb::splat(mean)).abs().max_element() < 1e-6);
+    assert!((reflectance(&cut, "spectrum") - Rgb::new(v(200), v(50), v(10))).abs().max_element() < 1e-6);
 }

@@ -262,6 +262,10 @@ pub fn texture(p: &mut Parser, ty: &str, class: &str, ps: &ParamSet) -> Result<O
         "imagemap" => {
             let mut o = obj("texture", "bitmap", &ps.loc);
             let file = ps.string("filename")?.ok_or_else(|| ps.error("an imagemap needs its \"string filename\""))?;
+            if float {
+                // pbrt-v4's float image: the alpha, or the mean of the colour (not its luminance).
+                set(&mut o, "pbrt_scalar", Value::Bool(true), &ps.loc);
+            }
             // pbrt-v4 decodes PNG files as sRGB and every other file as linear by default.
             let png = file.to_ascii_lowercase().ends_with(".png");
             set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
