@@ -50,10 +50,8 @@ fn finish(mut parser: parser::Parser, path: &Path, settings: &Overrides) -> Resu
     scene.children.append(&mut parser.emitters);
     // Named materials used before their definition are known now: first those inside named
     // materials (mixes), so that every shape shares its material's one object, then the shapes'.
-    parser.resolve_named_materials()?;
-    for s in std::mem::take(&mut parser.shapes) {
-        scene.children.push(parser.resolve_named(&s, 0)?);
-    }
+    let shapes = std::mem::take(&mut parser.shapes);
+    scene.children.extend(parser.resolve_named_materials(shapes)?);
     let root = crate::load::overrides::apply(&Rc::new(scene), settings);
     let resolver = parser.resolver.clone();
     let memory = std::mem::take(&mut parser.memory);

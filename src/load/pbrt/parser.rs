@@ -89,6 +89,10 @@ pub struct Parser {
 /// The plugin type of a stand-in for a named material defined later in the file.
 const NAMED_LATER: &str = "pbrt named material";
 
+/// Objects already resolved by [`Parser::resolve_named`], by address: the object (kept alive)
+/// and its result.
+type ResolvedMemo = HashMap<*const Obj, (Rc<Obj>, Rc<Obj>)>;
+
 /// A token cursor over one file.
 struct Cursor<'a> {
     tokens: &'a [Token],
@@ -777,23 +781,29 @@ impl Parser {
     }
 
     /// Replaces the stand-ins inside the named materials themselves (a `mix` of materials
-    /// defined after it) by [`Parser::resolve_named`].
-    pub(super) fn resolve_named_materials(&mut self) -> Result<()> {
+    /// defined after it) by [`Parser::resolve_named`], then those in `shapes`.
+    pub(super) fn resolve_named_materials(&mut self, shapes: Vec<Rc<Obj>>) -> Result<Vec<Rc<Obj>>> {
+        let mut memo = ResolvedMemo::new();
         let mut names: Vec<String> = self.named_materials.keys().cloned().collect();
         names.sort();
         for n in names {
             let m = self.named_materials[&n].clone();
-            let resolved = self.resolve_named(&m, 0)?;
+            let resolved = self.resolve_named(&m, 0, &mut memo)?;
             self.named_materials.insert(n, resolved);
         }
-        Ok(())
+        shapes.iter().map(|s| self.resolve_named(s, 0, &mut memo)).collect()
     }
 
     /// `o` with every stand-in of [`Parser::named_material`] replaced by the material of that
     /// name (the object itself where it holds none); an error names the first that is
-    /// defined nowhere, or a cycle of mixes.
-    pub(super) fn resolve_named(&self, o: &Rc<Obj>, depth: usize) -> Result<Rc<Obj>> {
-        if o.ty == NAMED_LATER && o.tag == "bsdf" {
+    /// defined nowhere, or a cycle of mixes. Each object is resolved once (`memo`): materials
+    /// shared by many shapes and mixes stay shared, and nested mixes cost their number, not
+    /// the paths through them.
+    fn resolve_named(&self, o: &Rc<Obj>, depth: usize, memo: &mut ResolvedMemo) -> Result<Rc<Obj>> {
+        if let Some((_, r)) = memo.get(&Rc::as_ptr(o)) {
+            return Ok(r.clone());
+        }
+        let resolved = if o.ty == NAMED_LATER && o.tag == "bsdf" {
             let name = match o.props.first().map(|p| &p.value) {
                 Some(crate::props::Value::String(n)) => n.clone(),
                 _ => unreachable!("a stand-in holds its name"),
@@ -807,20 +817,26 @@ impl Parser {
             if depth > 64 {
                 return Err(SceneError::at(&o.loc, format!("the named material \"{name}\" contains itself")));
             }
-            return self.resolve_named(m, depth + 1);
-        }
-        let mut children = Vec::with_capacity(o.children.len());
-        let mut changed = false;
-        for c in &o.children {
-            let r = self.resolve_named(c, depth)?;
-            changed |= !Rc::ptr_eq(&r, c);
-            children.push(r);
-        }
-        if !changed {
-            return Ok(o.clone());
-        }
-        let props = o.props.iter().map(|p| crate::props::Prop::new(&p.name, p.value.clone(), p.loc.clone())).collect();
-        Ok(Rc::new(Obj { props, children, id: o.id.clone(), ..Obj::new(&o.tag, &o.ty, o.loc.clone()) }))
+            self.resolve_named(&m.clone(), depth + 1, memo)?
+        } else {
+            let mut children = Vec::with_capacity(o.children.len());
+            let mut changed = false;
+            for c in &o.children {
+                let r = self.resolve_named(c, depth, memo)?;
+                changed |= !Rc::ptr_eq(&r, c);
+                children.push(r);
+            }
+            if changed {
+                let props =
+                    o.props.iter().map(|p| crate::props::Prop::new(&p.name, p.value.clone(), p.loc.clone())).collect();
+                Rc::new(Obj { props, children, id: o.id.clone(), ..Obj::new(&o.tag, &o.ty, o.loc.clone()) })
+            } else {
+                o.clone()
+            }
+        };
+        // The input is kept alive beside its result, so that its address names it alone.
+        memo.insert(Rc::as_ptr(o), (o.clone(), resolved.clone()));
+        Ok(resolved)
     }
 
     /// Checks the end state: balanced blocks, a camera.

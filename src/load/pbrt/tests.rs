@@ -1470,3 +1470,22 @@ fn float_imagemaps_read_alpha_or_the_mean() {
     assert!((reflectance(&opaque, "float") - Rgb::splat(mean)).abs().max_element() < 1e-6);
     assert!((reflectance(&cut, "spectrum") - Rgb::new(v(200), v(50), v(10))).abs().max_element() < 1e-6);
 }
+
+/// Forty mixes, each of the next one twice, defined after their use: resolved once each (a
+/// resolution that followed every path through them would take 2⁴⁰ steps and never end), and
+/// then refused by the BSDF builder's bound on nested evaluations, a located error.
+#[test]
+fn chains_of_forward_mixes_resolve_in_linear_time() {
+    let mut text = String::from("Camera \"perspective\"\nWorldBegin\nNamedMaterial \"m0\"\nShape \"sphere\"\n");
+    for i in 0..40 {
+        text += &format!(
+            "MakeNamedMaterial \"m{i}\" \"string type\" \"mix\" \"string materials\" [\"m{j}\" \"m{j}\"]\n",
+            j = i + 1
+        );
+    }
+    text += "MakeNamedMaterial \"m40\" \"string type\" \"diffuse\"\n";
+    let start = std::time::Instant::now();
+    let e = err(&text);
+    assert!(e.contains("nests") && e.contains("test.pbrt:"), "{e}");
+    assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
+}
