@@ -18,7 +18,7 @@ element at a time) down to an analytic case: the differences found so far were n
 or Mitsuba 3.9.1's own, listed in the README ("Mitsuba 3 scenes"), which this generator avoids:
 fractional `mask` opacity under `path`, `blendbsdf` of a delta and a smooth lobe, `direct` with
 several emitter samples and a delta light, `ptracer` under a rotated envmap, non-unit rotation
-axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under bump maps. Known and not avoided: Mitsuba 3.9.1's `ldsampler` is biased in some scenes (a flagged `ldsampler` scene is re-run with `independent` before bisecting); its `principledthin`
+axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under bump maps. Known and not avoided: Mitsuba 3.9.1's `ldsampler` is biased in some scenes (a flagged `ldsampler` scene is re-run with `independent` before bisecting); its light sampling misses an occluder crossing an emitting rectangle (two random rectangle lights that cross); its `principledthin`
 with `diff_trans` under two lights renders up to 1 % darker than the sum of its images under each. `ptracer` scenes are noisy (caustics
 through the BSDFs' delta lobes): re-run a flagged one at more spp before bisecting it.
 
