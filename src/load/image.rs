@@ -92,12 +92,19 @@ fn decode_png(path: &Path, bytes: &[u8]) -> Result<EncodedImage, String> {
 }
 
 /// [`decode_png`] and the file's channel count (1 grey, 2 grey and alpha, 3 RGB, 4 RGBA; a
-/// palette counts as its expansion).
+/// palette counts as RGB, as pbrt-v4 reads palettes: without their transparency).
 fn decode_png_channels(path: &Path, bytes: &[u8]) -> Result<(EncodedImage, usize), String> {
     check_png(path, bytes)?;
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);
     let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
+    // The file's own layout: a palette is RGB (its transparency dropped), as pbrt-v4 reads it.
+    let file_channels = match reader.info().color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb | png::ColorType::Indexed => 3,
+        png::ColorType::Rgba => 4,
+    };
     let mut buf = vec![0u8; reader.output_buffer_size().ok_or("PNG too large")?];
     let info = reader.next_frame(&mut buf).map_err(|e| format!("corrupt PNG data: {e}"))?;
     let (w, h) = (info.width, info.height);
@@ -123,7 +130,7 @@ fn decode_png_channels(path: &Path, bytes: &[u8]) -> Result<(EncodedImage, usize
             _ => [sample(base), sample(base + 1), sample(base + 2), sample(base + 3)],
         });
     }
-    Ok((EncodedImage { width: w, height: h, rgba, linear: false }, channels))
+    Ok((EncodedImage { width: w, height: h, rgba, linear: false }, file_channels))
 }
 
 /// An image read as pbrt-v4 reads a float image texture (its `MIPMap` of the file): one value
@@ -298,6 +305,19 @@ mod tests {
         assert!(close(&rgb, &[1.0 / 3.0, 20.0 / 255.0]), "{rgb:?}");
         let grey_alpha = read("ga.png", 2, &[100, 0, 200, 50], true);
         assert!(close(&grey_alpha, &[100.0 / 255.0, 200.0 / 255.0]), "{grey_alpha:?}");
+        // A palette with transparency: its colours' mean, the transparency dropped (pbrt-v4).
+        let mut out = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut out, 2, 1);
+            enc.set_color(png::ColorType::Indexed);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.set_palette(vec![30u8, 60, 90, 255, 255, 255]);
+            enc.set_trns(vec![10u8, 255]);
+            enc.write_header().unwrap().write_image_data(&[0, 1]).unwrap();
+        }
+        std::fs::write(dir.join("palette.png"), out).unwrap();
+        let palette = load_pbrt_scalar(&dir.join("palette.png"), &|v| v).unwrap();
+        assert!(close(&[palette.pixels[0].x, palette.pixels[1].x], &[60.0 / 255.0, 1.0]), "{:?}", palette.pixels);
     }
     use crate::film::output::{write_image, ImageInfo};
 
