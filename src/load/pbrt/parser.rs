@@ -561,7 +561,7 @@ impl Parser {
             }
             "Attribute" => {
                 let target = c.string("the attribute's target (shape, light, material, medium, texture)")?;
-                let ps = c.params(format!("Attribute \"{target}\""), loc.clone())?;
+                let ps = self.spectrum_files(c.params(format!("Attribute \"{target}\""), loc.clone())?)?;
                 const TARGETS: &[&str] = &["shape", "light", "material", "medium", "texture"];
                 if !TARGETS.contains(&target.as_str()) {
                     return Err(ps.unknown("attribute target", &target, TARGETS));

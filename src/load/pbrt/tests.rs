@@ -1275,6 +1275,15 @@ fn spectrum_files_read_as_their_pairs() {
     let inline = bsdf("[400 1.5 500 0.9 600 0.25 700 0.16]", "[400 1.9 500 1.9 600 3.0 700 4.0]").unwrap();
     assert_eq!(from_files, inline);
     assert_ne!(from_files, bsdf("\"metal-Au-eta\"", "\"metal-Au-k\"").unwrap());
+    // A default given by `Attribute` reads its file too.
+    std::fs::write(
+        dir.join("attr.pbrt"),
+        "Camera \"perspective\"\nWorldBegin\nAttribute \"material\" \"spectrum eta\" \"spds/eta.spd\"\n\
+         Material \"conductor\" \"spectrum k\" \"spds/k.spd\"\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let f = load_pbrt_file(&dir.join("attr.pbrt"), &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(format!("{:?}", f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize]), from_files);
     let e = bsdf("\"spds/none.spd\"", "\"spds/k.spd\"").unwrap_err().to_string();
     assert!(e.contains("main.pbrt:3:") && e.contains("spds/none.spd") && e.contains("named spectra"), "{e}");
     let e = bsdf("\"spds/odd.spd\"", "\"spds/k.spd\"").unwrap_err().to_string();
