@@ -62,6 +62,10 @@ pub struct Parser {
     stack: Vec<Graphics>,
     named_coords: HashMap<String, Mat4>,
     pub(super) named_materials: HashMap<String, Rc<Obj>>,
+    /// How deeply each named material's objects nest (by the address of the material, which
+    /// `named_materials` keeps alive): a mix of mixes of … is refused past
+    /// [`MAX_MATERIAL_DEPTH`], before anything walks it recursively.
+    material_depth: HashMap<*const Obj, usize>,
     pub(super) float_textures: HashMap<String, Rc<Obj>>,
     /// Named media (`MakeNamedMedium`).
     pub(super) media: HashMap<String, Rc<Obj>>,
@@ -85,6 +89,11 @@ pub struct Parser {
     /// [`super::translate::MAX_CURVE_PIECES`].
     pub(super) curve_pieces: usize,
 }
+
+/// How deeply a material's objects may nest (mixes of mixes, maps of mixes): deeper ones are
+/// a located error, as a hostile file could otherwise exhaust the stack of the recursive
+/// walks that build them.
+const MAX_MATERIAL_DEPTH: usize = 64;
 
 /// The plugin type of a stand-in for a named material defined later in the file.
 const NAMED_LATER: &str = "pbrt named material";
@@ -295,6 +304,7 @@ impl Parser {
             stack: Vec::new(),
             named_coords: HashMap::new(),
             named_materials: HashMap::new(),
+            material_depth: HashMap::new(),
             float_textures: HashMap::new(),
             media: HashMap::new(),
             camera_medium: None,
@@ -600,6 +610,7 @@ impl Parser {
                 self.with_attributes(&mut ps, "material");
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
+                self.material_depth_of(&obj, &loc)?;
                 self.gs.material = MaterialRef::Object(Rc::new(obj));
             }
             "MakeNamedMaterial" => {
@@ -613,7 +624,10 @@ impl Parser {
                 }
                 let obj = translate::material(self, &ty, &ps)?;
                 ps.check_unused()?;
-                self.named_materials.insert(mat, Rc::new(obj));
+                let depth = self.material_depth_of(&obj, &loc)?;
+                let obj = Rc::new(obj);
+                self.material_depth.insert(Rc::as_ptr(&obj), depth);
+                self.named_materials.insert(mat, obj);
             }
             "NamedMaterial" => {
                 let mat = c.string("the material's name")?;
@@ -765,6 +779,27 @@ impl Parser {
         }
     }
 
+    /// How deeply `o`'s objects nest (1 for a plugin without nested ones), the named materials
+    /// in it counted as recorded; an error at `loc` past [`MAX_MATERIAL_DEPTH`].
+    fn material_depth_of(&self, o: &Obj, loc: &Loc) -> Result<usize> {
+        fn depth(p: &Parser, o: &Obj) -> usize {
+            1 + o
+                .children
+                .iter()
+                .map(|c| p.material_depth.get(&Rc::as_ptr(c)).copied().unwrap_or_else(|| depth(p, c)))
+                .max()
+                .unwrap_or(0)
+        }
+        let d = depth(self, o);
+        if d > MAX_MATERIAL_DEPTH {
+            return Err(SceneError::at(
+                loc,
+                format!("this material nests {d} deep (mixes of mixes …), more than {MAX_MATERIAL_DEPTH}"),
+            ));
+        }
+        Ok(d)
+    }
+
     /// The named material `name`, or, where it is not defined yet, a stand-in that
     /// [`Parser::resolve_named`] replaces once the whole file is read: pbrt-v4 creates named
     /// materials after parsing, so `NamedMaterial` (and a `mix`) may name one defined further
@@ -814,8 +849,13 @@ impl Parser {
                     format!("no material named \"{name}\" (MakeNamedMaterial defines them)"),
                 ));
             };
-            if depth > 64 {
-                return Err(SceneError::at(&o.loc, format!("the named material \"{name}\" contains itself")));
+            if depth > MAX_MATERIAL_DEPTH {
+                return Err(SceneError::at(
+                    &o.loc,
+                    format!(
+                        "the named material \"{name}\" contains itself, or nests more than {MAX_MATERIAL_DEPTH} deep"
+                    ),
+                ));
             }
             self.resolve_named(&m.clone(), depth + 1, memo)?
         } else {

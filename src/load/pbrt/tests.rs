@@ -1498,3 +1498,39 @@ fn chains_of_forward_mixes_resolve_in_linear_time() {
     assert!(e.contains("nests") && e.contains("test.pbrt:"), "{e}");
     assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
 }
+
+/// Mixes nested deeper than 64 (each of the previous one, or each of the next one used before
+/// its definition) are a located error, found before anything walks them recursively: a file
+/// of 100 000 such mixes overflowed the stack.
+#[test]
+fn deeply_nested_mixes_are_refused() {
+    let chain = |forward: bool| {
+        let mut text = String::from("Camera \"perspective\"\nWorldBegin\n");
+        if forward {
+            text += "NamedMaterial \"m0\"\nShape \"sphere\"\n";
+        }
+        text += "MakeNamedMaterial \"base\" \"string type\" \"diffuse\"\n";
+        for i in 0..5000 {
+            let other = if forward {
+                format!("m{}", i + 1)
+            } else if i == 0 {
+                "base".into()
+            } else {
+                format!("m{}", i - 1)
+            };
+            text += &format!(
+                "MakeNamedMaterial \"m{i}\" \"string type\" \"mix\" \"string materials\" [\"{other}\" \"base\"]\n"
+            );
+        }
+        if forward {
+            text += "MakeNamedMaterial \"m5000\" \"string type\" \"diffuse\"\n";
+        } else {
+            text += "NamedMaterial \"m4999\"\nShape \"sphere\"\n";
+        }
+        text
+    };
+    let e = err(&chain(false));
+    assert!(e.contains("test.pbrt:66:1") && e.contains("more than 64"), "{e}");
+    let e = err(&chain(true));
+    assert!(e.contains("more than 64"), "{e}");
+}
