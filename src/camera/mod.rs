@@ -3,7 +3,8 @@
 //! irradiance on a shape's surface, averaged over it); neumann's `spherical` (pbrt-v4's: every
 //! direction around a point, in an equirectangular or an equal-area image); Mitsuba's `batch`
 //! (several cameras side by side on one film) and `distant` (the radiance leaving the scene
-//! in one direction, averaged over a target).
+//! in one direction, averaged over a target); pbrt-v4's `realistic` (a lens system traced ray
+//! by ray, [`realistic`]).
 //!
 //! Camera space looks down +z with +y up and +x to the *left* (Mitsuba's `lookat`
 //! convention); film coordinates run from (0, 0) at the top-left pixel corner to
@@ -17,7 +18,10 @@ use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_disk_concentric};
 use std::sync::Arc;
 
+pub mod realistic;
+
 pub use crate::props::fov::FovAxis;
+pub use realistic::LensSystem;
 
 /// A camera that cannot be built from its parameters.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -73,6 +77,9 @@ pub enum Projection {
     /// Mitsuba's `batch`: the film is split into as many columns of equal width as there are
     /// cameras, column k rendered by camera k on a film of that column's size.
     Batch,
+    /// pbrt-v4's `realistic`: rays traced from the film through a [`LensSystem`], each with
+    /// its own weight (none where the lens stops it).
+    Realistic,
 }
 
 /// The rays one pixel to the right (`x`) and one pixel down (`y`) of a camera ray (Mitsuba's
@@ -160,6 +167,8 @@ pub struct Camera {
     distant: Option<DistantTarget>,
     /// The scene's bounding sphere (centre, radius), which a distant sensor aims at.
     scene_sphere: (Vec3, f32),
+    /// A realistic camera's lens.
+    lens: Option<Arc<LensSystem>>,
 }
 
 impl Camera {
@@ -200,6 +209,7 @@ impl Camera {
             batch: Vec::new(),
             distant: None,
             scene_sphere: (Vec3::ZERO, 1.0),
+            lens: None,
         })
     }
 
@@ -238,6 +248,13 @@ impl Camera {
         };
         let c = Camera::radiancemeter(to_world);
         Ok(Camera { projection: Projection::Distant, distant: Some(target), ..c })
+    }
+
+    /// pbrt-v4's realistic camera placed by `to_world` (camera space as this module's: +x
+    /// left), its rays traced through `lens` for a `width × height` film.
+    pub fn realistic(to_world: Transform, lens: LensSystem, width: u32, height: u32) -> Result<Camera, CameraError> {
+        let c = Camera::perspective(to_world, 90.0, FovAxis::X, width, height)?;
+        Ok(Camera { projection: Projection::Realistic, lens: Some(Arc::new(lens)), ..c })
     }
 
     /// The camera for a scene whose shapes lie in `bounds`: a distant sensor aims at their
@@ -381,7 +398,35 @@ impl Camera {
                 let k = ((film.x / column) as usize).min(self.batch.len() - 1);
                 self.batch[k].generate_ray(Vec2::new(film.x - k as f32 * column, film.y), u_lens)
             }
+            Projection::Realistic => self.realistic_ray(film, u_lens).map_or_else(|| self.stopped_ray(), |(r, _)| r),
         }
+    }
+
+    /// [`Camera::generate_ray`] with the weight the radiance along it carries: π for an
+    /// irradiance meter, a realistic camera's lens weight, 1 otherwise; 0 (and a ray of no
+    /// length) where a realistic camera's lens stops the ray.
+    #[inline]
+    pub fn sample_ray(&self, film: Vec2, u_lens: Vec2) -> (Ray, f32) {
+        if self.projection == Projection::Realistic {
+            return self.realistic_ray(film, u_lens).unwrap_or_else(|| (self.stopped_ray(), 0.0));
+        }
+        (self.generate_ray(film, u_lens), self.ray_weight())
+    }
+
+    /// A realistic camera's ray through the lens and its weight, or `None` where the lens stops
+    /// it (camera space turned from pbrt's, +x right, to this module's, +x left).
+    fn realistic_ray(&self, film: Vec2, u_lens: Vec2) -> Option<(Ray, f32)> {
+        let lens = self.lens.as_ref()?;
+        let size = Vec2::new(self.width as f32, self.height as f32);
+        let (o, d, weight) = lens.ray(film, size, u_lens)?;
+        let flip = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        let d = self.to_world.apply_vector(flip(d)).normalize();
+        Some((Ray::new(self.to_world.apply_point(flip(o)), d), weight))
+    }
+
+    /// The ray of a camera sample the lens stops: no length, from the camera's position.
+    fn stopped_ray(&self) -> Ray {
+        Ray::bounded(self.position(), self.to_world.apply_vector(Vec3::Z).normalize(), 0.0)
     }
 
     /// The ray differentials of the camera ray `ray` that [`Camera::generate_ray`] made from
@@ -412,7 +457,9 @@ impl Camera {
                 self.batch[k].ray_differentials(Vec2::new(film.x - k as f32 * column, film.y), u_lens, ray)
             }
             _ => {
-                let (x, y) = (self.generate_ray(film + Vec2::X, u_lens), self.generate_ray(film + Vec2::Y, u_lens));
+                // (A realistic camera's offset ray the lens stops: the ray itself.)
+                let at = |f: Vec2| Some(self.generate_ray(f, u_lens)).filter(|r| r.t_max > 0.0).unwrap_or(*ray);
+                let (x, y) = (at(film + Vec2::X), at(film + Vec2::Y));
                 RayDifferentials { o_x: x.o, o_y: y.o, d_x: x.d, d_y: y.d }
             }
         }
@@ -570,8 +617,17 @@ pub fn spherical_direction(mapping: SphericalMapping, uv: Vec2) -> Vec3 {
 }
 
 /// Camera plugins by their (Mitsuba) names.
-pub const CAMERA_PLUGINS: &[&str] =
-    &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "distant", "batch", "spherical"];
+pub const CAMERA_PLUGINS: &[&str] = &[
+    "perspective",
+    "thinlens",
+    "orthographic",
+    "radiancemeter",
+    "irradiancemeter",
+    "distant",
+    "batch",
+    "spherical",
+    "realistic",
+];
 
 impl Camera {
     /// Mitsuba's `perspective` and `thinlens` sensors for a `width × height` film: `to_world`,
@@ -600,16 +656,16 @@ impl Camera {
             // (The loader builds it from the nested sensors with `Camera::batch`.)
             return Err(o.error("a batch sensor cannot be nested in another"));
         }
+        if o.ty == "realistic" {
+            // (The loader builds it, with its lens file, by `Camera::realistic`.)
+            return Err(o.error("a realistic sensor cannot be part of a batch"));
+        }
         if o.ty == "irradiancemeter" {
             // (The loader builds one nested in a shape with `Camera::irradiancemeter`.)
             return Err(o.error("an irradiancemeter must be nested in the <shape> whose irradiance it measures"));
         }
         let to_world = o.transform("to_world")?;
-        // The shutter interval only matters for animated transforms, which neumann does not have.
-        let (open, close) = (o.float("shutter_open", 0.0)?, o.float("shutter_close", 0.0)?);
-        if !(open.is_finite() && close.is_finite() && close >= open) {
-            return Err(o.error_at("shutter_close", format!("need shutter_open ≤ shutter_close, got {open} and {close}")));
-        }
+        check_shutter(o)?;
         let (near, far) = (o.float("near_clip", 0.01)?, o.float("far_clip", 10000.0)?);
         let focus = o.float_checked("focus_distance", far, |d| d > 0.0 && d.is_finite(), "positive")?;
         if o.ty == "spherical" {
@@ -664,6 +720,16 @@ impl Camera {
         };
         Ok(Camera::radiancemeter(to_world))
     }
+}
+
+/// Reads and checks a sensor's `shutter_open` and `shutter_close` (0 each; open ≤ close). The
+/// interval only matters for animated transforms, which neumann does not have.
+pub(crate) fn check_shutter(o: &Obj) -> PropResult<()> {
+    let (open, close) = (o.float("shutter_open", 0.0)?, o.float("shutter_close", 0.0)?);
+    if !(open.is_finite() && close.is_finite() && close >= open) {
+        return Err(o.error_at("shutter_close", format!("need shutter_open ≤ shutter_close, got {open} and {close}")));
+    }
+    Ok(())
 }
 
 /// A copy of `shape` ready to be sampled by area (a meter's or a distant sensor's target); an

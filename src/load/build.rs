@@ -275,10 +275,48 @@ impl Builder {
             }
             None if o.ty == "batch" => batch_from_props(o, film.width, film.height)?,
             None if o.ty == "distant" => self.distant_from_props(o, film.width, film.height)?,
+            None if o.ty == "realistic" => self.realistic_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
         let SamplerSettings { kind, spp, seed } = sampler;
         Ok(SensorSettings { camera, spp, sampler: kind, seed, film })
+    }
+
+    /// neumann's `realistic` sensor, pbrt-v4's realistic camera (see [`crate::camera::realistic`]):
+    /// `to_world`, `lens_file` (a lens description: per element its curvature radius, thickness,
+    /// index of refraction and aperture diameter in millimetres, front to rear, `#` comments),
+    /// `aperture_diameter` (1 mm; clamped to the stop's, with a warning), `focus_distance` (10,
+    /// scene units from the film), `film_diagonal` (35 mm), `aperture` (none: a disk; `gaussian`,
+    /// `square`, `pentagon`, `star`, or an image file, its colour averaged), `shutter_open`,
+    /// `shutter_close`.
+    fn realistic_from_props(&mut self, o: &Obj, width: u32, height: u32) -> Result<Camera> {
+        use crate::camera::realistic::{parse_lens_file, ApertureImage, BUILTIN_APERTURES};
+        let to_world = o.transform("to_world")?;
+        crate::camera::check_shutter(o)?;
+        let path = self.resolver.resolve(&o.string("lens_file")?);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| o.error_at("lens_file", format!("cannot read the lens file '{}': {e}", path.display())))?;
+        let values =
+            parse_lens_file(&text).map_err(|e| o.error_at("lens_file", format!("'{}': {e}", path.display())))?;
+        let aperture = match o.string_opt("aperture")?.as_deref() {
+            None | Some("") => None,
+            Some(name) if BUILTIN_APERTURES.contains(&name) => ApertureImage::builtin(name),
+            Some(_) => {
+                let image = ImageSource::image(self, o, "aperture", false)?;
+                Some(ApertureImage::from_image(&image).map_err(|e| o.error_at("aperture", e))?)
+            }
+        };
+        let positive = |v: f32| v > 0.0 && v.is_finite();
+        let diameter = o.float_checked("aperture_diameter", 1.0, positive, "a positive diameter (mm)")?;
+        let focus = o.float_checked("focus_distance", 10.0, positive, "a positive distance")?;
+        let diagonal = o.float_checked("film_diagonal", 35.0, positive, "a positive diagonal (mm)")?;
+        let (lens, warning) = crate::camera::LensSystem::new(&values, diameter, focus, diagonal, aperture)
+            .map_err(|e| o.error_at("lens_file", e))?;
+        if let Some(w) = warning {
+            let at = o.props.iter().find(|p| p.name == "aperture_diameter").map_or(&o.loc, |p| &p.loc);
+            self.warnings.push(format!("warning: {}: {w}", at.position()));
+        }
+        Camera::realistic(to_world, lens, width, height).map_err(|e| o.error(e.to_string()))
     }
 
     /// Mitsuba's `distant` sensor: `direction` or `to_world` (not both; it looks along

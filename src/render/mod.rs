@@ -368,7 +368,6 @@ pub fn render_from(
     // Which pixels still take samples (adaptive sampling only); written between passes only.
     let pixels = if adaptive.is_some() { width as usize * height as usize } else { 0 };
     let active: Vec<AtomicBool> = (0..pixels).map(|_| AtomicBool::new(true)).collect();
-    let ray_weight = cam.ray_weight();
     // Ray differentials where the integrator reads them, scaled to the spacing of the render's
     // samples (Mitsuba's 1/√spp).
     let differential_scale = integrator.wants_differentials().then(|| 1.0 / (settings.spp.max(1) as f32).sqrt());
@@ -398,21 +397,27 @@ pub fn render_from(
                     let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
-                    let ray = cam.generate_ray(film_pos, u_lens);
+                    let (ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
-                    let differentials = differential_scale
-                        .map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
-                    let mut s = integrator.sample_aovs(
-                        scene,
-                        &ray,
-                        differentials.as_ref(),
-                        &mut sampler,
-                        &mut sample_terms,
-                        &mut aovs,
-                    );
+                    let mut s = if ray_weight == 0.0 {
+                        // A realistic camera's lens stopped the ray: the sample sees nothing.
+                        crate::integrator::RadianceSample { l: Rgb::ZERO, alpha: 0.0 }
+                    } else {
+                        let differentials = differential_scale
+                            .map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
+                        integrator.sample_aovs(
+                            scene,
+                            &ray,
+                            differentials.as_ref(),
+                            &mut sampler,
+                            &mut sample_terms,
+                            &mut aovs,
+                        )
+                    };
                     if ray_weight != 1.0 {
-                        // An irradiance meter's rays (the AOVs stay unweighted, as in Mitsuba).
+                        // An irradiance meter's or a realistic camera's rays (the AOVs stay
+                        // unweighted, as in Mitsuba).
                         s.l *= ray_weight;
                         sample_terms.iter_mut().for_each(|t| *t *= ray_weight);
                     }

@@ -97,7 +97,7 @@ pub fn render_light_paths_with(
     }
     if cam.projection() != crate::camera::Projection::Perspective {
         return Err(RenderError::Unsupported(
-            "the light tracer (ptracer) needs a perspective or thin-lens camera: an orthographic, spherical, batch or meter one cannot be connected to".into(),
+            "the light tracer (ptracer) needs a perspective or thin-lens camera: an orthographic, spherical, realistic, batch or meter one cannot be connected to".into(),
         ));
     }
     let splatter = Splatter::new(&settings.filter, window);

@@ -136,6 +136,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let mut crop: Option<[i64; 4]> = None;
     // pbrt-v4's sensor steps: white balance (K) and the sample clamp.
     let (mut white_balance, mut max_component) = (0.0f32, f32::INFINITY);
+    // The film's diagonal (mm): only the realistic camera's image depends on it.
+    let mut diagonal = (35.0f32, loc.clone());
     if let Some(f) = p.film.take() {
         let fty = plugin_type(&f);
         if fty != "rgb" && fty != "gbuffer" {
@@ -173,7 +175,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             }
         }
         // The output's name and storage cannot change the image: neumann's -o decides.
-        for name in ["filename", "savefp16", "diagonal", "writefp16"] {
+        diagonal = (f.float("diagonal", 35.0)?, loc_of(&f, "diagonal"));
+        for name in ["filename", "savefp16", "writefp16"] {
             if let Some(q) = f.params.iter().find(|q| q.name == name) {
                 q.used.set(true);
             }
@@ -232,11 +235,26 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             set(&mut s, "mapping", Value::String(mapping.into()), &loc_of(&cam, "mapping"));
         }
         "realistic" => {
-            return Err(cam.error("the \"realistic\" camera (lens systems) is not implemented by neumann yet"))
+            // pbrt-v4's RealisticCamera → neumann's `realistic` sensor (the same tracing).
+            s.ty = "realistic".into();
+            let file = cam.string("lensfile")?.filter(|f| !f.is_empty());
+            let file = file.ok_or_else(|| cam.error("a realistic camera needs its \"string lensfile\""))?;
+            set(&mut s, "lens_file", Value::String(file), &loc_of(&cam, "lensfile"));
+            let diameter = cam.float("aperturediameter", 1.0)?;
+            set(&mut s, "aperture_diameter", Value::Float(diameter as f64), &loc_of(&cam, "aperturediameter"));
+            let focus = cam.float("focusdistance", 10.0)?;
+            set(&mut s, "focus_distance", Value::Float(focus as f64), &loc_of(&cam, "focusdistance"));
+            if let Some(a) = cam.string("aperture")?.filter(|a| !a.is_empty()) {
+                set(&mut s, "aperture", Value::String(a), &loc_of(&cam, "aperture"));
+            }
+            set(&mut s, "film_diagonal", Value::Float(diagonal.0 as f64), &diagonal.1);
         }
         other => return Err(cam.unknown("camera", other, &["orthographic", "perspective", "realistic", "spherical"])),
     }
-    if let Some(a) = cam.floats("frameaspectratio", &["float"])? {
+    // (The realistic camera reads neither: pbrt-v4 reports them unused.)
+    let projective = ty != "realistic";
+    let frame = if projective { cam.floats("frameaspectratio", &["float"])? } else { None };
+    if let Some(a) = frame {
         if (a[0] as f32 - aspect).abs() > 1e-4 {
             return Err(cam.error_at(
                 "frameaspectratio",
@@ -247,7 +265,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     // pbrt's screen window: [-aspect, aspect] × [-1, 1] (wide images), or [-1, 1] × [-1/aspect,
     // 1/aspect]; the orthographic camera scales it into Mitsuba's x ∈ [-1, 1].
     let half = if aspect >= 1.0 { aspect } else { 1.0 };
-    if let Some(w) = cam.floats("screenwindow", &["float"])? {
+    let window = if projective { cam.floats("screenwindow", &["float"])? } else { None };
+    if let Some(w) = window {
         let default =
             if aspect >= 1.0 { [-aspect, aspect, -1.0, 1.0] } else { [-1.0, 1.0, -1.0 / aspect, 1.0 / aspect] };
         if w.len() != 4 || w.iter().zip(default).any(|(a, b)| (*a as f32 - b).abs() > 1e-4) {

@@ -1534,3 +1534,73 @@ fn deeply_nested_mixes_are_refused() {
     let e = err(&chain(true));
     assert!(e.contains("more than 64"), "{e}");
 }
+
+/// pbrt-v4's realistic camera: its lens file read beside the scene (`Film`'s `diagonal` sets
+/// the film's size), each ray carrying its lens weight through the render loop and stopped rays
+/// nothing: a constant environment seen through a singlet whose stop is its last element gives
+/// the film's centre the stop disk's form factor π a² / (z² + a²) (z the film distance
+/// focusing at 10 m). The same sensor from Mitsuba XML (neumann's `realistic`); the errors.
+#[test]
+fn realistic_camera_traces_its_lens_file() {
+    let dir = tmp("realistic");
+    std::fs::create_dir_all(dir.join("lenses")).unwrap();
+    std::fs::write(dir.join("lenses/singlet.dat"), "# R t eta D\n50 6 1.5 30\n-50 2 1 30\n0 40 0 20\n").unwrap();
+    std::fs::write(dir.join("lenses/bad.dat"), "50 6 1.5 30\n-50 2 one 30\n").unwrap();
+    let scene = |camera: &str| {
+        format!(
+            "Camera \"realistic\" {camera}\nFilm \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16 \"float diagonal\" 20\n\
+             WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+        )
+    };
+    let lens = "\"string lensfile\" \"lenses/singlet.dat\" \"float aperturediameter\" 10 \"float focusdistance\" 10";
+    let load_in_dir = |name: &str, text: String| {
+        std::fs::write(dir.join(name), text).unwrap();
+        load_pbrt_file(&dir.join(name), &Overrides::default())
+    };
+    let f = load_in_dir("a.pbrt", scene(lens)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(f.scene.camera().projection(), crate::camera::Projection::Realistic);
+    let img = crate::load::test_support::render(&f, 1024, 1);
+    let centre: f64 =
+        [(7, 7), (8, 7), (7, 8), (8, 8)].iter().map(|&(x, y)| f64::from(img[y * 16 + x].x)).sum::<f64>() / 4.0;
+    let z = {
+        let values = crate::camera::realistic::parse_lens_file("50 6 1.5 30\n-50 2 1 30\n0 40 0 20").unwrap();
+        let l = crate::camera::LensSystem::new(&values, 10.0, 10.0, 20.0, None).unwrap().0;
+        f64::from(l.elements()[2].thickness)
+    };
+    let a = 0.005f64;
+    let want = std::f64::consts::PI * a * a / (z * z + a * a);
+    assert!((centre / want - 1.0).abs() < 0.03, "centre {centre} vs the stop's form factor {want}");
+    // The corners: the rays from there that the singlet's rims stop are dropped, not clamped.
+    assert!(img[0].x < img[7 * 16 + 7].x);
+
+    // Mitsuba XML: the same sensor.
+    std::fs::write(
+        dir.join("a.xml"),
+        r#"<scene version="3.0.0"><sensor type="realistic"><string name="lens_file" value="lenses/singlet.dat"/>
+            <float name="aperture_diameter" value="10"/><float name="focus_distance" value="10"/><float name="film_diagonal" value="20"/>
+            <string name="aperture" value="pentagon"/>
+            <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film></sensor>
+            <emitter type="constant"/></scene>"#,
+    )
+    .unwrap();
+    let x = crate::load::mitsuba::load_scene_file(&dir.join("a.xml"), &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(x.scene.camera().projection(), crate::camera::Projection::Realistic);
+
+    // Errors: no lens file, a missing one, a malformed one (its line), a parameter the realistic
+    // camera does not read, a focus closer than the lens can reach, an aperture stop clamped.
+    let e = load_in_dir("b.pbrt", scene("\"float aperturediameter\" 10")).unwrap_err().to_string();
+    assert!(e.contains("b.pbrt:1:") && e.contains("lensfile"), "{e}");
+    let e = load_in_dir("c.pbrt", scene("\"string lensfile\" \"lenses/none.dat\"")).unwrap_err().to_string();
+    assert!(e.contains("c.pbrt:1:") && e.contains("cannot read the lens file"), "{e}");
+    let e = load_in_dir("d.pbrt", scene("\"string lensfile\" \"lenses/bad.dat\"")).unwrap_err().to_string();
+    assert!(e.contains("line 2") && e.contains("'one'"), "{e}");
+    let e = load_in_dir("e.pbrt", scene(&format!("{lens} \"float fov\" 40"))).unwrap_err().to_string();
+    assert!(e.contains("fov"), "{e}");
+    let e = load_in_dir("f.pbrt", scene("\"string lensfile\" \"lenses/singlet.dat\" \"float focusdistance\" 0.03"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("too short"), "{e}");
+    let f = load_in_dir("g.pbrt", scene("\"string lensfile\" \"lenses/singlet.dat\" \"float aperturediameter\" 25"))
+        .unwrap();
+    assert!(f.warnings.iter().any(|w| w.contains("clamped")), "{:?}", f.warnings);
+}
