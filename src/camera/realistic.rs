@@ -349,15 +349,7 @@ impl LensSystem {
             let e = &self.elements[i];
             z -= e.thickness;
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - o.z) / d.z;
-                if t.is_nan() || t < 0.0 {
-                    return None;
-                }
-                (t, Vec3::ZERO)
-            } else {
-                intersect_spherical_element(e.curvature_radius, z + e.curvature_radius, o, d)?
-            };
+            let (t, n) = hit_element(e, z, o, d)?;
             let p = o + d * t;
             match (&self.aperture, stop) {
                 (Some(image), true) => {
@@ -391,15 +383,7 @@ impl LensSystem {
         let mut z = -self.front_z();
         for (i, e) in self.elements.iter().enumerate() {
             let stop = e.curvature_radius == 0.0;
-            let (t, n) = if stop {
-                let t = (z - o.z) / d.z;
-                if t.is_nan() || t < 0.0 {
-                    return None;
-                }
-                (t, Vec3::ZERO)
-            } else {
-                intersect_spherical_element(e.curvature_radius, z + e.curvature_radius, o, d)?
-            };
+            let (t, n) = hit_element(e, z, o, d)?;
             let p = o + d * t;
             if p.x * p.x + p.y * p.y > e.aperture_radius * e.aperture_radius {
                 return None;
@@ -491,6 +475,17 @@ impl LensSystem {
         let widen = 2.0 * (2.0 * r * std::f32::consts::SQRT_2) / (n as f32).sqrt();
         Some([b[0] - widen, b[1] - widen, b[2] + widen, b[3] + widen])
     }
+}
+
+/// Where the lens-space ray (`o`, `d`) meets element `e` whose vertex lies at `z` on the axis:
+/// its parameter and the unit normal facing the ray's origin side (zero for the stop, a plane);
+/// `None` if it misses or the hit lies behind.
+fn hit_element(e: &LensElement, z: f32, o: Vec3, d: Vec3) -> Option<(f32, Vec3)> {
+    if e.curvature_radius == 0.0 {
+        let t = (z - o.z) / d.z;
+        return (t >= 0.0).then_some((t, Vec3::ZERO));
+    }
+    intersect_spherical_element(e.curvature_radius, z + e.curvature_radius, o, d)
 }
 
 /// An index of refraction of 0 (a lens file's mark of air next to the stop) as 1.
