@@ -21,7 +21,9 @@ several emitter samples and a delta light, `ptracer` under a rotated envmap, non
 axes, `hide_emitters` with instances (Mitsuba crashes), `ptracer` with a principal-point shift, anisotropic roughness under bump maps. Known and not avoided: Mitsuba 3.9.1's `ldsampler` is biased in some scenes (a flagged `ldsampler` scene is re-run with `independent` before bisecting); its light sampling misses an occluder crossing an emitting rectangle (two random rectangle lights that cross); its `principledthin`
 with `diff_trans` under two lights renders up to 1 % darker than the sum of its images under each; under
 `hide_emitters` it lights too brightly a surface seen through an emitting shape that lights it (a flagged
-`hide_emitters` scene is re-run with it off before bisecting). `ptracer` scenes are noisy (caustics
+`hide_emitters` scene is re-run with it off before bisecting); its `ptracer` with a crop window drops the light
+paths landing outside the window, whose filter weight neumann's edge pixels keep (a flagged `ptracer` scene
+with a crop window is re-run without it). `ptracer` scenes are noisy (caustics
 through the BSDFs' delta lobes): re-run a flagged one at more spp before bisecting it.
 
 Run from the repository root after `cargo build --release`, with Mitsuba in a venv outside it:
