@@ -204,15 +204,7 @@ pub(super) fn build(bounds: &[Bounds3], weights: &[f32], opts: &BuildOptions) ->
     let bounds = match &root {
         BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
     };
-    Bvh { nodes: nodes.into(), order: items.iter().map(Item::index).collect(), bounds, avx: avx_detected() }
-}
-
-/// Whether this CPU runs the AVX slab test.
-fn avx_detected() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
+    Bvh { nodes: nodes.into(), order: items.iter().map(Item::index).collect(), bounds, kernel: super::Kernel::detect() }
 }
 
 fn leaf(items: &[Item], offset: usize, bounds: Bounds3) -> (BuildNode, usize) {

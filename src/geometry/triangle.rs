@@ -164,13 +164,19 @@ pub(crate) fn t_error_scaled<T: Lane>(x: [T; 3], y: [T; 3], z: [T; 3], e: [T; 3]
 where
     f32: Mul<T, Output = T>,
 {
-    let max3 = |v: [T; 3]| v[0].abs().max(v[1].abs()).max(v[2].abs());
-    let (max_xt, max_yt, max_zt, max_e) = (max3(x), max3(y), max3(z), max3(e));
+    let (max_xt, max_yt, max_zt, max_e) = (max_abs3(x), max_abs3(y), max_abs3(z), max_abs3(e));
     let delta_z = gamma(3) * max_zt;
     let delta_x = gamma(5) * (max_xt + max_zt);
     let delta_y = gamma(5) * (max_yt + max_zt);
     let delta_e = 2.0 * (gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e)
+}
+
+/// The largest magnitude of three lanes, lane by lane (a function, not a closure, so that
+/// it inlines into the SIMD traversals compiled for other target features).
+#[inline(always)]
+fn max_abs3<T: Lane>(v: [T; 3]) -> T {
+    v[0].abs().max(v[1].abs()).max(v[2].abs())
 }
 
 /// Absolute error bound of the hit point `b0 p0 + b1 p1 + b2 p2` (pbrt-v4 §6.8.5).

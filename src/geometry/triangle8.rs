@@ -335,8 +335,8 @@ fn to_ray_frame<L: Lanes>(
     s: [L; 3],
 ) -> (L, L, L) {
     let v = &v[vertex];
-    let c = |axis: usize| L::load(isa, &v[axis], part);
-    let (x, y, z) = (c(k[0]) - o[0], c(k[1]) - o[1], c(k[2]) - o[2]);
+    let (x, y, z) =
+        (L::load(isa, &v[k[0]], part) - o[0], L::load(isa, &v[k[1]], part) - o[1], L::load(isa, &v[k[2]], part) - o[2]);
     (x - s[0] * z, y - s[1] * z, s[2] * z)
 }
 
@@ -349,7 +349,7 @@ fn edges<L: Lanes, R>(
     part: usize,
     r: &RayPrecomp,
     t_max: f32,
-    finish: impl FnOnce(Candidates<L>) -> Option<R>,
+    finish: impl Finish<L, R>,
 ) -> Outcome<R> {
     let o = [L::splat(isa, r.op[0]), L::splat(isa, r.op[1]), L::splat(isa, r.op[2])];
     let s = [L::splat(isa, r.s[0]), L::splat(isa, r.s[1]), L::splat(isa, r.s[2])];
@@ -380,19 +380,30 @@ fn edges<L: Lanes, R>(
     }
     let c =
         Candidates { valid, det, t_scaled, e: [e0, e1, e2], x: [p0x, p1x, p2x], y: [p0y, p1y, p2y], z: [z0, z1, z2] };
-    match finish(c) {
+    match finish.finish(isa, c) {
         Some(found) => Outcome::Hit(found),
         None => Outcome::Miss,
     }
 }
 
-/// The closest hit among the lanes: lane and hit (the lowest lane among equal distances).
-#[inline(always)]
-fn closest<L: Lanes>(isa: L::Isa, v: &Rows, part: usize, r: &RayPrecomp, t_max: f32) -> Outcome<(usize, TriangleHit)>
+/// The last step of [`edges`] on its candidate lanes: the closest hit, or whether any is hit.
+/// A trait with an always-inlined method rather than a closure: a closure is a function of
+/// its own, compiled without the caller's target features and inlined only at the optimizer's
+/// discretion; a traversal compiled for x86-64-v3 (tried) called it, and every AVX intrinsic
+/// in it, where the one compiled for AVX happened to inline it.
+trait Finish<L: Lanes, R> {
+    fn finish(self, isa: L::Isa, c: Candidates<L>) -> Option<R>;
+}
+
+/// [`Finish`] of the closest-hit test: lane and hit (the lowest lane among equal distances).
+struct ClosestLane;
+
+impl<L: Lanes> Finish<L, (usize, TriangleHit)> for ClosestLane
 where
     f32: Mul<L, Output = L>,
 {
-    edges(isa, v, part, r, t_max, |c: Candidates<L>| {
+    #[inline(always)]
+    fn finish(self, isa: L::Isa, c: Candidates<L>) -> Option<(usize, TriangleHit)> {
         let inv_det = c.det.recip();
         let t = c.t_scaled * inv_det;
         // Conservative check that t is really positive (pbrt-v4 §6.8.7), per lane.
@@ -408,8 +419,31 @@ where
             // t_min is NaN (overflowing coordinates): no hit.
             return None;
         }
-        Some((lane, hit(t_min, c.e.map(|e| e.lane(lane)), inv_det.lane(lane))))
-    })
+        let e = [c.e[0].lane(lane), c.e[1].lane(lane), c.e[2].lane(lane)];
+        Some((lane, hit(t_min, e, inv_det.lane(lane))))
+    }
+}
+
+/// [`Finish`] of the any-hit test: whether a candidate lane passes the `t > δt` check.
+struct AnyLane;
+
+impl<L: Lanes> Finish<L, ()> for AnyLane
+where
+    f32: Mul<L, Output = L>,
+{
+    #[inline(always)]
+    fn finish(self, _: L::Isa, c: Candidates<L>) -> Option<()> {
+        L::any(c.valid & c.t_scaled.abs().cmpgt(t_error_scaled(c.x, c.y, c.z, c.e))).then_some(())
+    }
+}
+
+/// The closest hit among the lanes: lane and hit (the lowest lane among equal distances).
+#[inline(always)]
+fn closest<L: Lanes>(isa: L::Isa, v: &Rows, part: usize, r: &RayPrecomp, t_max: f32) -> Outcome<(usize, TriangleHit)>
+where
+    f32: Mul<L, Output = L>,
+{
+    edges(isa, v, part, r, t_max, ClosestLane)
 }
 
 /// The hit at `t` with edge functions `e` and `1 / det` (outside the generic code, whose
@@ -425,9 +459,7 @@ fn occluded<L: Lanes>(isa: L::Isa, v: &Rows, part: usize, r: &RayPrecomp, t_max:
 where
     f32: Mul<L, Output = L>,
 {
-    edges(isa, v, part, r, t_max, |c: Candidates<L>| {
-        L::any(c.valid & c.t_scaled.abs().cmpgt(t_error_scaled(c.x, c.y, c.z, c.e))).then_some(())
-    })
+    edges(isa, v, part, r, t_max, AnyLane)
 }
 
 #[cfg(test)]

@@ -329,6 +329,12 @@ impl Scene {
         &self.bvh
     }
 
+    /// Traces with the BVH's compiled traversal `kernel` from now on, if this CPU supports it
+    /// (see [`Bvh::set_kernel`]); the answers are the same bits, only the speed differs.
+    pub fn set_bvh_kernel(&mut self, kernel: crate::bvh::Kernel) -> bool {
+        self.bvh.set_kernel(kernel)
+    }
+
     /// Bytes the ray-tracing structure takes: the BVH's nodes and order, and the leaves'
     /// primitive data (triangle blocks, mixed primitives, primitive references).
     pub fn accel_memory_bytes(&self) -> usize {
@@ -916,15 +922,26 @@ mod tests {
             b.add_shape(Geometry::Sphere(*s), m, None);
         }
         b.set_camera(Camera::perspective(Transform::IDENTITY, 45.0, FovAxis::X, 1, 1).unwrap());
-        let scene = b.build().unwrap();
+        let mut scene = b.build().unwrap();
         assert_eq!(scene.primitive_count() > SMALL_SCENE_PRIMITIVES, triangles > 2000);
         assert!(scene.refs.len() > scene.primitive_count() + triangles as usize / 20, "slivers are split");
         assert!(!scene.blocks.is_empty(), "no triangle-only leaves");
         assert!(scene.prims.iter().any(|p| matches!(p.prim, Primitive::Triangle(_))), "no mixed leaves");
+        // The same rays through every compiled traversal this CPU runs.
+        for kernel in crate::bvh::Kernel::available() {
+            assert!(scene.bvh.set_kernel(kernel));
+            let hits = trace_like_brute_force(&scene, &tris, &spheres, &mut rng.clone());
+            assert!(hits > 1000, "{kernel:?}: {hits}");
+        }
+    }
+
+    /// [`match_brute_force`]'s rays from `rng` (intersections, hit-only queries and shadow rays);
+    /// returns how many hit something.
+    fn trace_like_brute_force(scene: &Scene, tris: &[[Vec3; 3]], spheres: &[Sphere], rng: &mut Pcg32) -> u32 {
+        let v = |rng: &mut Pcg32, s: f32| Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * s - s / 2.0;
         let mut hits = 0;
         for _ in 0..5000 {
-            let ray =
-                Ray::new(v(&mut rng, 10.0), sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value);
+            let ray = Ray::new(v(rng, 10.0), sample_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())).value);
             let pre = RayPrecomp::new(&ray);
             let tri = tris
                 .iter()
@@ -960,6 +977,6 @@ mod tests {
                 assert!(!scene.occluded(&ray));
             }
         }
-        assert!(hits > 1000, "{hits}");
+        hits
     }
 }

@@ -3,7 +3,7 @@
 //! second on the Cornell box.
 
 use clap::Args;
-use neumann::bvh::Bvh;
+use neumann::bvh::{Bvh, Kernel};
 use neumann::camera::{Camera, FovAxis};
 use neumann::geometry::{Geometry, TriangleMesh};
 use neumann::integrator::PathIntegrator;
@@ -42,6 +42,28 @@ pub struct BenchArgs {
     /// timing another ray tracer on identical data (`tools/embree/`; formats in `write_export`).
     #[arg(long, value_name = "DIR")]
     pub export: Option<PathBuf>,
+    /// The BVH traversal's compiled kernel (default: the most capable one this CPU runs), to
+    /// compare them on one machine.
+    #[arg(long, value_enum)]
+    pub kernel: Option<KernelArg>,
+}
+
+/// `--kernel` values: [`Kernel`]'s variants.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum KernelArg {
+    /// Two 4-wide halves (SSE2).
+    Portable,
+    /// 8-wide AVX.
+    Avx,
+}
+
+impl From<KernelArg> for Kernel {
+    fn from(k: KernelArg) -> Kernel {
+        match k {
+            KernelArg::Portable => Kernel::Portable,
+            KernelArg::Avx => Kernel::Avx,
+        }
+    }
 }
 
 /// A UV sphere with `≈ n` triangles, radially displaced so that rays see real structure.
@@ -121,7 +143,18 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
     }
 
     let triangles = mesh.len();
-    let scene = mesh_scene(mesh)?;
+    let mut scene = mesh_scene(mesh)?;
+    if let Some(k) = args.kernel {
+        if !scene.set_bvh_kernel(k.into()) {
+            return Err(format!(
+                "this CPU does not run the {:?} kernel (its best: {:?})",
+                Kernel::from(k),
+                Kernel::detect()
+            ));
+        }
+    }
+    say!("ray kernel: {:?} (the most capable this CPU runs: {:?})", scene.bvh().kernel(), Kernel::detect());
+    let scene = scene;
     say!(
         "ray-tracing structure (nodes, triangle blocks, references): {:.1} MiB, {:.0} bytes per triangle",
         scene.accel_memory_bytes() as f64 / (1 << 20) as f64,
