@@ -23,7 +23,9 @@ with `diff_trans` under two lights renders up to 1 % darker than the sum of its 
 `hide_emitters` it lights too brightly a surface seen through an emitting shape that lights it (a flagged
 `hide_emitters` scene is re-run with it off before bisecting); its `ptracer` with a crop window drops the light
 paths landing outside the window, whose filter weight neumann's edge pixels keep (a flagged `ptracer` scene
-with a crop window is re-run without it). `ptracer` scenes are noisy (caustics
+with a crop window is re-run without it). Its `ptracer` also renders black the surfaces of two `roughconductor`s
+whose `alpha` textures read the same image (a flagged `ptracer` scene with two such is re-run with one `alpha`
+constant). `ptracer` scenes are noisy (caustics
 through the BSDFs' delta lobes): re-run a flagged one at more spp before bisecting it. In
 particular Mitsuba's `ptracer` reaches a directly visible `envmap` or `sunsky` only through
 sparse splats (its visible-emitter step samples directions by the emitter's radiance, from the
