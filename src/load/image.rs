@@ -138,8 +138,8 @@ fn decode_png_channels(path: &Path, bytes: &[u8]) -> Result<(EncodedImage, usize
 /// everywhere, else the mean of its red, green and blue, else its one grey channel (a grey PNG
 /// with alpha is read as grey: pbrt-v4 drops that alpha). `decode` maps the stored 8- and 16-bit
 /// values to linear ones (pbrt-v4's encoding: sRGB, linear or a gamma), alpha included, as
-/// pbrt-v4 decodes every channel of such images; float files (EXR, HDR, PFM) are linear and
-/// read as RGB (the mean of their colour; an EXR's alpha is not read).
+/// pbrt-v4 decodes every channel of such images; float files (EXR, HDR, PFM) are linear, an
+/// EXR's alpha read by the same rule (HDR and PFM files have none).
 pub fn load_pbrt_scalar(path: &Path, decode: &dyn Fn(f32) -> f32) -> Result<Image, LoadError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     let (width, height, channels, rgba) = match ext.as_deref() {
@@ -158,6 +158,14 @@ pub fn load_pbrt_scalar(path: &Path, decode: &dyn Fn(f32) -> f32) -> Result<Imag
             let channels = decoded.color().channel_count() as usize;
             let rgba = decoded.to_rgba32f();
             (rgba.width(), rgba.height(), channels, rgba.pixels().map(|p| p.0).collect())
+        }
+        Some("exr") => {
+            let (w, h, rgba) = load_exr_rgba(path).map_err(|e| LoadError::format(path, e))?;
+            // Linear floats: `decode` (for 8- and 16-bit values) does not apply.
+            let alpha = rgba.iter().any(|p| p[3] != 1.0);
+            let pixels =
+                rgba.iter().map(|p| Rgb::splat(if alpha { p[3] } else { (p[0] + p[1] + p[2]) / 3.0 })).collect();
+            return Ok(Image { width: w, height: h, pixels });
         }
         _ => {
             let rgb = load_image(path, true)?;
@@ -234,6 +242,13 @@ fn load_ppm(path: &Path, raw: bool) -> Result<Image, String> {
 }
 
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
+    let (width, height, rgba) = load_exr_rgba(path)?;
+    Ok(Image { width, height, pixels: rgba.iter().map(|p| Rgb::new(p[0], p[1], p[2])).collect() })
+}
+
+/// The first RGBA layer of an OpenEXR file: width, height and the pixels' red, green, blue and
+/// alpha (1 where the file has no alpha channel), row by row from the top.
+fn load_exr_rgba(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
     use exr::prelude::*;
     // The sizes the header claims, checked before any pixel memory is allocated.
     let meta =
@@ -244,17 +259,14 @@ fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
     }
     let image = read_first_rgba_layer_from_file(
         path,
-        |resolution, _| crate::load::image::Image {
-            width: resolution.width() as u32,
-            height: resolution.height() as u32,
-            pixels: vec![Rgb::ZERO; resolution.width() * resolution.height()],
-        },
-        |img: &mut crate::load::image::Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            img.pixels[pos.y() * img.width as usize + pos.x()] = Rgb::new(r, g, b);
+        |resolution, _| (resolution.width(), vec![[0.0f32, 0.0, 0.0, 1.0]; resolution.width() * resolution.height()]),
+        |(width, px): &mut (usize, Vec<[f32; 4]>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *width + pos.x()] = [r, g, b, a];
         },
     )
     .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
-    Ok(image.layer_data.channel_data.pixels)
+    let size = image.layer_data.size;
+    Ok((size.width() as u32, size.height() as u32, image.layer_data.channel_data.pixels.1))
 }
 
 #[cfg(test)]
@@ -318,6 +330,22 @@ mod tests {
         std::fs::write(dir.join("palette.png"), out).unwrap();
         let palette = load_pbrt_scalar(&dir.join("palette.png"), &|v| v).unwrap();
         assert!(close(&[palette.pixels[0].x, palette.pixels[1].x], &[60.0 / 255.0, 1.0]), "{:?}", palette.pixels);
+        // OpenEXR: linear, never decoded; the alpha where it is not 1 everywhere, else the mean.
+        let exr = |name: &str, px: [[f32; 4]; 2]| {
+            let path = dir.join(name);
+            exr::prelude::write_rgba_file(&path, 2, 1, |x, _| (px[x][0], px[x][1], px[x][2], px[x][3])).unwrap();
+            load_pbrt_scalar(&path, &|v| v * 100.0).unwrap().pixels.iter().map(|c| c.x).collect::<Vec<f32>>()
+        };
+        let cut = exr("cut.exr", [[0.2, 0.4, 0.6, 0.25], [3.0, 0.0, 0.0, 1.0]]);
+        assert!(close(&cut, &[0.25, 1.0]), "{cut:?}");
+        let opaque = exr("opaque.exr", [[0.2, 0.4, 0.6, 1.0], [3.0, 0.0, 0.0, 1.0]]);
+        assert!(close(&opaque, &[0.4, 1.0]), "{opaque:?}");
+        // Without an alpha channel at all: the mean.
+        let path = dir.join("rgb.exr");
+        let colour = |x: usize| if x == 0 { (0.2f32, 0.4f32, 0.6f32) } else { (3.0, 0.0, 0.0) };
+        exr::prelude::write_rgb_file(&path, 2, 1, |x, _| colour(x)).unwrap();
+        let rgb = load_pbrt_scalar(&path, &|v| v).unwrap().pixels.iter().map(|c| c.x).collect::<Vec<f32>>();
+        assert!(close(&rgb, &[0.4, 1.0]), "{rgb:?}");
     }
     use crate::film::output::{write_image, ImageInfo};
 
