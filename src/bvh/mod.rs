@@ -80,8 +80,9 @@ pub struct Bvh {
     kernel: Kernel,
 }
 
-/// Which compiled traversal runs: the most capable one the CPU supports.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Which compiled traversal runs: the most capable one the CPU supports. Ordered from the
+/// least capable.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Kernel {
     /// Two 4-wide halves (SSE2 on x86-64, plain code elsewhere).
     #[default]
@@ -105,18 +106,6 @@ impl Kernel {
     /// The kernels this CPU runs, least capable first (for tests that compare them).
     pub fn available() -> Vec<Kernel> {
         [Kernel::Portable, Kernel::Avx].into_iter().filter(|&k| k <= Kernel::detect()).collect()
-    }
-}
-
-impl PartialOrd for Kernel {
-    fn partial_cmp(&self, other: &Kernel) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
-}
-
-impl Ord for Kernel {
-    fn cmp(&self, other: &Kernel) -> std::cmp::Ordering {
-        (*self as u8).cmp(&(*other as u8))
     }
 }
 

@@ -154,7 +154,6 @@ pub fn run(args: &BenchArgs) -> Result<(), String> {
         }
     }
     say!("ray kernel: {:?} (the most capable this CPU runs: {:?})", scene.bvh().kernel(), Kernel::detect());
-    let scene = scene;
     say!(
         "ray-tracing structure (nodes, triangle blocks, references): {:.1} MiB, {:.0} bytes per triangle",
         scene.accel_memory_bytes() as f64 / (1 << 20) as f64,
