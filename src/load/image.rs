@@ -160,7 +160,8 @@ pub fn load_pbrt_scalar(path: &Path, decode: &dyn Fn(f32) -> f32) -> Result<Imag
             (rgba.width(), rgba.height(), channels, rgba.pixels().map(|p| p.0).collect())
         }
         Some("exr") => {
-            let (w, h, rgba) = load_exr_rgba(path).map_err(|e| LoadError::format(path, e))?;
+            let (w, h, rgba) =
+                load_exr_pixels(path, |r, g, b, a| [r, g, b, a]).map_err(|e| LoadError::format(path, e))?;
             // Linear floats: `decode` (for 8- and 16-bit values) does not apply.
             let alpha = rgba.iter().any(|p| p[3] != 1.0);
             let pixels =
@@ -242,13 +243,17 @@ fn load_ppm(path: &Path, raw: bool) -> Result<Image, String> {
 }
 
 fn load_exr(path: &Path) -> Result<crate::load::image::Image, String> {
-    let (width, height, rgba) = load_exr_rgba(path)?;
-    Ok(Image { width, height, pixels: rgba.iter().map(|p| Rgb::new(p[0], p[1], p[2])).collect() })
+    let (width, height, pixels) = load_exr_pixels(path, |r, g, b, _| Rgb::new(r, g, b))?;
+    Ok(Image { width, height, pixels })
 }
 
-/// The first RGBA layer of an OpenEXR file: width, height and the pixels' red, green, blue and
-/// alpha (1 where the file has no alpha channel), row by row from the top.
-fn load_exr_rgba(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
+/// The first RGBA layer of an OpenEXR file: width, height and each pixel made by `pixel` from
+/// its red, green, blue and alpha (1 where the file has no alpha channel), row by row from the
+/// top.
+fn load_exr_pixels<T: Clone + 'static>(
+    path: &Path,
+    pixel: fn(f32, f32, f32, f32) -> T,
+) -> Result<(u32, u32, Vec<T>), String> {
     use exr::prelude::*;
     // The sizes the header claims, checked before any pixel memory is allocated.
     let meta =
@@ -259,9 +264,11 @@ fn load_exr_rgba(path: &Path) -> Result<(u32, u32, Vec<[f32; 4]>), String> {
     }
     let image = read_first_rgba_layer_from_file(
         path,
-        |resolution, _| (resolution.width(), vec![[0.0f32, 0.0, 0.0, 1.0]; resolution.width() * resolution.height()]),
-        |(width, px): &mut (usize, Vec<[f32; 4]>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *width + pos.x()] = [r, g, b, a];
+        move |resolution, _| {
+            (resolution.width(), vec![pixel(0.0, 0.0, 0.0, 1.0); resolution.width() * resolution.height()])
+        },
+        move |(width, px): &mut (usize, Vec<T>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * *width + pos.x()] = pixel(r, g, b, a);
         },
     )
     .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
