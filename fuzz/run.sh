@@ -29,5 +29,16 @@ for t in $targets; do
     dict=()
     case $t in xml|render) dict=(-dict=fuzz/xml.dict) ;; esac
     echo "fuzzing $t for $secs s"
-    cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=20 "${dict[@]}" 2>&1 | tail -4
+    log=$(mktemp)
+    if cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=20 "${dict[@]}" >"$log" 2>&1; then
+        tail -4 "$log"
+        rm -f "$log"
+    else
+        # What failed, and the input that did it (libFuzzer prints small inputs in Base64, and
+        # cargo-fuzz names the artifact): everything but the progress lines.
+        echo "fuzzing $t failed:"
+        grep -v -E '^#[0-9]+' "$log" | tail -120
+        rm -f "$log"
+        exit 1
+    fi
 done

@@ -153,6 +153,8 @@ impl Integrator for VolPathIntegrator {
             // Free flight through the current medium.
             if let Some(m) = medium {
                 let medium_ref = &media[m as usize];
+                // Light an emissive medium gives off along the segment (nothing otherwise).
+                l += beta * medium_ref.emitted(&ray, t_surface, &mut rng);
                 let (u_channel, u_t) = (sampler.next_1d(), sampler.next_1d());
                 match medium_ref.sample_free_flight(&ray, t_surface, beta, u_channel, u_t, &mut rng) {
                     FreeFlight::Scatter { t, weight } => {
@@ -362,6 +364,86 @@ mod tests {
     /// under a uniform sky of radiance 1: light is only redirected, never lost, so every pixel
     /// — through the sphere or past it — has radiance 1. Tests free flights, phase sampling,
     /// NEE with transmittance through the null boundary, and MIS with the environment.
+    /// Emissive media (pbrt-v4's `Le`), with no other light, under both volumetric path
+    /// tracers. A ball of absorbing medium (albedo 0, σₜ 1.5, radius 1) seen through its centre
+    /// shows `Lₑ (1 − e^(−2 σₜ))`. A camera deep inside an emissive scattering medium (albedo
+    /// 0.6, HG g 0.3, σₜ 4, a sphere of radius 6 with an index-matched boundary: the light that
+    /// leaks out is e⁻²⁰ of it) sees `Lₑ` everywhere: emission `σₐ Lₑ` balances absorption `σₐ L`.
+    /// Homogeneous media (the closed form along each segment) and heterogeneous ones (the
+    /// collision estimator) alike.
+    #[test]
+    fn emissive_media_glow_as_the_transport_equation_says() {
+        use crate::integrator::VolPathMisIntegrator;
+        use crate::medium::{volume::Volume, Coefficients, Heterogeneous};
+        let le = Rgb::new(2.0, 1.0, 0.5);
+        let emissive = |sigma_t: f32, albedo: f32, g: f32, heterogeneous: bool| {
+            let coefficients = if heterogeneous {
+                // Constant volumes over the box [-6, 6]³, which holds both spheres.
+                let to_world = Transform::translate(Vec3::splat(-6.0)) * Transform::scale(Vec3::splat(12.0)).unwrap();
+                let sigma = Volume::constant(Rgb::ONE, to_world);
+                let albedo = Volume::constant(Rgb::splat(albedo), to_world);
+                Coefficients::Heterogeneous(Box::new(Heterogeneous::new(sigma, albedo, sigma_t)))
+            } else {
+                Coefficients::Homogeneous(crate::medium::Homogeneous {
+                    sigma_t: Rgb::splat(sigma_t),
+                    albedo: Rgb::splat(albedo),
+                })
+            };
+            Medium {
+                coefficients,
+                phase: PhaseFunction::HenyeyGreenstein { g },
+                sample_emitters: true,
+                radiance: Some(Volume::constant(le, Transform::IDENTITY)),
+            }
+        };
+        let integrators: [(&str, Box<dyn Integrator>); 2] = [
+            ("volpath", Box::new(VolPathIntegrator::default())),
+            ("volpathmis", Box::new(VolPathMisIntegrator::default())),
+        ];
+        for heterogeneous in [false, true] {
+            for (name, integrator) in &integrators {
+                // The absorbing ball, from outside.
+                let mut b = SceneBuilder::new();
+                let null = b.add_bsdf(Bsdf::Null);
+                let m = b.add_medium(emissive(1.5, 0.0, 0.0, heterogeneous));
+                let s = b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), null, None);
+                b.set_shape_media(s, Some(m), None);
+                b.set_camera(camera(12, 12, 2.0));
+                let scene = b.build().unwrap();
+                let settings = RenderSettings { spp: 64, seed: 21, ..Default::default() };
+                let out = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap();
+                let c = centre(&out.film.image());
+                let expect = le * (1.0 - (-3.0f32).exp());
+                for k in 0..3 {
+                    let tol = if heterogeneous { 0.03 } else { 1e-3 };
+                    assert!(
+                        (c[k] - expect[k]).abs() <= tol * expect[k],
+                        "{name}, heterogeneous {heterogeneous}: ball {c} vs {expect}"
+                    );
+                }
+
+                // Deep inside a scattering one.
+                let mut b = SceneBuilder::new();
+                let null = b.add_bsdf(Bsdf::Null);
+                let m = b.add_medium(emissive(4.0, 0.6, 0.3, heterogeneous));
+                let s = b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 6.0, false)), null, None);
+                b.set_shape_media(s, Some(m), None);
+                b.set_camera_medium(Some(m));
+                b.set_camera(camera(4, 4, 60.0));
+                let scene = b.build().unwrap();
+                let settings = RenderSettings { spp: 256, seed: 22, ..Default::default() };
+                let out = render(&scene, integrator.as_ref(), &settings, &AtomicBool::new(false)).unwrap();
+                let mean = out.film.image().iter().fold(Rgb::ZERO, |a, &p| a + p) / 16.0;
+                for k in 0..3 {
+                    assert!(
+                        (mean[k] - le[k]).abs() <= 0.02 * le[k],
+                        "{name}, heterogeneous {heterogeneous}: inside {mean} vs {le}"
+                    );
+                }
+            }
+        }
+    }
+
     #[test]
     fn index_matched_scattering_sphere_is_invisible_in_a_furnace() {
         for phase in [PhaseFunction::Isotropic, PhaseFunction::HenyeyGreenstein { g: 0.6 }] {
@@ -528,6 +610,7 @@ mod tests {
             ))),
             phase: PhaseFunction::HenyeyGreenstein { g: 0.3 },
             sample_emitters: true,
+            radiance: None,
         };
         let out = render_with(hetero(sigma, Rgb::ONE), 1024);
         let (mean, se) = out.film.mean_and_std_error();
@@ -589,6 +672,7 @@ mod tests {
                 coefficients: Coefficients::Heterogeneous(Box::new(h)),
                 phase: PhaseFunction::Sggx(flakes.clone()),
                 sample_emitters: true,
+                radiance: None,
             };
             cube_in_furnace(medium)
         };
@@ -647,6 +731,7 @@ mod tests {
             coefficients: Coefficients::Heterogeneous(Box::new(h)),
             phase: PhaseFunction::Sggx(flakes),
             sample_emitters: true,
+            radiance: None,
         });
         let settings = RenderSettings { spp: 64, seed: 1, ..Default::default() };
         let out = render(&scene, &VolPathIntegrator::default(), &settings, &AtomicBool::new(false)).unwrap();

@@ -39,8 +39,8 @@ use crate::scene::Scene;
 
 /// Crossings of null surfaces allowed along one segment (guards against degenerate geometry).
 const MAX_NULL_CROSSINGS: u32 = 256;
-/// Tentative collisions allowed along one segment.
-const MAX_COLLISIONS: u32 = 1 << 20;
+/// Tentative collisions allowed along one segment (as [`crate::medium::heterogeneous::MAX_TRACKING_STEPS`]).
+const MAX_COLLISIONS: u32 = crate::medium::heterogeneous::MAX_TRACKING_STEPS;
 
 /// Mitsuba's `volpathmis`.
 #[derive(Clone, Debug, Default)]
@@ -261,6 +261,12 @@ impl Integrator for VolPathMisIntegrator {
             // Tracking through the current medium up to the surface.
             if let Some(m) = medium {
                 let medium_ref = &media[m as usize];
+                // Light an emissive medium gives off along the segment (nothing otherwise),
+                // weighted as everything the path up to here carries.
+                let emitted = medium_ref.emitted(&ray, t_surface, &mut rng);
+                if emitted != Rgb::ZERO {
+                    l += path.weight() * emitted;
+                }
                 let mut travelled = 0.0f32;
                 let mut scattered = None;
                 for _ in 0..MAX_COLLISIONS {
@@ -564,6 +570,7 @@ mod tests {
             ))),
             phase: PhaseFunction::HenyeyGreenstein { g: 0.4 },
             sample_emitters: true,
+            radiance: None,
         });
         let homo = b.add_medium(
             Medium::homogeneous(Rgb::new(0.3, 1.5, 4.0), albedo, PhaseFunction::Isotropic).unwrap(),

@@ -37,6 +37,21 @@ impl Homogeneous {
         Rgb::new(exp(-self.sigma_t.x * t), exp(-self.sigma_t.y * t), exp(-self.sigma_t.z * t))
     }
 
+    /// The light emitted along a segment of length `t` (possibly infinite) toward its start by
+    /// the medium of radiance `le`: `∫₀ᵗ e^(−σₜ s) σₐ Lₑ ds = α' Lₑ (1 − e^(−σₜ t))` per channel,
+    /// `α' = σₐ / σₜ = 1 − α` (0 where σₜ is: no absorption, no emission).
+    #[inline]
+    pub fn emitted(&self, le: Rgb, t: f32) -> Rgb {
+        let absorbed = Rgb::ONE - self.transmittance(t);
+        Rgb::from_array(std::array::from_fn(|c| {
+            if self.sigma_t[c] > 0.0 {
+                (1.0 - self.albedo[c]) * le[c] * absorbed[c]
+            } else {
+                0.0
+            }
+        }))
+    }
+
     /// Samples the distance to the next interaction along a ray with unit direction, up to
     /// `t_max` (possibly infinite). `u_channel` picks the channel, `u` the distance.
     #[inline]

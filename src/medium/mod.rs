@@ -7,10 +7,12 @@
 //! shape) and around the camera (the sensor's medium). A shape with a `null` BSDF is an
 //! index-matched boundary: rays cross it and change medium.
 //!
-//! An integrator asks a medium two things along a ray segment: where the next real interaction
-//! is ([`Medium::sample_free_flight`], with the throughput weight that keeps the estimate
-//! unbiased), and how much light gets through ([`Medium::transmittance`], exact for homogeneous
-//! media, an unbiased estimate for heterogeneous ones).
+//! An integrator asks a medium three things along a ray segment: where the next real
+//! interaction is ([`Medium::sample_free_flight`], with the throughput weight that keeps the
+//! estimate unbiased), how much light gets through ([`Medium::transmittance`], exact for
+//! homogeneous media, an unbiased estimate for heterogeneous ones), and, for an emissive medium
+//! (neumann's `radiance`, pbrt-v4's `Le`), how much light it emits along the segment toward the
+//! segment's start ([`Medium::emitted`]).
 
 pub mod heterogeneous;
 pub mod homogeneous;
@@ -109,6 +111,10 @@ pub struct Medium {
     /// `sample_emitters`, true). Off, light is found by phase sampling alone (same expectation;
     /// faster where shadow rays cannot get out, e.g. inside a dielectric).
     pub sample_emitters: bool,
+    /// Emitted radiance `Lₑ(x)` (W m⁻² sr⁻¹ per channel, world space; pbrt-v4's emissive media):
+    /// the medium adds `σₐ(x) Lₑ(x)` per unit length to the radiance along every ray through
+    /// it, `σₐ = σₜ (1 − α)`. `None`: it emits nothing. A homogeneous medium's is constant.
+    pub radiance: Option<volume::Volume>,
 }
 
 impl Medium {
@@ -119,7 +125,22 @@ impl Medium {
             coefficients: Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }),
             phase,
             sample_emitters: true,
+            radiance: None,
         })
+    }
+
+    /// The light this medium emits along `ray` (unit direction) over `[0, t_max)` toward the
+    /// ray's origin, `∫₀^t_max Tr(0, t) σₐ(x_t) Lₑ(x_t) dt` (zero for a medium that does not
+    /// emit): exact for homogeneous media, `σₐ Lₑ (1 − e^(−σₜ t_max)) / σₜ` per channel; for
+    /// heterogeneous ones an unbiased estimate (the collision estimator over a ratio-tracking
+    /// walk, numbers from `rng`; [`Heterogeneous::emitted`]).
+    #[inline]
+    pub fn emitted(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Rgb {
+        let Some(radiance) = &self.radiance else { return Rgb::ZERO };
+        match &self.coefficients {
+            Coefficients::Homogeneous(h) => h.emitted(radiance.eval(ray.o), t_max),
+            Coefficients::Heterogeneous(h) => h.emitted(ray, t_max, radiance, rng),
+        }
     }
 
     /// Whether the coefficients vary (tracking needs a random-number generator).
@@ -186,8 +207,13 @@ pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] =
     &[("homogeneous", homogeneous_from_props), ("heterogeneous", heterogeneous_from_props)];
 
 /// What every medium plugin reads: one nested `<phase>` (isotropic if none; see
-/// [`PhaseFunction::from_props`]) and `sample_emitters` (true).
-fn common(o: &Obj, coefficients: Coefficients, files: &mut dyn VolumeSource) -> PropResult<Medium> {
+/// [`PhaseFunction::from_props`]) and `sample_emitters` (true). `radiance` is the plugin's own.
+fn common(
+    o: &Obj,
+    coefficients: Coefficients,
+    radiance: Option<volume::Volume>,
+    files: &mut dyn VolumeSource,
+) -> PropResult<Medium> {
     o.check_children(&["phase"])?;
     let phases = o.nested("phase");
     if phases.len() > 1 {
@@ -198,11 +224,38 @@ fn common(o: &Obj, coefficients: Coefficients, files: &mut dyn VolumeSource) -> 
         Some(p) => PhaseFunction::from_props(p, files)?,
     };
     let sample_emitters = o.bool("sample_emitters", true)?;
-    Ok(Medium { coefficients, phase, sample_emitters })
+    Ok(Medium { coefficients, phase, sample_emitters, radiance })
+}
+
+/// neumann's `radiance` of an emissive medium (pbrt-v4's `Le`; Mitsuba 3.9.1's media do not
+/// emit): a `<float>`, `<rgb>` or `<spectrum>` (an illuminant, any non-negative value) or, where
+/// `grid` allows, a nested `<volume>`; `None` where absent or zero everywhere.
+fn radiance_param(o: &Obj, grid: bool, files: &mut dyn VolumeSource) -> PropResult<Option<volume::Volume>> {
+    use crate::props::Value;
+    let radiance = match o.get("radiance").map(|p| &p.value) {
+        None => return Ok(None),
+        Some(Value::Object(_)) if !grid => {
+            return Err(o.error_at("radiance", "a homogeneous medium's radiance is a <float>, <rgb> or <spectrum>"))
+        }
+        Some(Value::Object(_)) => {
+            let v = volume::volume_param(o, "radiance", 0.0, SpectrumKind::Illuminant, files)?;
+            volume::check_range(o, "radiance", &v, 0.0, f32::INFINITY)?;
+            v
+        }
+        Some(_) => {
+            let c = o.rgb("radiance", Rgb::ZERO, SpectrumKind::Illuminant)?;
+            if !(0..3).all(|k| c[k] >= 0.0 && c[k].is_finite()) {
+                return Err(o.error_at("radiance", format!("radiance must be finite and ≥ 0, got {c}")));
+            }
+            volume::Volume::constant(c, crate::math::Transform::IDENTITY)
+        }
+    };
+    Ok((radiance.max() > 0.0).then_some(radiance))
 }
 
 /// Mitsuba's `homogeneous`: `sigma_t` (1 m⁻¹) × `scale` (1), `albedo` (0.75), a `<phase>`,
-/// `sample_emitters`. An `<rgb>` value must lie in [0, 1] (Mitsuba reads it as a reflectance).
+/// `sample_emitters`; neumann's `radiance` (none: an emissive medium, [`Medium::radiance`]). An
+/// `<rgb>` `sigma_t` or `albedo` must lie in [0, 1] (Mitsuba reads it as a reflectance).
 fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
     let sigma_t = volume::constant_param(o, "sigma_t", 1.0, SpectrumKind::Illuminant)? * scale;
@@ -213,7 +266,8 @@ fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<M
     if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
         return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
     }
-    let medium = common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }), files)?;
+    let radiance = radiance_param(o, false, files)?;
+    let medium = common(o, Coefficients::Homogeneous(Homogeneous { sigma_t, albedo }), radiance, files)?;
     if medium.phase.microflakes().is_some() {
         // Its extinction follows the flakes' S grid from point to point: not homogeneous.
         let phase = &o.nested("phase")[0];
@@ -225,10 +279,13 @@ fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<M
     Ok(medium)
 }
 
-/// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`.
+/// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`;
+/// neumann's `radiance` (none; a constant or a `<volume>`: an emissive medium, which emits only
+/// where it has extinction, inside the `sigma_t` volume's box).
 fn heterogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let h = Heterogeneous::from_props(o, files)?;
-    let mut medium = common(o, Coefficients::Heterogeneous(Box::new(h.clone())), files)?;
+    let radiance = radiance_param(o, true, files)?;
+    let mut medium = common(o, Coefficients::Heterogeneous(Box::new(h.clone())), radiance, files)?;
     if let Some(flakes) = medium.phase.microflakes() {
         medium.coefficients = Coefficients::Heterogeneous(Box::new(h.with_flakes(flakes.clone())));
     }

@@ -1177,10 +1177,14 @@ fn media_on_shapes_and_the_sensor() {
     <shape type="sphere">
         <bsdf type="null"/>
         <ref name="exterior" id="fog"/>
-        <medium type="homogeneous" name="interior"><float name="sigma_t" value="3"/></medium>
+        <medium type="homogeneous" name="interior"><float name="sigma_t" value="3"/><rgb name="radiance" value="4, 2, 0"/></medium>
     </shape>
 </scene>"#;
     let f = load(text).unwrap();
+    // neumann's emissive media: `radiance`, any non-negative illuminant.
+    assert!(f.scene.media()[0].radiance.is_none());
+    let le = f.scene.media()[1].radiance.as_ref().expect("emissive").eval(crate::math::Vec3::ZERO);
+    assert_eq!(le, Rgb::new(4.0, 2.0, 0.0));
     assert!(f.warnings.is_empty(), "{:?}", f.warnings);
     assert!(matches!(f.integrator, crate::integrator::AnyIntegrator::VolPath(v) if v.settings.max_depth == 7));
     let s = &f.scene;
@@ -1203,6 +1207,12 @@ fn media_on_shapes_and_the_sensor() {
         (r#"<medium type="homogeneous" id="m"><phase type="hg"><float name="g" value="1"/></phase></medium>"#, "'g'"),
         (r#"<medium type="homogeneous" id="m"><phase type="raleigh"/></medium>"#, "the nearest is 'rayleigh'"),
         (r#"<phase type="hg"/>"#, "nested in a <medium>"),
+        (r#"<medium type="homogeneous" id="m"><float name="radiance" value="-1"/></medium>"#, "radiance"),
+        (
+            r#"<medium type="homogeneous" id="m"><volume type="constvolume" name="radiance"/></medium>"#,
+            "a homogeneous medium's radiance",
+        ),
+        (r#"<medium type="heterogeneous" id="m"><float name="radiance" value="inf"/></medium>"#, "radiance"),
     ] {
         let e = err(&scene(bad));
         assert!(e.contains("test.xml:") && e.contains(what), "{bad}: {e}");

@@ -952,12 +952,54 @@ fn grid_media() {
     assert!((albedo - Rgb::new(0.5, 2.0 / 3.0, 0.75)).abs().max_element() < 1e-5, "{albedo}");
     for (from, to, what) in [
         ("\"integer nx\" 4", "\"integer nx\" 5", "has 64 values for a 5×4×4 grid"),
-        ("\"float scale\" 1.5", "\"rgb Le\" [1 1 1]", "emissive"),
+        ("\"float scale\" 1.5", "\"float temperature\" [1]", "temperature"),
         ("\"point3 p1\" [2 2 2]", "\"point3 p1\" [-2 2 2]", "is empty"),
     ] {
         let e = err(&scene(&grid.replace(from, to)));
         assert!(e.contains(what), "{to}: {e}");
     }
+}
+
+/// pbrt-v4's emissive media: `homogeneous` `Le` (normalised to luminance 1) × `Lescale`;
+/// `uniformgrid` `Le` × the `Lescale` grid (without one pbrt's 1 × 1 × 1 grid of 1, a tent
+/// over the box); `rgbgrid` an RGB `Le` grid × `Lescale`, unnormalised as in pbrt-v4 (× its
+/// `CIE_Y_integral`).
+#[test]
+fn emissive_media() {
+    use crate::math::Vec3;
+    let medium = |m: &str| {
+        let text = format!(
+            "MakeNamedMedium \"m\" \"string type\" {m}\nCamera \"perspective\"\nWorldBegin\n\
+             MediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\n"
+        );
+        let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+        f.scene.media()[0].radiance.clone()
+    };
+    let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() < 1e-4 * b.max_element().max(1.0);
+    let le = medium("\"homogeneous\" \"rgb Le\" [2 1 0.5] \"float Lescale\" 3").expect("emissive");
+    let got = le.eval(Vec3::ZERO);
+    assert!(close(got, Rgb::new(6.0, 3.0, 1.5)), "{got}");
+    assert!(medium("\"homogeneous\" \"rgb Le\" [0 0 0]").is_none());
+    assert!(medium("\"homogeneous\"").is_none());
+    // A 2 × 1 × 1 grid over [0, 2] × [0, 1]²: texel centres at x = ½ and 1½.
+    let grid = "\"uniformgrid\" \"integer nx\" 2 \"point3 p1\" [2 1 1] \"float density\" [1 1] \"rgb Le\" [2 1 0.5]";
+    let le = medium(&format!("{grid} \"float Lescale\" [1 3]")).expect("emissive");
+    assert!(close(le.eval(Vec3::new(0.5, 0.5, 0.5)), Rgb::new(2.0, 1.0, 0.5)));
+    assert!(close(le.eval(Vec3::new(1.0, 0.5, 0.5)), Rgb::new(4.0, 2.0, 1.0)));
+    let tent = medium(grid).expect("emissive");
+    assert!(close(tent.eval(Vec3::new(1.0, 0.5, 0.5)), Rgb::new(2.0, 1.0, 0.5)), "centre");
+    assert!(close(tent.eval(Vec3::new(0.0, 0.0, 0.0)), Rgb::new(2.0, 1.0, 0.5) / 8.0), "corner");
+    let rgb = "\"rgbgrid\" \"integer nx\" 2 \"point3 p1\" [2 1 1] \"rgb sigma_a\" [1 1 1 1 1 1] \
+        \"rgb Le\" [1 0 0 0 0 2] \"float Lescale\" 0.5";
+    let le = medium(rgb).expect("emissive");
+    let y = 106.856_895;
+    assert!(close(le.eval(Vec3::new(0.5, 0.5, 0.5)), Rgb::new(0.5 * y, 0.0, 0.0)));
+    assert!(close(le.eval(Vec3::new(1.5, 0.5, 0.5)), Rgb::new(0.0, 0.0, y)));
+    let e = err(&format!(
+        "MakeNamedMedium \"m\" \"string type\" {}\nCamera \"perspective\"\nWorldBegin\n",
+        rgb.replace("\"rgb sigma_a\" [1 1 1 1 1 1]", "\"rgb sigma_s\" [1 1 1 1 1 1]")
+    ));
+    assert!(e.contains("sigma_a"), "{e}");
 }
 
 /// pbrt-v4's goniometric light: the diagram (RGB averaged) in the light's frame with y and z

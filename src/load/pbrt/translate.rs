@@ -1173,13 +1173,13 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     if n > 1 << 27 {
         return Err(ps.error(format!("a grid of {}×{}×{} values is too large", res[0], res[1], res[2])));
     }
-    for emission in ["Le", "temperature"] {
-        if ps.has(emission) {
-            return Err(ps.error_at(emission, "emissive grid media are not implemented by neumann"));
-        }
+    if ps.has("temperature") {
+        return Err(
+            ps.error_at("temperature", "media emitting by temperature (black bodies) are not implemented by neumann")
+        );
     }
-    for unused_without_emission in ["Lescale", "temperaturecutoff", "temperaturescale"] {
-        ps.float(unused_without_emission, 1.0)?;
+    for unused_without_temperature in ["temperaturecutoff", "temperatureoffset", "temperaturescale"] {
+        ps.float(unused_without_temperature, 1.0)?;
     }
     let (p0, p1) = (ps.point("p0", Vec3::ZERO)?, ps.point("p1", Vec3::ONE)?);
     if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
@@ -1211,6 +1211,37 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
             )),
         }
     };
+    // Emission (pbrt-v4's `Le`): `uniformgrid`, a spectrum normalised to luminance 1 as lights'
+    // are, times the `Lescale` grid (without one, a 1 × 1 × 1 grid of 1, which pbrt's lookup
+    // reads as a tent: 1 at the box's centre, 1/8 at its corners); `rgbgrid`, a grid of RGB
+    // illuminants times the float `Lescale`. pbrt-v4 does not normalise the latter, whose RGB
+    // illuminant spectra (the colour times the colour space's D65, scaled to luminance
+    // `CIE_Y_integral`) thus render 106.856895 × brighter than the same RGB on a light.
+    let radiance: Option<Vec<f32>> = if rgb_grid {
+        let scale = ps.float("Lescale", 1.0)?;
+        if !(scale >= 0.0 && scale.is_finite()) {
+            return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
+        }
+        match values("Le", 3, &["rgb"])? {
+            Some(_) if !ps.has("sigma_a") => {
+                return Err(ps.error_at("Le", "an rgbgrid with \"Le\" needs \"sigma_a\" values (as pbrt-v4 requires)"))
+            }
+            Some(le) => Some(le.into_iter().map(|v| v * scale * CIE_Y_INTEGRAL).collect()),
+            None => None,
+        }
+    } else {
+        match medium_le(ps)? {
+            None => {
+                ps.floats("Lescale", &["float"])?;
+                None
+            }
+            Some(le) => Some(match values("Lescale", 1, &["float"])? {
+                Some(grid) => grid.iter().flat_map(|s| (le * *s).to_array()).collect(),
+                None => le.to_array().to_vec(),
+            }),
+        }
+    }
+    .filter(|v| v.iter().any(|x| *x > 0.0));
     let (sigma_t, albedo): (Vec<f32>, std::result::Result<Rgb, Vec<f32>>) = if rgb_grid {
         let sa = values("sigma_a", 3, &["rgb"])?.unwrap_or_else(|| vec![1.0; 3 * n]);
         let ss = values("sigma_s", 3, &["rgb"])?.unwrap_or_else(|| vec![1.0; 3 * n]);
@@ -1231,6 +1262,8 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     let volume = |data: Vec<f32>, p: &mut Parser| -> Obj {
         let name = format!("#pbrt-grid-{}", p.mesh_count);
         p.mesh_count += 1;
+        // A grid of one value per channel is `uniformgrid`'s default `Lescale` (pbrt's 1 × 1 × 1).
+        let res = if data.len() == 3 { [1; 3] } else { res };
         let grid = crate::image::GridVolume { res, channels: 3, bbox: [[0.0; 3], [1.0; 3]], data };
         p.memory.volumes.insert(name.clone(), std::sync::Arc::new(grid));
         let mut v = obj("volume", "gridvolume", &ps.loc);
@@ -1250,8 +1283,32 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
         }
     }
     set(&mut o, "scale", Value::Float(scale as f64), &ploc(ps, "scale"));
+    if let Some(le) = radiance {
+        let v = volume(le, p);
+        set(&mut o, "radiance", Value::Object(Rc::new(v)), &ploc(ps, "Le"));
+    }
     phase_g(ps, &mut o)?;
     Ok(o)
+}
+
+/// `CIE_Y_integral` of pbrt-v4 (∫ ȳ(λ) dλ over its 1 nm tables): the luminance to which it
+/// scales its named illuminants, the D65 of RGB illuminant spectra among them.
+const CIE_Y_INTEGRAL: f32 = 106.856_895;
+
+/// pbrt-v4's `Le` of a `homogeneous` or `uniformgrid` medium as linear sRGB: an illuminant
+/// spectrum normalised to luminance 1, as lights' are (an RGB as given); `None` where absent
+/// or zero.
+fn medium_le(ps: &ParamSet) -> Result<Option<Rgb>> {
+    let Some(s) = ps.spectrum("Le")? else { return Ok(None) };
+    let le = match spectrum_value(ps, "Le", s, true)? {
+        Value::Rgb(c) => c,
+        Value::Float(v) => Rgb::splat(v as f32),
+        _ => return Err(ps.error_at("Le", "this spectrum cannot be a medium's emission")),
+    };
+    if !(0..3).all(|c| le[c] >= 0.0 && le[c].is_finite()) {
+        return Err(ps.error_at("Le", format!("Le must be finite and ≥ 0, got {le}")));
+    }
+    Ok((le.max_element() > 0.0).then_some(le))
 }
 
 /// pbrt-v4's `homogeneous` medium: `preset` (a measured medium by name, σₛ and σₐ in mm⁻¹,
@@ -1279,12 +1336,12 @@ fn homogeneous_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
         None => (medium_coefficient(ps, "sigma_s", Rgb::ONE)?, medium_coefficient(ps, "sigma_a", Rgb::ONE)?),
     };
     let scale = ps.float("scale", 1.0)?;
-    if let Some(le) = ps.spectrum("Le")? {
-        if le != SpectrumParam::Constant(0.0) && le != SpectrumParam::Rgb(Rgb::ZERO) {
-            return Err(ps.error_at("Le", "emissive media are not implemented by neumann"));
-        }
+    // Emission: `Le` (normalised to luminance 1) × `Lescale`.
+    let le_scale = ps.float("Lescale", 1.0)?;
+    if !(le_scale >= 0.0 && le_scale.is_finite()) {
+        return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
     }
-    ps.float("Lescale", 1.0)?;
+    let radiance = medium_le(ps)?.map(|le| le * le_scale).filter(|le| le.max_element() > 0.0);
     let sigma_t = sigma_a + sigma_s;
     if sigma_a.min_element() < 0.0 || sigma_s.min_element() < 0.0 || !sigma_t.is_finite() || scale < 0.0 {
         return Err(ps.error("sigma_a, sigma_s and scale must be finite and ≥ 0"));
@@ -1297,6 +1354,9 @@ fn homogeneous_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     set(&mut o, "sigma_t", Value::Rgb(unit), &ploc(ps, "sigma_a"));
     set(&mut o, "scale", Value::Float((peak * scale) as f64), &ploc(ps, "scale"));
     set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
+    if let Some(le) = radiance {
+        set(&mut o, "radiance", Value::Rgb(le), &ploc(ps, "Le"));
+    }
     phase_g(ps, &mut o)?;
     Ok(o)
 }
