@@ -34,6 +34,7 @@ use crate::scene::{Scene, SceneBuilder};
 use crate::texture::Texture;
 use rayon::prelude::*;
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Which linear solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -213,12 +214,16 @@ pub enum RadiosityError {
     /// More patches than the dense solve handles.
     #[error("{0} patches is too many (at most 200 000): use a larger patch size")]
     TooManyPatches(usize),
+    /// The solve was interrupted (its form factors or iterations unfinished: nothing to show).
+    #[error("interrupted before the radiosity solve finished (no image to keep)")]
+    Interrupted,
 }
 
 impl Radiosity {
     /// Meshes `scene` into patches, computes form factors and solves. Errors name what the
-    /// method cannot handle.
-    pub fn solve(scene: &Scene, opts: &Options) -> Result<Radiosity, RadiosityError> {
+    /// method cannot handle. `cancel` becoming true stops it between patches (form factors)
+    /// and between iterations or shots ([`RadiosityError::Interrupted`]).
+    pub fn solve(scene: &Scene, opts: &Options, cancel: &AtomicBool) -> Result<Radiosity, RadiosityError> {
         if !(opts.patch_size > 0.0 && opts.patch_size.is_finite()) {
             return Err(RadiosityError::PatchSize(opts.patch_size));
         }
@@ -298,6 +303,9 @@ impl Radiosity {
         let rows: Vec<Vec<(u32, f32)>> = (0..n)
             .into_par_iter()
             .map(|i| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Vec::new();
+                }
                 let (s, k) = locate(&first_patch, i as u32);
                 let Geometry::Mesh(m) = &patched.geometries()[s as usize] else { unreachable!("patches are meshes") };
                 let p = m.triangle(k as usize);
@@ -330,12 +338,16 @@ impl Radiosity {
                 row
             })
             .collect();
+        if cancel.load(Ordering::Relaxed) {
+            return Err(RadiosityError::Interrupted);
+        }
         let form_factor_entries = rows.iter().map(Vec::len).sum();
 
         let (bsol, history) = match opts.method {
-            Method::Jacobi | Method::GaussSeidel => iterate(&rows, &rho, &emission, opts),
-            Method::Shooting => shoot(&rows, &rho, &emission, &area, opts),
-        };
+            Method::Jacobi | Method::GaussSeidel => iterate(&rows, &rho, &emission, opts, cancel),
+            Method::Shooting => shoot(&rows, &rho, &emission, &area, opts, cancel),
+        }
+        .ok_or(RadiosityError::Interrupted)?;
         let mut r = Radiosity {
             scene: patched,
             first_patch,
@@ -420,11 +432,17 @@ fn locate(first_patch: &[u32], i: u32) -> (u32, u32) {
     (s as u32, i - first_patch[s])
 }
 
-/// Jacobi or Gauss–Seidel sweeps of `B = E + ρ F B`.
-fn iterate(rows: &[Vec<(u32, f32)>], rho: &[Rgb], e: &[Rgb], opts: &Options) -> (Vec<Rgb>, Vec<(usize, f64)>) {
+/// A solver's radiosities (per patch) and its convergence history (iteration, residual).
+type Solved = (Vec<Rgb>, Vec<(usize, f64)>);
+
+/// Jacobi or Gauss–Seidel sweeps of `B = E + ρ F B`; `None` if `cancel` became true.
+fn iterate(rows: &[Vec<(u32, f32)>], rho: &[Rgb], e: &[Rgb], opts: &Options, cancel: &AtomicBool) -> Option<Solved> {
     let mut b = e.to_vec();
     let mut history = Vec::new();
     for it in 1..=opts.max_iterations {
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
         let gather = |b: &[Rgb], i: usize| e[i] + rho[i] * rows[i].iter().map(|&(j, f)| b[j as usize] * f).sum::<Rgb>();
         let (mut change, mut norm) = (0.0f64, 0.0f64);
         if opts.method == Method::Jacobi {
@@ -448,17 +466,18 @@ fn iterate(rows: &[Vec<(u32, f32)>], rho: &[Rgb], e: &[Rgb], opts: &Options) -> 
             break;
         }
     }
-    (b, history)
+    Some((b, history))
 }
 
-/// Progressive refinement (shooting).
+/// Progressive refinement (shooting); `None` if `cancel` became true.
 fn shoot(
     rows: &[Vec<(u32, f32)>],
     rho: &[Rgb],
     e: &[Rgb],
     area: &[f32],
     opts: &Options,
-) -> (Vec<Rgb>, Vec<(usize, f64)>) {
+    cancel: &AtomicBool,
+) -> Option<Solved> {
     let n = e.len();
     // Columns of F: cols[i] lists (j, Fⱼᵢ), the patches that receive from i.
     let mut cols: Vec<Vec<(u32, f32)>> = vec![Vec::new(); n];
@@ -473,6 +492,9 @@ fn shoot(
     let mut history = Vec::new();
     let max_shots = opts.max_iterations.saturating_mul(n).max(1);
     for shot in 1..=max_shots {
+        if cancel.load(Ordering::Relaxed) {
+            return None;
+        }
         let (i, power) = (0..n)
             .map(|i| (i, luminance(unshot[i]) as f64 * area[i] as f64))
             .fold((0, -1.0), |best, x| if x.1 > best.1 { x } else { best });
@@ -494,7 +516,7 @@ fn shoot(
             unshot[j] += d;
         }
     }
-    (b, history)
+    Some((b, history))
 }
 
 /// Displays a solved radiosity: the radiance `B/π` of the patch a camera ray hits.
@@ -600,7 +622,7 @@ mod tests {
         let expected = PI * le / (1.0 - rho);
         for method in [Method::Jacobi, Method::GaussSeidel, Method::Shooting] {
             let opts = Options { patch_size: 0.8, rays_per_patch: 256, method, tolerance: 1e-6, ..Default::default() };
-            let r = Radiosity::solve(&scene, &opts).unwrap();
+            let r = Radiosity::solve(&scene, &opts, &AtomicBool::new(false)).unwrap();
             for bi in &r.b {
                 assert!((bi.x - expected).abs() < 2e-3 * expected, "{method:?}: {} vs {expected}", bi.x);
             }
@@ -624,7 +646,7 @@ mod tests {
         let mut errors = Vec::new();
         for size in [0.5f32, 0.25, 0.1] {
             let opts = Options { patch_size: size, rays_per_patch: 1024, smooth: true, ..Default::default() };
-            let r = Radiosity::solve(&scene, &opts).unwrap();
+            let r = Radiosity::solve(&scene, &opts, &AtomicBool::new(false)).unwrap();
             let integrator = RadiosityIntegrator { solution: r };
             let out = render(&scene, &integrator, &RenderSettings { spp: 1024, seed: 5, ..Default::default() }, &never)
                 .unwrap();
@@ -651,7 +673,7 @@ mod tests {
     fn reflected_power_matches_light_tracing() {
         let scene = crate::scene::cornell::cornell_box(8, 8).unwrap();
         let opts = Options { patch_size: 0.25, rays_per_patch: 4096, ..Default::default() };
-        let r = Radiosity::solve(&scene, &opts).unwrap();
+        let r = Radiosity::solve(&scene, &opts, &AtomicBool::new(false)).unwrap();
         let power: Vec<f64> = (0..r.b.len()).map(|i| luminance(r.emission[i]) as f64 * r.area[i] as f64).collect();
         let emitted: f64 = power.iter().sum();
         let cdf: Vec<f64> = power
@@ -716,6 +738,7 @@ mod tests {
 
     #[test]
     fn refuses_what_it_cannot_solve() {
+        let never = AtomicBool::new(false);
         let scene_with = |bsdf: Bsdf| {
             let mut b = SceneBuilder::new();
             let m = b.add_bsdf(bsdf);
@@ -724,21 +747,32 @@ mod tests {
             b.set_camera(Camera::perspective(Transform::IDENTITY, 60.0, FovAxis::X, 4, 4).unwrap());
             b.build().unwrap()
         };
-        let e = Radiosity::solve(&scene_with(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))), &Options::default()).unwrap_err();
+        let e = Radiosity::solve(&scene_with(Bsdf::Diffuse(Diffuse::new(Rgb::ONE))), &Options::default(), &never)
+            .unwrap_err();
         assert_eq!(e, RadiosityError::Light("point"));
         let mirror = Bsdf::Conductor(crate::material::Conductor { ior: None, specular_reflectance: Rgb::ONE.into() });
         let mut b = SceneBuilder::new();
         let m = b.add_bsdf(mirror);
         b.add_shape(Geometry::Mesh(TriangleMesh::rectangle()), m, Some(Rgb::ONE));
         b.set_camera(Camera::perspective(Transform::IDENTITY, 60.0, FovAxis::X, 4, 4).unwrap());
-        let e = Radiosity::solve(&b.build().unwrap(), &Options::default()).unwrap_err();
+        let e = Radiosity::solve(&b.build().unwrap(), &Options::default(), &never).unwrap_err();
         assert!(matches!(&e, RadiosityError::NotDiffuse { shape, bsdf: "conductor" } if shape == "shape 0"), "{e}");
         assert_eq!(e.to_string(), "shape 0: radiosity handles diffuse surfaces only, not the conductor BSDF");
         // A tiny patch size is refused before the patches are made (it once took gigabytes).
         let cornell = crate::scene::cornell::cornell_box(4, 4).unwrap();
         let start = std::time::Instant::now();
-        let e = Radiosity::solve(&cornell, &Options { patch_size: 1e-4, ..Default::default() }).unwrap_err();
+        let e = Radiosity::solve(&cornell, &Options { patch_size: 1e-4, ..Default::default() }, &never).unwrap_err();
         assert!(matches!(e, RadiosityError::TooManyPatches(n) if n > 1_000_000), "{e}");
         assert!(start.elapsed().as_secs_f32() < 1.0);
+        // An interrupt stops even a solve that would take hours (2²⁴ rays for each of the
+        // Cornell box's patches), with either solver.
+        let cancelled = AtomicBool::new(true);
+        for method in [Method::GaussSeidel, Method::Shooting] {
+            let start = std::time::Instant::now();
+            let opts = Options { rays_per_patch: 1 << 24, method, ..Default::default() };
+            let e = Radiosity::solve(&cornell, &opts, &cancelled).unwrap_err();
+            assert_eq!(e, RadiosityError::Interrupted);
+            assert!(start.elapsed().as_secs_f32() < 1.0);
+        }
     }
 }

@@ -21,6 +21,13 @@ use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{balance_heuristic, power_heuristic};
 use crate::scene::Scene;
 
+/// The most segments a path may have whatever `max_depth` says (65,536): paths end there. Only
+/// Russian roulette held off beyond it (`rr_depth` ≥ 65,536) in a scene that loses almost no
+/// light lets a path get that far — its light after 65,536 bounces is ρ⁶⁵⁵³⁶ of the first, and
+/// a lossless closed scene's radiance diverges —, and such a path would otherwise run for
+/// ever, deaf to an interrupt (the render loop checks it between samples).
+pub const MAX_SEGMENTS: u32 = 1 << 16;
+
 /// Path-length settings of the path-space integrators (`path`, `volpath`, `ptracer`), with
 /// Mitsuba's names and defaults.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,13 +60,14 @@ impl PathSettings {
         Ok(PathSettings { max_depth: max_depth as i32, rr_depth: rr_depth as u32, hide_emitters })
     }
 
-    /// The longest path in segments (`u32::MAX` when unlimited).
+    /// The longest path in segments: `max_depth`, at most [`MAX_SEGMENTS`] (also when
+    /// unlimited).
     #[inline]
     pub fn max_segments(&self) -> u32 {
         if self.max_depth < 0 {
-            u32::MAX
+            MAX_SEGMENTS
         } else {
-            self.max_depth as u32
+            (self.max_depth as u32).min(MAX_SEGMENTS)
         }
     }
 
@@ -418,6 +426,41 @@ mod tests {
         assert_eq!(no_bsdf.light_weight(0.5, || panic!("not needed")), 1.0);
     }
 
+    /// Inside a closed white sphere (albedo 1, lit by a point light) with Russian roulette held
+    /// off, no path ever loses its light: every integrator still ends each path at
+    /// [`MAX_SEGMENTS`] segments (it would otherwise run for ever, deaf to an interrupt), and
+    /// the image stays finite.
+    #[test]
+    fn lossless_closed_scenes_without_roulette_end() {
+        use crate::camera::{Camera, FovAxis};
+        use crate::geometry::{Geometry, Sphere};
+        use crate::integrator::{LightTracer, PathIntegrator, VolPathIntegrator, VolPathMisIntegrator};
+        use crate::material::{Bsdf, Diffuse};
+        use crate::math::{Transform, Vec3};
+        use crate::render::{render, render_light_paths, RenderSettings};
+        use crate::scene::SceneBuilder;
+        use std::sync::atomic::AtomicBool;
+        let mut b = SceneBuilder::new();
+        let white = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::ONE)));
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 2.0, true)), white, None);
+        b.add_point_light(Vec3::new(0.0, 1.0, 0.0), Rgb::ONE);
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        let settings = PathSettings { max_depth: -1, rr_depth: u32::MAX, hide_emitters: false };
+        let run = RenderSettings { spp: 2, seed: 1, threads: 1, ..Default::default() };
+        let never = AtomicBool::new(false);
+        let images = [
+            render(&scene, &PathIntegrator { settings, ..Default::default() }, &run, &never).unwrap(),
+            render(&scene, &VolPathIntegrator { settings }, &run, &never).unwrap(),
+            render(&scene, &VolPathMisIntegrator { settings }, &run, &never).unwrap(),
+            render_light_paths(&scene, &LightTracer { settings }, &run, &never).unwrap(),
+        ];
+        for out in images {
+            let px = out.film.image()[0];
+            assert!(px.is_finite() && px.min_element() > 0.0, "{px}");
+        }
+    }
+
     #[test]
     fn path_settings_are_checked() {
         assert_eq!(PathSettings::new(-1, 5, false).unwrap(), PathSettings::default());
@@ -425,6 +468,8 @@ mod tests {
         assert_eq!(PathSettings::new(3, 0, false).unwrap_err().0, "rr_depth");
         let s = PathSettings::new(2, 5, true).unwrap();
         assert!(s.allows(2) && !s.allows(3) && s.max_segments() == 2 && s.depth_text() == "2");
-        assert!(PathSettings::default().allows(u32::MAX) && PathSettings::default().depth_text() == "unlimited");
+        assert!(PathSettings::default().allows(MAX_SEGMENTS) && PathSettings::default().depth_text() == "unlimited");
+        assert!(!PathSettings::default().allows(MAX_SEGMENTS + 1));
+        assert_eq!(PathSettings::new(1 << 20, 5, false).unwrap().max_segments(), MAX_SEGMENTS);
     }
 }

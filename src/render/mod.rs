@@ -280,7 +280,7 @@ pub fn render_integrator_with(
         AnyIntegrator::Depth(i) => camera(i, after_pass),
         AnyIntegrator::Radiosity(opts) => {
             let start = Instant::now();
-            let solution = Radiosity::solve(scene, opts).map_err(RenderError::Radiosity)?;
+            let solution = Radiosity::solve(scene, opts, cancel).map_err(RenderError::Radiosity)?;
             let mut report = solution.report_lines();
             if let Some(path) = &opts.patches_out {
                 std::fs::write(path, solution.to_csv())
