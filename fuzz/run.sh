@@ -2,6 +2,8 @@
 # Fuzzes each loader for SECONDS seconds (default 20) on the nightly toolchain with cargo-fuzz,
 # starting from the seed corpora (scenes/, their assets) and keeping what it finds in
 # fuzz/corpus/<target> (not committed). Usage: fuzz/run.sh [SECONDS] [TARGET ...]
+# An input that runs longer than 60 s counts as a hang (a failure); the limit leaves room for a
+# slower machine than the ones where every input of the corpora took under a second or two.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
@@ -30,7 +32,7 @@ for t in $targets; do
     case $t in xml|render) dict=(-dict=fuzz/xml.dict) ;; esac
     echo "fuzzing $t for $secs s"
     log=$(mktemp)
-    if cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=20 "${dict[@]}" >"$log" 2>&1; then
+    if cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=60 "${dict[@]}" >"$log" 2>&1; then
         tail -4 "$log"
         rm -f "$log"
     else
