@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-targets=${*:-xml render obj ply image vol tensor part gltf pbrt}
+targets=${*:-xml render obj ply image vol tensor part gltf pbrt render_pbrt}
 mkdir -p fuzz/corpus
 for t in $targets; do
     mkdir -p "fuzz/corpus/$t"
@@ -19,7 +19,7 @@ for t in $targets; do
         vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
         tensor) cp -n scenes/assets/*.bsdf "fuzz/corpus/$t/" ;;
         gltf) cp -n scenes/*.gltf "fuzz/corpus/$t/" ;;
-        pbrt) cp -n scenes/*.pbrt "fuzz/corpus/$t/" ;;
+        pbrt|render_pbrt) cp -n scenes/*.pbrt "fuzz/corpus/$t/" ;;
         part) # Parts of a split render of the built-in scene (needs the release build).
               bin=target/release/neumann
               [ -x "$bin" ] || cargo build --release --quiet
@@ -29,7 +29,10 @@ for t in $targets; do
                for f in scenes/assets/*.exr; do [ -e "fuzz/corpus/$t/exr-$(basename "$f")" ] || { printf '\x01' | cat - "$f" > "fuzz/corpus/$t/exr-$(basename "$f")"; }; done ;;
     esac
     dict=()
-    case $t in xml|render) dict=(-dict=fuzz/xml.dict) ;; esac
+    case $t in
+        xml|render) dict=(-dict=fuzz/xml.dict) ;;
+        pbrt|render_pbrt) dict=(-dict=fuzz/pbrt.dict) ;;
+    esac
     echo "fuzzing $t for $secs s"
     log=$(mktemp)
     if cargo +nightly fuzz run --fuzz-dir fuzz "$t" "fuzz/corpus/$t" -- -max_total_time="$secs" -seed=1 -rss_limit_mb=4096 -timeout=60 "${dict[@]}" >"$log" 2>&1; then
