@@ -765,14 +765,15 @@ mod tests {
         assert!(matches!(e, RadiosityError::TooManyPatches(n) if n > 1_000_000), "{e}");
         assert!(start.elapsed().as_secs_f32() < 1.0);
         // An interrupt stops even a solve that would take hours (2²⁴ rays for each of the
-        // Cornell box's patches), with either solver.
+        // Cornell box's patches: 10¹⁰ rays), with either solver. (The bound on its time is loose
+        // so that a loaded machine passes; an uninterrupted solve would not come near it.)
         let cancelled = AtomicBool::new(true);
         for method in [Method::GaussSeidel, Method::Shooting] {
             let start = std::time::Instant::now();
             let opts = Options { rays_per_patch: 1 << 24, method, ..Default::default() };
             let e = Radiosity::solve(&cornell, &opts, &cancelled).unwrap_err();
             assert_eq!(e, RadiosityError::Interrupted);
-            assert!(start.elapsed().as_secs_f32() < 1.0);
+            assert!(start.elapsed().as_secs_f32() < 30.0, "{:?}", start.elapsed());
         }
     }
 }
