@@ -46,6 +46,9 @@ pub struct GridVolume {
 pub trait VolumeSource {
     /// The grid volume named by parameter `name` of `o`; errors are located at the parameter.
     fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<Arc<GridVolume>>;
+
+    /// Reports a warning (a complete line, `warning: FILE:LINE:COL: …`).
+    fn warn(&mut self, line: String);
 }
 
 /// Where plugins get their images: the loader resolves the file that the string parameter

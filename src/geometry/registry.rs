@@ -36,9 +36,6 @@ pub trait MeshSource: VolumeSource {
 
     /// The first element of the PLY file named by parameter `name` of `o`, as a table.
     fn point_table(&mut self, o: &Obj, name: &str) -> Result<super::ellipsoids::PointTable>;
-
-    /// Reports a warning (a complete line, `warning: FILE:LINE:COL: …`).
-    fn warn(&mut self, line: String);
 }
 
 /// A shape plugin's constructor: `(object, to_world, flip_normals, mesh files)`.

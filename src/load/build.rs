@@ -918,16 +918,16 @@ impl VolumeSource for Builder {
         self.volumes.insert(path, v.clone());
         Ok(v)
     }
+
+    fn warn(&mut self, line: String) {
+        self.warnings.push(line);
+    }
 }
 
 impl MeshSource for Builder {
     fn point_table(&mut self, o: &Obj, name: &str) -> Result<crate::geometry::ellipsoids::PointTable> {
         let path = self.resolver.resolve(&o.string(name)?);
         crate::load::ply::load_ply_table(&path).map_err(|e| o.error_at(name, e.to_string()))
-    }
-
-    fn warn(&mut self, line: String) {
-        self.warnings.push(line);
     }
 
     fn curve_file(&mut self, o: &Obj, name: &str) -> Result<Vec<Vec<crate::geometry::roundcurve::ControlPoint>>> {

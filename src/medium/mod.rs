@@ -207,7 +207,8 @@ pub const MEDIUM_PLUGINS: &[(&str, MediumPlugin)] =
     &[("homogeneous", homogeneous_from_props), ("heterogeneous", heterogeneous_from_props)];
 
 /// What every medium plugin reads: one nested `<phase>` (isotropic if none; see
-/// [`PhaseFunction::from_props`]) and `sample_emitters` (true). `radiance` is the plugin's own.
+/// [`PhaseFunction::from_props`]), `sample_emitters` (true) and `has_spectral_extinction`
+/// (true; see below). `radiance` is the plugin's own.
 fn common(
     o: &Obj,
     coefficients: Coefficients,
@@ -224,6 +225,24 @@ fn common(
         Some(p) => PhaseFunction::from_props(p, files)?,
     };
     let sample_emitters = o.bool("sample_emitters", true)?;
+    // Mitsuba's `has_spectral_extinction` (true): false tells Mitsuba's integrators that the
+    // extinction is the same in every channel, so that they track one channel without spectral
+    // MIS. neumann tracks spectrally either way: the same image where the extinction is grey,
+    // the unbiased one (which Mitsuba's is not) where it is not, which it says.
+    if !o.bool("has_spectral_extinction", true)? {
+        let grey = match &coefficients {
+            Coefficients::Homogeneous(h) => h.sigma_t.x == h.sigma_t.y && h.sigma_t.y == h.sigma_t.z,
+            Coefficients::Heterogeneous(h) => h.sigma_t.is_grey(),
+        };
+        if !grey {
+            let at = o.get("has_spectral_extinction").map_or_else(|| o.loc.position(), |p| p.loc.position());
+            files.warn(format!(
+                "warning: {at}: has_spectral_extinction is false but this medium's sigma_t differs between \
+                 channels: Mitsuba would track it in one channel without spectral MIS (biased); neumann tracks \
+                 it spectrally (unbiased)"
+            ));
+        }
+    }
     Ok(Medium { coefficients, phase, sample_emitters, radiance })
 }
 

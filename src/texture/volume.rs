@@ -236,6 +236,17 @@ impl Volume {
         }
     }
 
+    /// Whether its three channels are equal everywhere (a one-channel grid, or equal values).
+    pub fn is_grey(&self) -> bool {
+        let grey = |c: Rgb| c.x == c.y && c.y == c.z;
+        match &self.data {
+            VolumeData::Constant(v) | VolumeData::Cloud(_, v) => grey(*v),
+            VolumeData::Grid(g) => {
+                g.data.channels == 1 || g.data.data.chunks_exact(3).all(|t| t[0] == t[1] && t[1] == t[2])
+            }
+        }
+    }
+
     /// The smallest value of any channel anywhere.
     pub fn min(&self) -> f32 {
         match &self.data {

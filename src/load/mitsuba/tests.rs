@@ -1219,6 +1219,28 @@ fn media_on_shapes_and_the_sensor() {
     }
 }
 
+/// Mitsuba's `has_spectral_extinction` is read on both media: false where the extinction is
+/// grey changes nothing; where it is not, neumann still tracks spectrally and warns at the
+/// parameter (Mitsuba would track one channel, biased).
+#[test]
+fn has_spectral_extinction_is_read_and_warned_about_where_it_matters() {
+    let medium = |ty: &str, sigma_t: &str| {
+        scene(&format!(
+            r#"<medium type="{ty}" id="m"><rgb name="sigma_t" value="{sigma_t}"/>
+            <boolean name="has_spectral_extinction" value="false"/></medium>
+    <shape type="sphere"><bsdf type="null"/><ref name="interior" id="m"/></shape>"#
+        ))
+    };
+    for ty in ["homogeneous", "heterogeneous"] {
+        let grey = load(&medium(ty, "0.5, 0.5, 0.5")).unwrap_or_else(|e| panic!("{e}"));
+        assert!(grey.warnings.is_empty(), "{ty}: {:?}", grey.warnings);
+        let chromatic = load(&medium(ty, "0.5, 1, 0.25")).unwrap();
+        assert_eq!(chromatic.warnings.len(), 1, "{ty}: {:?}", chromatic.warnings);
+        let w = &chromatic.warnings[0];
+        assert!(w.contains("test.xml:8:") && w.contains("has_spectral_extinction"), "{w}");
+    }
+}
+
 /// Mitsuba's `rayleigh`, `tabphase` and `blendphase` (weight a float or a `<volume>`, two
 /// nested phases, nesting again) load with their parameters; a bad table, a missing weight or
 /// the wrong number of nested phases is an error at its place.
