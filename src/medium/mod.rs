@@ -277,11 +277,11 @@ fn radiance_param(o: &Obj, grid: bool, files: &mut dyn VolumeSource) -> PropResu
 /// `<rgb>` `sigma_t` or `albedo` must lie in [0, 1] (Mitsuba reads it as a reflectance).
 fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<Medium> {
     let scale = o.float_checked("scale", 1.0, |s| s >= 0.0 && s.is_finite(), "a non-negative number")?;
-    let sigma_t = volume::constant_param(o, "sigma_t", 1.0, SpectrumKind::Illuminant)? * scale;
+    let sigma_t = constant_coefficient(o, "sigma_t", 1.0, SpectrumKind::Illuminant, files)? * scale;
     if !(0..3).all(|c| sigma_t[c] >= 0.0 && sigma_t[c].is_finite()) {
         return Err(o.error_at("sigma_t", format!("sigma_t must be non-negative, got {sigma_t}")));
     }
-    let albedo = o.rgb("albedo", Rgb::splat(0.75), SpectrumKind::Reflectance)?;
+    let albedo = constant_coefficient(o, "albedo", 0.75, SpectrumKind::Reflectance, files)?;
     if !(0..3).all(|c| (0.0..=1.0).contains(&albedo[c])) {
         return Err(o.error_at("albedo", format!("albedo must lie in [0, 1], got {albedo}")));
     }
@@ -296,6 +296,29 @@ fn homogeneous_from_props(o: &Obj, files: &mut dyn VolumeSource) -> PropResult<M
         ));
     }
     Ok(medium)
+}
+
+/// A homogeneous medium's coefficient `name`: a `<float>`, `<rgb>` or `<spectrum>`
+/// ([`volume::constant_param`]), or a `constvolume`, whose value it takes (as Mitsuba's
+/// `homogeneous`, which reads its coefficients as volumes); another volume is an error.
+fn constant_coefficient(
+    o: &Obj,
+    name: &str,
+    default: f32,
+    kind: SpectrumKind,
+    files: &mut dyn VolumeSource,
+) -> PropResult<Rgb> {
+    if !matches!(o.get(name).map(|p| &p.value), Some(crate::props::Value::Object(_))) {
+        return volume::constant_param(o, name, default, kind);
+    }
+    let v = volume::volume_param(o, name, default, kind, files)?;
+    if !v.is_constant() {
+        return Err(o.error_at(
+            name,
+            format!("a homogeneous medium's {name} is constant (a constvolume, float, rgb or spectrum): give a heterogeneous medium this volume"),
+        ));
+    }
+    Ok(v.mean())
 }
 
 /// Mitsuba's `heterogeneous` ([`Heterogeneous::from_props`]), a `<phase>`, `sample_emitters`;

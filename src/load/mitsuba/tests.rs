@@ -1202,7 +1202,10 @@ fn media_on_shapes_and_the_sensor() {
     assert!(matches!(s.bsdfs()[s.shapes()[0].bsdf as usize], Bsdf::Null));
     for (bad, what) in [
         (r#"<medium type="homogenous" id="m"/>"#, "the nearest is 'homogeneous'"),
-        (r#"<medium type="homogeneous" id="m"><volume type="constvolume" name="sigma_t"/></medium>"#, "a colour"),
+        (
+            r#"<medium type="homogeneous" id="m"><volume type="gridvolume" name="sigma_t"><string name="filename" value="scenes/assets/albedo.vol"/></volume></medium>"#,
+            "give a heterogeneous medium this volume",
+        ),
         (r#"<medium type="homogeneous" id="m"><float name="albedo" value="1.5"/></medium>"#, "albedo"),
         (r#"<medium type="homogeneous" id="m"><phase type="hg"><float name="g" value="1"/></phase></medium>"#, "'g'"),
         (r#"<medium type="homogeneous" id="m"><phase type="raleigh"/></medium>"#, "the nearest is 'rayleigh'"),
@@ -1217,6 +1220,23 @@ fn media_on_shapes_and_the_sensor() {
         let e = err(&scene(bad));
         assert!(e.contains("test.xml:") && e.contains(what), "{bad}: {e}");
     }
+}
+
+/// Mitsuba's `homogeneous` reads its coefficients as volumes: a `constvolume` gives its value
+/// (an rgb beyond 1 too, as an extinction), with `scale` applied.
+#[test]
+fn homogeneous_media_take_constant_volumes() {
+    use crate::medium::Coefficients;
+    let text = scene(
+        r#"<medium type="homogeneous" id="m">
+        <volume type="constvolume" name="sigma_t"><rgb name="value" value="0.6, 3, 0.15"/></volume>
+        <float name="scale" value="2"/>
+        <volume type="constvolume" name="albedo"><float name="value" value="0.5"/></volume></medium>
+    <shape type="sphere"><bsdf type="null"/><ref name="interior" id="m"/></shape>"#,
+    );
+    let f = load(&text).unwrap_or_else(|e| panic!("{e}"));
+    let Coefficients::Homogeneous(h) = &f.scene.media()[0].coefficients else { panic!() };
+    assert_eq!((h.sigma_t, h.albedo), (Rgb::new(1.2, 6.0, 0.3), Rgb::splat(0.5)));
 }
 
 /// Mitsuba's `has_spectral_extinction` is read on both media: false where the extinction is
