@@ -162,6 +162,30 @@ impl Heterogeneous {
     /// `[0, t_max)` by ratio tracking with Russian roulette (module docs).
     pub fn transmittance(&self, ray: &Ray, t_max: f32, rng: &mut Pcg32) -> Rgb {
         let Some((t0, t1)) = self.segment(ray, t_max) else { return Rgb::ONE };
+        self.ratio_track(ray, t0, t1, rng, |_, _, _| {})
+    }
+
+    /// An unbiased estimate of the light emitted along `ray` (unit direction) over `[0, t_max)`
+    /// toward its origin by this medium of radiance `radiance`, `∫ Tr(0, t) σₐ(x) Lₑ(x) dt`
+    /// (σₐ = σₜ (1 − α)): each tentative collision of the ratio-tracking walk adds the
+    /// transmittance estimated so far times `σₐ Lₑ / σ̄`. Tentative collisions form a Poisson
+    /// process of rate `σ̄`, so the sum's expectation is `∫ σ̄ Tr(0, t) σₐ Lₑ / σ̄ dt`.
+    pub fn emitted(&self, ray: &Ray, t_max: f32, radiance: &Volume, rng: &mut Pcg32) -> Rgb {
+        let Some((t0, t1)) = self.segment(ray, t_max) else { return Rgb::ZERO };
+        let mut sum = Rgb::ZERO;
+        self.ratio_track(ray, t0, t1, rng, |p, sigma_t, tr| {
+            let sigma_a = sigma_t * (Rgb::ONE - self.albedo.eval(p));
+            sum += tr * sigma_a * radiance.eval(p) / self.majorant;
+        });
+        sum
+    }
+
+    /// Ratio tracking along `ray` over `(t0, t1)` (module docs): at each tentative collision,
+    /// `visit(point, σₜ, transmittance so far)` before the transmittance takes its `σₙ / σ̄`.
+    /// Returns the transmittance estimate (zero where the roulette or the step bound ends the
+    /// walk).
+    #[inline]
+    fn ratio_track(&self, ray: &Ray, t0: f32, t1: f32, rng: &mut Pcg32, mut visit: impl FnMut(Vec3, Rgb, Rgb)) -> Rgb {
         let majorant = self.majorant;
         let mut tr = Rgb::ONE;
         let mut t = t0;
@@ -170,8 +194,10 @@ impl Heterogeneous {
             if t >= t1 {
                 return tr;
             }
-            let sigma_n = (Rgb::splat(majorant) - self.sigma_t_at(ray.at(t), ray.d)).max(Rgb::ZERO);
-            tr *= sigma_n / majorant;
+            let p = ray.at(t);
+            let sigma_t = self.sigma_t_at(p, ray.d);
+            visit(p, sigma_t, tr);
+            tr *= (Rgb::splat(majorant) - sigma_t).max(Rgb::ZERO) / majorant;
             let m = tr.max_element();
             if m < RR_THRESHOLD {
                 if m <= 0.0 || rng.next_f32() >= RR_SURVIVAL {
@@ -181,39 +207,6 @@ impl Heterogeneous {
             }
         }
         Rgb::ZERO
-    }
-
-    /// An unbiased estimate of the light emitted along `ray` (unit direction) over `[0, t_max)`
-    /// toward its origin by this medium of radiance `radiance`, `∫ Tr(0, t) σₐ(x) Lₑ(x) dt`
-    /// (σₐ = σₜ (1 − α)): tentative collisions at the majorant rate `σ̄`, each adding the
-    /// transmittance estimated so far times `σₐ Lₑ / σ̄` before taking its `σₙ / σ̄` (ratio
-    /// tracking, with the same roulette as [`Heterogeneous::transmittance`]). Tentative
-    /// collisions form a Poisson process of rate `σ̄`, so the sum's expectation is
-    /// `∫ σ̄ Tr(0, t) σₐ Lₑ / σ̄ dt`.
-    pub fn emitted(&self, ray: &Ray, t_max: f32, radiance: &Volume, rng: &mut Pcg32) -> Rgb {
-        let Some((t0, t1)) = self.segment(ray, t_max) else { return Rgb::ZERO };
-        let majorant = self.majorant;
-        let (mut tr, mut sum) = (Rgb::ONE, Rgb::ZERO);
-        let mut t = t0;
-        for _ in 0..MAX_TRACKING_STEPS {
-            t += sample_exponential(rng.next_f32(), majorant).value;
-            if t >= t1 {
-                break;
-            }
-            let p = ray.at(t);
-            let sigma_t = self.sigma_t_at(p, ray.d);
-            let sigma_a = sigma_t * (Rgb::ONE - self.albedo.eval(p));
-            sum += tr * sigma_a * radiance.eval(p) / majorant;
-            tr *= (Rgb::splat(majorant) - sigma_t).max(Rgb::ZERO) / majorant;
-            let m = tr.max_element();
-            if m < RR_THRESHOLD {
-                if m <= 0.0 || rng.next_f32() >= RR_SURVIVAL {
-                    break;
-                }
-                tr /= RR_SURVIVAL;
-            }
-        }
-        sum
     }
 
     /// Mitsuba's `heterogeneous` coefficients: `sigma_t` (a volume or constant, 1) × `scale`

@@ -1218,10 +1218,7 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     // illuminant spectra (the colour times the colour space's D65, scaled to luminance
     // `CIE_Y_integral`) thus render 106.856895 × brighter than the same RGB on a light.
     let radiance: Option<Vec<f32>> = if rgb_grid {
-        let scale = ps.float("Lescale", 1.0)?;
-        if !(scale >= 0.0 && scale.is_finite()) {
-            return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
-        }
+        let scale = le_scale(ps)?;
         match values("Le", 3, &["rgb"])? {
             Some(_) if !ps.has("sigma_a") => {
                 return Err(ps.error_at("Le", "an rgbgrid with \"Le\" needs \"sigma_a\" values (as pbrt-v4 requires)"))
@@ -1295,6 +1292,15 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
 /// scales its named illuminants, the D65 of RGB illuminant spectra among them.
 const CIE_Y_INTEGRAL: f32 = 106.856_895;
 
+/// The float `Lescale` (1) of a `homogeneous` or `rgbgrid` medium, finite and ≥ 0.
+fn le_scale(ps: &ParamSet) -> Result<f32> {
+    let scale = ps.float("Lescale", 1.0)?;
+    if !(scale >= 0.0 && scale.is_finite()) {
+        return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
+    }
+    Ok(scale)
+}
+
 /// pbrt-v4's `Le` of a `homogeneous` or `uniformgrid` medium as linear sRGB: an illuminant
 /// spectrum normalised to luminance 1, as lights' are (an RGB as given); `None` where absent
 /// or zero.
@@ -1337,10 +1343,7 @@ fn homogeneous_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     };
     let scale = ps.float("scale", 1.0)?;
     // Emission: `Le` (normalised to luminance 1) × `Lescale`.
-    let le_scale = ps.float("Lescale", 1.0)?;
-    if !(le_scale >= 0.0 && le_scale.is_finite()) {
-        return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
-    }
+    let le_scale = le_scale(ps)?;
     let radiance = medium_le(ps)?.map(|le| le * le_scale).filter(|le| le.max_element() > 0.0);
     let sigma_t = sigma_a + sigma_s;
     if sigma_a.min_element() < 0.0 || sigma_s.min_element() < 0.0 || !sigma_t.is_finite() || scale < 0.0 {
