@@ -16,6 +16,7 @@
 
 pub mod heterogeneous;
 pub mod homogeneous;
+pub mod majorant;
 pub mod phase;
 pub mod presets;
 
@@ -53,27 +54,25 @@ pub enum FreeFlight {
 
 /// A tentative collision along a ray (Mitsuba's `sample_interaction`), for integrators that
 /// weigh the tracking decisions themselves (`volpathmis`): collisions are drawn at the rate of
-/// `majorant` in one channel over `[t0, t1)`, the part of the segment where the medium is.
+/// the majorant in one channel along the part of the segment where the medium is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tentative {
-    /// Where the medium starts along the ray.
-    pub t0: f32,
-    /// Where it ends (the segment's end, or the medium's box).
-    pub t1: f32,
-    /// The majorant per channel (homogeneous media: σₜ, so every collision is real;
-    /// heterogeneous ones: the scalar bound σ̄).
+    /// The majorant's optical depth per channel from the segment's start to the collision, or
+    /// to the segment's end where there is none (`∫ σ̄ dt`, zero outside the medium).
+    pub optical_depth: Rgb,
+    /// The majorant per channel at the collision (homogeneous media: σₜ, so every collision is
+    /// real; heterogeneous ones: the bound σ̄ of the collision's cell, grey); zero without one.
     pub majorant: Rgb,
     /// The collision, if one was drawn before `t1`.
     pub collision: Option<Collision>,
 }
 
 impl Tentative {
-    /// The free flight's density per channel (at the collision: `σ̄ e^(-σ̄ (t - t0))`; passing
-    /// to `t1`: `e^(-σ̄ (t1 - t0))`) and its majorant transmittance `e^(-σ̄ (t - t0))`.
+    /// The free flight's density per channel (at the collision: `σ̄(t) e^(-∫σ̄)`; passing to the
+    /// end: `e^(-∫σ̄)`) and its majorant transmittance `e^(-∫σ̄)`.
     #[inline]
     pub fn pdf_and_transmittance(&self) -> (Rgb, Rgb) {
-        let end = self.collision.map_or(self.t1, |c| c.t);
-        let tr = (-(end - self.t0) * self.majorant).exp();
+        let tr = (-self.optical_depth).exp();
         (if self.collision.is_some() { tr * self.majorant } else { tr }, tr)
     }
 }
@@ -182,7 +181,8 @@ impl Medium {
                     sigma_s: h.sigma_t * h.albedo,
                     sigma_n: Rgb::ZERO,
                 });
-                Tentative { t0: 0.0, t1: t_max, majorant: h.sigma_t, collision }
+                let end = collision.map_or(t_max, |c| c.t);
+                Tentative { optical_depth: h.sigma_t * end, majorant: h.sigma_t, collision }
             }
             Coefficients::Heterogeneous(h) => h.sample_tentative(ray, t_max, u),
         }

@@ -207,6 +207,60 @@ impl Volume {
         self.max
     }
 
+    /// An upper bound of every channel of [`Volume::eval`] over the world box `region`: for a
+    /// grid, the largest texel that nearest or trilinear lookups anywhere in it read (the
+    /// region mapped to the unit cube, its texel range widened by one for the trilinear
+    /// footprint, indices wrapped as lookups wrap them; zero for texels a `zero` wrap leaves
+    /// out); [`Volume::max`] for a constant or a cloud, and where the region maps to more than
+    /// twice the grid's extent (a degenerate transform).
+    pub fn max_in(&self, region: &Bounds3) -> f32 {
+        let VolumeData::Grid(g) = &self.data else { return self.max };
+        let local = self.to_local.apply_bounds(region);
+        let res = g.data.res;
+        let mut range = [(0i64, 0i64); 3];
+        for a in 0..3 {
+            let n = res[a] as f32;
+            let lo = crate::math::floor(local.min[a] * n - 0.5);
+            let hi = crate::math::floor(local.max[a] * n - 0.5) + 1.0;
+            if !(lo.is_finite() && hi.is_finite()) || hi - lo > 2.0 * n + 2.0 {
+                return self.max;
+            }
+            range[a] = (lo as i64, hi as i64);
+        }
+        let ch = g.data.channels;
+        let mut max = f32::NEG_INFINITY;
+        for z in range[2].0..=range[2].1 {
+            let Some(z) = g.wrap.apply(z, res[2]) else {
+                max = max.max(0.0);
+                continue;
+            };
+            for y in range[1].0..=range[1].1 {
+                let Some(y) = g.wrap.apply(y, res[1]) else {
+                    max = max.max(0.0);
+                    continue;
+                };
+                for x in range[0].0..=range[0].1 {
+                    match g.wrap.apply(x, res[0]) {
+                        None => max = max.max(0.0),
+                        Some(x) => {
+                            let k = ((z * res[1] + y) * res[0] + x) * ch;
+                            max = g.data.data[k..k + ch].iter().fold(max, |m, &v| m.max(v));
+                        }
+                    }
+                }
+            }
+        }
+        max
+    }
+
+    /// The resolution of a grid volume's data (`None` for a constant or a cloud).
+    pub fn grid_resolution(&self) -> Option<[usize; 3]> {
+        match &self.data {
+            VolumeData::Grid(g) => Some(g.data.res),
+            _ => None,
+        }
+    }
+
     /// The average value over the volume's box (of its grid values; a one-channel grid's in
     /// all three channels).
     pub fn mean(&self) -> Rgb {
