@@ -416,6 +416,36 @@ mod tests {
         assert!((walk.optical_depth() as f64 - total).abs() < 2e-3 * total.max(1.0));
     }
 
+    /// Walks end, within `[t0, t1]`, on any ray: from inside and outside the box, along axes
+    /// (zero direction components), with `t0 = t1`, and with NaN or infinite components (which
+    /// leave the grid or never collide, but never loop).
+    #[test]
+    fn walks_end_on_any_ray() {
+        let mut rng = Pcg32::new(2, 2);
+        let data = random_grid(1, &mut rng);
+        let v = Volume::grid(data, GridFilter::Trilinear, GridWrap::Clamp, Transform::IDENTITY).unwrap();
+        let grid = MajorantGrid::with_resolution(&v, 3.0, [7, 5, 3]);
+        let odd = [0.0, -0.0, f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e-30, 0.5, -0.7];
+        for k in 0..4000 {
+            let pick = |i: usize| odd[(k / 8usize.pow(i as u32)) % 8];
+            let o = if k % 3 == 0 {
+                Vec3::new(pick(0), 0.5, pick(1))
+            } else {
+                Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * 1.4 - Vec3::splat(0.2)
+            };
+            let d = Vec3::new(pick(2), pick(3), 0.3);
+            let ray = Ray::new(o, d);
+            let (t0, t1) = if k % 5 == 0 { (0.3, 0.3) } else { (0.0, 2.0 * rng.next_f32()) };
+            let mut walk = grid.walk(&ray, t0, t1);
+            let mut n = 0;
+            while let Some((t, sigma)) = walk.next(rng.next_f32()) {
+                assert!((t0..=t1).contains(&t) && sigma > 0.0, "{o} {d}: collision at {t} of [{t0}, {t1}]");
+                n += 1;
+                assert!(n < 100_000, "{o} {d}: no end");
+            }
+        }
+    }
+
     /// Sampled by uniform numbers, the first collision's distance has the density
     /// `σ̄(t) e^(−∫σ̄)` (χ² over equal-probability bins of the exact CDF, computed by the
     /// midpoint rule), and passes with probability `e^(−∫₀^{t1} σ̄)`.
