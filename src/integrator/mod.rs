@@ -13,6 +13,7 @@ pub mod moment;
 pub mod path;
 pub mod ptracer;
 pub mod radiosity;
+pub mod subsurface;
 pub mod trace;
 pub mod volpath;
 pub mod volpathmis;

@@ -288,6 +288,44 @@ impl Integrator for VolPathIntegrator {
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
+            // Into a subsurface material: the light leaves it where the BSSRDF's probe says.
+            if let Some(sss) = bsdf.subsurface().filter(|_| !bs.null && bs.wi.z * wo_local.z < 0.0) {
+                let u = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
+                let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, &ctx, &si, shape.bsdf, u, &mut rng)
+                else {
+                    break;
+                };
+                beta *= w;
+                let exit_ctx = LightSampleContext { p: exit.p, n: exit.ns };
+                let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
+                let sss_eta = sss.eta;
+                l += beta
+                    * trace::sample_direct(
+                        scene,
+                        &exit_ctx,
+                        u_light,
+                        u_light2,
+                        &mis,
+                        |wi, _| super::subsurface::exit_lobe(&exit, sss_eta, wi),
+                        |ls| {
+                            let side = medium_after(scene, exit.shape, exit.ng, ls.wi, medium);
+                            transmittance(scene, exit.spawn_ray_to(ls.p, ls.n, ls.p_error), side, &mut rng)
+                        },
+                    );
+                let Some((wi, w, pdf)) = super::subsurface::sample_exit_lobe(&exit, sss_eta, sampler.next_2d()) else {
+                    break;
+                };
+                beta *= w;
+                medium = medium_after(scene, exit.shape, exit.ng, wi, medium);
+                ray = exit.spawn_ray(wi);
+                prev = Some(PrevVertex { ctx: exit_ctx, pdf, delta: false });
+                depth += 1;
+                crossings = 0;
+                if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
+                    break;
+                }
+                continue;
+            }
             medium = medium_after(scene, si.shape, si.ng, wi, medium);
             ray = si.spawn_ray(wi);
             if bs.null {

@@ -189,6 +189,15 @@ impl Builder {
                 root.loc.position()
             ));
         }
+        // Subsurface scattering is `volpath`'s alone (pbrt-v4's too): elsewhere such surfaces
+        // are their dielectric boundary, which changes the image.
+        let name = integrator.as_ref().map_or_else(|| AnyIntegrator::default().name(), |i| i.name());
+        if name != "volpath" && scene.bsdfs().iter().any(|b| b.subsurface().is_some()) {
+            self.warnings.push(format!(
+                "warning: {}: the `{name}` integrator renders subsurface materials as their dielectric boundary: only `volpath` renders their subsurface scattering (as in pbrt-v4)",
+                root.loc.position(),
+            ));
+        }
         // Mitsuba 3 rejects parameters that no plugin reads ("unreferenced property"), and so
         // does neumann: such a parameter is a typo or a feature neumann does not implement.
         root.check_unused(&mut Vec::new())?;

@@ -14,6 +14,7 @@ mod diffuse;
 mod filter;
 mod diffusetransmission;
 pub mod hair;
+pub mod bssrdf;
 pub mod fresnel;
 pub mod layered;
 mod measured;
@@ -27,6 +28,7 @@ mod principledthin;
 mod registry;
 mod roughdielectric;
 mod roughplastic;
+pub mod subsurface;
 
 pub use conductor::{Conductor, ConductorIor, RoughConductor};
 pub use conductor_presets::{conductor_names, named_conductor};
@@ -202,6 +204,8 @@ pub enum Bsdf {
     /// Mitsuba's `normalmap` and `bumpmap`, pbrt-v4's `displacement`: a nested BSDF under a
     /// perturbed shading normal.
     Perturbed(Perturbed),
+    /// pbrt-v4's `subsurface`: a dielectric boundary over a BSSRDF ([`subsurface`]).
+    Subsurface(Box<subsurface::Subsurface>),
 }
 
 impl Bsdf {
@@ -235,6 +239,7 @@ impl Bsdf {
             Bsdf::Null => "null",
             Bsdf::Filter(f) => f.kind.name(),
             Bsdf::TwoSided(_) => "twosided",
+            Bsdf::Subsurface(_) => "pbrt_subsurface",
             Bsdf::Perturbed(p) => match p.perturbation {
                 Perturbation::NormalMap { .. } => "normalmap",
                 Perturbation::BumpMap { .. } => "bumpmap",
@@ -299,7 +304,8 @@ impl Bsdf {
             | Bsdf::Hair(_)
             | Bsdf::Null
             | Bsdf::Filter(_)
-            | Bsdf::PrincipledThin(_) => true,
+            | Bsdf::PrincipledThin(_)
+            | Bsdf::Subsurface(_) => true,
             Bsdf::Principled(b) => b.spec_trans.is_some(),
             Bsdf::Blend { bsdfs, .. } => distinct(bsdfs).iter().any(|c| c.has_transmission_lobe()),
             Bsdf::Perturbed(n) => n.bsdf.has_transmission_lobe(),
@@ -351,6 +357,7 @@ impl Bsdf {
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.eval(ctx, wo, wi) * blend_weight(opacity, ctx),
             Bsdf::Perturbed(n) => n.eval(ctx, wo, wi),
+            Bsdf::Subsurface(s) => s.surface.eval(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].eval(ctx, wo, wi)
@@ -419,6 +426,7 @@ impl Bsdf {
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.pdf(ctx, wo, wi) * blend_weight(opacity, ctx),
             Bsdf::Perturbed(n) => n.pdf(ctx, wo, wi),
+            Bsdf::Subsurface(s) => s.surface.pdf(ctx, wo, wi),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].pdf(ctx, wo, wi)
@@ -476,6 +484,7 @@ impl Bsdf {
                 }
             }
             Bsdf::Perturbed(n) => n.sample(ctx, wo, u1, u),
+            Bsdf::Subsurface(s) => s.surface.sample(ctx, wo, u1, u),
             Bsdf::TwoSided(b) => {
                 if wo.z >= 0.0 {
                     b[0].sample(ctx, wo, u1, u)
@@ -504,6 +513,7 @@ impl Bsdf {
             // The sides of the perturbed frame decide; without the context, those of the
             // original one (they agree for every direction the normal map lets through).
             Bsdf::Perturbed(n) => return n.bsdf.eta_crossed(wo, wi),
+            Bsdf::Subsurface(s) => return s.surface.eta_crossed(wo, wi),
             _ => return 1.0,
         };
         if wo.z > 0.0 {
@@ -525,6 +535,7 @@ impl Bsdf {
             }
             Bsdf::Mask { opacity, bsdf } => bsdf.eval_adjoint(ctx, wo, wi) * blend_weight(opacity, ctx),
             Bsdf::Perturbed(n) => n.eval_adjoint(ctx, wo, wi),
+            Bsdf::Subsurface(s) => s.surface.eval_adjoint(ctx, wo, wi),
             _ => {
                 let eta = self.eta_crossed(wo, wi);
                 self.eval(ctx, wo, wi) * (eta * eta)
@@ -572,6 +583,7 @@ impl Bsdf {
                 }
             }
             Bsdf::Perturbed(n) => n.bsdf.diffuse_reflectance(ctx, wo),
+            Bsdf::Subsurface(s) => s.surface.diffuse_reflectance(ctx, wo),
             _ => self.eval(ctx, wo, Vec3::new(0.0, 0.0, 1.0)) * std::f32::consts::PI,
         }
     }
@@ -633,6 +645,11 @@ impl Bsdf {
                 v.extend(n.bsdf.textures());
                 v
             }
+            Bsdf::Subsurface(s) => {
+                let mut v = s.textures();
+                v.extend(s.surface.textures());
+                v
+            }
             Bsdf::Null => Vec::new(),
             Bsdf::Filter(f) => vec![&f.transmittance],
         }
@@ -660,10 +677,20 @@ impl Bsdf {
         f(self)
             || match self {
                 Bsdf::Perturbed(p) => p.bsdf.any_nested(f),
+                Bsdf::Subsurface(s) => s.surface.any_nested(f),
                 Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().any(|c| c.any_nested(f)),
                 Bsdf::Mask { bsdf, .. } => bsdf.any_nested(f),
                 _ => false,
             }
+    }
+
+    /// The subsurface material this BSDF is (under normal or bump maps), if it is one.
+    pub fn subsurface(&self) -> Option<&subsurface::Subsurface> {
+        match self {
+            Bsdf::Subsurface(s) => Some(s),
+            Bsdf::Perturbed(p) => p.bsdf.subsurface(),
+            _ => None,
+        }
     }
 
     /// Whether the BSDF has only delta lobes (light sampling is useless on it).
@@ -695,6 +722,7 @@ impl Bsdf {
             Bsdf::TwoSided(b) | Bsdf::Blend { bsdfs: b, .. } => distinct(b).iter().all(|c| c.is_delta()),
             Bsdf::Mask { bsdf, .. } => bsdf.is_delta(),
             Bsdf::Perturbed(n) => n.bsdf.is_delta(),
+            Bsdf::Subsurface(s) => s.surface.is_delta(),
             leaf => leaf.is_delta(),
         }
     }

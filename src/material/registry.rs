@@ -37,6 +37,7 @@ pub const BSDF_PLUGINS: &[(&str, BsdfPlugin)] = &[
     ("diffusetransmission", super::DiffuseTransmission::from_props),
     ("hair", super::Hair::mitsuba_from_props),
     ("pbrt_hair", super::Hair::from_props),
+    ("pbrt_subsurface", super::subsurface::Subsurface::from_props),
     ("conductor", super::Conductor::from_props),
     ("roughconductor", super::RoughConductor::from_props),
     ("dielectric", super::Dielectric::from_props),

@@ -15,6 +15,7 @@ pub mod quadrature;
 pub mod ray;
 pub mod simd;
 pub mod special;
+pub mod spline;
 pub mod spectrum;
 pub mod transform;
 pub mod trig;

@@ -69,8 +69,10 @@ fn plugin_type(ps: &ParamSet) -> String {
 /// media): `maxdepth` (5 bounces) → `max_depth` = `maxdepth` + 1.
 fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let Some(ps) = p.integrator.take() else {
-        // pbrt-v4's default, volpath; neumann's path renders the same image without media.
-        let mut o = obj("integrator", if p.media.is_empty() { "path" } else { "volpath" }, loc);
+        // pbrt-v4's default, volpath; neumann's path renders the same image without media and
+        // subsurface materials.
+        let kind = if p.media.is_empty() && !p.subsurface { "path" } else { "volpath" };
+        let mut o = obj("integrator", kind, loc);
         set(&mut o, "max_depth", Value::Integer(6), loc);
         return Ok(o);
     };

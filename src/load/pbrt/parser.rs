@@ -69,6 +69,9 @@ pub struct Parser {
     pub(super) float_textures: HashMap<String, Rc<Obj>>,
     /// Named media (`MakeNamedMedium`).
     pub(super) media: HashMap<String, Rc<Obj>>,
+    /// Whether a `subsurface` material was declared (its scattering needs `volpath`, pbrt-v4's
+    /// default integrator, which neumann otherwise replaces by `path` where nothing differs).
+    pub(super) subsurface: bool,
     /// The camera's medium (the outside medium at `Camera`).
     pub(super) camera_medium: Option<Rc<Obj>>,
     pub(super) spectrum_textures: HashMap<String, Rc<Obj>>,
@@ -307,6 +310,7 @@ impl Parser {
             material_depth: HashMap::new(),
             float_textures: HashMap::new(),
             media: HashMap::new(),
+            subsurface: false,
             camera_medium: None,
             spectrum_textures: HashMap::new(),
             objects: HashMap::new(),

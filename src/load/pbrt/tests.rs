@@ -250,8 +250,8 @@ fn errors_name_the_place_and_what_was_expected() {
     assert!(e.contains("test.pbrt:3:") && e.contains("unused parameter \"float raduis\""), "{e}");
     let e = err(&format!("{head}Shape \"sphere\" \"flaot radius\" 1\n"));
     assert!(e.contains("unknown parameter type 'flaot'") && e.contains("'float'"), "{e}");
-    let e = err(&format!("{head}Material \"subsurface\"\n"));
-    assert!(e.contains("\"subsurface\" material is not implemented"), "{e}");
+    let e = err(&format!("{head}Material \"subsurfaec\"\n"));
+    assert!(e.contains("test.pbrt:3:") && e.contains("subsurfaec") && e.contains("'subsurface'"), "{e}");
     let e = err(&format!("{head}Shape \"sphere\" \"float radius\" [ 1\n"));
     assert!(e.contains("expected ']'"), "{e}");
     let e = err(&format!("{head}AttributeEnd\n"));
@@ -1645,4 +1645,60 @@ fn realistic_camera_traces_its_lens_file() {
     let f = load_in_dir("g.pbrt", scene("\"string lensfile\" \"lenses/singlet.dat\" \"float aperturediameter\" 25"))
         .unwrap();
     assert!(f.warnings.iter().any(|w| w.contains("clamped")), "{:?}", f.warnings);
+}
+
+/// pbrt-v4's `subsurface` material: its four ways of giving the coefficients (a named measured
+/// medium, with `g` forced to 0 and a warning; `sigma_a` and `sigma_s`; `reflectance` and
+/// `mfp`; pbrt's defaults), each times `scale`, over a dielectric boundary of `eta` (1.33),
+/// rough where `roughness` is given; the errors pbrt makes (an unknown name, one coefficient of
+/// the two).
+#[test]
+fn subsurface_materials() {
+    let sss = |params: &str| {
+        let f =
+            load(&format!("Camera \"perspective\"\nWorldBegin\nMaterial \"subsurface\" {params}\nShape \"sphere\"\n"))
+                .unwrap_or_else(|e| panic!("{e}"));
+        let Bsdf::Subsurface(s) = &f.scene.bsdfs()[f.scene.shapes()[0].bsdf as usize] else { panic!("{params}") };
+        let ctx = crate::material::BsdfContext::default();
+        let (sigma_a, sigma_s) = s.sigma(&ctx);
+        (sigma_a, sigma_s, s.eta, matches!(*s.surface, Bsdf::RoughDielectric(_)), f.warnings.clone())
+    };
+    let close = |a: Rgb, b: Rgb| (a - b).abs().max_element() <= 1e-5 * b.max_element().max(1.0);
+    let (sa, ss, eta, rough, warnings) = sss("\"string name\" \"Skin1\" \"float scale\" 10 \"float g\" 0.5");
+    let (skin_s, skin_a) = crate::medium::presets::preset("Skin1").unwrap();
+    assert!(close(sa, skin_a * 10.0) && close(ss, skin_s * 10.0), "{sa} {ss}");
+    assert!((eta, rough) == (1.33, false));
+    assert!(warnings.iter().any(|w| w.contains("\"g\" is ignored")), "{warnings:?}");
+    let (sa, ss, eta, rough, _) =
+        sss("\"rgb sigma_a\" [1 2 3] \"rgb sigma_s\" [10 20 30] \"float scale\" 2 \"float eta\" 1.5 \"float roughness\" 0.1");
+    assert!(close(sa, Rgb::new(2.0, 4.0, 6.0)) && close(ss, Rgb::new(20.0, 40.0, 60.0)), "{sa} {ss}");
+    assert!((eta, rough) == (1.5, true));
+    // reflectance and mfp: σₜ = 1 / (scale · mfp), the albedo the one whose ρ_eff is the reflectance.
+    let (sa, ss, ..) = sss("\"rgb reflectance\" [0.2 0.5 0.8] \"rgb mfp\" [0.5 1 2] \"float scale\" 2");
+    let st = sa + ss;
+    assert!(close(st, Rgb::new(1.0, 0.5, 0.25)), "σₜ {st}");
+    assert!(ss.x / st.x < ss.y / st.y && ss.y / st.y < ss.z / st.z);
+    let (sa, ss, _, _, warnings) = sss("");
+    assert!(close(sa, Rgb::new(0.0011, 0.0024, 0.014)) && close(ss, Rgb::new(2.55, 3.21, 3.77)));
+    assert!(warnings.is_empty(), "volpath renders it: {warnings:?}");
+    // Another integrator sees the boundary only, and says so.
+    let f =
+        load("Integrator \"path\"\nCamera \"perspective\"\nWorldBegin\nMaterial \"subsurface\"\nShape \"sphere\"\n")
+            .unwrap();
+    assert!(
+        f.warnings.iter().any(|w| w.contains("only `volpath` renders their subsurface scattering")),
+        "{:?}",
+        f.warnings
+    );
+    for (params, what) in [
+        ("\"string name\" \"Skin 1\"", "named medium \"Skin 1\" not found; the nearest is 'Skin1'"),
+        ("\"rgb sigma_a\" [1 1 1]", "\"sigma_a\" without \"sigma_s\""),
+    ] {
+        let e =
+            load(&format!("Camera \"perspective\"\nWorldBegin\nMaterial \"subsurface\" {params}\nShape \"sphere\"\n"))
+                .err()
+                .unwrap_or_else(|| panic!("{params}: no error"))
+                .to_string();
+        assert!(e.contains(what), "{params}: {e}");
+    }
 }

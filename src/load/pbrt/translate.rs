@@ -789,7 +789,7 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             set(&mut o, "filename", Value::String(file), &ploc(ps, "filename"));
             two_sided(o)
         }
-        "subsurface" => return Err(ps.error(format!("the \"{ty}\" material is not implemented by neumann yet"))),
+        "subsurface" => subsurface(p, ps, l)?,
         other => {
             return Err(ps.unknown(
                 "material",
@@ -811,6 +811,63 @@ fn material_bsdf(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
             ))
         }
     })
+}
+
+/// pbrt-v4's `subsurface` material → neumann's `pbrt_subsurface`: the coefficients by `name`
+/// (a measured medium, `crate::medium::presets`, with `g` = 0 as pbrt enforces), or `sigma_a`
+/// and `sigma_s` (both, texturable), or `reflectance` (texturable) with `mfp` (1), or pbrt's
+/// default skin-like coefficients; `scale` (1), `eta` (1.33), `g` (0), the roughness of its
+/// dielectric boundary (`roughness`, `uroughness`, `vroughness`, 0; `remaproughness`).
+fn subsurface(p: &mut Parser, ps: &ParamSet, l: &Loc) -> Result<Obj> {
+    p.subsurface = true;
+    let mut o = obj("bsdf", "pbrt_subsurface", l);
+    let mut g = ps.float("g", 0.0)?;
+    if let Some(name) = ps.string("name")? {
+        let Some((sigma_s, sigma_a)) = crate::medium::presets::preset(&name) else {
+            let hint = crate::choice::nearest(&name, crate::medium::presets::preset_names())
+                .map(|n| format!("; the nearest is '{n}'"))
+                .unwrap_or_default();
+            return Err(ps.error_at("name", format!("named medium \"{name}\" not found{hint}")));
+        };
+        if g != 0.0 {
+            p.warnings.push(format!(
+                "warning: {}: a non-zero \"g\" is ignored with named scattering coefficients (as pbrt does)",
+                ploc(ps, "g").position()
+            ));
+            g = 0.0;
+        }
+        set(&mut o, "sigma_a", Value::Rgb(sigma_a), &ploc(ps, "name"));
+        set(&mut o, "sigma_s", Value::Rgb(sigma_s), &ploc(ps, "name"));
+    } else {
+        let sigma_a = texturable(p, ps, "sigma_a", false)?;
+        let sigma_s = texturable(p, ps, "sigma_s", false)?;
+        match (sigma_a, sigma_s) {
+            (Some(a), Some(s)) => {
+                set(&mut o, "sigma_a", a, &ploc(ps, "sigma_a"));
+                set(&mut o, "sigma_s", s, &ploc(ps, "sigma_s"));
+            }
+            (Some(_), None) => return Err(ps.error_at("sigma_a", "\"sigma_a\" without \"sigma_s\"")),
+            (None, Some(_)) => return Err(ps.error_at("sigma_s", "\"sigma_s\" without \"sigma_a\"")),
+            (None, None) => {
+                if let Some(r) = texturable(p, ps, "reflectance", false)? {
+                    set(&mut o, "reflectance", r, &ploc(ps, "reflectance"));
+                    if let Some(m) = texturable(p, ps, "mfp", false)? {
+                        set(&mut o, "mfp", m, &ploc(ps, "mfp"));
+                    }
+                }
+            }
+        }
+    }
+    set(&mut o, "g", Value::Float(g as f64), &ploc(ps, "g"));
+    set(&mut o, "scale", Value::Float(ps.float("scale", 1.0)? as f64), &ploc(ps, "scale"));
+    set(&mut o, "int_ior", Value::Float(ps.float("eta", 1.33)? as f64), &ploc(ps, "eta"));
+    set(&mut o, "ext_ior", Value::Float(1.0), l);
+    if let Some((u, v)) = roughness(p, ps)? {
+        set(&mut o, "distribution", Value::String("ggx".into()), l);
+        set(&mut o, "alpha_u", u, &ploc(ps, "roughness"));
+        set(&mut o, "alpha_v", v, &ploc(ps, "roughness"));
+    }
+    Ok(o)
 }
 
 /// A light's `scale` times the film's imaging ratio.
