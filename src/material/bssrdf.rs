@@ -226,16 +226,23 @@ impl<'a> TabulatedBssrdf<'a> {
         TabulatedBssrdf { po, ns, sigma_t, rho, table }
     }
 
+    /// Channel `c`'s profile per unit area at distance `r` (m): `Sr(r)` (m⁻²) and the effective
+    /// albedo it integrates to; `None` outside the table.
+    fn profile(&self, c: usize, r: f32) -> Option<(f32, f32)> {
+        let r_optical = r * self.sigma_t[c];
+        let (mut sr, rho_eff) = self.table.lookup(self.rho[c], r_optical)?;
+        // The table holds 2π r S (a density over the radius) in optical units.
+        if r_optical != 0.0 {
+            sr /= 2.0 * PI * r_optical;
+        }
+        Some((sr * self.sigma_t[c] * self.sigma_t[c], rho_eff))
+    }
+
     /// The radial profile `Sr(r)` (m⁻², per channel) at distance `r` (m).
     pub fn sr(&self, r: f32) -> Rgb {
         let mut out = Rgb::ZERO;
         for c in 0..3 {
-            let r_optical = r * self.sigma_t[c];
-            let Some((mut sr, _)) = self.table.lookup(self.rho[c], r_optical) else { continue };
-            if r_optical != 0.0 {
-                sr /= 2.0 * PI * r_optical;
-            }
-            out[c] = (sr * self.sigma_t[c] * self.sigma_t[c]).max(0.0);
+            out[c] = self.profile(c, r).map_or(0.0, |(sr, _)| sr.max(0.0));
         }
         out
     }
@@ -245,12 +252,7 @@ impl<'a> TabulatedBssrdf<'a> {
     pub fn pdf_sr(&self, r: f32) -> Rgb {
         let mut out = Rgb::ZERO;
         for c in 0..3 {
-            let r_optical = r * self.sigma_t[c];
-            let Some((mut sr, rho_eff)) = self.table.lookup(self.rho[c], r_optical) else { continue };
-            if r_optical != 0.0 {
-                sr /= 2.0 * PI * r_optical;
-            }
-            let pdf = sr * self.sigma_t[c] * self.sigma_t[c] / rho_eff;
+            let pdf = self.profile(c, r).map_or(0.0, |(sr, rho_eff)| sr / rho_eff);
             out[c] = if pdf.is_finite() { pdf.max(0.0) } else { 0.0 };
         }
         out
