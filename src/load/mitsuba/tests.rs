@@ -2768,3 +2768,37 @@ fn timed_sunsky_is_the_sky_of_its_moment() {
     let e = load(&open).unwrap_err().to_string();
     assert!(e.contains("shutter is open from 0 to 0.5") && e.contains("test.xml:"), "{e}");
 }
+
+/// neumann's `pbrt_subsurface` from Mitsuba XML: a rough boundary where `alpha` is given, the
+/// coefficients as given (an rgb above 1: unbounded), the relative index from `int_ior`; the
+/// errors of a half-given or doubly given medium, and of an index-matched boundary.
+#[test]
+fn pbrt_subsurface_from_xml() {
+    let bsdf = |params: &str| {
+        scene(&format!(
+            r#"<shape type="sphere"><bsdf type="pbrt_subsurface">{params}</bsdf></shape><integrator type="volpath"/>"#
+        ))
+    };
+    let f = load(&bsdf(
+        r#"<rgb name="sigma_a" value="0.5, 1, 2"/><rgb name="sigma_s" value="20, 10, 5"/><float name="scale" value="2"/><float name="int_ior" value="1.4"/><float name="alpha" value="0.2"/>"#,
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let Bsdf::Subsurface(s) = &f.scene.bsdfs()[0] else { panic!("{:?}", f.scene.bsdfs()[0]) };
+    let (sa, ss) = s.sigma(&crate::material::BsdfContext::default());
+    assert_eq!((sa, ss), (Rgb::new(1.0, 2.0, 4.0), Rgb::new(40.0, 20.0, 10.0)));
+    // (Mitsuba's default `ext_ior` is air's, 1.000277.)
+    assert!(matches!(*s.surface, Bsdf::RoughDielectric(_)) && (s.eta - 1.4 / 1.000277).abs() < 1e-5);
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    for (params, what) in [
+        (r#"<rgb name="sigma_a" value="1, 1, 1"/>"#, "sigma_s is missing"),
+        (r#"<rgb name="mfp" value="1, 1, 1"/>"#, "mfp needs a reflectance"),
+        (
+            r#"<rgb name="sigma_a" value="1, 1, 1"/><rgb name="sigma_s" value="1, 1, 1"/><rgb name="reflectance" value="0.5, 0.5, 0.5"/>"#,
+            "not both",
+        ),
+        (r#"<float name="int_ior" value="1"/><float name="ext_ior" value="1"/>"#, "relative index is 1"),
+    ] {
+        let e = err(&bsdf(params));
+        assert!(e.contains("test.xml:") && e.contains(what), "{params}: {e}");
+    }
+}
