@@ -211,8 +211,8 @@ pub struct TabulatedBssrdf<'a> {
     pub table: &'a BssrdfTable,
 }
 
-/// Axis choice probabilities: the local x and y tangents, the normal.
-const AXIS_PROB: [f32; 3] = [0.25, 0.25, 0.5];
+/// Probe axis probabilities: the shading frame's two tangents, then its normal (pbrt-v4's).
+pub const AXIS_PROB: [f32; 3] = [0.25, 0.25, 0.5];
 
 impl<'a> TabulatedBssrdf<'a> {
     /// The BSSRDF of coefficients `sigma_a`, `sigma_s` at `po` with shading normal `ns`.
