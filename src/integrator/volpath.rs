@@ -288,8 +288,9 @@ impl Integrator for VolPathIntegrator {
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
-            // Into a subsurface material: the light leaves it where the BSSRDF's probe says.
-            if let Some(sss) = bsdf.subsurface().filter(|_| !bs.null && bs.wi.z * wo_local.z < 0.0) {
+            // The vertex MIS refers to next: this one, or where the light leaves a subsurface
+            // material it refracted into (the BSSRDF's probe finds that point).
+            let vertex = if let Some(sss) = bsdf.subsurface().filter(|_| !bs.null && bs.wi.z * wo_local.z < 0.0) {
                 let u = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
                 let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, &ctx, &si, shape.bsdf, u, &mut rng)
                 else {
@@ -318,25 +319,21 @@ impl Integrator for VolPathIntegrator {
                 beta *= w;
                 medium = medium_after(scene, exit.shape, exit.ng, wi, medium);
                 ray = exit.spawn_ray(wi);
-                prev = Some(PrevVertex { ctx: exit_ctx, pdf, delta: false });
-                depth += 1;
-                crossings = 0;
-                if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {
-                    break;
+                PrevVertex { ctx: exit_ctx, pdf, delta: false }
+            } else {
+                medium = medium_after(scene, si.shape, si.ng, wi, medium);
+                ray = si.spawn_ray(wi);
+                if bs.null {
+                    // Passed straight through: not a bounce, and not the vertex MIS refers to.
+                    crossings += 1;
+                    if crossings > MAX_NULL_CROSSINGS {
+                        break;
+                    }
+                    continue;
                 }
-                continue;
-            }
-            medium = medium_after(scene, si.shape, si.ng, wi, medium);
-            ray = si.spawn_ray(wi);
-            if bs.null {
-                // Passed straight through: not a bounce, and not the vertex MIS refers to.
-                crossings += 1;
-                if crossings > MAX_NULL_CROSSINGS {
-                    break;
-                }
-                continue;
-            }
-            prev = Some(PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta });
+                PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta }
+            };
+            prev = Some(vertex);
             depth += 1;
             crossings = 0;
             if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {

@@ -227,26 +227,18 @@ impl Volume {
             }
             range[a] = (lo as i64, hi as i64);
         }
-        let ch = g.data.channels;
+        // A grid has one channel or three; texels a `zero` wrap leaves out read zero.
+        let texel_max = |i: [Option<usize>; 3]| match g.data.channels {
+            1 => g.texel::<1>(i)[0],
+            _ => g.texel::<3>(i).into_iter().fold(f32::NEG_INFINITY, f32::max),
+        };
         let mut max = f32::NEG_INFINITY;
         for z in range[2].0..=range[2].1 {
-            let Some(z) = g.wrap.apply(z, res[2]) else {
-                max = max.max(0.0);
-                continue;
-            };
+            let z = g.wrap.apply(z, res[2]);
             for y in range[1].0..=range[1].1 {
-                let Some(y) = g.wrap.apply(y, res[1]) else {
-                    max = max.max(0.0);
-                    continue;
-                };
+                let y = g.wrap.apply(y, res[1]);
                 for x in range[0].0..=range[0].1 {
-                    match g.wrap.apply(x, res[0]) {
-                        None => max = max.max(0.0),
-                        Some(x) => {
-                            let k = ((z * res[1] + y) * res[0] + x) * ch;
-                            max = g.data.data[k..k + ch].iter().fold(max, |m, &v| m.max(v));
-                        }
-                    }
+                    max = max.max(texel_max([g.wrap.apply(x, res[0]), y, z]));
                 }
             }
         }
