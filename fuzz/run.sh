@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs=${1:-20}
 shift || true
-targets=${*:-xml render obj ply image vol tensor part gltf pbrt render_pbrt}
+targets=${*:-xml render obj ply image vol nanovdb tensor part gltf pbrt render_pbrt}
 mkdir -p fuzz/corpus
 for t in $targets; do
     mkdir -p "fuzz/corpus/$t"
@@ -17,6 +17,9 @@ for t in $targets; do
         obj) cp -n scenes/assets/*.obj "fuzz/corpus/$t/" ;;
         ply) cp -n scenes/assets/*.ply "fuzz/corpus/$t/" ;;
         vol) cp -n scenes/assets/*.vol "fuzz/corpus/$t/" ;;
+        nanovdb) cp -n scenes/assets/*.nvdb tests/data/nanovdb/*.nvdb "fuzz/corpus/$t/"
+                 # A small grid uncompressed (codec NONE): the tree itself for the fuzzer to mutate.
+                 [ -e "fuzz/corpus/$t/voxels-raw.nvdb" ] || python3 tools/nanovdb/uncompress.py tests/data/nanovdb/voxels.nvdb "fuzz/corpus/$t/voxels-raw.nvdb" ;;
         tensor) cp -n scenes/assets/*.bsdf "fuzz/corpus/$t/" ;;
         gltf) cp -n scenes/*.gltf "fuzz/corpus/$t/" ;;
         pbrt|render_pbrt) cp -n scenes/*.pbrt "fuzz/corpus/$t/" ;;

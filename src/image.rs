@@ -3,6 +3,8 @@
 //! files into them is the job of `load::image` and `load::volume`, which sit above the
 //! renderer's layers.
 
+pub mod nanovdb;
+
 use crate::math::Rgb;
 use crate::props::{Obj, Result};
 use std::sync::Arc;
@@ -46,6 +48,10 @@ pub struct GridVolume {
 pub trait VolumeSource {
     /// The grid volume named by parameter `name` of `o`; errors are located at the parameter.
     fn grid_volume(&mut self, o: &Obj, name: &str) -> Result<Arc<GridVolume>>;
+
+    /// The float grid named `grid` of the NanoVDB file that the string parameter `name` of `o`
+    /// names (`None` if the file has no grid of that name); errors are located at the parameter.
+    fn nanovdb_grid(&mut self, o: &Obj, name: &str, grid: &str) -> Result<Option<Arc<nanovdb::NanoGrid>>>;
 
     /// Reports a warning (a complete line, `warning: FILE:LINE:COL: …`).
     fn warn(&mut self, line: String);

@@ -59,6 +59,8 @@ pub struct Builder {
     warnings: Vec<String>,
     images: HashMap<(PathBuf, bool), Arc<Image>>,
     volumes: HashMap<PathBuf, Arc<GridVolume>>,
+    /// NanoVDB grids read so far, by file and grid name (`None`: the file has no such grid).
+    nano_grids: HashMap<(PathBuf, String), Option<Arc<crate::image::nanovdb::NanoGrid>>>,
     tensors: HashMap<PathBuf, Arc<crate::tensor::TensorFile>>,
     /// The default BSDFs (diffuse 0.5 for plain shapes, black for emitters), once created.
     default_bsdf: [Option<u32>; 2],
@@ -91,6 +93,7 @@ impl Builder {
             warnings: Vec::new(),
             images: HashMap::new(),
             volumes: HashMap::new(),
+            nano_grids: HashMap::new(),
             tensors: HashMap::new(),
             default_bsdf: [None; 2],
             medium_index: HashMap::new(),
@@ -926,6 +929,23 @@ impl VolumeSource for Builder {
         let v = Arc::new(crate::load::volume::load_grid_volume(&path).map_err(|e| o.error_at(name, e.to_string()))?);
         self.volumes.insert(path, v.clone());
         Ok(v)
+    }
+
+    fn nanovdb_grid(
+        &mut self,
+        o: &Obj,
+        name: &str,
+        grid: &str,
+    ) -> Result<Option<Arc<crate::image::nanovdb::NanoGrid>>> {
+        let path = self.resolver.resolve(&o.string(name)?);
+        let key = (path, grid.to_string());
+        if let Some(g) = self.nano_grids.get(&key) {
+            return Ok(g.clone());
+        }
+        let g = crate::load::nanovdb::load_nanovdb(&key.0, grid).map_err(|e| o.error_at(name, e.to_string()))?;
+        let g = g.map(Arc::new);
+        self.nano_grids.insert(key, g.clone());
+        Ok(g)
     }
 
     fn warn(&mut self, line: String) {

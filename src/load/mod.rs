@@ -10,6 +10,7 @@ pub mod gltf;
 pub mod image;
 pub mod limits;
 pub mod memory;
+pub mod nanovdb;
 pub mod mitsuba;
 pub mod obj;
 pub mod overrides;

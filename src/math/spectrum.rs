@@ -182,6 +182,22 @@ fn integrate_xyz(samples: &[(f32, f32)], under_d65: bool) -> Vec3 {
     xyz / norm as f32
 }
 
+/// Planck's law at `kelvin` sampled every 5 nm over 360–830 nm: in W m⁻³ sr⁻¹ × 10⁻¹³, or
+/// divided by its value at the peak wavelength (Wien's law) where `peak_one`.
+pub fn blackbody(kelvin: f32, peak_one: bool) -> Vec<(f32, f32)> {
+    const H: f64 = 6.626_070_15e-34;
+    const C: f64 = 299_792_458.0;
+    const K: f64 = 1.380_649e-23;
+    let planck = |l: f64| 2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * kelvin as f64)).exp() - 1.0);
+    let norm = if peak_one { planck(2.897_771_955e-3 / kelvin as f64) } else { 1e13 };
+    (0..=94)
+        .map(|i| {
+            let nm = 360.0 + 5.0 * i as f64;
+            (nm as f32, (planck(nm * 1e-9) / norm) as f32)
+        })
+        .collect()
+}
+
 /// CIE XYZ of an emission spectrum (wavelength nm, value), normalised so that a flat spectrum
 /// of 1 has Y = 1 (its chromaticity is what colour work needs).
 pub fn spectrum_to_xyz(samples: &[(f32, f32)]) -> Vec3 {

@@ -13,7 +13,13 @@
 //! `i` is centred at `(i + ½) / res`; `trilinear` blends the eight texels around `p·res − ½`,
 //! `nearest` takes texel `⌊p·res⌋`; indices outside the grid wrap by `wrap_mode` (`clamp`,
 //! `repeat`, `mirror`).
+//!
+//! neumann's `nanovdb` reads a float grid of a NanoVDB file ([`crate::image::nanovdb`]) in the
+//! volume's own space (where the grid's index-to-world map puts it: no unit cube), trilinearly
+//! between voxel centres as NanoVDB samples, times a colour; `nanovdb_blackbody` turns a
+//! temperature grid into black-body radiance. Together they are pbrt-v4's `nanovdb` medium.
 
+use crate::image::nanovdb::NanoGrid;
 use crate::image::{GridVolume, VolumeSource};
 use crate::math::spectrum::SpectrumKind;
 use crate::math::{Bounds3, Rgb, Transform, Vec3};
@@ -139,6 +145,74 @@ pub enum VolumeData {
     /// neumann's `pbrt_cloud`: pbrt-v4's procedural cloud density (in [0, 1]) times a colour,
     /// looked up in the cloud's own space (not a unit cube: its box is given).
     Cloud(super::cloud::CloudDensity, Rgb),
+    /// neumann's `nanovdb`: a NanoVDB float grid times a colour, looked up at the point's
+    /// coordinates in the volume's own space (which the grid's map relates to its voxels).
+    Nano(Arc<NanoGrid>, Rgb),
+    /// neumann's `nanovdb_blackbody`: black-body radiance at the temperatures of a NanoVDB grid.
+    Blackbody(Box<BlackbodyGrid>),
+}
+
+/// The radiance of a black body (pbrt-v4's `BlackbodySpectrum`: Planck's law divided by its
+/// value at the peak wavelength, in linear sRGB as pbrt-v4's CIE 1931 sensor sees it: Y = 1 for
+/// a flat spectrum of 1) at the temperature `(T − offset) · temperature_scale` kelvin, `T` the
+/// grid's trilinear value, times `scale`; zero at or below 100 K (pbrt-v4's emissive `nanovdb`
+/// medium).
+#[derive(Clone, Debug)]
+pub struct BlackbodyGrid {
+    grid: Arc<NanoGrid>,
+    offset: f32,
+    temperature_scale: f32,
+    /// The radiance at `BLACKBODY_MIN_K + k · step` kelvin (`scale` applied), for k up to the
+    /// grid's hottest point.
+    table: Vec<Rgb>,
+    step: f32,
+}
+
+/// pbrt-v4's cut-off: no emission at or below this temperature (K).
+const BLACKBODY_MIN_K: f32 = 100.0;
+
+impl BlackbodyGrid {
+    /// The table over the temperatures the grid reaches (2048 entries).
+    fn new(grid: Arc<NanoGrid>, offset: f32, temperature_scale: f32, scale: f32) -> BlackbodyGrid {
+        let (lo, hi) = grid.range();
+        let top = ((lo - offset) * temperature_scale).max((hi - offset) * temperature_scale);
+        let n = 2048;
+        let (table, step) = if top > BLACKBODY_MIN_K && top.is_finite() {
+            let step = (top - BLACKBODY_MIN_K) / (n - 1) as f32;
+            let table = (0..n)
+                .map(|k| {
+                    let t = BLACKBODY_MIN_K + k as f32 * step;
+                    let s = crate::math::spectrum::blackbody(t, true);
+                    crate::math::spectrum::spectrum_to_rgb(&s, SpectrumKind::Illuminant) * scale
+                })
+                .collect();
+            (table, step)
+        } else {
+            (vec![Rgb::ZERO], 1.0)
+        };
+        BlackbodyGrid { grid, offset, temperature_scale, table, step }
+    }
+
+    /// The radiance at `p` in the grid's world space.
+    #[inline]
+    fn eval(&self, p: Vec3) -> Rgb {
+        let t = (self.grid.sample(self.grid.world_to_index(p.to_array())) - self.offset) * self.temperature_scale;
+        if t.is_nan() || t <= BLACKBODY_MIN_K {
+            return Rgb::ZERO;
+        }
+        let x = ((t - BLACKBODY_MIN_K) / self.step).min((self.table.len() - 1) as f32);
+        let k = (x as usize).min(self.table.len().saturating_sub(2));
+        let f = x - k as f32;
+        match self.table.get(k + 1) {
+            Some(&next) => self.table[k] * (1.0 - f) + next * f,
+            None => self.table[k],
+        }
+    }
+
+    /// The largest channel of any radiance it gives.
+    fn max(&self) -> f32 {
+        self.table.iter().map(|c| c.max_element()).fold(0.0, f32::max)
+    }
 }
 
 /// A volume texture: values over its box in the world.
@@ -176,6 +250,24 @@ impl Volume {
         }
     }
 
+    /// A NanoVDB grid times `value` in the space that `to_world` places in the world (the grid's
+    /// own map takes its voxels there); it exists in its active voxels' box.
+    pub fn nanovdb(grid: Arc<NanoGrid>, value: Rgb, to_world: Transform) -> Volume {
+        let (lo, hi) = grid.range();
+        let max = value.to_array().iter().map(|&c| (c * lo).max(c * hi)).fold(0.0f32, f32::max);
+        let bounds = to_world.apply_bounds(&nano_bounds(&grid));
+        Volume { data: VolumeData::Nano(grid, value), to_local: to_world.inverse(), bounds, max }
+    }
+
+    /// Black-body radiance (see [`BlackbodyGrid`]) at the temperatures of a NanoVDB grid in the
+    /// space that `to_world` places in the world.
+    pub fn blackbody(grid: Arc<NanoGrid>, offset: f32, temperature_scale: f32, scale: f32, to_world: Transform) -> Volume {
+        let bounds = to_world.apply_bounds(&nano_bounds(&grid));
+        let b = BlackbodyGrid::new(grid, offset, temperature_scale, scale);
+        let max = b.max();
+        Volume { data: VolumeData::Blackbody(Box::new(b)), to_local: to_world.inverse(), bounds, max }
+    }
+
     /// A grid volume (one or three channels) over the unit cube under `to_world`; `None` for
     /// another channel count.
     pub fn grid(data: Arc<GridVolume>, filter: GridFilter, wrap: GridWrap, to_world: Transform) -> Option<Volume> {
@@ -194,6 +286,8 @@ impl Volume {
             VolumeData::Constant(v) => *v,
             VolumeData::Grid(g) => g.eval(self.to_local.apply_point(p)),
             VolumeData::Cloud(c, v) => *v * c.at(self.to_local.apply_point(p)),
+            VolumeData::Nano(g, v) => *v * g.sample(g.world_to_index(self.to_local.apply_point(p).to_array())),
+            VolumeData::Blackbody(b) => b.eval(self.to_local.apply_point(p)),
         }
     }
 
@@ -214,6 +308,30 @@ impl Volume {
     /// out); [`Volume::max`] for a constant or a cloud, and where the region maps to more than
     /// twice the grid's extent (a degenerate transform).
     pub fn max_in(&self, region: &Bounds3) -> f32 {
+        if let VolumeData::Nano(g, v) = &self.data {
+            // The voxels trilinear lookups in the region read: its index box, widened by one.
+            let local = self.to_local.apply_bounds(region);
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for corner in 0..8 {
+                let c = Vec3::new(
+                    if corner & 1 == 0 { local.min.x } else { local.max.x },
+                    if corner & 2 == 0 { local.min.y } else { local.max.y },
+                    if corner & 4 == 0 { local.min.z } else { local.max.z },
+                );
+                let x = g.world_to_index(c.to_array());
+                for a in 0..3 {
+                    lo[a] = lo[a].min(x[a]);
+                    hi[a] = hi[a].max(x[a]);
+                }
+            }
+            if !(lo.iter().chain(&hi).all(|c| c.abs() < 1.0e9)) {
+                return self.max;
+            }
+            let lo = lo.map(|c| crate::math::floor(c) as i32 - 1);
+            let hi = hi.map(|c| crate::math::floor(c) as i32 + 1);
+            let m = g.max_in(lo, hi);
+            return v.to_array().iter().map(|&c| c * m).fold(0.0f32, f32::max).min(self.max);
+        }
         let VolumeData::Grid(g) = &self.data else { return self.max };
         let local = self.to_local.apply_bounds(region);
         let res = g.data.res;
@@ -249,6 +367,10 @@ impl Volume {
     pub fn grid_resolution(&self) -> Option<[usize; 3]> {
         match &self.data {
             VolumeData::Grid(g) => Some(g.data.res),
+            VolumeData::Nano(g, _) => {
+                let b = g.index_bbox();
+                Some(std::array::from_fn(|a| (b[1][a] as i64 - b[0][a] as i64 + 1).clamp(1, 1 << 20) as usize))
+            }
             _ => None,
         }
     }
@@ -258,8 +380,8 @@ impl Volume {
     pub fn mean(&self) -> Rgb {
         match &self.data {
             VolumeData::Constant(v) => *v,
-            VolumeData::Cloud(..) => {
-                // The density's average over a 16³ lattice of the box's points.
+            VolumeData::Cloud(..) | VolumeData::Nano(..) | VolumeData::Blackbody(_) => {
+                // The average over a 16³ lattice of the box's points.
                 let (lo, hi) = (self.bounds.min, self.bounds.max);
                 let n = 16;
                 let mut sum = Rgb::ZERO;
@@ -286,7 +408,8 @@ impl Volume {
     pub fn is_grey(&self) -> bool {
         let grey = |c: Rgb| c.x == c.y && c.y == c.z;
         match &self.data {
-            VolumeData::Constant(v) | VolumeData::Cloud(_, v) => grey(*v),
+            VolumeData::Constant(v) | VolumeData::Cloud(_, v) | VolumeData::Nano(_, v) => grey(*v),
+            VolumeData::Blackbody(_) => false,
             VolumeData::Grid(g) => {
                 g.data.channels == 1 || g.data.data.chunks_exact(3).all(|t| t[0] == t[1] && t[1] == t[2])
             }
@@ -299,6 +422,11 @@ impl Volume {
             VolumeData::Constant(v) => v.min_element(),
             VolumeData::Grid(g) => g.data.data.iter().copied().fold(f32::INFINITY, f32::min),
             VolumeData::Cloud(_, v) => v.min_element().min(0.0),
+            VolumeData::Nano(g, v) => {
+                let (lo, hi) = g.range();
+                v.to_array().iter().map(|&c| (c * lo).min(c * hi)).fold(f32::INFINITY, f32::min)
+            }
+            VolumeData::Blackbody(_) => 0.0,
         }
     }
 
@@ -310,6 +438,9 @@ impl Volume {
             VolumeData::Cloud(c, v) => {
                 v.is_finite() && [c.density, c.wispiness, c.frequency].iter().all(|x| x.is_finite())
             }
+            // The grid's values are checked finite when read.
+            VolumeData::Nano(_, v) => v.is_finite(),
+            VolumeData::Blackbody(b) => b.table.iter().all(|c| c.is_finite()),
         }
     }
 
@@ -317,6 +448,25 @@ impl Volume {
     pub fn is_constant(&self) -> bool {
         matches!(self.data, VolumeData::Constant(_))
     }
+}
+
+/// An error unless NanoVDB grid `g` is a fog volume or unclassified (as pbrt-v4 requires of a
+/// medium's grids: a level set's values are distances, not densities).
+fn fog_volume(o: &Obj, g: &NanoGrid) -> Result<()> {
+    match g.unfit_class() {
+        None => Ok(()),
+        Some(c) => Err(o.error_at(
+            "filename",
+            format!("grid \"{}\" is a {c}: a volume reads fog volumes (or unclassified grids)", g.name()),
+        )),
+    }
+}
+
+/// The box of a NanoVDB grid's active voxel centres in its world space.
+fn nano_bounds(grid: &NanoGrid) -> Bounds3 {
+    let [lo, hi] = grid.world_bbox();
+    let v = |c: [f64; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+    Bounds3::new(v(lo), v(hi))
 }
 
 /// A volume parameter `name` of a medium, as Mitsuba's `props.volume`: a nested `<volume>`
@@ -362,6 +512,16 @@ impl Volume {
     ///   before `to_world`), `max_value` (an upper bound of the values; neumann takes the larger
     ///   of it and the data's maximum, so that tracking stays unbiased), `raw` and `accel` (no
     ///   effect in RGB rendering).
+    ///
+    /// and neumann's:
+    /// - `nanovdb`: `filename` (a NanoVDB file), `grid` (the name of a float grid in it,
+    ///   `density`), `value` (1: a colour it multiplies), `to_world` (where the grid's world
+    ///   space goes: the grid's own map places its voxels there); the volume's box is that of the
+    ///   grid's active voxels;
+    /// - `nanovdb_blackbody`: `filename`, `grid` (`temperature`), `temperature_offset` (0) and
+    ///   `temperature_scale` (1): the temperature is `(T − offset) · scale` K; `scale` (1: it
+    ///   multiplies the radiance), `required` (true; false: a file without the grid gives no
+    ///   radiance, as pbrt-v4's optional temperature grid), `to_world`.
     pub fn from_props(o: &Obj, kind: SpectrumKind, files: &mut dyn VolumeSource) -> Result<Volume> {
         o.check_children(&[])?;
         let to_world = o.transform("to_world")?;
@@ -401,7 +561,40 @@ impl Volume {
                 }
                 Ok(v)
             }
-            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume", "pbrt_cloud"])),
+            "nanovdb" => {
+                let grid = o.string_opt("grid")?.unwrap_or_else(|| "density".into());
+                let g = files.nanovdb_grid(o, "filename", &grid)?.ok_or_else(|| {
+                    o.error_at("filename", format!("the file has no grid named \"{grid}\" (see the \"grid\" parameter)"))
+                })?;
+                fog_volume(o, &g)?;
+                Ok(Volume::nanovdb(g, o.rgb("value", Rgb::ONE, kind)?, to_world))
+            }
+            "nanovdb_blackbody" => {
+                let grid = o.string_opt("grid")?.unwrap_or_else(|| "temperature".into());
+                let required = o.bool("required", true)?;
+                let (offset, t_scale, scale) =
+                    (o.float("temperature_offset", 0.0)?, o.float("temperature_scale", 1.0)?, o.float("scale", 1.0)?);
+                for (name, v) in [("temperature_offset", offset), ("temperature_scale", t_scale), ("scale", scale)] {
+                    if !v.is_finite() {
+                        return Err(o.error_at(name, format!("{name} must be finite, got {v}")));
+                    }
+                }
+                if scale < 0.0 {
+                    return Err(o.error_at("scale", format!("scale must be ≥ 0, got {scale}")));
+                }
+                match files.nanovdb_grid(o, "filename", &grid)? {
+                    Some(g) => {
+                        fog_volume(o, &g)?;
+                        Ok(Volume::blackbody(g, offset, t_scale, scale, to_world))
+                    }
+                    None if !required => Ok(Volume::constant(Rgb::ZERO, to_world)),
+                    None => Err(o.error_at(
+                        "filename",
+                        format!("the file has no grid named \"{grid}\" (see the \"grid\" parameter)"),
+                    )),
+                }
+            }
+            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume", "pbrt_cloud", "nanovdb", "nanovdb_blackbody"])),
         }
     }
 }

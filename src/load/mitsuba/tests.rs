@@ -1994,6 +1994,64 @@ fn principled_parameters() {
     assert!(e.contains("clearcoat"), "{e}");
 }
 
+/// neumann's `nanovdb` and `nanovdb_blackbody` volumes in Mitsuba XML: the grid named `grid` of
+/// the file (relative to the scene), `value` × its density in the space of `to_world`, the
+/// medium's box the grid's world box carried there; black-body `radiance` from the temperature
+/// grid; errors are located: a missing grid (unless not `required`), a level set, a missing file.
+#[test]
+fn nanovdb_volumes() {
+    use crate::medium::Coefficients;
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/nanovdb");
+    let medium = |body: &str| {
+        scene(&format!(
+            r#"<medium type="heterogeneous" id="smoke">{body}</medium>
+            <shape type="sphere"><float name="radius" value="3"/><bsdf type="null"/><ref name="interior" id="smoke"/></shape>"#
+        ))
+    };
+    let text = medium(
+        r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/>
+             <rgb name="value" value="1, 0.5, 0.25"/><transform name="to_world"><translate x="2"/></transform></volume>
+           <float name="scale" value="4"/><rgb name="albedo" value="0.5"/>
+           <volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="blob.nvdb"/>
+             <float name="temperature_offset" value="1"/><float name="temperature_scale" value="150"/>
+             <transform name="to_world"><translate x="2"/></transform></volume>"#,
+    );
+    let f = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
+    let m = &f.scene.media()[0];
+    let Coefficients::Heterogeneous(h) = &m.coefficients else { panic!() };
+    let g = crate::load::nanovdb::load_nanovdb(&dir.join("blob.nvdb"), "density").unwrap().unwrap();
+    let [lo, hi] = g.world_bbox();
+    let b = h.sigma_t.bounds();
+    assert!((b.min - Vec3::new(lo[0] as f32 + 2.0, lo[1] as f32, lo[2] as f32)).abs().max_element() < 1e-6, "{b:?}");
+    assert!((b.max - Vec3::new(hi[0] as f32 + 2.0, hi[1] as f32, hi[2] as f32)).abs().max_element() < 1e-6, "{b:?}");
+    let p = [0.1f32, 0.2, 0.05];
+    let d = g.sample(g.world_to_index(p));
+    assert!(d > 0.1, "{d}");
+    let got = h.sigma_t.eval(Vec3::new(p[0] + 2.0, p[1], p[2]));
+    assert!((got - Rgb::new(1.0, 0.5, 0.25) * d).abs().max_element() < 1e-6, "{got} vs {d}");
+    assert!((h.majorant() - 4.0 * g.range().1).abs() < 1e-5, "{}", h.majorant());
+    let le = m.radiance.as_ref().expect("radiance").eval(Vec3::new(2.0, 0.0, 0.2));
+    assert!(le.x > le.y && le.y >= le.z && le.x > 0.0, "a red glow: {le}");
+    // A grid the file lacks: no radiance where not required.
+    let text = medium(
+        r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="voxels.nvdb"/>
+             <boolean name="required" value="false"/></volume>"#,
+    );
+    let f = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
+    assert!(f.scene.media()[0].radiance.is_none());
+    for (body, expectation) in [
+        (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/><string name="grid" value="smoke"/></volume>"#, "no grid named \"smoke\""),
+        (r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="voxels.nvdb"/></volume>"#, "no grid named \"temperature\""),
+        (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="missing.nvdb"/></volume>"#, "missing.nvdb"),
+        (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob_ref.txt"/></volume>"#, "not a NanoVDB file"),
+        (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/><rgb name="value" value="-1"/></volume>"#, "non-negative"),
+        (r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="blob.nvdb"/><float name="scale" value="-1"/></volume>"#, "scale must be ≥ 0"),
+    ] {
+        let e = load_scene_text(&dir.join("s.xml"), &medium(body), &[]).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("s.xml:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");
+    }
+}
+
 /// Mitsuba's `heterogeneous` medium: `gridvolume` and `constvolume` volumes (and plain
 /// constants, which are constant volumes over the unit cube), `scale`, `sample_emitters`; the
 /// medium's extent is the `sigma_t` volume's box; the majorant is `scale` × the grid's largest

@@ -115,7 +115,7 @@ fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
         SpectrumParam::Rgb(c) => c,
         SpectrumParam::Constant(v) => spectrum_to_rgb(&[(360.0, v), (830.0, v)], SpectrumKind::Illuminant),
         SpectrumParam::Samples(v) => spectrum_to_rgb(&v, SpectrumKind::Illuminant),
-        SpectrumParam::Blackbody(t) => spectrum_to_rgb(&blackbody_samples(t, true), SpectrumKind::Illuminant),
+        SpectrumParam::Blackbody(t) => spectrum_to_rgb(&crate::math::spectrum::blackbody(t, true), SpectrumKind::Illuminant),
         SpectrumParam::Named(n) if n == "stdillum-D65" => Rgb::ONE,
         SpectrumParam::Named(n) => {
             return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here")))
@@ -123,26 +123,10 @@ fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
     })
 }
 
-/// Planck's law at `kelvin` sampled every 5 nm over 360–830 nm: in W m⁻³ sr⁻¹ × 10⁻¹³, or
-/// divided by its value at the peak wavelength (Wien's law) where `peak_one`.
-fn blackbody_samples(kelvin: f32, peak_one: bool) -> Vec<(f32, f32)> {
-    const H: f64 = 6.626_070_15e-34;
-    const C: f64 = 299_792_458.0;
-    const K: f64 = 1.380_649e-23;
-    let planck = |l: f64| 2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * kelvin as f64)).exp() - 1.0);
-    let norm = if peak_one { planck(2.897_771_955e-3 / kelvin as f64) } else { 1e13 };
-    (0..=94)
-        .map(|i| {
-            let nm = 360.0 + 5.0 * i as f64;
-            (nm as f32, (planck(nm * 1e-9) / norm) as f32)
-        })
-        .collect()
-}
-
 /// The linear sRGB colour of a black body at `kelvin`, at luminance 1 (pbrt-v4 normalises a
 /// light's spectrum to 1 nit, which its sRGB film shows as Y = 1).
 pub fn blackbody_rgb(kelvin: f32) -> Rgb {
-    unit_luminance(&blackbody_samples(kelvin, false))
+    unit_luminance(&crate::math::spectrum::blackbody(kelvin, false))
 }
 
 /// The linear sRGB colour of an emission spectrum (wavelength nm, value) at luminance 1: pbrt-v4
@@ -1125,10 +1109,7 @@ pub fn medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
         "homogeneous" => homogeneous_medium(p, ps),
         "uniformgrid" | "rgbgrid" => grid_medium(p, ps, ty == "rgbgrid"),
         "cloud" => cloud_medium(p, ps),
-        "nanovdb" => Err(ps.error_at(
-            "type",
-            format!("the \"{ty}\" medium is not implemented by neumann yet (homogeneous, uniformgrid, rgbgrid, cloud)"),
-        )),
+        "nanovdb" => nanovdb_medium(p, ps),
         other => Err(ps.error_at(
             "type",
             format!("unknown medium \"{other}\" (homogeneous, uniformgrid, rgbgrid, nanovdb, cloud)"),
@@ -1194,6 +1175,63 @@ fn cloud_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
     set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
     phase_g(ps, &mut o)?;
+    Ok(o)
+}
+
+/// pbrt-v4's `nanovdb` medium: the float grid `gridname` ("density") of the NanoVDB file
+/// `filename` (required), read trilinearly at the point's medium-space coordinates through the
+/// grid's own map, times `sigma_a` and `sigma_s` (1 each) and `scale` (1), `g`; where the file
+/// also has the grid `temperaturename` ("temperature") and `Lescale` (1) is positive, it emits
+/// `σₐ` times black-body radiance at `(T − temperatureoffset) · temperaturescale` K (the offset
+/// also spelt `temperaturecutoff`; none at or below 100 K) times `Lescale` → Mitsuba's
+/// `heterogeneous` whose σₜ is neumann's `nanovdb` volume and whose `radiance` is its
+/// `nanovdb_blackbody`.
+fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
+    let file = ps
+        .string("filename")?
+        .ok_or_else(|| ps.error("a nanovdb medium needs its \"string filename\" (as pbrt-v4 requires)"))?;
+    let grid = ps.string("gridname")?.unwrap_or_else(|| "density".into());
+    let (sa, ss) = (medium_coefficient(ps, "sigma_a", Rgb::ONE)?, medium_coefficient(ps, "sigma_s", Rgb::ONE)?);
+    let scale = ps.float("scale", 1.0)?;
+    if !(scale >= 0.0 && scale.is_finite()) {
+        return Err(ps.error_at("scale", format!("scale must be finite and ≥ 0, got {scale}")));
+    }
+    let st = sa + ss;
+    let peak = st.max_element();
+    let to_world = Value::Transform(transform(p.gs.ctm, ps)?);
+    let at = ploc(ps, "filename");
+    let mut v = obj("volume", "nanovdb", &ps.loc);
+    set(&mut v, "filename", Value::String(file.clone()), &at);
+    set(&mut v, "grid", Value::String(grid), &ploc(ps, "gridname"));
+    set(&mut v, "value", Value::Rgb(if peak > 0.0 { st / peak } else { Rgb::ZERO }), &ploc(ps, "sigma_a"));
+    set(&mut v, "to_world", to_world.clone(), &ps.loc);
+    let mut o = obj("medium", "heterogeneous", &ps.loc);
+    set(&mut o, "sigma_t", Value::Object(Rc::new(v)), &ps.loc);
+    set(&mut o, "scale", Value::Float((peak * scale) as f64), &ploc(ps, "scale"));
+    let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
+    set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
+    phase_g(ps, &mut o)?;
+    let le_scale = le_scale(ps)?;
+    let temperature = ps.string("temperaturename")?.unwrap_or_else(|| "temperature".into());
+    let cutoff = ps.float("temperaturecutoff", 0.0)?;
+    let offset = ps.float("temperatureoffset", cutoff)?;
+    let t_scale = ps.float("temperaturescale", 1.0)?;
+    for (name, x) in [("temperatureoffset", offset), ("temperaturescale", t_scale)] {
+        if !x.is_finite() {
+            return Err(ps.error_at(name, format!("\"{name}\" must be finite, got {x}")));
+        }
+    }
+    if le_scale > 0.0 && sa.max_element() > 0.0 {
+        let mut b = obj("volume", "nanovdb_blackbody", &ps.loc);
+        set(&mut b, "filename", Value::String(file), &at);
+        set(&mut b, "grid", Value::String(temperature), &ploc(ps, "temperaturename"));
+        set(&mut b, "required", Value::Bool(false), &ps.loc);
+        set(&mut b, "temperature_offset", Value::Float(offset as f64), &ploc(ps, "temperatureoffset"));
+        set(&mut b, "temperature_scale", Value::Float(t_scale as f64), &ploc(ps, "temperaturescale"));
+        set(&mut b, "scale", Value::Float(le_scale as f64), &ploc(ps, "Lescale"));
+        set(&mut b, "to_world", to_world, &ps.loc);
+        set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, "Lescale"));
+    }
     Ok(o)
 }
 
