@@ -20,6 +20,7 @@ use crate::props::{Obj, Result as PropResult};
 use std::sync::Arc;
 
 pub mod attributes;
+pub mod blackbody;
 pub mod cloud;
 pub mod noise;
 pub mod procedural;

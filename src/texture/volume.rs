@@ -16,8 +16,8 @@
 //!
 //! neumann's `nanovdb` reads a float grid of a NanoVDB file ([`crate::image::nanovdb`]) in the
 //! volume's own space (where the grid's index-to-world map puts it: no unit cube), trilinearly
-//! between voxel centres as NanoVDB samples, times a colour; `nanovdb_blackbody` turns a
-//! temperature grid into black-body radiance. Together they are pbrt-v4's `nanovdb` medium.
+//! between voxel centres as NanoVDB samples, times a colour (pbrt-v4's `nanovdb` medium);
+//! `blackbody` ([`super::blackbody`]) turns another volume's temperatures into radiance.
 
 use crate::image::nanovdb::NanoGrid;
 use crate::image::{GridVolume, VolumeSource};
@@ -148,78 +148,16 @@ pub enum VolumeData {
     /// neumann's `nanovdb`: a NanoVDB float grid times a colour, looked up at the point's
     /// coordinates in the volume's own space (which the grid's map relates to its voxels).
     Nano(Arc<NanoGrid>, Rgb),
-    /// neumann's `nanovdb_blackbody`: black-body radiance at the temperatures of a NanoVDB grid.
-    Blackbody(Box<BlackbodyGrid>),
-}
-
-/// The radiance of a black body (pbrt-v4's `BlackbodySpectrum`: Planck's law divided by its
-/// value at the peak wavelength, in linear sRGB as pbrt-v4's CIE 1931 sensor sees it: Y = 1 for
-/// a flat spectrum of 1) at the temperature `(T − offset) · temperature_scale` kelvin, `T` the
-/// grid's trilinear value, times `scale`; zero at or below 100 K (pbrt-v4's emissive `nanovdb`
-/// medium).
-#[derive(Clone, Debug)]
-pub struct BlackbodyGrid {
-    grid: Arc<NanoGrid>,
-    offset: f32,
-    temperature_scale: f32,
-    /// The radiance at `BLACKBODY_MIN_K + k · step` kelvin (`scale` applied), for k up to the
-    /// grid's hottest point.
-    table: Vec<Rgb>,
-    step: f32,
-}
-
-/// pbrt-v4's cut-off: no emission at or below this temperature (K).
-const BLACKBODY_MIN_K: f32 = 100.0;
-
-impl BlackbodyGrid {
-    /// The table over the temperatures the grid reaches (2048 entries).
-    fn new(grid: Arc<NanoGrid>, offset: f32, temperature_scale: f32, scale: f32) -> BlackbodyGrid {
-        let (lo, hi) = grid.range();
-        let top = ((lo - offset) * temperature_scale).max((hi - offset) * temperature_scale);
-        let n = 2048;
-        let (table, step) = if top > BLACKBODY_MIN_K && top.is_finite() {
-            let step = (top - BLACKBODY_MIN_K) / (n - 1) as f32;
-            let table = (0..n)
-                .map(|k| {
-                    let t = BLACKBODY_MIN_K + k as f32 * step;
-                    let s = crate::math::spectrum::blackbody(t, true);
-                    crate::math::spectrum::spectrum_to_rgb(&s, SpectrumKind::Illuminant) * scale
-                })
-                .collect();
-            (table, step)
-        } else {
-            (vec![Rgb::ZERO], 1.0)
-        };
-        BlackbodyGrid { grid, offset, temperature_scale, table, step }
-    }
-
-    /// The radiance at `p` in the grid's world space.
-    #[inline]
-    fn eval(&self, p: Vec3) -> Rgb {
-        let t = (self.grid.sample(self.grid.world_to_index(p.to_array())) - self.offset) * self.temperature_scale;
-        if t.is_nan() || t <= BLACKBODY_MIN_K {
-            return Rgb::ZERO;
-        }
-        let x = ((t - BLACKBODY_MIN_K) / self.step).min((self.table.len() - 1) as f32);
-        let k = (x as usize).min(self.table.len().saturating_sub(2));
-        let f = x - k as f32;
-        match self.table.get(k + 1) {
-            Some(&next) => self.table[k] * (1.0 - f) + next * f,
-            None => self.table[k],
-        }
-    }
-
-    /// The largest channel of any radiance it gives.
-    fn max(&self) -> f32 {
-        self.table.iter().map(|c| c.max_element()).fold(0.0, f32::max)
-    }
+    /// neumann's `blackbody`: black-body radiance at the temperatures of another volume.
+    Blackbody(Box<super::blackbody::Blackbody>),
 }
 
 /// A volume texture: values over its box in the world.
 #[derive(Clone, Debug)]
 pub struct Volume {
     data: VolumeData,
-    /// World to the unit cube of the data.
+    /// World to the data's own space: a grid's unit cube, a cloud's or a NanoVDB grid's world
+    /// space (the identity for a black body, whose volumes place themselves).
     to_local: Transform,
     /// Where the volume is (the transformed unit cube's box; module docs).
     bounds: Bounds3,
@@ -259,13 +197,11 @@ impl Volume {
         Volume { data: VolumeData::Nano(grid, value), to_local: to_world.inverse(), bounds, max }
     }
 
-    /// Black-body radiance (see [`BlackbodyGrid`]) at the temperatures of a NanoVDB grid in the
-    /// space that `to_world` places in the world.
-    pub fn blackbody(grid: Arc<NanoGrid>, offset: f32, temperature_scale: f32, scale: f32, to_world: Transform) -> Volume {
-        let bounds = to_world.apply_bounds(&nano_bounds(&grid));
-        let b = BlackbodyGrid::new(grid, offset, temperature_scale, scale);
-        let max = b.max();
-        Volume { data: VolumeData::Blackbody(Box::new(b)), to_local: to_world.inverse(), bounds, max }
+    /// Black-body radiance ([`super::blackbody::Blackbody`]; its volumes place themselves in
+    /// the world).
+    pub fn blackbody(b: super::blackbody::Blackbody) -> Volume {
+        let (bounds, max) = (b.bounds(), b.max());
+        Volume { data: VolumeData::Blackbody(Box::new(b)), to_local: Transform::IDENTITY, bounds, max }
     }
 
     /// A grid volume (one or three channels) over the unit cube under `to_world`; `None` for
@@ -287,7 +223,7 @@ impl Volume {
             VolumeData::Grid(g) => g.eval(self.to_local.apply_point(p)),
             VolumeData::Cloud(c, v) => *v * c.at(self.to_local.apply_point(p)),
             VolumeData::Nano(g, v) => *v * g.sample(g.world_to_index(self.to_local.apply_point(p).to_array())),
-            VolumeData::Blackbody(b) => b.eval(self.to_local.apply_point(p)),
+            VolumeData::Blackbody(b) => b.eval(p),
         }
     }
 
@@ -426,7 +362,7 @@ impl Volume {
                 let (lo, hi) = g.range();
                 v.to_array().iter().map(|&c| (c * lo).min(c * hi)).fold(f32::INFINITY, f32::min)
             }
-            VolumeData::Blackbody(_) => 0.0,
+            VolumeData::Blackbody(b) => b.min(),
         }
     }
 
@@ -440,7 +376,7 @@ impl Volume {
             }
             // The grid's values are checked finite when read.
             VolumeData::Nano(_, v) => v.is_finite(),
-            VolumeData::Blackbody(b) => b.table.iter().all(|c| c.is_finite()),
+            VolumeData::Blackbody(b) => b.is_finite(),
         }
     }
 
@@ -518,10 +454,11 @@ impl Volume {
     ///   `density`), `value` (1: a colour it multiplies), `to_world` (where the grid's world
     ///   space goes: the grid's own map places its voxels there); the volume's box is that of the
     ///   grid's active voxels;
-    /// - `nanovdb_blackbody`: `filename`, `grid` (`temperature`), `temperature_offset` (0) and
-    ///   `temperature_scale` (1): the temperature is `(T − offset) · scale` K; `scale` (1: it
-    ///   multiplies the radiance), `required` (true; false: a file without the grid gives no
-    ///   radiance, as pbrt-v4's optional temperature grid), `to_world`.
+    ///   `required` (true; false: a file without the grid gives a volume of zero, as pbrt-v4's
+    ///   optional temperature grid);
+    /// - `blackbody`: black-body radiance ([`super::blackbody`]) at the temperatures of the
+    ///   volume `temperature` (required: a nested `<volume>` or a number), `temperature_offset`
+    ///   (0), `temperature_scale` (1), times `scale` (1) and the volume `weight` (none).
     pub fn from_props(o: &Obj, kind: SpectrumKind, files: &mut dyn VolumeSource) -> Result<Volume> {
         o.check_children(&[])?;
         let to_world = o.transform("to_world")?;
@@ -563,15 +500,36 @@ impl Volume {
             }
             "nanovdb" => {
                 let grid = o.string_opt("grid")?.unwrap_or_else(|| "density".into());
-                let g = files.nanovdb_grid(o, "filename", &grid)?.ok_or_else(|| {
-                    o.error_at("filename", format!("the file has no grid named \"{grid}\" (see the \"grid\" parameter)"))
-                })?;
-                fog_volume(o, &g)?;
-                Ok(Volume::nanovdb(g, o.rgb("value", Rgb::ONE, kind)?, to_world))
-            }
-            "nanovdb_blackbody" => {
-                let grid = o.string_opt("grid")?.unwrap_or_else(|| "temperature".into());
+                let value = o.rgb("value", Rgb::ONE, kind)?;
                 let required = o.bool("required", true)?;
+                match files.nanovdb_grid(o, "filename", &grid)? {
+                    Some(g) => {
+                        fog_volume(o, &g)?;
+                        Ok(Volume::nanovdb(g, value, to_world))
+                    }
+                    None if !required => Ok(Volume::constant(Rgb::ZERO, to_world)),
+                    None => Err(o.error_at(
+                        "filename",
+                        format!("the file has no grid named \"{grid}\" (see the \"grid\" parameter)"),
+                    )),
+                }
+            }
+            "blackbody" => {
+                if o.get("temperature").is_none() {
+                    return Err(o.error("a blackbody volume needs its 'temperature' (a <volume> or a number)"));
+                }
+                let temperature = volume_param(o, "temperature", 0.0, SpectrumKind::Unbounded, files)?;
+                if !temperature.is_grey() || !temperature.is_finite() {
+                    return Err(o.error_at("temperature", "'temperature' must be one finite value per point (grey)"));
+                }
+                let weight = match o.get("weight") {
+                    None => None,
+                    Some(_) => {
+                        let w = volume_param(o, "weight", 1.0, SpectrumKind::Unbounded, files)?;
+                        check_range(o, "weight", &w, 0.0, f32::INFINITY)?;
+                        Some(w)
+                    }
+                };
                 let (offset, t_scale, scale) =
                     (o.float("temperature_offset", 0.0)?, o.float("temperature_scale", 1.0)?, o.float("scale", 1.0)?);
                 for (name, v) in [("temperature_offset", offset), ("temperature_scale", t_scale), ("scale", scale)] {
@@ -582,19 +540,9 @@ impl Volume {
                 if scale < 0.0 {
                     return Err(o.error_at("scale", format!("scale must be ≥ 0, got {scale}")));
                 }
-                match files.nanovdb_grid(o, "filename", &grid)? {
-                    Some(g) => {
-                        fog_volume(o, &g)?;
-                        Ok(Volume::blackbody(g, offset, t_scale, scale, to_world))
-                    }
-                    None if !required => Ok(Volume::constant(Rgb::ZERO, to_world)),
-                    None => Err(o.error_at(
-                        "filename",
-                        format!("the file has no grid named \"{grid}\" (see the \"grid\" parameter)"),
-                    )),
-                }
+                Ok(Volume::blackbody(super::blackbody::Blackbody::new(temperature, weight, offset, t_scale, scale)))
             }
-            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume", "pbrt_cloud", "nanovdb", "nanovdb_blackbody"])),
+            _ => Err(o.unknown_plugin(&["gridvolume", "constvolume", "pbrt_cloud", "nanovdb", "blackbody"])),
         }
     }
 }

@@ -1994,10 +1994,11 @@ fn principled_parameters() {
     assert!(e.contains("clearcoat"), "{e}");
 }
 
-/// neumann's `nanovdb` and `nanovdb_blackbody` volumes in Mitsuba XML: the grid named `grid` of
-/// the file (relative to the scene), `value` × its density in the space of `to_world`, the
-/// medium's box the grid's world box carried there; black-body `radiance` from the temperature
-/// grid; errors are located: a missing grid (unless not `required`), a level set, a missing file.
+/// neumann's `nanovdb` and `blackbody` volumes in Mitsuba XML: the grid named `grid` of the file
+/// (relative to the scene), `value` × its density in the space of `to_world`, the medium's box
+/// the grid's world box carried there; black-body `radiance` from a temperature grid; errors
+/// are located: a missing grid (unless not `required`), a missing file or temperature, bad
+/// values.
 #[test]
 fn nanovdb_volumes() {
     use crate::medium::Coefficients;
@@ -2012,9 +2013,10 @@ fn nanovdb_volumes() {
         r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/>
              <rgb name="value" value="1, 0.5, 0.25"/><transform name="to_world"><translate x="2"/></transform></volume>
            <float name="scale" value="4"/><rgb name="albedo" value="0.5"/>
-           <volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="blob.nvdb"/>
-             <float name="temperature_offset" value="1"/><float name="temperature_scale" value="150"/>
-             <transform name="to_world"><translate x="2"/></transform></volume>"#,
+           <volume type="blackbody" name="radiance">
+             <volume type="nanovdb" name="temperature"><string name="filename" value="blob.nvdb"/>
+               <string name="grid" value="temperature"/><transform name="to_world"><translate x="2"/></transform></volume>
+             <float name="temperature_offset" value="1"/><float name="temperature_scale" value="150"/></volume>"#,
     );
     let f = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
     let m = &f.scene.media()[0];
@@ -2034,18 +2036,21 @@ fn nanovdb_volumes() {
     assert!(le.x > le.y && le.y >= le.z && le.x > 0.0, "a red glow: {le}");
     // A grid the file lacks: no radiance where not required.
     let text = medium(
-        r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="voxels.nvdb"/>
-             <boolean name="required" value="false"/></volume>"#,
+        r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"><volume type="nanovdb" name="temperature">
+             <string name="filename" value="voxels.nvdb"/><string name="grid" value="temperature"/><boolean name="required" value="false"/></volume></volume>"#,
     );
     let f = load_scene_text(&dir.join("s.xml"), &text, &[]).unwrap_or_else(|e| panic!("{e}"));
     assert!(f.scene.media()[0].radiance.is_none());
     for (body, expectation) in [
         (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/><string name="grid" value="smoke"/></volume>"#, "no grid named \"smoke\""),
-        (r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="voxels.nvdb"/></volume>"#, "no grid named \"temperature\""),
+        (r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"><volume type="nanovdb" name="temperature"><string name="filename" value="voxels.nvdb"/><string name="grid" value="temperature"/></volume></volume>"#, "no grid named \"temperature\""),
+        (r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"/>"#, "needs its 'temperature'"),
+        (r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"><rgb name="temperature" value="0.1, 0.2, 0.3"/></volume>"#, "grey"),
         (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="missing.nvdb"/></volume>"#, "missing.nvdb"),
         (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob_ref.txt"/></volume>"#, "not a NanoVDB file"),
         (r#"<volume type="nanovdb" name="sigma_t"><string name="filename" value="blob.nvdb"/><rgb name="value" value="-1"/></volume>"#, "non-negative"),
-        (r#"<float name="sigma_t" value="1"/><volume type="nanovdb_blackbody" name="radiance"><string name="filename" value="blob.nvdb"/><float name="scale" value="-1"/></volume>"#, "scale must be ≥ 0"),
+        (r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"><float name="temperature" value="3000"/><float name="scale" value="-1"/></volume>"#, "scale must be ≥ 0"),
+        (r#"<float name="sigma_t" value="1"/><volume type="blackbody" name="radiance"><float name="temperature" value="3000"/><float name="weight" value="-1"/></volume>"#, "non-negative"),
     ] {
         let e = load_scene_text(&dir.join("s.xml"), &medium(body), &[]).map(|_| ()).unwrap_err().to_string();
         assert!(e.contains("s.xml:") && e.contains(expectation), "expected '{expectation}' in:\n{e}");

@@ -1100,6 +1100,41 @@ fn nanovdb_media() {
     assert!(e.contains("temperaturescale"), "{e}");
 }
 
+/// pbrt-v4's `uniformgrid` with a `temperature` grid: black-body radiance at
+/// `(T − temperaturecutoff) · temperaturescale` K (trilinear `T`) times the `Lescale` grid
+/// (without one, pbrt's 1 × 1 × 1 tent); `Le` and `temperature` together are an error.
+#[test]
+fn uniformgrid_media_emit_by_temperature() {
+    use crate::math::spectrum::{blackbody, spectrum_to_rgb, SpectrumKind};
+    use crate::math::Vec3;
+    let radiance = |params: &str| {
+        let text = format!(
+            "MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" \"integer nx\" 2 \"point3 p1\" [2 1 1] \
+             \"float density\" [1 1] \"float temperature\" [20 40] \"float temperaturecutoff\" 4 \"float temperaturescale\" 100 {params}\n\
+             Camera \"perspective\"\nWorldBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\nShape \"sphere\"\n"
+        );
+        load(&text).unwrap_or_else(|e| panic!("{e}")).scene.media()[0].radiance.clone().expect("emissive")
+    };
+    let b = |t: f32| spectrum_to_rgb(&blackbody(t, true), SpectrumKind::Illuminant);
+    let close = |a: Rgb, want: Rgb| (a - want).abs().max_element() <= 2e-3 * want.max_element();
+    // Texel centres x = ½, 1½: (20 − 4) · 100 = 1600 K and 3600 K; between them the temperature
+    // is interpolated, then converted.
+    let le = radiance("\"float Lescale\" [2 0.5]");
+    assert!(close(le.eval(Vec3::new(0.5, 0.5, 0.5)), b(1600.0) * 2.0), "{}", le.eval(Vec3::new(0.5, 0.5, 0.5)));
+    assert!(close(le.eval(Vec3::new(1.5, 0.5, 0.5)), b(3600.0) * 0.5));
+    assert!(close(le.eval(Vec3::new(1.0, 0.5, 0.5)), b(2600.0) * 1.25));
+    let tent = radiance("");
+    assert!(close(tent.eval(Vec3::new(1.0, 0.5, 0.5)), b(2600.0)), "the centre");
+    // At (1.5, 0.75, 0.5) of the box [0, 2] × [0, 1]²: the temperature fades toward the box's
+    // face as pbrt's grids do, ¾ of 40 → (30 − 4) · 100 = 2600 K; the tent weighs ¾ · ¾.
+    let at = Vec3::new(1.5, 0.75, 0.5);
+    assert!(close(tent.eval(at), b(2600.0) * 0.5625), "the tent: {} vs {}", tent.eval(at), b(2600.0) * 0.5625);
+    let e = err("MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" \"float density\" [1] \"float temperature\" [3000] \"rgb Le\" [1 1 1]\n");
+    assert!(e.contains("either \"Le\" or \"temperature\""), "{e}");
+    let e = err("MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" \"rgb sigma_a\" [1 1 1] \"float temperaturescale\" 2\n");
+    assert!(e.contains("temperaturescale"), "rgbgrid has no temperatures: {e}");
+}
+
 /// The `nanovdb` medium of `scenes/assets/fireball.nvdb` (its map a plain scale) renders like
 /// a `uniformgrid` of its voxels (texel centres on the voxels: the box from `lo − ½` to
 /// `hi + ½` in index space): the same trilinear lookups through another volume type.

@@ -1184,8 +1184,8 @@ fn cloud_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
 /// also has the grid `temperaturename` ("temperature") and `Lescale` (1) is positive, it emits
 /// `σₐ` times black-body radiance at `(T − temperatureoffset) · temperaturescale` K (the offset
 /// also spelt `temperaturecutoff`; none at or below 100 K) times `Lescale` → Mitsuba's
-/// `heterogeneous` whose σₜ is neumann's `nanovdb` volume and whose `radiance` is its
-/// `nanovdb_blackbody`.
+/// `heterogeneous` whose σₜ is neumann's `nanovdb` volume and whose `radiance` is a
+/// `blackbody` volume over another (`required` false: pbrt's temperature grid is optional).
 fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     let file = ps
         .string("filename")?
@@ -1222,17 +1222,36 @@ fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
         }
     }
     if le_scale > 0.0 && sa.max_element() > 0.0 {
-        let mut b = obj("volume", "nanovdb_blackbody", &ps.loc);
-        set(&mut b, "filename", Value::String(file), &at);
-        set(&mut b, "grid", Value::String(temperature), &ploc(ps, "temperaturename"));
-        set(&mut b, "required", Value::Bool(false), &ps.loc);
-        set(&mut b, "temperature_offset", Value::Float(offset as f64), &ploc(ps, "temperatureoffset"));
-        set(&mut b, "temperature_scale", Value::Float(t_scale as f64), &ploc(ps, "temperaturescale"));
-        set(&mut b, "scale", Value::Float(le_scale as f64), &ploc(ps, "Lescale"));
-        set(&mut b, "to_world", to_world, &ps.loc);
+        let mut t = obj("volume", "nanovdb", &ps.loc);
+        set(&mut t, "filename", Value::String(file), &at);
+        set(&mut t, "grid", Value::String(temperature), &ploc(ps, "temperaturename"));
+        set(&mut t, "required", Value::Bool(false), &ps.loc);
+        set(&mut t, "to_world", to_world, &ps.loc);
+        let b = blackbody_volume(ps, t, None, offset, t_scale, le_scale);
         set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, "Lescale"));
     }
     Ok(o)
+}
+
+/// neumann's `blackbody` volume over the temperature volume `temperature` (and the `weight`
+/// volume): pbrt-v4's emission by temperature, `scale · weight · B̂((T − offset) · t_scale)`.
+fn blackbody_volume(
+    ps: &ParamSet,
+    temperature: Obj,
+    weight: Option<Obj>,
+    offset: f32,
+    t_scale: f32,
+    scale: f32,
+) -> Obj {
+    let mut b = obj("volume", "blackbody", &ps.loc);
+    set(&mut b, "temperature", Value::Object(Rc::new(temperature)), &ploc(ps, "temperature"));
+    if let Some(w) = weight {
+        set(&mut b, "weight", Value::Object(Rc::new(w)), &ploc(ps, "Lescale"));
+    }
+    set(&mut b, "temperature_offset", Value::Float(offset as f64), &ploc(ps, "temperatureoffset"));
+    set(&mut b, "temperature_scale", Value::Float(t_scale as f64), &ploc(ps, "temperaturescale"));
+    set(&mut b, "scale", Value::Float(scale as f64), &ploc(ps, "Lescale"));
+    b
 }
 
 /// pbrt-v4's phase function parameter `g` on the medium `o` (Henyey–Greenstein; none at 0).
@@ -1268,13 +1287,18 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     if n > 1 << 27 {
         return Err(ps.error(format!("a grid of {}×{}×{} values is too large", res[0], res[1], res[2])));
     }
-    if ps.has("temperature") {
-        return Err(
-            ps.error_at("temperature", "media emitting by temperature (black bodies) are not implemented by neumann")
-        );
-    }
-    for unused_without_temperature in ["temperaturecutoff", "temperatureoffset", "temperaturescale"] {
-        ps.float(unused_without_temperature, 1.0)?;
+    // pbrt-v4's `uniformgrid` reads the temperature parameters whether or not it has a
+    // `temperature` grid (`rgbgrid` does not: they are unused there).
+    let (offset, t_scale) = if rgb_grid {
+        (0.0, 1.0)
+    } else {
+        let cutoff = ps.float("temperaturecutoff", 0.0)?;
+        (ps.float("temperatureoffset", cutoff)?, ps.float("temperaturescale", 1.0)?)
+    };
+    for (name, x) in [("temperatureoffset", offset), ("temperaturescale", t_scale)] {
+        if !x.is_finite() {
+            return Err(ps.error_at(name, format!("\"{name}\" must be finite, got {x}")));
+        }
     }
     let (p0, p1) = (ps.point("p0", Vec3::ZERO)?, ps.point("p1", Vec3::ONE)?);
     if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
@@ -1312,7 +1336,23 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     // illuminants times the float `Lescale`. pbrt-v4 does not normalise the latter, whose RGB
     // illuminant spectra (the colour times the colour space's D65, scaled to luminance
     // `CIE_Y_integral`) thus render 106.856895 × brighter than the same RGB on a light.
-    let radiance: Option<Vec<f32>> = if rgb_grid {
+    // With a `temperature` grid (`uniformgrid`, no `Le`: pbrt-v4 refuses both), black bodies
+    // at `(T − temperatureoffset) · temperaturescale` K times the `Lescale` grid (the same
+    // default tent).
+    let temperature = if rgb_grid { None } else { values("temperature", 1, &["float"])? };
+    if temperature.is_some() && ps.has("Le") {
+        return Err(ps.error_at("Le", "give either \"Le\" or \"temperature\" (pbrt-v4 refuses both)"));
+    }
+    let temperature_weight = match &temperature {
+        None => None,
+        Some(_) => Some(match values("Lescale", 1, &["float"])? {
+            Some(grid) => grid.iter().flat_map(|s| [*s; 3]).collect::<Vec<f32>>(),
+            None => vec![1.0; 3],
+        }),
+    };
+    let radiance: Option<Vec<f32>> = if temperature.is_some() {
+        None
+    } else if rgb_grid {
         let scale = le_scale(ps)?;
         match values("Le", 3, &["rgb"])? {
             Some(_) if !ps.has("sigma_a") => {
@@ -1378,6 +1418,12 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     if let Some(le) = radiance {
         let v = volume(le, p);
         set(&mut o, "radiance", Value::Object(Rc::new(v)), &ploc(ps, "Le"));
+    }
+    if let (Some(t), Some(w)) = (temperature, temperature_weight) {
+        let t = volume(t.iter().flat_map(|x| [*x; 3]).collect(), p);
+        let w = volume(w, p);
+        let b = blackbody_volume(ps, t, Some(w), offset, t_scale, 1.0);
+        set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, "temperature"));
     }
     phase_g(ps, &mut o)?;
     Ok(o)
