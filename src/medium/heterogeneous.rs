@@ -239,7 +239,7 @@ impl Heterogeneous {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::image::GridVolume;
     use crate::math::Transform;
@@ -283,6 +283,59 @@ mod tests {
     }
     use crate::medium::volume::{GridFilter, GridWrap};
     use std::sync::Arc;
+
+    /// Asserts that along `ray` (unit direction) over `[0, t_max)` through `m` spectral
+    /// tracking's pass and scatter weights, ratio tracking's transmittance and the emission
+    /// estimate `∫ Tr σₐ Lₑ dt` for the radiance `radiance` agree, each channel within the
+    /// relative tolerance `tol` over `n` walks, with the midpoint rule (10⁵ steps); returns the
+    /// optical depths, for the caller to check the test is not trivial.
+    pub(crate) fn tracking_matches_quadrature(
+        m: &Heterogeneous,
+        radiance: &Volume,
+        ray: &Ray,
+        t_max: f32,
+        n: usize,
+        tol: f64,
+        rng: &mut Pcg32,
+    ) -> [f64; 3] {
+        let b = m.sigma_t.bounds();
+        let steps = 100_000;
+        let h = t_max as f64 / steps as f64;
+        let (mut tau, mut scatter, mut emitted) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
+        for i in 0..steps {
+            let p = ray.at(((i as f64 + 0.5) * h) as f32);
+            let s = if b.contains(p) { m.sigma_t_at(p, ray.d) } else { Rgb::ZERO };
+            let (albedo, le) = (m.albedo.eval(p), radiance.eval(p));
+            for c in 0..3 {
+                let tr = (-(tau[c] + 0.5 * s[c] as f64 * h)).exp();
+                scatter[c] += (albedo[c] * s[c]) as f64 * tr * h;
+                emitted[c] += ((1.0 - albedo[c]) * s[c] * le[c]) as f64 * tr * h;
+                tau[c] += s[c] as f64 * h;
+            }
+        }
+        let (mut pass, mut sc, mut ratio, mut glow) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
+        for _ in 0..n {
+            match m.sample_free_flight(ray, t_max, Rgb::ONE, rng.next_f32(), rng) {
+                FreeFlight::Pass { weight } => (0..3).for_each(|c| pass[c] += weight[c] as f64),
+                FreeFlight::Scatter { weight, .. } => (0..3).for_each(|c| sc[c] += weight[c] as f64),
+            }
+            let tr = m.transmittance(ray, t_max, rng);
+            let e = m.emitted(ray, t_max, radiance, rng);
+            (0..3).for_each(|c| {
+                ratio[c] += tr[c] as f64;
+                glow[c] += e[c] as f64;
+            });
+        }
+        for c in 0..3 {
+            let tr = (-tau[c]).exp();
+            let close = |got: f64, want: f64| (got / n as f64 - want).abs() <= tol * want + 1e-4;
+            assert!(close(pass[c], tr), "channel {c}: pass {} vs {tr}", pass[c] / n as f64);
+            assert!(close(ratio[c], tr), "channel {c}: ratio tracking {} vs {tr}", ratio[c] / n as f64);
+            assert!(close(sc[c], scatter[c]), "channel {c}: scatter {} vs {}", sc[c] / n as f64, scatter[c]);
+            assert!(close(glow[c], emitted[c]), "channel {c}: emission {} vs {}", glow[c] / n as f64, emitted[c]);
+        }
+        tau
+    }
 
     /// σₜ rising along x inside the unit cube: a 2-texel grid (x) read trilinearly is
     /// `lo` up to x = ¼, linear to `hi` at x = ¾, then `hi`; per channel.
@@ -394,45 +447,9 @@ mod tests {
         let b = m.sigma_t.bounds();
         let d = Vec3::new(0.8, 0.35, -0.45).normalize();
         let ray = Ray::new(b.centroid() - d * 4.0, d);
-        let t_max = 4.6f32;
-        // Midpoint rule over the ray from 0 to t_max: optical depth, ∫ σₛ e^(-τ), ∫ σₐ Lₑ e^(-τ).
-        let steps = 100_000;
-        let h = t_max as f64 / steps as f64;
-        let (mut tau, mut scatter, mut emitted) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
-        for i in 0..steps {
-            let p = ray.at(((i as f64 + 0.5) * h) as f32);
-            let s = if b.contains(p) { m.sigma_t_at(p, d) } else { Rgb::ZERO };
-            for c in 0..3 {
-                let tr = (-(tau[c] + 0.5 * s[c] as f64 * h)).exp();
-                scatter[c] += (albedo[c] * s[c]) as f64 * tr * h;
-                emitted[c] += ((1.0 - albedo[c]) * s[c] * le[c]) as f64 * tr * h;
-                tau[c] += s[c] as f64 * h;
-            }
-        }
-        assert!(tau.iter().all(|&t| t > 0.3 && t < 5.0), "optical depths {tau:?}");
         let radiance = Volume::constant(le, Transform::IDENTITY);
-        let n = 200_000;
-        let (mut pass, mut sc, mut ratio, mut glow) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
-        for _ in 0..n {
-            match m.sample_free_flight(&ray, t_max, Rgb::ONE, rng.next_f32(), &mut rng) {
-                FreeFlight::Pass { weight } => (0..3).for_each(|c| pass[c] += weight[c] as f64),
-                FreeFlight::Scatter { weight, .. } => (0..3).for_each(|c| sc[c] += weight[c] as f64),
-            }
-            let tr = m.transmittance(&ray, t_max, &mut rng);
-            let e = m.emitted(&ray, t_max, &radiance, &mut rng);
-            (0..3).for_each(|c| {
-                ratio[c] += tr[c] as f64;
-                glow[c] += e[c] as f64;
-            });
-        }
-        for c in 0..3 {
-            let tr = (-tau[c]).exp();
-            let close = |got: f64, want: f64| (got / n as f64 - want).abs() < 0.015 * want;
-            assert!(close(pass[c], tr), "channel {c}: pass {} vs {tr}", pass[c] / n as f64);
-            assert!(close(ratio[c], tr), "channel {c}: ratio tracking {} vs {tr}", ratio[c] / n as f64);
-            assert!(close(sc[c], scatter[c]), "channel {c}: scatter {} vs {}", sc[c] / n as f64, scatter[c]);
-            assert!(close(glow[c], emitted[c]), "channel {c}: emission {} vs {}", glow[c] / n as f64, emitted[c]);
-        }
+        let tau = tracking_matches_quadrature(&m, &radiance, &ray, 4.6, 200_000, 0.015, &mut rng);
+        assert!(tau.iter().all(|&t| t > 0.3 && t < 5.0), "optical depths {tau:?}");
     }
 
     /// A microflake medium (SGGX flakes, one matrix with eigenvalues above 1): the extinction

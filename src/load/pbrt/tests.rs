@@ -1011,7 +1011,7 @@ fn emissive_media() {
 fn nanovdb_media() {
     use crate::math::spectrum::{blackbody, spectrum_to_rgb, SpectrumKind};
     use crate::math::{Ray, Transform, Vec3};
-    use crate::medium::{Coefficients, FreeFlight};
+    use crate::medium::Coefficients;
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/nanovdb");
     let ctm = "Translate 0.5 0 3\nRotate 40 0 1 0\nScale 2 1.5 2";
     let medium = |params: &str| {
@@ -1039,9 +1039,13 @@ fn nanovdb_media() {
         let got = m.sigma_t.eval(w) * m.scale;
         assert!((got - want).abs().max_element() <= 1e-4 * (1.0 + want.max_element()), "σₜ at {w}: {got} vs {want}");
         let t = (v[4] - 1.0) * 150.0;
-        let want = if t > 100.0 { spectrum_to_rgb(&blackbody(t, true), SpectrumKind::Illuminant) * 0.5 } else { Rgb::ZERO };
+        let want =
+            if t > 100.0 { spectrum_to_rgb(&blackbody(t, true), SpectrumKind::Illuminant) * 0.5 } else { Rgb::ZERO };
         let got = radiance.eval(w);
-        assert!((got - want).abs().max_element() <= 2e-3 * want.max_element() + 1e-7, "Lₑ at {w} ({t} K): {got} vs {want}");
+        assert!(
+            (got - want).abs().max_element() <= 2e-3 * want.max_element() + 1e-7,
+            "Lₑ at {w} ({t} K): {got} vs {want}"
+        );
         glowing += (want.max_element() > 0.0 && v[3] > 0.0) as u32;
     }
     assert!(glowing > 50, "{glowing}");
@@ -1049,43 +1053,11 @@ fn nanovdb_media() {
     let b = m.sigma_t.bounds();
     let d = Vec3::new(0.7, 0.2, -0.6).normalize();
     let ray = Ray::new(b.centroid() - d * 5.0, d);
-    let t_max = 10.0f32;
-    let steps = 100_000;
-    let h = t_max as f64 / steps as f64;
-    let albedo = m.albedo.eval(Vec3::ZERO);
-    let (mut tau, mut emitted) = ([0.0f64; 3], [0.0f64; 3]);
-    for i in 0..steps {
-        let p = ray.at(((i as f64 + 0.5) * h) as f32);
-        let s = if b.contains(p) { m.sigma_t_at(p, d) } else { Rgb::ZERO };
-        let le = radiance.eval(p);
-        for c in 0..3 {
-            let tr = (-(tau[c] + 0.5 * s[c] as f64 * h)).exp();
-            emitted[c] += ((1.0 - albedo[c]) * s[c] * le[c]) as f64 * tr * h;
-            tau[c] += s[c] as f64 * h;
-        }
-    }
-    assert!(tau.iter().all(|&t| t > 0.3 && t < 6.0), "optical depths {tau:?}");
     let mut rng = crate::sampling::Pcg32::new(9, 2);
-    let n = 100_000;
-    let (mut pass, mut ratio, mut glow) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
-    for _ in 0..n {
-        if let FreeFlight::Pass { weight } = m.sample_free_flight(&ray, t_max, Rgb::ONE, rng.next_f32(), &mut rng) {
-            (0..3).for_each(|c| pass[c] += weight[c] as f64);
-        }
-        let tr = m.transmittance(&ray, t_max, &mut rng);
-        let e = m.emitted(&ray, t_max, &radiance, &mut rng);
-        (0..3).for_each(|c| {
-            ratio[c] += tr[c] as f64;
-            glow[c] += e[c] as f64;
-        });
-    }
-    for c in 0..3 {
-        let tr = (-tau[c]).exp();
-        let close = |got: f64, want: f64| (got / n as f64 - want).abs() < 0.02 * want + 1e-4;
-        assert!(close(pass[c], tr), "channel {c}: pass {} vs {tr}", pass[c] / n as f64);
-        assert!(close(ratio[c], tr), "channel {c}: ratio tracking {} vs {tr}", ratio[c] / n as f64);
-        assert!(close(glow[c], emitted[c]), "channel {c}: emission {} vs {}", glow[c] / n as f64, emitted[c]);
-    }
+    let tau = crate::medium::heterogeneous::tests::tracking_matches_quadrature(
+        m, &radiance, &ray, 10.0, 100_000, 0.02, &mut rng,
+    );
+    assert!(tau.iter().all(|&t| t > 0.3 && t < 6.0), "optical depths {tau:?}");
     // No radiance without Lescale or without the temperature grid; a missing density grid, a
     // missing file and a missing filename are errors.
     let f = load(&medium("\"float Lescale\" 0")).unwrap();
@@ -1131,7 +1103,8 @@ fn uniformgrid_media_emit_by_temperature() {
     assert!(close(tent.eval(at), b(2600.0) * 0.5625), "the tent: {} vs {}", tent.eval(at), b(2600.0) * 0.5625);
     let e = err("MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" \"float density\" [1] \"float temperature\" [3000] \"rgb Le\" [1 1 1]\n");
     assert!(e.contains("either \"Le\" or \"temperature\""), "{e}");
-    let e = err("MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" \"rgb sigma_a\" [1 1 1] \"float temperaturescale\" 2\n");
+    let e =
+        err("MakeNamedMedium \"m\" \"string type\" \"rgbgrid\" \"rgb sigma_a\" [1 1 1] \"float temperaturescale\" 2\n");
     assert!(e.contains("temperaturescale"), "rgbgrid has no temperatures: {e}");
 }
 

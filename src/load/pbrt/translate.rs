@@ -115,7 +115,9 @@ fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
         SpectrumParam::Rgb(c) => c,
         SpectrumParam::Constant(v) => spectrum_to_rgb(&[(360.0, v), (830.0, v)], SpectrumKind::Illuminant),
         SpectrumParam::Samples(v) => spectrum_to_rgb(&v, SpectrumKind::Illuminant),
-        SpectrumParam::Blackbody(t) => spectrum_to_rgb(&crate::math::spectrum::blackbody(t, true), SpectrumKind::Illuminant),
+        SpectrumParam::Blackbody(t) => {
+            spectrum_to_rgb(&crate::math::spectrum::blackbody(t, true), SpectrumKind::Illuminant)
+        }
         SpectrumParam::Named(n) if n == "stdillum-D65" => Rgb::ONE,
         SpectrumParam::Named(n) => {
             return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here")))
