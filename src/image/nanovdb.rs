@@ -11,6 +11,8 @@
 //! eight voxels around `⌊x⌋`, trilinear weights `x − ⌊x⌋`), which pbrt-v4's `nanovdb` medium
 //! uses. Reading the file (segments, codecs, grid names) is `load::nanovdb`'s job.
 
+use std::collections::HashMap;
+
 /// `"NanoVDB0"`, little-endian: the first eight bytes of a grid (and of a file segment).
 pub const MAGIC: u64 = 0x3042_4456_6f6e_614e;
 /// The format's major version this reader knows (its layout is fixed within a major version).
@@ -71,6 +73,8 @@ pub struct NanoGrid {
     first_leaf: usize,
     /// The largest of each leaf's 512 values (active or not), by leaf number.
     leaf_max: Vec<f32>,
+    /// The largest value in each upper and lower node (its tiles and children), by byte offset.
+    node_max: HashMap<usize, f32>,
     min: f32,
     max: f32,
 }
@@ -98,6 +102,11 @@ fn bit(b: &[u8], mask: usize, n: usize) -> bool {
 fn root_key(ijk: [i32; 3]) -> u64 {
     let top = |c: i32| (c as u32 >> 12) as u64;
     top(ijk[2]) | top(ijk[1]) << 21 | top(ijk[0]) << 42
+}
+/// The origin (smallest voxel) of the root cell of key `key`.
+fn key_origin(key: u64) -> [i32; 3] {
+    let c = |shift: u32| (((key >> shift) & 0x1f_ffff) << 12) as u32 as i32;
+    [c(42), c(21), c(0)]
 }
 fn upper_entry(ijk: [i32; 3]) -> usize {
     let e = |c: i32| ((c & 4095) >> 7) as usize;
@@ -175,56 +184,74 @@ impl NanoGrid {
             let abs = usize::try_from(abs).ok()?;
             (abs % 32 == 0 && fits(abs, len)).then_some(abs)
         };
+        // Leaves lie in one array from `first_leaf`; its length is bounded by the buffer.
+        if first_leaf > b.len() || leaf_count > (b.len() - first_leaf) / LEAF_BYTES {
+            return Err(format!("grid \"{name}\": its {leaf_count} leaves overrun the grid"));
+        }
         let mut tiles = Vec::with_capacity(table);
         let (mut min, mut max) = (background, background);
         let mut leaf_max = vec![f32::NEG_INFINITY; leaf_count];
-        let mut seen_leaf = vec![false; leaf_count];
-        let mut extend = |v: f32| {
+        // Each node is checked once however many parents name it (its largest value kept):
+        // the work stays bounded by the buffer's size.
+        let mut node_max: HashMap<usize, f32> = HashMap::new();
+        let mut finite = background.is_finite();
+        let mut extend = |v: f32, m: &mut f32| {
             min = min.min(v);
             max = max.max(v);
+            *m = m.max(v);
             v.is_finite()
         };
-        let mut finite = background.is_finite();
         for n in 0..table {
             let at = root + ROOT_HEADER + n * ROOT_TILE;
             let key = u64_at(b, at);
             if u64_at(b, at + 8) == 0 {
                 let v = f32_at(b, at + 20);
-                finite &= extend(v);
+                let mut unused = f32::NEG_INFINITY;
+                finite &= extend(v, &mut unused);
                 tiles.push(RootTile { key, node: Err(v) });
                 continue;
             }
             let upper = child(root, at + 8, UPPER_BYTES).ok_or_else(|| bad("upper node"))?;
             tiles.push(RootTile { key, node: Ok(upper) });
+            if node_max.contains_key(&upper) {
+                continue;
+            }
+            let mut upper_max = f32::NEG_INFINITY;
             for u in 0..32 * 32 * 32 {
                 let entry = upper + UPPER_HEADER + 8 * u;
                 if !bit(b, upper + 32 + 4096, u) {
-                    finite &= extend(f32_at(b, entry));
+                    finite &= extend(f32_at(b, entry), &mut upper_max);
                     continue;
                 }
                 let lower = child(upper, entry, LOWER_BYTES).ok_or_else(|| bad("lower node"))?;
+                if let Some(&m) = node_max.get(&lower) {
+                    upper_max = upper_max.max(m);
+                    continue;
+                }
+                let mut lower_max = f32::NEG_INFINITY;
                 for l in 0..16 * 16 * 16 {
                     let entry = lower + LOWER_HEADER + 8 * l;
                     if !bit(b, lower + 32 + 512, l) {
-                        finite &= extend(f32_at(b, entry));
+                        finite &= extend(f32_at(b, entry), &mut lower_max);
                         continue;
                     }
                     let leaf = child(lower, entry, LEAF_BYTES).ok_or_else(|| bad("leaf"))?;
                     let k = leaf.checked_sub(first_leaf).filter(|d| d % LEAF_BYTES == 0).map(|d| d / LEAF_BYTES);
                     let Some(k) = k.filter(|&k| k < leaf_count) else { return Err(bad("leaf")) };
-                    if !seen_leaf[k] {
-                        seen_leaf[k] = true;
+                    if leaf_max[k] == f32::NEG_INFINITY {
                         let values = &b[leaf + LEAF_VALUES..leaf + LEAF_BYTES];
                         let mut lm = f32::NEG_INFINITY;
                         for v in values.chunks_exact(4) {
-                            let v = f32::from_le_bytes(v.try_into().expect("4 bytes"));
-                            finite &= extend(v);
-                            lm = lm.max(v);
+                            finite &= extend(f32::from_le_bytes(v.try_into().expect("4 bytes")), &mut lm);
                         }
                         leaf_max[k] = lm;
                     }
+                    lower_max = lower_max.max(leaf_max[k]);
                 }
+                node_max.insert(lower, lower_max);
+                upper_max = upper_max.max(lower_max);
             }
+            node_max.insert(upper, upper_max);
         }
         if !finite {
             return Err(format!("grid \"{name}\" holds values that are not finite (NaN or infinite)"));
@@ -235,6 +262,7 @@ impl NanoGrid {
             class,
             bytes,
             tiles,
+            node_max,
             background,
             m,
             inv,
@@ -383,25 +411,68 @@ impl NanoGrid {
 
     /// An upper bound of every voxel value in the index box `lo`–`hi` (bounds included): the
     /// largest value of each 8³ block the box touches (a leaf's largest voxel, or the covering
-    /// tile's value).
+    /// tile's value), found through the tree — a node inside the box by its largest value,
+    /// space no root tile covers by the background — so the work follows the nodes the box
+    /// cuts, not its volume.
     pub fn max_in(&self, lo: [i32; 3], hi: [i32; 3]) -> f32 {
         if (0..3).any(|k| lo[k] > hi[k]) {
             return f32::NEG_INFINITY;
         }
+        // The root cells (4096³) the box touches; any not covered by a tile reads the background.
+        let cells: i64 = (0..3).map(|k| ((hi[k] >> 12) as i64 - (lo[k] >> 12) as i64) + 1).product();
         let mut max = f32::NEG_INFINITY;
-        let (b0, b1) = (lo.map(|c| c >> 3), hi.map(|c| c >> 3));
-        let blocks: i64 = (0..3).map(|k| (b1[k] - b0[k]) as i64 + 1).product();
-        if blocks > 1 << 26 {
-            return self.max;
+        let mut covered = 0i64;
+        for t in &self.tiles {
+            let o = key_origin(t.key);
+            if (0..3).any(|k| o[k] as i64 + 4095 < lo[k] as i64 || o[k] > hi[k]) {
+                continue;
+            }
+            covered += 1;
+            max = max.max(match t.node {
+                Err(v) => v,
+                Ok(upper) => self.node_max_in(upper, o, 12, lo, hi),
+            });
         }
-        for bx in b0[0]..=b1[0] {
-            for by in b0[1]..=b1[1] {
-                for bz in b0[2]..=b1[2] {
-                    let v = match self.node([bx << 3, by << 3, bz << 3]) {
-                        Node::Value(v) => v,
-                        Node::Leaf(leaf) => self.leaf_max[(leaf - self.first_leaf) / LEAF_BYTES],
-                    };
-                    max = max.max(v);
+        if covered < cells {
+            max = max.max(self.background);
+        }
+        max
+    }
+
+    /// [`NanoGrid::max_in`] within the internal node at byte offset `node` whose children are
+    /// `2^child_log2` voxels wide (upper: 7, lower: 3) and whose origin is `o`; `log2` its own width.
+    fn node_max_in(&self, node: usize, o: [i32; 3], log2: u32, lo: [i32; 3], hi: [i32; 3]) -> f32 {
+        let width = 1i64 << log2;
+        if (0..3).all(|k| lo[k] as i64 <= o[k] as i64 && o[k] as i64 + width - 1 <= hi[k] as i64) {
+            return self.node_max.get(&node).copied().unwrap_or(f32::INFINITY);
+        }
+        let b = &self.bytes[..];
+        let (dim_log2, header, child_log2) = if log2 == 12 { (5, UPPER_HEADER, 7) } else { (4, LOWER_HEADER, 3) };
+        let mask = node + 32 + (1usize << (3 * dim_log2)) / 8;
+        // The child cells the box touches, per axis.
+        let range = |k: usize| {
+            let a = ((lo[k] as i64 - o[k] as i64).max(0) >> child_log2) as usize;
+            let z = ((hi[k] as i64 - o[k] as i64).min(width - 1) >> child_log2) as usize;
+            a..=z
+        };
+        let mut max = f32::NEG_INFINITY;
+        for i in range(0) {
+            for j in range(1) {
+                for k in range(2) {
+                    let n = i << (2 * dim_log2) | j << dim_log2 | k;
+                    let entry = node + header + 8 * n;
+                    if !bit(b, mask, n) {
+                        max = max.max(f32_at(b, entry));
+                        continue;
+                    }
+                    let child = (node as i64 + u64_at(b, entry) as i64) as usize;
+                    max = max.max(if log2 == 12 {
+                        let co = [i, j, k].map(|c| (c as i32) << child_log2);
+                        let co = [o[0] + co[0], o[1] + co[1], o[2] + co[2]];
+                        self.node_max_in(child, co, 7, lo, hi)
+                    } else {
+                        self.leaf_max[(child - self.first_leaf) / LEAF_BYTES]
+                    });
                 }
             }
         }

@@ -296,6 +296,28 @@ mod tests {
             assert!(bound >= m, "{a:?}–{b:?}: {bound} < {m}");
             assert_eq!(bound, block_m, "{a:?}–{b:?}");
         }
+        // Boxes holding whole nodes (read by their maxima), a lower node's 128³ exactly, the
+        // whole index space, and nothing but background.
+        let block_max = |a: [i32; 3], b: [i32; 3]| {
+            let mut m = f32::NEG_INFINITY;
+            for i in (a[0] >> 3)..=(b[0] >> 3) {
+                for j in (a[1] >> 3)..=(b[1] >> 3) {
+                    for k in (a[2] >> 3)..=(b[2] >> 3) {
+                        for v in 0..512 {
+                            m = m.max(d.value([i * 8 + (v >> 6), j * 8 + (v >> 3 & 7), k * 8 + (v & 7)]));
+                        }
+                    }
+                }
+            }
+            m
+        };
+        for (a, b) in [([0, 0, 0], [127, 127, 127]), ([-128, -128, -128], [-1, -1, -1]), ([-200, -3, -7], [5, 300, 4])]
+        {
+            assert_eq!(d.max_in(a, b), block_max(a, b), "{a:?}–{b:?}");
+        }
+        assert_eq!(d.max_in([i32::MIN / 2; 3], [i32::MAX / 2; 3]), hi);
+        assert_eq!(d.max_in([1 << 20; 3], [(1 << 20) + 100; 3]), 0.0, "background only");
+        assert_eq!(d.max_in([5000, -20, -20], [9000, 20, 20]), 0.0);
     }
 
     #[test]
