@@ -105,7 +105,8 @@ fn grid_bytes(bytes: &[u8], e: &GridEntry) -> Result<Vec<u8>, String> {
             let n = u64::from_le_bytes(stored[..8].try_into().expect("8 bytes"));
             let body = usize::try_from(n).ok().and_then(|n| stored.get(8..8 + n));
             let body = body.ok_or_else(|| format!("grid \"{}\": its ZIP block overruns the grid", e.name))?;
-            let mut out = Vec::with_capacity(size);
+            // zlib expands at most ~1032:1: a size the metadata overstate is not allocated.
+            let mut out = Vec::with_capacity(size.min(body.len().saturating_mul(1032)));
             flate2::read::ZlibDecoder::new(body)
                 .take(size as u64 + 1)
                 .read_to_end(&mut out)
@@ -333,6 +334,10 @@ mod tests {
         let mut v = bytes.clone();
         v[14] = 2;
         assert!(err(&v).contains("Blosc"));
+        // Metadata overstating a grid's size (3 GiB): an error, nothing that size allocated.
+        let mut v = bytes.clone();
+        v[SEGMENT_HEADER..SEGMENT_HEADER + 8].copy_from_slice(&(3u64 << 30).to_le_bytes());
+        assert!(err(&v).contains("decompresses to"), "{}", err(&v));
         // A corrupted ZIP stream.
         let mut v = bytes.clone();
         let e = &entries(&bytes).unwrap()[0];
