@@ -247,24 +247,16 @@ impl Volume {
         if let VolumeData::Nano(g, v) = &self.data {
             // The voxels trilinear lookups in the region read: its index box, widened by one.
             let local = self.to_local.apply_bounds(region);
-            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-            for corner in 0..8 {
-                let c = Vec3::new(
-                    if corner & 1 == 0 { local.min.x } else { local.max.x },
-                    if corner & 2 == 0 { local.min.y } else { local.max.y },
-                    if corner & 4 == 0 { local.min.z } else { local.max.z },
-                );
-                let x = g.world_to_index(c.to_array());
-                for a in 0..3 {
-                    lo[a] = lo[a].min(x[a]);
-                    hi[a] = hi[a].max(x[a]);
+            let mut index = Bounds3::EMPTY;
+            for i in 0..8 {
+                let x = Vec3::from(g.world_to_index(local.corner(i).to_array()));
+                if !(x.abs().max_element() < 1.0e9 && x.is_finite()) {
+                    return self.max;
                 }
+                index = index.union_point(x);
             }
-            if !(lo.iter().chain(&hi).all(|c| c.abs() < 1.0e9)) {
-                return self.max;
-            }
-            let lo = lo.map(|c| crate::math::floor(c) as i32 - 1);
-            let hi = hi.map(|c| crate::math::floor(c) as i32 + 1);
+            let lo = index.min.to_array().map(|c| crate::math::floor(c) as i32 - 1);
+            let hi = index.max.to_array().map(|c| crate::math::floor(c) as i32 + 1);
             let m = g.max_in(lo, hi);
             return v.to_array().iter().map(|&c| c * m).fold(0.0f32, f32::max).min(self.max);
         }

@@ -1215,14 +1215,7 @@ fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     phase_g(ps, &mut o)?;
     let le_scale = le_scale(ps)?;
     let temperature = ps.string("temperaturename")?.unwrap_or_else(|| "temperature".into());
-    let cutoff = ps.float("temperaturecutoff", 0.0)?;
-    let offset = ps.float("temperatureoffset", cutoff)?;
-    let t_scale = ps.float("temperaturescale", 1.0)?;
-    for (name, x) in [("temperatureoffset", offset), ("temperaturescale", t_scale)] {
-        if !x.is_finite() {
-            return Err(ps.error_at(name, format!("\"{name}\" must be finite, got {x}")));
-        }
-    }
+    let (offset, t_scale) = temperature_params(ps)?;
     if le_scale > 0.0 && sa.max_element() > 0.0 {
         let mut t = obj("volume", "nanovdb", &ps.loc);
         set(&mut t, "filename", Value::String(file), &at);
@@ -1233,6 +1226,20 @@ fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
         set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, "Lescale"));
     }
     Ok(o)
+}
+
+/// pbrt-v4's `temperatureoffset` (or, where absent, `temperaturecutoff`; 0) and
+/// `temperaturescale` (1) of its `nanovdb` and `uniformgrid` media, finite.
+fn temperature_params(ps: &ParamSet) -> Result<(f32, f32)> {
+    let cutoff = ps.float("temperaturecutoff", 0.0)?;
+    let offset = ps.float("temperatureoffset", cutoff)?;
+    let t_scale = ps.float("temperaturescale", 1.0)?;
+    for (name, x) in [("temperatureoffset", offset), ("temperaturescale", t_scale)] {
+        if !x.is_finite() {
+            return Err(ps.error_at(name, format!("\"{name}\" must be finite, got {x}")));
+        }
+    }
+    Ok((offset, t_scale))
 }
 
 /// neumann's `blackbody` volume over the temperature volume `temperature` (and the `weight`
@@ -1291,17 +1298,7 @@ fn grid_medium(p: &mut Parser, ps: &ParamSet, rgb_grid: bool) -> Result<Obj> {
     }
     // pbrt-v4's `uniformgrid` reads the temperature parameters whether or not it has a
     // `temperature` grid (`rgbgrid` does not: they are unused there).
-    let (offset, t_scale) = if rgb_grid {
-        (0.0, 1.0)
-    } else {
-        let cutoff = ps.float("temperaturecutoff", 0.0)?;
-        (ps.float("temperatureoffset", cutoff)?, ps.float("temperaturescale", 1.0)?)
-    };
-    for (name, x) in [("temperatureoffset", offset), ("temperaturescale", t_scale)] {
-        if !x.is_finite() {
-            return Err(ps.error_at(name, format!("\"{name}\" must be finite, got {x}")));
-        }
-    }
+    let (offset, t_scale) = if rgb_grid { (0.0, 1.0) } else { temperature_params(ps)? };
     let (p0, p1) = (ps.point("p0", Vec3::ZERO)?, ps.point("p1", Vec3::ONE)?);
     if !(p1.cmpgt(p0).all() && (p1 - p0).is_finite()) {
         return Err(ps.error_at("p1", format!("the grid's box p0 {p0} – p1 {p1} is empty")));
