@@ -26,6 +26,7 @@ pub mod metrics;
 pub mod output;
 pub mod part;
 pub mod sensor;
+pub mod sensor_data;
 pub mod state;
 pub mod tev;
 
@@ -690,9 +691,10 @@ impl FilmSettings {
     /// `sample_border` (false; true: the pixels outside the film or crop window within the
     /// filter's reach are sampled too, as Mitsuba samples them); `banner` and `compensate` are
     /// read (they cannot change the image: the output format follows the output file's
-    /// extension, and the sums are f64); neumann's `white_balance` (K, 0: none; pbrt-v4's
-    /// `whitebalance`, see [`sensor`]) and `max_component` (∞: pbrt-v4's
-    /// `maxcomponentvalue`).
+    /// extension, and the sums are f64); neumann's `sensor` (`cie1931`, or one of pbrt-v4's
+    /// measured cameras, [`sensor::camera_names`]), `white_balance` (K; 0: none, the default
+    /// of `cie1931`; 6500 for a camera; pbrt-v4's `whitebalance`, see [`sensor`]) and
+    /// `max_component` (∞: pbrt-v4's `maxcomponentvalue`).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
         f.built.set(true);
         f.check_children(&["rfilter"])?;
@@ -750,8 +752,27 @@ impl FilmSettings {
             Some(r) => Filter::from_props(r)?,
             None => FilmSettings::default().filter,
         };
-        let kelvin = f.float_checked("white_balance", 0.0, |k| k == 0.0 || (1000.0..=40000.0).contains(&k), "0 (none) or a temperature of 1000–40000 K")?;
-        let matrix = (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin));
+        let mut sensors = vec!["cie1931"];
+        sensors.extend(sensor::camera_names());
+        let camera = f.choice("sensor", &sensors)?;
+        // pbrt-v4: a named camera is balanced for 6500 K unless told otherwise.
+        let default_kelvin = if camera == "cie1931" { 0.0 } else { 6500.0 };
+        let kelvin = f.float_checked(
+            "white_balance",
+            default_kelvin,
+            |k| k == 0.0 || (1000.0..=40000.0).contains(&k),
+            "0 (none) or a temperature of 1000–40000 K",
+        )?;
+        let matrix = if camera == "cie1931" {
+            (kelvin != 0.0).then(|| sensor::SampleTransform::white_balance(kelvin))
+        } else if kelvin == 0.0 {
+            return Err(f.error_at(
+                "white_balance",
+                format!("the camera sensor '{camera}' needs a white balance (1000–40000 K; 6500 by default)"),
+            ));
+        } else {
+            sensor::camera(&camera, kelvin)
+        };
         let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
         let transform = sensor::SampleTransform { matrix, max_component };
         Ok(FilmSettings { width, height, window, alpha, colors, component, filter, transform, sample_border })

@@ -6,8 +6,23 @@
 //! temperature, or a black body below 4000 K where the D series is not defined, as pbrt
 //! chooses — to the output colour space's white (sRGB's D65) by the von Kries transform in
 //! Bradford's cone space: `RGB ← RGB_from_XYZ · B⁻¹ diag(L_dst/L_src) B · XYZ_from_RGB`.
+//! **Named camera sensors** (pbrt-v4's `"string sensor"`, seventeen cameras whose spectral
+//! responses were measured, [`camera`]): pbrt-v4 maps a camera's raw RGB to XYZ by a 3 × 3
+//! matrix fitted by least squares on the 24 ColorChecker swatches seen under CIE daylight of the
+//! white-balance temperature (6500 K unless given), so that a white lit by that light comes out
+//! as the output space's white. pbrt renders spectra and applies the camera's curves to them;
+//! neumann renders linear sRGB, so the camera becomes one matrix on linear sRGB, fitted the same
+//! way: the best linear map (least squares, with D65's white mapped exactly) from the sRGB
+//! neumann renders for the swatches, under D65 and under the white-balance light, to the sRGB
+//! pbrt's camera gives for their spectra. How close that comes to the spectral answer is
+//! measured in the tests (`camera_matrices_reproduce_the_spectral_pipeline`).
 //! **Clamp** (pbrt-v4's `maxcomponentvalue`): a sample whose largest RGB component exceeds the
-//! bound is scaled down to it (biased, as pbrt's is; off by default).
+//! bound is scaled down to it (biased, as pbrt's is; off by default; neumann clamps the output
+//! RGB, pbrt the sensor's RGB before its colour matrix, the same where there is no matrix).
+
+use super::sensor_data::{CAMERAS, CAMERA_LAMBDA_START, SWATCHES, SWATCH_LAMBDA_START};
+use crate::math::spectrum::{cie_xyz_d65, daylight, sample_at};
+use glam::{DMat3, DVec3};
 
 use crate::math::{Mat3, Rgb, Vec3};
 
@@ -55,17 +70,11 @@ fn xyz_of(xy: [f32; 2]) -> Vec3 {
 /// The chromaticity of pbrt-v4's white for a colour temperature of `kelvin`: CIE daylight of
 /// that correlated colour temperature (on the 1968 Planck constant, T · 1.4388/1.4380), by the
 /// CIE's closed form for its x and `y = −3x² + 2.870x − 0.275`; below 4000 K, where the D series
-/// is not defined, a black body's.
+/// is not defined, a black body's (of that correlated temperature, as pbrt's `Spectra::D`).
 pub fn white_chromaticity(kelvin: f32) -> [f32; 2] {
     let cct = kelvin as f64 * 1.4388 / 1.4380;
     if cct < 4000.0 {
-        let samples: Vec<(f32, f32)> = (0..=94)
-            .map(|i| {
-                let nm = 360.0 + 5.0 * i as f64;
-                (nm as f32, planck(nm * 1e-9, kelvin as f64) as f32)
-            })
-            .collect();
-        let xyz = crate::math::spectrum::spectrum_to_xyz(&samples);
+        let xyz = crate::math::spectrum::spectrum_to_xyz(&daylight(kelvin));
         let s = xyz.x + xyz.y + xyz.z;
         return [xyz.x / s, xyz.y / s];
     }
@@ -78,12 +87,129 @@ pub fn white_chromaticity(kelvin: f32) -> [f32; 2] {
     [x as f32, y as f32]
 }
 
-/// Planck's spectral radiance at wavelength `l` (m) and temperature `t` (K), up to a constant.
-fn planck(l: f64, t: f64) -> f64 {
-    const H: f64 = 6.626_070_15e-34;
-    const C: f64 = 299_792_458.0;
-    const K: f64 = 1.380_649e-23;
-    2.0 * H * C * C / l.powi(5) / ((H * C / (l * K * t)).exp() - 1.0) * 1e-13
+/// The names of pbrt-v4's measured camera sensors, in its order.
+pub fn camera_names() -> impl Iterator<Item = &'static str> {
+    CAMERAS.iter().map(|c| c.0)
+}
+
+/// The camera sensor `name` (one of [`camera_names`]) white-balanced for CIE daylight of
+/// `kelvin` (pbrt's `whitebalance`; pbrt-v4 uses 6500 K when a named sensor is given none), as a
+/// matrix on linear sRGB samples; `None` for an unknown name. See the module's notes.
+pub fn camera(name: &str, kelvin: f32) -> Option<Mat3> {
+    let (_, curves) = CAMERAS.iter().find(|c| c.0 == name)?;
+    let table = |c: usize| -> Vec<(f32, f32)> {
+        curves[c].iter().enumerate().map(|(i, &v)| (CAMERA_LAMBDA_START + 10.0 * i as f32, v)).collect()
+    };
+    let (r, g, b) = (table(0), table(1), table(2));
+    let response = |l: f32| [r.as_slice(), g.as_slice(), b.as_slice()].map(|t| sample_at(t, l) as f64);
+    Some(camera_fit(&response, kelvin).1.as_mat3())
+}
+
+/// Spectra on pbrt-v4's integration grid: every nanometre from 360 to 830 nm (its
+/// `Lambda_min`…`Lambda_max`, summed as pbrt sums).
+struct Grid {
+    /// x̄, ȳ, z̄ and D65 at each wavelength.
+    cie: Vec<[f64; 4]>,
+    /// The camera's r̄, ḡ, b̄.
+    camera: Vec<[f64; 3]>,
+    /// The white-balance illuminant (CIE daylight).
+    light: Vec<f64>,
+    /// The swatches' reflectances, swatch by swatch.
+    swatches: Vec<Vec<f64>>,
+}
+
+impl Grid {
+    fn new(response: &dyn Fn(f32) -> [f64; 3], kelvin: f32) -> Grid {
+        let lambdas: Vec<f32> = (360..=830).map(|l| l as f32).collect();
+        let light = daylight(kelvin);
+        let swatches = SWATCHES
+            .iter()
+            .map(|s| {
+                let t: Vec<(f32, f32)> =
+                    s.iter().enumerate().map(|(i, &v)| (SWATCH_LAMBDA_START + 10.0 * i as f32, v)).collect();
+                lambdas.iter().map(|&l| sample_at(&t, l) as f64).collect()
+            })
+            .collect();
+        Grid {
+            cie: lambdas.iter().map(|&l| cie_xyz_d65(l).map(|v| v as f64)).collect(),
+            camera: lambdas.iter().map(|&l| response(l)).collect(),
+            light: lambdas.iter().map(|&l| sample_at(&light, l) as f64).collect(),
+            swatches,
+        }
+    }
+
+    /// `Σ_λ f(λ) · basis(λ)` for the three functions of `basis` (the CIE functions or the
+    /// camera's curves), over the grid's wavelengths `k`.
+    fn project(&self, f: impl Fn(usize) -> f64, basis: impl Fn(usize) -> [f64; 3]) -> DVec3 {
+        (0..self.cie.len()).fold(DVec3::ZERO, |acc, k| acc + DVec3::from_array(basis(k)) * f(k))
+    }
+
+    fn xyz(&self, f: impl Fn(usize) -> f64) -> DVec3 {
+        self.project(f, |k| [self.cie[k][0], self.cie[k][1], self.cie[k][2]])
+    }
+
+    fn raw(&self, f: impl Fn(usize) -> f64) -> DVec3 {
+        self.project(f, |k| self.camera[k])
+    }
+}
+
+/// The matrix M minimising `Σᵢ |M aᵢ − bᵢ|²` (pbrt's `LinearLeastSquares`).
+fn least_squares(pairs: &[(DVec3, DVec3)]) -> DMat3 {
+    let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
+    let aa = pairs.iter().fold(DMat3::ZERO, |m, &(a, _)| m + outer(a, a));
+    let ba = pairs.iter().fold(DMat3::ZERO, |m, &(a, b)| m + outer(b, a));
+    ba * aa.inverse()
+}
+
+/// The fit for response curves `response` (per nanometre) and white balance `kelvin`: pbrt-v4's
+/// `XYZFromSensorRGB` and neumann's matrix on linear sRGB (module notes).
+fn camera_fit(response: &dyn Fn(f32) -> [f64; 3], kelvin: f32) -> (DMat3, DMat3) {
+    let grid = Grid::new(response, kelvin);
+    let d65 = |k: usize| grid.cie[k][3];
+    let light = |k: usize| grid.light[k];
+    // pbrt-v4: each swatch's camera RGB under the light, over the light's green; its XYZ under
+    // the output space's illuminant (D65) over D65's Y, scaled by the light's Y over its green.
+    let light_g = grid.raw(light).y;
+    let light_y = grid.xyz(light).y;
+    let d65_y = grid.xyz(d65).y;
+    let pairs: Vec<(DVec3, DVec3)> = grid
+        .swatches
+        .iter()
+        .map(|s| {
+            let camera = grid.raw(|k| s[k] * light(k)) / light_g;
+            let xyz = grid.xyz(|k| s[k] * d65(k)) / d65_y * (light_y / light_g);
+            (camera, xyz)
+        })
+        .collect();
+    let xyz_from_camera = least_squares(&pairs);
+    // neumann: linear sRGB of a spectrum L (luminance-normalised by its illuminant), and what
+    // pbrt's camera makes of L in the same space.
+    let rgb_from_xyz = xyz_from_rgb().as_dmat3().inverse();
+    let seen = |l: &dyn Fn(usize) -> f64, norm: f64| {
+        let rendered = rgb_from_xyz * grid.xyz(l) / norm;
+        let camera = rgb_from_xyz * xyz_from_camera * grid.raw(l) / norm;
+        (rendered, camera)
+    };
+    let mut pairs = Vec::new();
+    for illuminant in [&d65 as &dyn Fn(usize) -> f64, &light] {
+        let norm = grid.xyz(illuminant).y;
+        for s in &grid.swatches {
+            pairs.push(seen(&|k| s[k] * illuminant(k), norm));
+        }
+    }
+    let (white, white_out) = seen(&d65, d65_y);
+    // Row by row: least squares under the constraint that D65's white maps exactly,
+    // a = a₀ − G⁻¹w (w·a₀ − t) / (w·G⁻¹w) with G = Σ xxᵀ, a₀ = G⁻¹ Σ x yᵣ.
+    let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
+    let g_inv = pairs.iter().fold(DMat3::ZERO, |m, &(x, _)| m + outer(x, x)).inverse();
+    let gw = g_inv * white;
+    let rows: Vec<DVec3> = (0..3)
+        .map(|r| {
+            let a0 = g_inv * pairs.iter().fold(DVec3::ZERO, |acc, &(x, y)| acc + x * y[r]);
+            a0 - gw * ((white.dot(a0) - white_out[r]) / white.dot(gw))
+        })
+        .collect();
+    (xyz_from_camera, DMat3::from_cols(rows[0], rows[1], rows[2]).transpose())
 }
 
 impl SampleTransform {
@@ -149,6 +275,123 @@ mod tests {
         // A black body below 4000 K: 2856 K is CIE illuminant A, (0.4476, 0.4074).
         let a = white_chromaticity(2856.0);
         assert!((a[0] - 0.4476).abs() < 2e-3 && (a[1] - 0.4074).abs() < 2e-3, "{a:?}");
+    }
+
+    /// The camera's curves by name, per nanometre (as `camera` builds them).
+    fn response_of(name: &str) -> impl Fn(f32) -> [f64; 3] {
+        let (_, curves) = CAMERAS.iter().find(|c| c.0 == name).unwrap();
+        let tables: Vec<Vec<(f32, f32)>> = curves
+            .iter()
+            .map(|c| c.iter().enumerate().map(|(i, &v)| (CAMERA_LAMBDA_START + 10.0 * i as f32, v)).collect())
+            .collect();
+        move |l| [0, 1, 2].map(|c| sample_at(&tables[c], l) as f64)
+    }
+
+    /// For spectrum `spd` (per grid index): the linear sRGB neumann renders for it (CIE 1931,
+    /// luminance `norm` → 1) and the sRGB pbrt's camera makes of it.
+    fn seen(grid: &Grid, xyz_from_camera: DMat3, spd: &dyn Fn(usize) -> f64, norm: f64) -> (DVec3, DVec3) {
+        let rgb_from_xyz = xyz_from_rgb().as_dmat3().inverse();
+        (rgb_from_xyz * grid.xyz(spd) / norm, rgb_from_xyz * xyz_from_camera * grid.raw(spd) / norm)
+    }
+
+    /// A "camera" whose curves are the CIE functions, balanced for D65's temperature, is the
+    /// identity (pbrt's fit gives XYZ back, neumann's matrix changes nothing); balanced for a
+    /// warm or cool light it is a white balance: the light's white comes out white (within
+    /// pbrt's least-squares fit), as under the Bradford adaptation of the `cie1931` sensor.
+    #[test]
+    fn a_cie_camera_is_the_identity_or_a_white_balance() {
+        let cie = |l: f32| {
+            let c = cie_xyz_d65(l);
+            [c[0] as f64, c[1] as f64, c[2] as f64]
+        };
+        let (m, a) = camera_fit(&cie, 6504.0);
+        assert!(m.abs_diff_eq(DMat3::IDENTITY, 2e-3), "{m}");
+        assert!(a.abs_diff_eq(DMat3::IDENTITY, 2e-3), "{a}");
+        for kelvin in [3000.0, 5000.0, 9000.0] {
+            let (_, a) = camera_fit(&cie, kelvin);
+            let grid = Grid::new(&cie, kelvin);
+            let light = |k: usize| grid.light[k];
+            let rgb_from_xyz = xyz_from_rgb().as_dmat3().inverse();
+            let white = rgb_from_xyz * grid.xyz(light) / grid.xyz(light).y;
+            let ours = a * white;
+            assert!((ours - DVec3::ONE).abs().max_element() < 0.02, "{kelvin} K: the light's white becomes {ours}");
+            // The Bradford adaptation makes it exactly white: both balance the light.
+            let bradford = SampleTransform::white_balance(kelvin).as_dmat3() * white;
+            assert!((bradford - DVec3::ONE).abs().max_element() < 2e-3, "{kelvin} K: {bradford}");
+        }
+    }
+
+    /// Every named camera, balanced for a light, shows a white lit by it as nearly neutral
+    /// (pbrt's fit is least squares, not exact at white), and its matrix reproduces what pbrt's
+    /// spectral camera makes of the swatches (under D65 and the balanced light: the fit's own
+    /// data; under illuminant A and a 2000 K black body: held out) and of black-body emitters
+    /// (1500–10000 K), within the bounds below and closer than the CIE observer with the
+    /// same white balance would (the image neumann would make if it ignored the camera). The
+    /// table (`--nocapture`) is the README's accuracy study.
+    #[test]
+    fn camera_matrices_reproduce_the_spectral_pipeline() {
+        let lambdas = || (360..=830).map(|l| l as f32);
+        let tabulate = |t: Vec<(f32, f32)>| lambdas().map(|l| sample_at(&t, l) as f64).collect::<Vec<f64>>();
+        let blackbody = |t: f32| tabulate(crate::math::spectrum::blackbody(t, false));
+        // (mean, max) relative error over all cameras and balances: [fit, held out, emitters]
+        // for neumann's matrix, then for the CIE observer's white balance.
+        let (mut sum, mut worst, mut count) = ([[0.0f64; 3]; 2], [[0.0f64; 3]; 2], [0usize; 3]);
+        for name in camera_names() {
+            for kelvin in [2700.0f32, 5000.0, 6500.0, 9000.0] {
+                let response = response_of(name);
+                let (m, a) = camera_fit(&response, kelvin);
+                let bradford = SampleTransform::white_balance(kelvin).as_dmat3();
+                let grid = Grid::new(&response, kelvin);
+                let (_, white) = seen(&grid, m, &|k| grid.light[k], grid.xyz(|k| grid.light[k]).y);
+                let spread = white.max_element() / white.min_element() - 1.0;
+                assert!(spread < 0.05, "{name} at {kelvin} K: white under its light is {white}");
+                let d65: Vec<f64> = grid.cie.iter().map(|c| c[3]).collect();
+                let sets: [Vec<Vec<f64>>; 3] = [
+                    vec![d65, grid.light.clone()],
+                    vec![blackbody(2856.0), blackbody(2000.0)],
+                    [1500.0, 2000.0, 3000.0, 4000.0, 6000.0, 10000.0].map(blackbody).to_vec(),
+                ];
+                let mut line = String::new();
+                for (set, illuminants) in sets.iter().enumerate() {
+                    // Swatches under each illuminant, or the emitters themselves.
+                    let mut spds: Vec<Box<dyn Fn(usize) -> f64 + '_>> = Vec::new();
+                    for e in illuminants {
+                        if set == 2 {
+                            spds.push(Box::new(move |k| e[k]));
+                        } else {
+                            spds.extend(
+                                grid.swatches
+                                    .iter()
+                                    .map(|s| Box::new(move |k| s[k] * e[k]) as Box<dyn Fn(usize) -> f64>),
+                            );
+                        }
+                    }
+                    let mut local = [0.0f64; 2];
+                    for spd in &spds {
+                        let (rendered, truth) = seen(&grid, m, spd, grid.xyz(spd).y.abs().max(1e-30));
+                        for (i, approx) in [a * rendered, bradford * rendered].into_iter().enumerate() {
+                            let e = (approx - truth).length() / truth.length();
+                            sum[i][set] += e;
+                            worst[i][set] = worst[i][set].max(e);
+                            local[i] = local[i].max(e);
+                        }
+                        count[set] += 1;
+                    }
+                    line += &format!("  {:5.1} % ({:5.1} %)", 100.0 * local[0], 100.0 * local[1]);
+                }
+                println!("{name:20} {kelvin:5} K:{line}");
+            }
+        }
+        let mean = |i: usize| [0, 1, 2].map(|s| sum[i][s] / count[s] as f64);
+        println!("mean: matrix {:?}, CIE observer {:?}", mean(0), mean(1));
+        println!("max:  matrix {:?}, CIE observer {:?}", worst[0], worst[1]);
+        // The matrix: mean errors of a few percent (metamerism: an RGB renderer cannot tell
+        // spectra of one colour apart, which a camera can), below the CIE observer's.
+        let (ours, cie) = (mean(0), mean(1));
+        for s in 0..3 {
+            assert!(ours[s] < 0.06 && worst[0][s] < 0.21, "set {s}: mean {} max {}", ours[s], worst[0][s]);
+            assert!(ours[s] < 0.8 * cie[s], "set {s}: the matrix ({}) against the CIE observer ({})", ours[s], cie[s]);
+        }
     }
 
     #[test]

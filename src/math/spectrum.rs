@@ -198,6 +198,106 @@ pub fn blackbody(kelvin: f32, peak_one: bool) -> Vec<(f32, f32)> {
         .collect()
 }
 
+/// The CIE daylight components S₀, S₁, S₂ every 10 nm from 300 to 830 nm (CIE 15). pbrt-v4
+/// tabulates them every 5 nm, each odd entry the mean of its neighbours, which linear
+/// interpolation of this table reproduces.
+#[rustfmt::skip]
+const CIE_DAYLIGHT_S: [[f32; 3]; 54] = [
+    [0.04, 0.02, 0.00], // 300 nm
+    [6.00, 4.50, 2.00], // 310 nm
+    [29.60, 22.40, 4.00], // 320 nm
+    [55.30, 42.00, 8.50], // 330 nm
+    [57.30, 40.60, 7.80], // 340 nm
+    [61.80, 41.60, 6.70], // 350 nm
+    [61.50, 38.00, 5.30], // 360 nm
+    [68.80, 42.40, 6.10], // 370 nm
+    [63.40, 38.50, 3.00], // 380 nm
+    [65.80, 35.00, 1.20], // 390 nm
+    [94.80, 43.40, -1.10], // 400 nm
+    [104.80, 46.30, -0.50], // 410 nm
+    [105.90, 43.90, -0.70], // 420 nm
+    [96.80, 37.10, -1.20], // 430 nm
+    [113.90, 36.70, -2.60], // 440 nm
+    [125.60, 35.90, -2.90], // 450 nm
+    [125.50, 32.60, -2.80], // 460 nm
+    [121.30, 27.90, -2.60], // 470 nm
+    [121.30, 24.30, -2.60], // 480 nm
+    [113.50, 20.10, -1.80], // 490 nm
+    [113.10, 16.20, -1.50], // 500 nm
+    [110.80, 13.20, -1.30], // 510 nm
+    [106.50, 8.60, -1.20], // 520 nm
+    [108.80, 6.10, -1.00], // 530 nm
+    [105.30, 4.20, -0.50], // 540 nm
+    [104.40, 1.90, -0.30], // 550 nm
+    [100.00, 0.00, 0.00], // 560 nm
+    [96.00, -1.60, 0.20], // 570 nm
+    [95.10, -3.50, 0.50], // 580 nm
+    [89.10, -3.50, 2.10], // 590 nm
+    [90.50, -5.80, 3.20], // 600 nm
+    [90.30, -7.20, 4.10], // 610 nm
+    [88.40, -8.60, 4.70], // 620 nm
+    [84.00, -9.50, 5.10], // 630 nm
+    [85.10, -10.90, 6.70], // 640 nm
+    [81.90, -10.70, 7.30], // 650 nm
+    [82.60, -12.00, 8.60], // 660 nm
+    [84.90, -14.00, 9.80], // 670 nm
+    [81.30, -13.60, 10.20], // 680 nm
+    [71.90, -12.00, 8.30], // 690 nm
+    [74.30, -13.30, 9.60], // 700 nm
+    [76.40, -12.90, 8.50], // 710 nm
+    [63.30, -10.60, 7.00], // 720 nm
+    [71.70, -11.60, 7.60], // 730 nm
+    [77.00, -12.20, 8.00], // 740 nm
+    [65.20, -10.20, 6.70], // 750 nm
+    [47.70, -7.80, 5.20], // 760 nm
+    [68.60, -11.20, 7.40], // 770 nm
+    [65.00, -10.40, 6.80], // 780 nm
+    [66.00, -10.60, 7.00], // 790 nm
+    [61.00, -9.70, 6.40], // 800 nm
+    [53.30, -8.30, 5.50], // 810 nm
+    [58.90, -9.30, 6.10], // 820 nm
+    [61.90, -9.80, 6.50], // 830 nm
+];
+
+/// CIE daylight of colour temperature `kelvin` as pbrt-v4's `Spectra::D` makes it (relative
+/// spectral power at 300, 310, …, 830 nm, 100 near 560 nm): the temperature is taken to the
+/// correlated colour temperature on the 1968 Planck constant (`T · 1.4388/1.4380`); below
+/// 4000 K, where the D series is not defined, a black body of that temperature (Planck's law,
+/// `blackbody`'s 5 nm samples); else `S₀ + M₁ S₁ + M₂ S₂` with the CIE's `M₁`, `M₂` of the
+/// chromaticity `x` (its cubic in `1/T`) and `y = −3x² + 2.870x − 0.275`.
+pub fn daylight(kelvin: f32) -> Vec<(f32, f32)> {
+    let cct = kelvin as f64 * 1.4388 / 1.4380;
+    if cct < 4000.0 {
+        return blackbody(cct as f32, false);
+    }
+    let x = if cct <= 7000.0 {
+        -4.607e9 / cct.powi(3) + 2.9678e6 / (cct * cct) + 0.09911e3 / cct + 0.244063
+    } else {
+        -2.0064e9 / cct.powi(3) + 1.9018e6 / (cct * cct) + 0.24748e3 / cct + 0.23704
+    };
+    let y = -3.0 * x * x + 2.870 * x - 0.275;
+    let m = 0.0241 + 0.2562 * x - 0.7341 * y;
+    let m1 = (-1.3515 - 1.7703 * x + 5.9114 * y) / m;
+    let m2 = (0.0300 - 31.4424 * x + 30.0717 * y) / m;
+    CIE_DAYLIGHT_S
+        .iter()
+        .enumerate()
+        .map(|(i, s)| (300.0 + 10.0 * i as f32, (s[0] as f64 + m1 * s[1] as f64 + m2 * s[2] as f64) as f32))
+        .collect()
+}
+
+/// x̄, ȳ, z̄ (CIE 1931 2°) and D65 (relative) at `lambda` nm, interpolated linearly in the 5 nm
+/// tables, for 360 ≤ `lambda` ≤ 830.
+pub fn cie_xyz_d65(lambda: f32) -> [f32; 4] {
+    cie_at(lambda)
+}
+
+/// A sampled spectrum (wavelength nm, value; sorted by wavelength) at `lambda`: linear
+/// between samples, zero outside them (pbrt's and Mitsuba's piecewise-linear spectra).
+pub fn sample_at(samples: &[(f32, f32)], lambda: f32) -> f32 {
+    interpolate(samples, lambda)
+}
+
 /// CIE XYZ of an emission spectrum (wavelength nm, value), normalised so that a flat spectrum
 /// of 1 has Y = 1 (its chromaticity is what colour work needs).
 pub fn spectrum_to_xyz(samples: &[(f32, f32)]) -> Vec3 {

@@ -2865,3 +2865,29 @@ fn pbrt_subsurface_from_xml() {
         assert!(e.contains("test.xml:") && e.contains(what), "{params}: {e}");
     }
 }
+
+/// neumann's film `sensor` (pbrt-v4's named cameras) and `white_balance`: the camera's matrix,
+/// balanced for 6500 K unless told otherwise; located errors for an unknown camera (naming the
+/// nearest) and for a camera asked for no white balance.
+#[test]
+fn film_camera_sensors() {
+    use crate::film::sensor;
+    let film = |props: &str| {
+        scene("").replace(
+            r#"<integer name="height" value="24"/></film>"#,
+            &format!(r#"<integer name="height" value="24"/>{props}</film>"#),
+        )
+    };
+    let f = load(&film(r#"<string name="sensor" value="sony_ilce_9"/>"#)).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(f.transform.matrix, sensor::camera("sony_ilce_9", 6500.0));
+    let f =
+        load(&film(r#"<string name="sensor" value="nikon_d850"/><float name="white_balance" value="3200"/>"#)).unwrap();
+    assert_eq!(f.transform.matrix, sensor::camera("nikon_d850", 3200.0));
+    assert_ne!(f.transform.matrix, sensor::camera("nikon_d850", 6500.0));
+    let f = load(&film(r#"<string name="sensor" value="cie1931"/>"#)).unwrap();
+    assert!(f.transform.is_identity());
+    let e = err(&film(r#"<string name="sensor" value="nikon_d8500"/>"#));
+    assert!(e.contains("test.xml:5:") && e.contains("did you mean 'nikon_d850'"), "{e}");
+    let e = err(&film(r#"<string name="sensor" value="canon_eos_5d"/><float name="white_balance" value="0"/>"#));
+    assert!(e.contains("test.xml:5:") && e.contains("needs a white balance"), "{e}");
+}

@@ -138,6 +138,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let mut crop: Option<[i64; 4]> = None;
     // pbrt-v4's sensor steps: white balance (K) and the sample clamp.
     let (mut white_balance, mut max_component) = (0.0f32, f32::INFINITY);
+    // pbrt-v4's named camera sensors (see `film::sensor::camera`).
+    let mut sensor = "cie1931".to_string();
     // The film's diagonal (mm): only the realistic camera's image depends on it.
     let mut diagonal = (35.0f32, loc.clone());
     if let Some(f) = p.film.take() {
@@ -172,9 +174,11 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             return Err(f.error_at("whitebalance", format!("a white balance of {white_balance} K: expected 1000–40000 K (or 0: none)")));
         }
         if let Some(s) = f.string("sensor")? {
-            if s != "cie1931" {
-                return Err(f.error_at("sensor", format!("the sensor \"{s}\" is not implemented by neumann (cie1931)")));
+            if s != "cie1931" && !crate::film::sensor::camera_names().any(|c| c == s) {
+                let names: Vec<&str> = crate::film::sensor::camera_names().collect();
+                return Err(f.error_at("sensor", format!("unknown sensor \"{s}\" (cie1931, {})", names.join(", "))));
             }
+            sensor = s;
         }
         // The output's name and storage cannot change the image: neumann's -o decides.
         diagonal = (f.float("diagonal", 35.0)?, loc_of(&f, "diagonal"));
@@ -289,6 +293,9 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let mut film = obj("film", "hdrfilm", loc);
     set(&mut film, "width", Value::Integer(width), loc);
     set(&mut film, "height", Value::Integer(height), loc);
+    if sensor != "cie1931" {
+        set(&mut film, "sensor", Value::String(sensor), loc);
+    }
     if white_balance != 0.0 {
         set(&mut film, "white_balance", Value::Float(white_balance as f64), loc);
     }

@@ -888,6 +888,22 @@ fn white_balance_and_sample_clamp() {
     }
     let e = err(&scene("\"float whitebalance\" 50"));
     assert!(e.contains("1000–40000 K"), "{e}");
+    // A named camera sensor: its matrix on every sample, balanced for 6500 K unless given a
+    // temperature (pbrt-v4's default for named sensors). A D65 sky stays nearly white at
+    // 6500 K and turns blue balanced for 3000 K.
+    let f = load(&scene("\"string sensor\" \"nikon_d850\"")).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(f.transform.matrix, crate::film::sensor::camera("nikon_d850", 6500.0));
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        assert!((px - Rgb::ONE).abs().max_element() < 0.03, "{px}");
+    }
+    let f = load(&scene("\"string sensor\" \"canon_eos_5d_mkiv\" \"float whitebalance\" 3000")).unwrap();
+    let expected = crate::film::sensor::camera("canon_eos_5d_mkiv", 3000.0).unwrap() * Rgb::ONE;
+    assert!(expected.x < 0.9 * expected.z, "{expected}");
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        assert!((px - expected).abs().max_element() < 1e-4, "{px} vs {expected}");
+    }
+    let e = err(&scene("\"string sensor\" \"nikon_d9000\""));
+    assert!(e.contains("unknown sensor") && e.contains("nikon_d850") && e.contains("test.pbrt:1"), "{e}");
 }
 
 /// pbrt-v4's spherical camera (equal-area by default, or equirectangular) sees a uniform sky as
@@ -1853,4 +1869,32 @@ fn subsurface_materials() {
                 .to_string();
         assert!(e.contains(what), "{params}: {e}");
     }
+}
+
+/// pbrt-v4's named standard illuminants A and D50 as light spectra: a sky of each has the
+/// CIE chromaticity of that illuminant (A (0.4476, 0.4074), D50 (0.3457, 0.3585)) at luminance 1
+/// (pbrt normalises lights to 1 nit); F-series illuminants remain an error.
+#[test]
+fn named_standard_illuminants() {
+    let scene = |spd: &str| {
+        format!("Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\nCamera \"perspective\"\nWorldBegin\nLightSource \"infinite\" \"spectrum L\" \"{spd}\"\n")
+    };
+    let to_xyz = glam::Mat3::from_cols(
+        glam::Vec3::new(0.412_456_4, 0.212_672_9, 0.019_333_9),
+        glam::Vec3::new(0.357_576_1, 0.715_152_2, 0.119_192),
+        glam::Vec3::new(0.180_437_5, 0.072_175, 0.950_304_1),
+    );
+    for (spd, xy) in
+        [("stdillum-A", [0.4476, 0.4074]), ("stdillum-D50", [0.3457, 0.3585]), ("stdillum-D65", [0.3127, 0.3290])]
+    {
+        let f = load(&scene(spd)).unwrap_or_else(|e| panic!("{spd}: {e}"));
+        for px in crate::load::test_support::render(&f, 1, 1) {
+            let xyz = to_xyz * px;
+            let s = xyz.x + xyz.y + xyz.z;
+            assert!((xyz.y - 1.0).abs() < 2e-3, "{spd}: Y {}", xyz.y);
+            assert!((xyz.x / s - xy[0]).abs() < 2e-3 && (xyz.y / s - xy[1]).abs() < 2e-3, "{spd}: {xyz}");
+        }
+    }
+    let e = err(&scene("stdillum-F4"));
+    assert!(e.contains("stdillum-F4") && e.contains("not available"), "{e}");
 }

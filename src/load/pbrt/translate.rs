@@ -98,8 +98,11 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
         SpectrumParam::Samples(v) if illuminant => Value::Rgb(unit_luminance(&v)),
         SpectrumParam::Samples(v) => Value::Spectrum(SpectrumValue::Samples(v)),
         SpectrumParam::Named(n) if illuminant && n == "stdillum-D65" => Value::Float(1.0),
+        SpectrumParam::Named(n) if illuminant && named_illuminant(&n).is_some() => {
+            Value::Rgb(unit_luminance(&named_illuminant(&n).unwrap_or_default()))
+        }
         SpectrumParam::Named(n) => {
-            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-D65)")))
+            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-A, -D50 and -D65 for lights)")))
         }
         SpectrumParam::Blackbody(t) if illuminant => Value::Rgb(blackbody_rgb(t)),
         SpectrumParam::Blackbody(_) => return Err(ps.error_at(name, "a blackbody spectrum is for emitted light only")),
@@ -119,10 +122,32 @@ fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
             spectrum_to_rgb(&crate::math::spectrum::blackbody(t, true), SpectrumKind::Illuminant)
         }
         SpectrumParam::Named(n) if n == "stdillum-D65" => Rgb::ONE,
-        SpectrumParam::Named(n) => {
-            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here")))
-        }
+        SpectrumParam::Named(n) => match named_illuminant(&n) {
+            Some(samples) => unit_luminance(&samples),
+            None => return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here"))),
+        },
     })
+}
+
+/// pbrt-v4's named standard illuminants that are defined by formulas (pbrt normalises each to
+/// luminance 1, so only the shape matters): CIE illuminant A, Planck's law at 2856 K on the
+/// 1931 radiation constant (`S(λ) ∝ λ⁻⁵ / (exp(1.435 × 10⁷ / (2848 λ)) − 1)`, λ in nm, the
+/// CIE's definition), and D50, CIE daylight at 5000 K on the 1931 constant (5003 K).
+fn named_illuminant(name: &str) -> Option<Vec<(f32, f32)>> {
+    match name {
+        "stdillum-A" => Some(
+            (0..=94)
+                .map(|i| {
+                    let nm = 360.0 + 5.0 * i as f64;
+                    let s = 100.0 * (560.0 / nm).powi(5) * ((1.435e7f64 / (2848.0 * 560.0)).exp() - 1.0)
+                        / ((1.435e7 / (2848.0 * nm)).exp() - 1.0);
+                    (nm as f32, s as f32)
+                })
+                .collect(),
+        ),
+        "stdillum-D50" => Some(crate::math::spectrum::daylight(5000.0)),
+        _ => None,
+    }
 }
 
 /// The linear sRGB colour of a black body at `kelvin`, at luminance 1 (pbrt-v4 normalises a
