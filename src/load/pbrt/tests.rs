@@ -1078,6 +1078,14 @@ fn nanovdb_media() {
     // missing file and a missing filename are errors.
     let f = load(&medium("\"float Lescale\" 0")).unwrap();
     assert!(f.scene.media()[0].radiance.is_none());
+    // Earlier pbrt-v4's spelling `LeScale` (pbrt-v4-scenes' explosion.pbrt) is the same
+    // parameter; giving both is an error.
+    let w = to_world.apply_point(Vec3::new(0.1, 0.2, 0.0));
+    let old = load(&medium(&params.replace("Lescale", "LeScale"))).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(old.scene.media()[0].radiance.as_ref().map(|r| r.eval(w)), Some(radiance.eval(w)));
+    assert!(load(&medium("\"float LeScale\" 0")).unwrap().scene.media()[0].radiance.is_none());
+    let e = err(&medium("\"float LeScale\" 1 \"float Lescale\" 1"));
+    assert!(e.contains("both") && e.contains("test.pbrt"), "{e}");
     let f = load(&medium("\"string temperaturename\" \"heat\"")).unwrap();
     assert!(f.scene.media()[0].radiance.is_none());
     let e = err(&medium("\"string gridname\" \"smoke\""));

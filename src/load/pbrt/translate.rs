@@ -1208,7 +1208,8 @@ fn cloud_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
 /// pbrt-v4's `nanovdb` medium: the float grid `gridname` ("density") of the NanoVDB file
 /// `filename` (required), read trilinearly at the point's medium-space coordinates through the
 /// grid's own map, times `sigma_a` and `sigma_s` (1 each) and `scale` (1), `g`; where the file
-/// also has the grid `temperaturename` ("temperature") and `Lescale` (1) is positive, it emits
+/// also has the grid `temperaturename` ("temperature") and `Lescale` (1; earlier pbrt-v4's
+/// `LeScale` is read too) is positive, it emits
 /// `σₐ` times black-body radiance at `(T − temperatureoffset) · temperaturescale` K (the offset
 /// also spelt `temperaturecutoff`; none at or below 100 K) times `Lescale` → Mitsuba's
 /// `heterogeneous` whose σₜ is neumann's `nanovdb` volume and whose `radiance` is a
@@ -1238,7 +1239,12 @@ fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
     let albedo = Rgb::from_array(std::array::from_fn(|c| if st[c] > 0.0 { ss[c] / st[c] } else { 0.0 }));
     set(&mut o, "albedo", Value::Rgb(albedo), &ploc(ps, "sigma_s"));
     phase_g(ps, &mut o)?;
-    let le_scale = le_scale(ps)?;
+    // Earlier pbrt-v4 spelt it `LeScale` for this medium (pbrt-v4-scenes' explosion.pbrt does).
+    let le_name = if ps.has("LeScale") { "LeScale" } else { "Lescale" };
+    if ps.has("LeScale") && ps.has("Lescale") {
+        return Err(ps.error_at("LeScale", "both \"LeScale\" and \"Lescale\" given: they name one parameter"));
+    }
+    let le_scale = le_scale_named(ps, le_name)?;
     let temperature = ps.string("temperaturename")?.unwrap_or_else(|| "temperature".into());
     let (offset, t_scale) = temperature_params(ps)?;
     if le_scale > 0.0 && sa.max_element() > 0.0 {
@@ -1248,7 +1254,7 @@ fn nanovdb_medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
         set(&mut t, "required", Value::Bool(false), &ps.loc);
         set(&mut t, "to_world", to_world, &ps.loc);
         let b = blackbody_volume(ps, t, None, offset, t_scale, le_scale);
-        set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, "Lescale"));
+        set(&mut o, "radiance", Value::Object(Rc::new(b)), &ploc(ps, le_name));
     }
     Ok(o)
 }
@@ -1459,9 +1465,14 @@ const CIE_Y_INTEGRAL: f32 = 106.856_895;
 
 /// The float `Lescale` (1) of a `homogeneous` or `rgbgrid` medium, finite and ≥ 0.
 fn le_scale(ps: &ParamSet) -> Result<f32> {
-    let scale = ps.float("Lescale", 1.0)?;
+    le_scale_named(ps, "Lescale")
+}
+
+/// [`le_scale`] under the parameter name `name`.
+fn le_scale_named(ps: &ParamSet, name: &str) -> Result<f32> {
+    let scale = ps.float(name, 1.0)?;
     if !(scale >= 0.0 && scale.is_finite()) {
-        return Err(ps.error_at("Lescale", "Lescale must be finite and ≥ 0"));
+        return Err(ps.error_at(name, format!("{name} must be finite and ≥ 0")));
     }
     Ok(scale)
 }
