@@ -82,6 +82,9 @@ pub struct Parser {
     pub(super) sampler: Option<ParamSet>,
     pub(super) filter: Option<ParamSet>,
     pub(super) integrator: Option<ParamSet>,
+    /// Parameters that follow an `Include` being parsed, for the included file's last
+    /// parameter list (see `Cursor::tail`).
+    include_tail: Option<Vec<Param>>,
     pub(super) shapes: Vec<Rc<Obj>>,
     pub(super) emitters: Vec<Rc<Obj>>,
     world: bool,
@@ -110,6 +113,12 @@ struct Cursor<'a> {
     tokens: &'a [Token],
     pos: usize,
     file: Arc<SourceFile>,
+    /// Parameters that follow this (included) file's `Include` in the files that include it:
+    /// pbrt reads one stream of tokens across an `Include`, so a parameter list that ends this
+    /// file goes on with them (pbrt-v4-scenes' smoke-plume gives its medium's coefficients
+    /// after including the file that declares the medium). Taken by the parameter list that
+    /// ends the file; `None` once taken or where there are none.
+    tail: Option<Vec<Param>>,
 }
 
 impl Cursor<'_> {
@@ -258,6 +267,14 @@ impl Cursor<'_> {
             }
             params.push(Param { ty: ty.into(), name: name.into(), values, loc: ploc, used: Cell::new(false) });
         }
+        if self.pos == self.tokens.len() {
+            for p in self.tail.take().unwrap_or_default() {
+                if params.iter().any(|q| q.name == p.name) {
+                    return Err(SceneError::at(&p.loc, format!("parameter '{}' is given twice", p.name)));
+                }
+                params.push(p);
+            }
+        }
         Ok(ParamSet { params, loc, what })
     }
 }
@@ -320,6 +337,7 @@ impl Parser {
             sampler: None,
             filter: None,
             integrator: None,
+            include_tail: None,
             shapes: Vec::new(),
             emitters: Vec::new(),
             world: false,
@@ -363,11 +381,24 @@ impl Parser {
         let file = Arc::new(SourceFile { path, text });
         let tokens =
             tokenize(&file.text).map_err(|(offset, m)| SceneError::at(&Loc { file: file.clone(), offset }, m))?;
-        let mut c = Cursor { tokens: &tokens, pos: 0, file: file.clone() };
+        let mut c = Cursor { tokens: &tokens, pos: 0, file: file.clone(), tail: self.include_tail.take() };
         while c.pos < tokens.len() {
             self.directive(&mut c)?;
         }
-        Ok(())
+        match c.tail.and_then(|t| t.into_iter().next()) {
+            // pbrt would read them as the next directive: the file does not end with one that
+            // takes parameters.
+            Some(p) => Err(SceneError::at(
+                &p.loc,
+                format!(
+                    "expected a directive, found the parameter \"{} {}\" (the included file {} does not end with a directive that takes parameters)",
+                    p.ty,
+                    p.name,
+                    file.path.display()
+                ),
+            )),
+            None => Ok(()),
+        }
     }
 
     fn directive(&mut self, c: &mut Cursor) -> Result<()> {
@@ -699,10 +730,23 @@ impl Parser {
             "Include" | "Import" => {
                 let f = c.string("the file name")?;
                 let path = self.resolver.resolve(&f);
+                // Parameters after the file name continue the included file's last parameter
+                // list (pbrt's one token stream); where this file ends there too, so do the
+                // parameters that follow it in its own includer.
+                // (An imported file is parsed apart in pbrt-v4: nothing runs on from it.)
+                let tail = c.params(format!("{name} \"{f}\""), loc.clone())?.params;
+                if name == "Import" {
+                    if let Some(p) = tail.first() {
+                        return Err(SceneError::at(&p.loc, "Import takes no parameters (an imported file is parsed apart)"));
+                    }
+                }
+                self.include_tail = (!tail.is_empty()).then_some(tail);
                 // An imported file adds shapes and named things but cannot change the
                 // importer's graphics state (pbrt-v4 parses it apart); an included one can.
                 let saved = (name == "Import").then(|| self.gs.clone());
-                self.parse_file(&path, Some(&loc))?;
+                let parsed = self.parse_file(&path, Some(&loc));
+                self.include_tail = None;
+                parsed?;
                 if let Some(gs) = saved {
                     self.gs = gs;
                 }

@@ -294,6 +294,47 @@ fn import_keeps_the_importers_state_and_include_does_not() {
     }
 }
 
+/// pbrt reads one token stream across `Include`: parameters after an `Include` continue the
+/// parameter list that ends the included file (pbrt-v4-scenes' smoke-plume declares its
+/// medium in the included grid file and gives the coefficients after the `Include`), through
+/// nested includes too; such a scene loads as the same scene written in one file. Trailing
+/// parameters where the included file does not end in a parameter list, one given on both
+/// sides, and parameters after `Import` are located errors.
+#[test]
+fn parameters_after_include_continue_the_included_files_last_directive() {
+    let dir = tmp("include-tail");
+    let grid = "MakeNamedMedium \"smoke\" \"string type\" \"uniformgrid\"\n  \"integer nx\" 2 \"integer ny\" 1 \"integer nz\" 1 \"float density\" [0.2 1]\n";
+    let rest = "MediumInterface \"smoke\" \"\"\nMaterial \"interface\"\nShape \"sphere\" \"float radius\" 2\n";
+    let coefficients = "  \"rgb sigma_a\" [1 2 3]\n  \"rgb sigma_s\" [4 5 6]\n";
+    let head = "Camera \"perspective\"\nWorldBegin\n";
+    std::fs::write(dir.join("grid.pbrt"), grid).unwrap();
+    std::fs::write(dir.join("middle.pbrt"), "# includes the grid last\nInclude \"grid.pbrt\"\n").unwrap();
+    let medium = |main: &str| {
+        std::fs::write(dir.join("main.pbrt"), main).unwrap();
+        let f = load_pbrt_file(&dir.join("main.pbrt"), &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+        let crate::medium::Coefficients::Heterogeneous(m) = &f.scene.media()[0].coefficients else { panic!() };
+        let p = m.sigma_t.bounds().centroid();
+        (m.sigma_t.eval(p) * m.scale, m.albedo.eval(p))
+    };
+    let inline = medium(&format!("{head}{}{coefficients}{rest}", grid.trim_end()));
+    assert!((inline.0 - Rgb::new(3.0, 4.2, 5.4)).abs().max_element() < 1e-4, "{:?}", inline.0);
+    assert_eq!(medium(&format!("{head}Include \"grid.pbrt\"\n{coefficients}{rest}")), inline);
+    assert_eq!(medium(&format!("{head}Include \"middle.pbrt\"\n{coefficients}{rest}")), inline);
+    // Errors.
+    let main = dir.join("main.pbrt");
+    let fails = |text: &str| {
+        std::fs::write(&main, text).unwrap();
+        load_pbrt_file(&main, &Overrides::default()).err().map(|e| e.to_string()).unwrap_or_default()
+    };
+    std::fs::write(dir.join("ends.pbrt"), format!("{grid}AttributeBegin\nAttributeEnd\n")).unwrap();
+    let e = fails(&format!("{head}Include \"ends.pbrt\"\n{coefficients}{rest}"));
+    assert!(e.contains("main.pbrt:4:3") && e.contains("sigma_a") && e.contains("ends.pbrt"), "{e}");
+    let e = fails(&format!("{head}Include \"grid.pbrt\" \"float density\" [1 1]\n{rest}"));
+    assert!(e.contains("main.pbrt:3:21") && e.contains("given twice"), "{e}");
+    let e = fails(&format!("{head}Import \"grid.pbrt\"\n{coefficients}{rest}"));
+    assert!(e.contains("main.pbrt:4:3") && e.contains("Import takes no parameters"), "{e}");
+}
+
 #[test]
 fn attribute_defaults_apply_to_their_targets_until_the_block_ends() {
     let f = load(
