@@ -117,6 +117,25 @@ fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
             };
             set(&mut o, "light_sampler", Value::String(neumann.into()), &loc_of(&ps, "lightsampler"));
         }
+        // Earlier pbrt-v4's `rrthreshold` (1; pbrt-v4-scenes' transparent-machines gives 0):
+        // Russian roulette where the throughput falls below it. Roulette is unbiased, so the
+        // threshold changes noise only: 0 (no roulette) holds neumann's roulette off; any other
+        // value keeps neumann's (Mitsuba's rule), with a warning.
+        if ps.has("rrthreshold") {
+            let t = ps.float("rrthreshold", 1.0)?;
+            if !(t >= 0.0 && t.is_finite()) {
+                return Err(ps.error_at("rrthreshold", format!("rrthreshold must be finite and ≥ 0, got {t}")));
+            }
+            if t == 0.0 {
+                let never = crate::integrator::trace::MAX_SEGMENTS as i64;
+                set(&mut o, "rr_depth", Value::Integer(never), &loc_of(&ps, "rrthreshold"));
+            } else {
+                p.warnings.push(format!(
+                    "warning: {}: \"rrthreshold\" {t}: neumann's Russian roulette (Mitsuba's rule, from the fifth segment) replaces pbrt's threshold; the expected image is the same, the noise differs",
+                    loc_of(&ps, "rrthreshold").position()
+                ));
+            }
+        }
     }
     ps.check_unused()?;
     Ok(o)

@@ -1947,3 +1947,22 @@ fn named_standard_illuminants() {
     let e = err(&scene("stdillum-F4"));
     assert!(e.contains("stdillum-F4") && e.contains("not available"), "{e}");
 }
+
+/// Earlier pbrt-v4's integrator `rrthreshold` (pbrt-v4-scenes' transparent-machines gives 0):
+/// 0 holds Russian roulette off; another value keeps neumann's roulette with a warning (the
+/// expected image is the same); a negative one is an error.
+#[test]
+fn rrthreshold_zero_holds_russian_roulette_off() {
+    use crate::integrator::AnyIntegrator;
+    let scene = |params: &str| format!("Integrator \"volpath\" \"integer maxdepth\" 256 {params}\nWorldBegin\n");
+    let f = load(&scene("\"float rrthreshold\" [ 0 ]")).unwrap_or_else(|e| panic!("{e}"));
+    let AnyIntegrator::VolPath(v) = &f.integrator else { panic!("{:?}", f.integrator) };
+    assert_eq!((v.settings.max_depth, v.settings.rr_depth), (257, crate::integrator::trace::MAX_SEGMENTS));
+    assert!(f.warnings.is_empty(), "{:?}", f.warnings);
+    let f = load(&scene("\"float rrthreshold\" 0.5")).unwrap();
+    let AnyIntegrator::VolPath(v) = &f.integrator else { panic!() };
+    assert_eq!(v.settings.rr_depth, 5);
+    assert!(f.warnings.iter().any(|w| w.contains("rrthreshold") && w.contains("test.pbrt:1:")), "{:?}", f.warnings);
+    let e = err(&scene("\"float rrthreshold\" -1"));
+    assert!(e.contains("rrthreshold must be finite and ≥ 0") && e.contains("test.pbrt:1:"), "{e}");
+}
