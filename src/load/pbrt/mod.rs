@@ -188,6 +188,17 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         }
         // `iso` (with the camera's shutter interval) scales the lights: translate::imaging_ratio.
         f.float("iso", 100.0)?;
+        // So does an earlier pbrt-v4's `scale` (current pbrt-v4's films do not read it).
+        if f.has("scale") {
+            let scale = f.float("scale", 1.0)?;
+            if !(scale > 0.0 && scale.is_finite()) {
+                return Err(f.error_at("scale", format!("the film's scale must be positive, got {scale}")));
+            }
+            p.warnings.push(format!(
+                "warning: {}: Film \"scale\" {scale}: an earlier pbrt-v4's parameter (current pbrt-v4 does not read it): the image is multiplied by it",
+                loc_of(&f, "scale").position()
+            ));
+        }
         white_balance = f.float("whitebalance", 0.0)?;
         if white_balance != 0.0 && !(1000.0..=40000.0).contains(&white_balance) {
             return Err(f.error_at("whitebalance", format!("a white balance of {white_balance} K: expected 1000–40000 K (or 0: none)")));

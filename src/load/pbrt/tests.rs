@@ -722,6 +722,13 @@ fn iso_and_shutter_scale_the_image_as_pbrt_v4_sensors_do() {
     // pbrt-v4's film has no "exposuretime" (the camera's shutter gives it).
     let e = err("Camera \"perspective\"\nFilm \"rgb\" \"float exposuretime\" 2\nWorldBegin\n");
     assert!(e.contains("exposuretime"), "{e}");
+    // An earlier pbrt-v4's film `scale` (zero-day, sportscar-sky) multiplies the image too,
+    // with a warning (current pbrt-v4 does not read it).
+    let f = load("Film \"rgb\" \"float scale\" 3 \"float iso\" 200\nWorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1]\n").unwrap();
+    assert!(matches!(&f.scene.lights()[0], Light::Point { intensity, .. } if *intensity == Rgb::splat(6.0)));
+    assert!(f.warnings.iter().any(|w| w.contains("test.pbrt:1:12") && w.contains("scale")), "{:?}", f.warnings);
+    let e = err("Film \"rgb\" \"float scale\" 0\nWorldBegin\n");
+    assert!(e.contains("test.pbrt:1:12") && e.contains("must be positive"), "{e}");
 }
 
 #[test]

@@ -891,8 +891,9 @@ fn light_scale(p: &Parser, ps: &ParamSet) -> Result<f32> {
 }
 
 /// pbrt-v4's imaging ratio, `exposure time × ISO / 100` (the exposure time being the camera's
-/// `shutterclose − shutteropen`): its sensor scales the image by it. Light transport is linear
-/// in the emission, so neumann scales every light instead (1 by default).
+/// `shutterclose − shutteropen`), times an earlier pbrt-v4's film `scale`: its sensor scales the
+/// image by it. Light transport is linear in the emission, so neumann scales every light
+/// instead (1 by default).
 fn imaging_ratio(p: &Parser, light: &ParamSet) -> Result<f32> {
     let iso = match &p.film {
         Some(f) => f.float("iso", 100.0)?,
@@ -902,11 +903,17 @@ fn imaging_ratio(p: &Parser, light: &ParamSet) -> Result<f32> {
         Some((c, _)) => c.float("shutterclose", 1.0)? - c.float("shutteropen", 0.0)?,
         None => 1.0,
     };
-    let ratio = exposure * iso / 100.0;
+    // Earlier pbrt-v4's film `scale` (pbrt-v4-scenes' zero-day and sportscar-sky): the image
+    // times it, as the imaging ratio is.
+    let film_scale = match &p.film {
+        Some(f) => f.float("scale", 1.0)?,
+        None => 1.0,
+    };
+    let ratio = exposure * iso / 100.0 * film_scale;
     if !(ratio.is_finite() && ratio > 0.0) {
         let at = p.film.as_ref().filter(|f| f.has("iso")).or(p.camera.as_ref().map(|c| &c.0)).unwrap_or(light);
         return Err(at.error(format!(
-            "the imaging ratio (shutterclose − shutteropen) × iso / 100 must be positive, got {ratio}"
+            "the imaging ratio (shutterclose − shutteropen) × iso / 100 (× the film's scale) must be positive, got {ratio}"
         )));
     }
     Ok(ratio)
