@@ -188,9 +188,18 @@ pub type IntegratorPlugin = fn(&Obj) -> PropResult<AnyIntegrator>;
 /// Every integrator plugin by its name (Mitsuba's where it has one).
 pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("path", |o| {
-        Ok(AnyIntegrator::Path(PathIntegrator { settings: PathSettings::from_props(o)?, ..Default::default() }))
+        Ok(AnyIntegrator::Path(PathIntegrator {
+            settings: PathSettings::from_props(o)?,
+            regularize: o.bool("regularize", false)?,
+            ..Default::default()
+        }))
     }),
-    ("volpath", |o| Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props(o)? }))),
+    ("volpath", |o| {
+        Ok(AnyIntegrator::VolPath(VolPathIntegrator {
+            settings: PathSettings::from_props(o)?,
+            regularize: o.bool("regularize", false)?,
+        }))
+    }),
     ("volpathmis", |o| Ok(AnyIntegrator::VolPathMis(VolPathMisIntegrator { settings: PathSettings::from_props(o)? }))),
     ("ptracer", |o| Ok(AnyIntegrator::Ptracer(LightTracer { settings: PathSettings::from_props(o)? }))),
     ("direct", |o| Ok(AnyIntegrator::Direct(DirectIntegrator::from_props(o)?))),
@@ -201,7 +210,7 @@ pub const INTEGRATOR_PLUGINS: &[(&str, IntegratorPlugin)] = &[
     ("prb", |o| Ok(AnyIntegrator::Path(differentiable_path(o)?))),
     ("prb_basic", |o| Ok(AnyIntegrator::Path(differentiable_path(o)?))),
     ("prbvolpath", |o| {
-        Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props_with_depth(o, 6)? }))
+        Ok(AnyIntegrator::VolPath(VolPathIntegrator { settings: PathSettings::from_props_with_depth(o, 6)?, regularize: false }))
     }),
     ("prb_projective", |o| {
         projective_props(o)?;
@@ -368,7 +377,7 @@ impl AnyIntegrator {
             }
             IntegratorKind::Ptracer => AnyIntegrator::Ptracer(LightTracer { settings }),
             IntegratorKind::Radiosity => AnyIntegrator::Radiosity(radiosity::Options::default()),
-            IntegratorKind::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings }),
+            IntegratorKind::Volpath => AnyIntegrator::VolPath(VolPathIntegrator { settings, regularize: false }),
             IntegratorKind::VolpathMis => AnyIntegrator::VolPathMis(VolPathMisIntegrator { settings }),
             IntegratorKind::Moment => {
                 let path = AnyIntegrator::with_kind(IntegratorKind::Path, settings);

@@ -53,6 +53,9 @@ pub struct PathIntegrator {
     pub strategy: DirectStrategy,
     /// MIS heuristic (used by the `Mis` strategy).
     pub heuristic: MisHeuristic,
+    /// pbrt-v4's path regularization (`regularize`, false): after the path's first
+    /// non-specular bounce its BSDFs are seen widened ([`Bsdf::regularized`]). Biased.
+    pub regularize: bool,
 }
 
 crate::choices!(DirectStrategy, "direct-light strategy", {
@@ -170,6 +173,9 @@ impl PathIntegrator {
         // Product of the relative IORs crossed: radiance scales by η² at refractions, which
         // Russian roulette must not mistake for a loss of throughput (Mitsuba's rule).
         let mut eta = 1.0f32;
+        // Whether the path went on from a vertex by a non-delta BSDF sample (pbrt-v4's
+        // `anyNonSpecularBounces`, which starts regularization).
+        let mut non_specular = false;
         loop {
             let hit = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
@@ -217,7 +223,11 @@ impl PathIntegrator {
                 break;
             }
 
-            let bsdf = &scene.bsdfs()[shape.bsdf as usize];
+            let bsdf = if self.regularize && non_specular {
+                &scene.regularized_bsdfs()[shape.bsdf as usize]
+            } else {
+                &scene.bsdfs()[shape.bsdf as usize]
+            };
             let frame = si.frame();
             let wo_local = frame.to_local(wo);
             // Textures and normal maps looked up once for this vertex's BSDF calls.
@@ -259,6 +269,7 @@ impl PathIntegrator {
             // Continue the path by BSDF sampling.
             null_only &= bs.as_ref().is_some_and(|b| b.null);
             let Some(bs) = bs else { break };
+            non_specular |= !bs.delta;
             beta *= bs.weight;
             eta *= bs.eta;
             let wi = frame.to_world(bs.wi);
@@ -423,7 +434,7 @@ mod tests {
         ];
         for (k, (strategy, heuristic, spp)) in cases.into_iter().enumerate() {
             let integrator =
-                PathIntegrator { settings: PathSettings { max_depth: 6, ..Default::default() }, strategy, heuristic };
+                PathIntegrator { settings: PathSettings { max_depth: 6, ..Default::default() }, strategy, heuristic, regularize: false };
             let settings = RenderSettings { spp, seed: 100 + k as u64, ..Default::default() };
             let out = render(&scene, &integrator, &settings, &AtomicBool::new(false)).unwrap();
             means.push((strategy, heuristic, image_mean(&out.film)));

@@ -451,7 +451,7 @@ mod tests {
         let never = AtomicBool::new(false);
         let images = [
             render(&scene, &PathIntegrator { settings, ..Default::default() }, &run, &never).unwrap(),
-            render(&scene, &VolPathIntegrator { settings }, &run, &never).unwrap(),
+            render(&scene, &VolPathIntegrator { settings, regularize: false }, &run, &never).unwrap(),
             render(&scene, &VolPathMisIntegrator { settings }, &run, &never).unwrap(),
             render_light_paths(&scene, &LightTracer { settings }, &run, &never).unwrap(),
         ];

@@ -37,6 +37,10 @@ const MAX_NULL_CROSSINGS: u32 = 256;
 pub struct VolPathIntegrator {
     /// `max_depth`, `rr_depth`, `hide_emitters`.
     pub settings: PathSettings,
+    /// pbrt-v4's path regularization (`regularize`, false): after the path's first
+    /// non-specular bounce — a BSDF sample that is no delta, a scattering in a medium, a
+    /// subsurface exit — its BSDFs are seen widened ([`crate::material::Bsdf::regularized`]).
+    pub regularize: bool,
 }
 
 /// The medium a ray leaving shape `shape`'s surface along `d` (geometric normal `ng`) starts
@@ -142,6 +146,8 @@ impl Integrator for VolPathIntegrator {
         let mut depth = 0u32;
         let mut crossings = 0u32;
         let mut rng = tracking_rng(scene, sampler);
+        // pbrt-v4's `anyNonSpecularBounces` (which starts regularization).
+        let mut non_specular = false;
         if max_depth == 0 {
             let hit = scene.intersect(camera_ray).is_some();
             return RadianceSample { l, alpha: trace::coverage(scene, hit, self.settings.hide_emitters) };
@@ -206,6 +212,7 @@ impl Integrator for VolPathIntegrator {
                         // Without emitter sampling, emission found by phase sampling counts in
                         // full, as after a specular bounce.
                         prev = Some(PrevVertex { ctx: light_ctx, pdf: s.pdf, delta: !nee });
+                        non_specular = true;
                         ray = Ray::new(p, s.value);
                         depth += 1;
                         crossings = 0;
@@ -223,7 +230,11 @@ impl Integrator for VolPathIntegrator {
                 break;
             };
             let shape = scene.shapes()[si.shape as usize];
-            let bsdf = &scene.bsdfs()[shape.bsdf as usize];
+            let bsdf = if self.regularize && non_specular {
+                &scene.regularized_bsdfs()[shape.bsdf as usize]
+            } else {
+                &scene.bsdfs()[shape.bsdf as usize]
+            };
             let wo = -ray.d;
 
             // Emission found by the path (not for hidden emitters seen by the camera).
@@ -287,6 +298,7 @@ impl Integrator for VolPathIntegrator {
             }
             beta *= bs.weight;
             eta *= bs.eta;
+            non_specular |= !bs.delta && !bs.null;
             let wi = frame.to_world(bs.wi);
             // The vertex MIS refers to next: this one, or where the light leaves a subsurface
             // material it refracted into (the BSSRDF's probe finds that point).
@@ -317,6 +329,7 @@ impl Integrator for VolPathIntegrator {
                     break;
                 };
                 beta *= w;
+                non_specular = true;
                 medium = medium_after(scene, exit.shape, exit.ng, wi, medium);
                 ray = exit.spawn_ray(wi);
                 PrevVertex { ctx: exit_ctx, pdf, delta: false }
@@ -571,7 +584,7 @@ mod tests {
         let scene = null_sphere_before_a_wall();
         let sample = |max_depth: i32, target: Vec3| {
             let settings = PathSettings { max_depth, hide_emitters: true, ..Default::default() };
-            sample_toward(&scene, &VolPathIntegrator { settings }, target)
+            sample_toward(&scene, &VolPathIntegrator { settings, regularize: false }, target)
         };
         let sky = sample(4, Vec3::new(0.0, 0.6, 0.0));
         assert_eq!((sky.l, sky.alpha), (Rgb::ZERO, 0.0));
@@ -604,7 +617,7 @@ mod tests {
             Bsdf::Mask { opacity: Texture::Constant(Rgb::splat(0.5)), bsdf: std::sync::Arc::new(thin.clone()) };
         let settings = PathSettings { max_depth: 2, ..Default::default() };
         let integrators: [(&str, Box<dyn Integrator>); 2] = [
-            ("volpath", Box::new(VolPathIntegrator { settings })),
+            ("volpath", Box::new(VolPathIntegrator { settings, regularize: false })),
             ("volpathmis", Box::new(VolPathMisIntegrator { settings })),
         ];
         for (shell, share) in [(thin, 0.6), (mask, 0.6), (masked_pane, 0.8)] {

@@ -436,11 +436,27 @@ pub struct Roughness {
     pub distribution: Microfacet,
     /// Roughness textures (α_u, α_v; their luminance), if the roughness varies over the surface.
     pub textures: Option<Box<[Texture; 2]>>,
+    /// Whether the textures' roughness is regularized ([`regularize_alpha`]) where it is
+    /// looked up (a constant distribution is regularized once, when made).
+    pub regularized: bool,
+}
+
+/// pbrt-v4's path regularization of a Trowbridge–Reitz (GGX) roughness `α`: below 0.3 it is
+/// doubled and clamped to [0.1, 0.3] (a smooth surface, α = 0, becomes α = 0.1); from 0.3 on it
+/// is kept. Biased — near-specular paths blur into ones the light sampling can find — and
+/// applied only after a path's first non-specular bounce (`regularize` of `path`, `volpath`).
+#[inline]
+pub fn regularize_alpha(alpha: f32) -> f32 {
+    if alpha < 0.3 {
+        (2.0 * alpha).clamp(0.1, 0.3)
+    } else {
+        alpha
+    }
 }
 
 impl From<Microfacet> for Roughness {
     fn from(distribution: Microfacet) -> Roughness {
-        Roughness { distribution, textures: None }
+        Roughness { distribution, textures: None, regularized: false }
     }
 }
 
@@ -451,9 +467,29 @@ impl Roughness {
         match &self.textures {
             None => self.distribution,
             Some(t) => {
-                let alpha = |t: &Texture| ctx.scalar(t);
+                let alpha = |t: &Texture| {
+                    let a = ctx.scalar(t);
+                    if self.regularized {
+                        regularize_alpha(a)
+                    } else {
+                        a
+                    }
+                };
                 Microfacet::new(self.distribution.kind, alpha(&t[0]), alpha(&t[1]))
             }
+        }
+    }
+
+    /// This roughness under pbrt-v4's path regularization ([`regularize_alpha`]).
+    pub fn regularized(&self) -> Roughness {
+        let d = self.distribution;
+        if matches!(d.kind, MicrofacetType::BlinnPhong(_)) {
+            return self.clone();
+        }
+        Roughness {
+            distribution: Microfacet::new(d.kind, regularize_alpha(d.alpha_u), regularize_alpha(d.alpha_v)),
+            textures: self.textures.clone(),
+            regularized: true,
         }
     }
 
@@ -482,7 +518,11 @@ impl Roughness {
             let a = |b: &mut dyn TextureSource, n| b.texture_of(o, n, Rgb::splat(0.1), SpectrumKind::Unbounded);
             (a(b, "alpha_u")?, a(b, "alpha_v")?)
         };
-        Ok(Roughness { distribution: Microfacet::kind_from_props(o)?, textures: Some(Box::new([au, av])) })
+        Ok(Roughness {
+            distribution: Microfacet::kind_from_props(o)?,
+            textures: Some(Box::new([au, av])),
+            regularized: false,
+        })
     }
 }
 

@@ -7,15 +7,15 @@
 //! `f |cos θᵢ| / pdf`. BSDFs are one-sided unless stated: seen from the back (`wo.z ≤ 0`) they
 //! are black, as in Mitsuba.
 
+pub mod bssrdf;
 mod conductor;
 mod conductor_presets;
 mod dielectric;
 mod diffuse;
-mod filter;
 mod diffusetransmission;
-pub mod hair;
-pub mod bssrdf;
+mod filter;
 pub mod fresnel;
+pub mod hair;
 pub mod layered;
 mod measured;
 mod memo;
@@ -26,6 +26,7 @@ mod pplastic;
 mod principled;
 mod principledthin;
 mod registry;
+mod regularize;
 mod roughdielectric;
 mod roughplastic;
 pub mod subsurface;

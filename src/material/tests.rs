@@ -72,6 +72,7 @@ fn rough_conductors() -> Vec<(String, Bsdf)> {
             roughness: Roughness {
                 distribution: Microfacet::new(MicrofacetType::Ggx, 0.1, 0.1),
                 textures: Some(Box::new([Rgb::splat(0.15).into(), Rgb::splat(0.45).into()])),
+                regularized: false,
             },
             ior: gold,
             specular_reflectance: Rgb::new(0.9, 0.8, 0.6).into(),
@@ -294,6 +295,15 @@ fn all_non_delta() -> Vec<(String, Bsdf)> {
             shadowing: true,
         }),
     ));
+    // pbrt-v4's path regularization: smooth glass made GGX 0.1, textured roughness widened.
+    let glass = Bsdf::Dielectric(Dielectric {
+        eta: 1.5,
+        specular_reflectance: Rgb::ONE.into(),
+        specular_transmittance: Rgb::ONE.into(),
+    });
+    v.push(("regularized(dielectric)".into(), glass.regularized()));
+    let textured = rough_conductors().into_iter().find(|(n, _)| n == "roughconductor textured").expect("listed").1;
+    v.push(("regularized(roughconductor textured)".into(), textured.regularized()));
     v
 }
 
@@ -546,8 +556,11 @@ fn textured_parameters_act_as_their_local_value() {
     let eta = checker(Rgb::new(0.2, 0.4, 1.2), Rgb::new(1.1, 0.9, 0.3));
     let k = checker(Rgb::new(3.0, 2.5, 2.0), Rgb::new(1.0, 4.0, 0.5));
     let ggx = |a: f32| Microfacet::new(MicrofacetType::Ggx, a, a);
-    let textured_roughness =
-        Roughness { distribution: ggx(0.1), textures: Some(Box::new([alpha.clone(), alpha.clone()])) };
+    let textured_roughness = Roughness {
+        distribution: ggx(0.1),
+        textures: Some(Box::new([alpha.clone(), alpha.clone()])),
+        regularized: false,
+    };
     type Case<'a> = (&'static str, Bsdf, Box<dyn Fn(Vec2) -> Bsdf + 'a>);
     let cases: Vec<Case> = vec![
         (

@@ -266,6 +266,7 @@ impl SceneBuilder {
             shapes: self.shapes,
             geometries: self.geometries,
             bsdfs: self.bsdfs,
+            regularized_bsdfs: std::sync::OnceLock::new(),
             lights: self.lights,
             light_sampler,
             light_sampler_kind: LightSamplerKind::default(),

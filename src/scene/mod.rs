@@ -223,6 +223,9 @@ pub struct Scene {
     shapes: Vec<Shape>,
     geometries: Vec<Geometry>,
     bsdfs: Vec<Bsdf>,
+    /// The BSDFs under pbrt-v4's path regularization (indexed like `bsdfs`), made when an
+    /// integrator first asks for them.
+    regularized_bsdfs: std::sync::OnceLock<Vec<Bsdf>>,
     lights: Vec<Light>,
     light_sampler: LightSampler,
     light_sampler_kind: LightSamplerKind,
@@ -306,6 +309,12 @@ impl Scene {
     /// The BSDFs.
     pub fn bsdfs(&self) -> &[Bsdf] {
         &self.bsdfs
+    }
+
+    /// The BSDFs as pbrt-v4's path regularization sees them ([`Bsdf::regularized`]; indexed
+    /// like [`Scene::bsdfs`]), made on the first call.
+    pub fn regularized_bsdfs(&self) -> &[Bsdf] {
+        self.regularized_bsdfs.get_or_init(|| self.bsdfs.iter().map(Bsdf::regularized).collect())
     }
 
     /// The lights.

@@ -106,7 +106,8 @@ fn integrator(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     set(&mut o, "max_depth", Value::Integer(depth + 1), &loc_of(&ps, "maxdepth"));
     if ty == "path" || ty == "volpath" {
         if ps.bool("regularize", false)? {
-            return Err(ps.error_at("regularize", "path regularization (biased) is not implemented by neumann"));
+            // pbrt-v4's path regularization (biased): neumann's `regularize`.
+            set(&mut o, "regularize", Value::Bool(true), &loc_of(&ps, "regularize"));
         }
         if let Some(s) = ps.string("lightsampler")? {
             let neumann = match s.as_str() {

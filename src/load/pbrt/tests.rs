@@ -724,7 +724,9 @@ fn iso_and_shutter_scale_the_image_as_pbrt_v4_sensors_do() {
     assert!(e.contains("exposuretime"), "{e}");
     // An earlier pbrt-v4's film `scale` (zero-day, sportscar-sky) multiplies the image too,
     // with a warning (current pbrt-v4 does not read it).
-    let f = load("Film \"rgb\" \"float scale\" 3 \"float iso\" 200\nWorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1]\n").unwrap();
+    let f =
+        load("Film \"rgb\" \"float scale\" 3 \"float iso\" 200\nWorldBegin\nLightSource \"point\" \"rgb I\" [1 1 1]\n")
+            .unwrap();
     assert!(matches!(&f.scene.lights()[0], Light::Point { intensity, .. } if *intensity == Rgb::splat(6.0)));
     assert!(f.warnings.iter().any(|w| w.contains("test.pbrt:1:12") && w.contains("scale")), "{:?}", f.warnings);
     let e = err("Film \"rgb\" \"float scale\" 0\nWorldBegin\n");
@@ -1972,4 +1974,82 @@ fn rrthreshold_zero_holds_russian_roulette_off() {
     assert!(f.warnings.iter().any(|w| w.contains("rrthreshold") && w.contains("test.pbrt:1:")), "{:?}", f.warnings);
     let e = err(&scene("\"float rrthreshold\" -1"));
     assert!(e.contains("rrthreshold must be finite and ≥ 0") && e.contains("test.pbrt:1:"), "{e}");
+}
+
+/// pbrt-v4's path regularization (`"bool regularize" true`, bmw-m6): a floor lit only through a
+/// smooth mirror the camera does not see (a small one-sided light shines up at it) renders
+/// exactly as the same scene with
+/// the mirror a GGX conductor of α = 0.1 (what regularization makes of a smooth one after the
+/// floor's diffuse bounce) — the same samples, so the same bits — and unlike the unregularized
+/// scene; a mirror the camera sees directly is not regularized.
+#[test]
+fn regularize_widens_bsdfs_after_the_first_non_specular_bounce() {
+    use crate::load::test_support::{mean, render};
+    let text = |regularize: bool, mirror: &str, camera: &str| {
+        let reg = if regularize { "\"bool regularize\" true" } else { "" };
+        format!(
+            "LookAt {camera}\nCamera \"perspective\" \"float fov\" 30\n\
+             Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 18\nSampler \"independent\"\n\
+             Integrator \"path\" \"integer maxdepth\" 5 {reg}\nWorldBegin\n\
+             AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0.8 0.8 0.8]\n\
+             Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] \"integer indices\" [0 1 2 0 2 3]\nAttributeEnd\n\
+             AttributeBegin\nMaterial \"conductor\" {mirror}\n\
+             Shape \"trianglemesh\" \"point3 P\" [-2 4 5.5  2 4 5.5  2 4 7.5  -2 4 7.5] \"integer indices\" [0 1 2 0 2 3]\nAttributeEnd\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [200 200 200]\n\
+             Shape \"trianglemesh\" \"point3 P\" [-0.3 2 9.7  0.3 2 9.7  0.3 2 10.3  -0.3 2 10.3] \"integer indices\" [0 2 1 0 3 2]\nAttributeEnd\n"
+        )
+    };
+    let floor_view = "0 3 6  0 0 0  0 1 0";
+    let smooth = "\"float roughness\" 0";
+    let rough = "\"float roughness\" 0.1 \"bool remaproughness\" false";
+    let load_ok = |t: String| load(&t).unwrap_or_else(|e| panic!("{e}"));
+    for integrator in ["path", "volpath"] {
+        let with = |t: String| t.replace("Integrator \"path\"", &format!("Integrator \"{integrator}\""));
+        let regularized = render(&load_ok(with(text(true, smooth, floor_view))), 64, 1);
+        let widened = render(&load_ok(with(text(false, rough, floor_view))), 64, 1);
+        assert!(mean(&widened) > 0.01, "lit: {}", mean(&widened));
+        assert!(regularized == widened, "{integrator}: regularization is the widened mirror, sample for sample");
+    }
+    // A glossy mirror (α = 0.12, whose caustic light sampling finds, so the noise is low) is
+    // widened to α = 0.24: the same bits as that mirror, and a caustic unlike the unwidened one.
+    let (glossy, wider) = (
+        "\"float roughness\" 0.12 \"bool remaproughness\" false",
+        "\"float roughness\" 0.24 \"bool remaproughness\" false",
+    );
+    let regularized = render(&load_ok(text(true, glossy, floor_view)), 64, 1);
+    let widened = render(&load_ok(text(false, wider, floor_view)), 64, 1);
+    assert!(regularized == widened, "the glossy mirror widened, sample for sample");
+    let plain = render(&load_ok(text(false, glossy, floor_view)), 1024, 1);
+    let (widened, widened2) = (
+        render(&load_ok(text(false, wider, floor_view)), 1024, 1),
+        render(&load_ok(text(false, wider, floor_view)), 1024, 2),
+    );
+    // Compared by the image's row and column sums (the caustic's shape, with little noise).
+    let profile = |img: &[Rgb]| -> Vec<f64> {
+        let (w, h) = (24, 18);
+        let px = |x: usize, y: usize| img[y * w + x].element_sum() as f64;
+        let rows = (0..h).map(|y| (0..w).map(|x| px(x, y)).sum::<f64>());
+        rows.chain((0..w).map(|x| (0..h).map(|y| px(x, y)).sum::<f64>())).collect()
+    };
+    let distance = |a: &[Rgb], b: &[Rgb]| {
+        let (pa, pb) = (profile(a), profile(b));
+        pa.iter().zip(&pb).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / pb.iter().map(|y| y * y).sum::<f64>()
+    };
+    let (noise, diff) = (distance(&widened2, &widened), distance(&plain, &widened));
+    println!("profile distance {diff}, noise {noise}");
+    assert!(diff > 5.0 * noise, "the unregularized caustic differs: {diff} against noise {noise}");
+    // The camera looking at the mirror, which shows the light: its first vertex is not
+    // regularized, nor what follows a specular bounce — the light seen in the mirror is the
+    // same; only the weak light of paths that bounced diffusely off the light's own surface
+    // and came back by the mirror changes.
+    let mirror_view = "0 1 3  0 4 7.2  0 1 0";
+    let a = render(&load_ok(text(true, smooth, mirror_view)), 16, 1);
+    let b = render(&load_ok(text(false, smooth, mirror_view)), 16, 1);
+    assert!(mean(&b) > 0.01, "{}", mean(&b));
+    let worst = a
+        .iter()
+        .zip(&b)
+        .map(|(x, y)| ((*x - *y).abs().max_element() / (1.0 + y.max_element())) as f64)
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-5, "the mirror seen directly is not regularized: {worst}");
 }

@@ -87,6 +87,9 @@ pub struct Layered {
     pub max_depth: u32,
     /// Number of walks per evaluation.
     pub n_samples: u32,
+    /// Whether the coating's and a conductor base's roughness are regularized (pbrt-v4's
+    /// `LayeredBxDF::Regularize`, [`super::microfacet::regularize_alpha`]).
+    pub regularized: bool,
 }
 
 /// The layered BSDF's parameters at one shading point.
@@ -146,8 +149,15 @@ impl Layered {
     /// The parameters at `ctx`.
     fn at(&self, ctx: &BsdfContext) -> Stack {
         let scalar = |t: &Texture| ctx.scalar(t);
-        let ggx =
-            |a: &[Texture; 2]| rough_or_smooth(Microfacet::new(MicrofacetType::Ggx, scalar(&a[0]), scalar(&a[1])));
+        let alpha = |t: &Texture| {
+            let a = scalar(t);
+            if self.regularized {
+                super::microfacet::regularize_alpha(a)
+            } else {
+                a
+            }
+        };
+        let ggx = |a: &[Texture; 2]| rough_or_smooth(Microfacet::new(MicrofacetType::Ggx, alpha(&a[0]), alpha(&a[1])));
         let top = Interface::Dielectric { eta: self.eta, mf: ggx(&self.alpha) };
         let bottom = match &self.base {
             Base::Diffuse { reflectance } => Interface::Diffuse { r: ctx.eval(reflectance).clamp(Rgb::ZERO, Rgb::ONE) },
@@ -527,7 +537,17 @@ fn layer(o: &Obj, b: &mut dyn BsdfBuilder, eta_name: &str, prefix: &str, base: B
     let albedo = b.texture_opt(o, "albedo", SpectrumKind::Reflectance)?;
     let g = b.texture_of(o, "g", Rgb::ZERO, SpectrumKind::Unbounded)?;
     let (max_depth, n_samples) = walk_props(o)?;
-    Ok(Bsdf::Layered(Box::new(Layered { eta, alpha, base, thickness, albedo, g, max_depth, n_samples })))
+    Ok(Bsdf::Layered(Box::new(Layered {
+        eta,
+        alpha,
+        base,
+        thickness,
+        albedo,
+        g,
+        max_depth,
+        n_samples,
+        regularized: false,
+    })))
 }
 
 impl Layered {

@@ -37,6 +37,7 @@ fn coated_diffuse(r: Rgb, alpha: f32, thickness: f32, albedo: Option<f32>, g: f3
         g: c(g),
         max_depth,
         n_samples: 1,
+        regularized: false,
     }
 }
 
@@ -53,6 +54,7 @@ fn coated_gold(eta: f32, alpha: f32, base_alpha: f32) -> Layered {
         g: c(0.0),
         max_depth: 10,
         n_samples: 1,
+        regularized: false,
     }
 }
 
