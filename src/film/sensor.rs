@@ -1,11 +1,13 @@
 //! What a radiance sample becomes before it reaches the film: pbrt-v4's pixel-sensor steps that
-//! neumann's RGB films can take — white balance and the clamp of a sample's largest component.
+//! neumann's RGB films can take — white balance, a named camera's colour response, and the clamp
+//! of a sample's largest component.
 //!
 //! **White balance** (pbrt-v4's `whitebalance` of its `cie1931` sensor): the image is adapted
 //! from a source white — CIE daylight (the D series) of the given correlated colour
 //! temperature, or a black body below 4000 K where the D series is not defined, as pbrt
 //! chooses — to the output colour space's white (sRGB's D65) by the von Kries transform in
 //! Bradford's cone space: `RGB ← RGB_from_XYZ · B⁻¹ diag(L_dst/L_src) B · XYZ_from_RGB`.
+//!
 //! **Named camera sensors** (pbrt-v4's `"string sensor"`, seventeen cameras whose spectral
 //! responses were measured, [`camera`]): pbrt-v4 maps a camera's raw RGB to XYZ by a 3 × 3
 //! matrix fitted by least squares on the 24 ColorChecker swatches seen under CIE daylight of the
@@ -16,6 +18,7 @@
 //! neumann renders for the swatches, under D65 and under the white-balance light, to the sRGB
 //! pbrt's camera gives for their spectra. How close that comes to the spectral answer is
 //! measured in the tests (`camera_matrices_reproduce_the_spectral_pipeline`).
+//!
 //! **Clamp** (pbrt-v4's `maxcomponentvalue`): a sample whose largest RGB component exceeds the
 //! bound is scaled down to it (biased, as pbrt's is; off by default; neumann clamps the output
 //! RGB, pbrt the sensor's RGB before its colour matrix, the same where there is no matrix).
@@ -96,13 +99,23 @@ pub fn camera_names() -> impl Iterator<Item = &'static str> {
 /// `kelvin` (pbrt's `whitebalance`; pbrt-v4 uses 6500 K when a named sensor is given none), as a
 /// matrix on linear sRGB samples; `None` for an unknown name. See the module's notes.
 pub fn camera(name: &str, kelvin: f32) -> Option<Mat3> {
+    Some(camera_fit(&camera_response(name)?, kelvin).1.as_mat3())
+}
+
+/// The camera `name`'s r̄, ḡ, b̄ at a wavelength (nm): linear between the table's samples, zero
+/// outside them.
+fn camera_response(name: &str) -> Option<impl Fn(f32) -> [f64; 3]> {
     let (_, curves) = CAMERAS.iter().find(|c| c.0 == name)?;
-    let table = |c: usize| -> Vec<(f32, f32)> {
-        curves[c].iter().enumerate().map(|(i, &v)| (CAMERA_LAMBDA_START + 10.0 * i as f32, v)).collect()
-    };
-    let (r, g, b) = (table(0), table(1), table(2));
-    let response = |l: f32| [r.as_slice(), g.as_slice(), b.as_slice()].map(|t| sample_at(t, l) as f64);
-    Some(camera_fit(&response, kelvin).1.as_mat3())
+    let tables: Vec<Vec<(f32, f32)>> = curves
+        .iter()
+        .map(|c| c.iter().enumerate().map(|(i, &v)| (CAMERA_LAMBDA_START + 10.0 * i as f32, v)).collect())
+        .collect();
+    Some(move |l| [0, 1, 2].map(|c| sample_at(&tables[c], l) as f64))
+}
+
+/// The outer product `u vᵀ`.
+fn outer(u: DVec3, v: DVec3) -> DMat3 {
+    DMat3::from_cols(u * v.x, u * v.y, u * v.z)
 }
 
 /// Spectra on pbrt-v4's integration grid: every nanometre from 360 to 830 nm (its
@@ -155,7 +168,6 @@ impl Grid {
 
 /// The matrix M minimising `Σᵢ |M aᵢ − bᵢ|²` (pbrt's `LinearLeastSquares`).
 fn least_squares(pairs: &[(DVec3, DVec3)]) -> DMat3 {
-    let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
     let aa = pairs.iter().fold(DMat3::ZERO, |m, &(a, _)| m + outer(a, a));
     let ba = pairs.iter().fold(DMat3::ZERO, |m, &(a, b)| m + outer(b, a));
     ba * aa.inverse()
@@ -200,7 +212,6 @@ fn camera_fit(response: &dyn Fn(f32) -> [f64; 3], kelvin: f32) -> (DMat3, DMat3)
     let (white, white_out) = seen(&d65, d65_y);
     // Row by row: least squares under the constraint that D65's white maps exactly,
     // a = a₀ − G⁻¹w (w·a₀ − t) / (w·G⁻¹w) with G = Σ xxᵀ, a₀ = G⁻¹ Σ x yᵣ.
-    let outer = |u: DVec3, v: DVec3| DMat3::from_cols(u * v.x, u * v.y, u * v.z);
     let g_inv = pairs.iter().fold(DMat3::ZERO, |m, &(x, _)| m + outer(x, x)).inverse();
     let gw = g_inv * white;
     let rows: Vec<DVec3> = (0..3)
@@ -277,16 +288,6 @@ mod tests {
         assert!((a[0] - 0.4476).abs() < 2e-3 && (a[1] - 0.4074).abs() < 2e-3, "{a:?}");
     }
 
-    /// The camera's curves by name, per nanometre (as `camera` builds them).
-    fn response_of(name: &str) -> impl Fn(f32) -> [f64; 3] {
-        let (_, curves) = CAMERAS.iter().find(|c| c.0 == name).unwrap();
-        let tables: Vec<Vec<(f32, f32)>> = curves
-            .iter()
-            .map(|c| c.iter().enumerate().map(|(i, &v)| (CAMERA_LAMBDA_START + 10.0 * i as f32, v)).collect())
-            .collect();
-        move |l| [0, 1, 2].map(|c| sample_at(&tables[c], l) as f64)
-    }
-
     /// For spectrum `spd` (per grid index): the linear sRGB neumann renders for it (CIE 1931,
     /// luminance `norm` → 1) and the sRGB pbrt's camera makes of it.
     fn seen(grid: &Grid, xyz_from_camera: DMat3, spd: &dyn Fn(usize) -> f64, norm: f64) -> (DVec3, DVec3) {
@@ -338,7 +339,7 @@ mod tests {
         let (mut sum, mut worst, mut count) = ([[0.0f64; 3]; 2], [[0.0f64; 3]; 2], [0usize; 3]);
         for name in camera_names() {
             for kelvin in [2700.0f32, 5000.0, 6500.0, 9000.0] {
-                let response = response_of(name);
+                let response = camera_response(name).expect("listed");
                 let (m, a) = camera_fit(&response, kelvin);
                 let bradford = SampleTransform::white_balance(kelvin).as_dmat3();
                 let grid = Grid::new(&response, kelvin);
