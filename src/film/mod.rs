@@ -694,7 +694,8 @@ impl FilmSettings {
     /// extension, and the sums are f64); neumann's `sensor` (`cie1931`, or one of pbrt-v4's
     /// measured cameras, [`sensor::camera_names`]), `white_balance` (K; 0: none, the default
     /// of `cie1931`; 6500 for a camera; pbrt-v4's `whitebalance`, see [`sensor`]) and
-    /// `max_component` (∞: pbrt-v4's `maxcomponentvalue`).
+    /// `max_component` (∞: pbrt-v4's `maxcomponentvalue`), measured in the output RGB or, with
+    /// `max_component_of` `sensor`, in pbrt-v4's sensor RGB (XYZ, or a camera's raw RGB).
     pub fn from_props(f: &Obj) -> PropResult<FilmSettings> {
         f.built.set(true);
         f.check_children(&["rfilter"])?;
@@ -774,7 +775,13 @@ impl FilmSettings {
             sensor::camera(&camera, kelvin)
         };
         let max_component = f.float_checked("max_component", f32::INFINITY, |m| m > 0.0, "a positive number")?;
-        let transform = sensor::SampleTransform { matrix, max_component };
+        // Where the clamp measures: the output (neumann's) or, as pbrt-v4, the sensor's RGB.
+        let clamp_basis = match f.choice("max_component_of", &["output", "sensor"])?.as_str() {
+            "output" => None,
+            _ if camera == "cie1931" => Some(sensor::cie1931_sensor_basis()),
+            _ => sensor::camera_sensor_basis(&camera, kelvin),
+        };
+        let transform = sensor::SampleTransform { matrix, max_component, clamp_basis };
         Ok(FilmSettings { width, height, window, alpha, colors, component, filter, transform, sample_border })
     }
 }

@@ -36,12 +36,23 @@ pub struct SampleTransform {
     pub matrix: Option<Mat3>,
     /// The largest value a sample's largest component may take (∞: no clamp).
     pub max_component: f32,
+    /// Where the clamp measures that component: `None`, in the output RGB (neumann's
+    /// `max_component`); `Some(S)`, in `S ×` the sample as rendered — pbrt-v4 clamps its
+    /// sensor's RGB before the colour matrix: XYZ for `cie1931`, a named camera's raw RGB
+    /// ([`camera_sensor_basis`]).
+    pub clamp_basis: Option<Mat3>,
 }
 
 impl Default for SampleTransform {
     fn default() -> Self {
-        SampleTransform { matrix: None, max_component: f32::INFINITY }
+        SampleTransform { matrix: None, max_component: f32::INFINITY, clamp_basis: None }
     }
+}
+
+/// pbrt-v4's sensor RGB of a rendered linear sRGB sample for the `cie1931` sensor (with or
+/// without white balance): the sample's CIE XYZ.
+pub fn cie1931_sensor_basis() -> Mat3 {
+    xyz_from_rgb()
 }
 
 /// Bradford's cone-response matrix (XYZ → LMS), rows as published.
@@ -100,6 +111,14 @@ pub fn camera_names() -> impl Iterator<Item = &'static str> {
 /// matrix on linear sRGB samples; `None` for an unknown name. See the module's notes.
 pub fn camera(name: &str, kelvin: f32) -> Option<Mat3> {
     Some(camera_fit(&camera_response(name)?, kelvin).1.as_mat3())
+}
+
+/// pbrt-v4's sensor RGB of a rendered linear sRGB sample for the camera `name` balanced for
+/// `kelvin` (what its `maxcomponentvalue` clamps): `(RGB_from_XYZ · XYZ_from_sensor)⁻¹` times
+/// [`camera`]'s matrix, the raw RGB whose image is the camera's output.
+pub fn camera_sensor_basis(name: &str, kelvin: f32) -> Option<Mat3> {
+    let (xyz_from_camera, output) = camera_fit(&camera_response(name)?, kelvin);
+    Some((xyz_from_camera.inverse() * xyz_from_rgb().as_dmat3() * output).as_mat3())
 }
 
 /// The camera `name`'s r̄, ḡ, b̄ at a wavelength (nm): linear between the table's samples, zero
@@ -243,12 +262,12 @@ impl SampleTransform {
     /// The sample `l` after the colour matrix and the clamp.
     #[inline]
     pub fn apply(&self, l: Rgb) -> Rgb {
-        let l = self.matrix.map_or(l, |m| m * l);
-        let max = l.max_element();
+        let out = self.matrix.map_or(l, |m| m * l);
+        let max = self.clamp_basis.map_or(out, |s| s * l).max_element();
         if max > self.max_component {
-            l * (self.max_component / max)
+            out * (self.max_component / max)
         } else {
-            l
+            out
         }
     }
 
@@ -397,7 +416,7 @@ mod tests {
 
     #[test]
     fn clamp_scales_the_largest_component_down() {
-        let t = SampleTransform { matrix: None, max_component: 2.0 };
+        let t = SampleTransform { max_component: 2.0, ..Default::default() };
         assert_eq!(t.apply(Rgb::new(4.0, 1.0, 0.0)), Rgb::new(2.0, 0.5, 0.0));
         assert_eq!(t.apply(Rgb::new(1.0, 1.0, 0.0)), Rgb::new(1.0, 1.0, 0.0));
         assert!(SampleTransform::default().is_identity() && !t.is_identity());

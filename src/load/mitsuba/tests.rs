@@ -2890,4 +2890,17 @@ fn film_camera_sensors() {
     assert!(e.contains("test.xml:5:") && e.contains("did you mean 'nikon_d850'"), "{e}");
     let e = err(&film(r#"<string name="sensor" value="canon_eos_5d"/><float name="white_balance" value="0"/>"#));
     assert!(e.contains("test.xml:5:") && e.contains("needs a white balance"), "{e}");
+    // The clamp measured in the output RGB (default) or, as pbrt-v4, in the sensor's RGB.
+    let f = load(&film(r#"<float name="max_component" value="2"/>"#)).unwrap();
+    assert_eq!((f.transform.max_component, f.transform.clamp_basis), (2.0, None));
+    let f = load(&film(r#"<float name="max_component" value="2"/><string name="max_component_of" value="sensor"/>"#))
+        .unwrap();
+    assert_eq!(f.transform.clamp_basis, Some(sensor::cie1931_sensor_basis()));
+    let f = load(&film(
+        r#"<string name="sensor" value="nikon_d850"/><float name="max_component" value="2"/><string name="max_component_of" value="sensor"/>"#,
+    ))
+    .unwrap();
+    assert_eq!(f.transform.clamp_basis, sensor::camera_sensor_basis("nikon_d850", 6500.0));
+    let e = err(&film(r#"<string name="max_component_of" value="input"/>"#));
+    assert!(e.contains("test.xml:5:") && e.contains("output, sensor"), "{e}");
 }

@@ -332,6 +332,8 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     }
     if max_component.is_finite() {
         set(&mut film, "max_component", Value::Float(max_component as f64), loc);
+        // pbrt-v4 bounds its sensor's RGB (XYZ for cie1931), before the colour matrix.
+        set(&mut film, "max_component_of", Value::String("sensor".into()), loc);
     }
     if let Some([x0, x1, y0, y1]) = crop {
         set(&mut film, "crop_offset_x", Value::Integer(x0), loc);

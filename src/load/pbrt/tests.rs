@@ -932,9 +932,29 @@ fn white_balance_and_sample_clamp() {
     for px in crate::load::test_support::render(&f, 2, 1) {
         assert!((px - expected).abs().max_element() < 1e-4, "{px} vs {expected}");
     }
+    // pbrt-v4 bounds its sensor's RGB — XYZ for cie1931 — before the colour matrix: a white
+    // sky's largest component is Z = 1.0888, so it is scaled by 0.25 / 1.0888 (not to 0.25).
     let f = load(&scene("\"float maxcomponentvalue\" 0.25")).unwrap();
+    let z_of_white = 0.019_333_9 + 0.119_192 + 0.950_304_1;
     for px in crate::load::test_support::render(&f, 2, 1) {
-        assert!((px - Rgb::splat(0.25)).abs().max_element() < 1e-5, "{px}");
+        assert!((px - Rgb::splat(0.25 / z_of_white)).abs().max_element() < 1e-5, "{px}");
+    }
+    // A red sky: its X (0.4125) is bounded, not its R.
+    let red = scene("\"float maxcomponentvalue\" 0.3").replace("[1 1 1]", "[1 0 0]");
+    for px in crate::load::test_support::render(&load(&red).unwrap(), 2, 1) {
+        assert!((px - Rgb::new(0.3 / 0.412_456_4, 0.0, 0.0)).abs().max_element() < 1e-5, "{px}");
+    }
+    // A named camera: its raw RGB is bounded; the output is its matrix's, scaled.
+    use crate::film::sensor::{camera, camera_sensor_basis};
+    let f = load(&scene("\"string sensor\" \"sony_ilce_9\" \"float maxcomponentvalue\" 0.5")).unwrap();
+    let (out, raw) = (
+        camera("sony_ilce_9", 6500.0).unwrap() * Rgb::ONE,
+        camera_sensor_basis("sony_ilce_9", 6500.0).unwrap() * Rgb::ONE,
+    );
+    assert!(raw.max_element() > 0.5 && (raw.max_element() - out.max_element()).abs() > 0.02, "{raw} vs {out}");
+    for px in crate::load::test_support::render(&f, 2, 1) {
+        let want = out * (0.5 / raw.max_element());
+        assert!((px - want).abs().max_element() < 1e-5, "{px} vs {want}");
     }
     let e = err(&scene("\"float whitebalance\" 50"));
     assert!(e.contains("1000–40000 K"), "{e}");
