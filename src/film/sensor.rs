@@ -86,19 +86,15 @@ fn xyz_of(xy: [f32; 2]) -> Vec3 {
 /// CIE's closed form for its x and `y = −3x² + 2.870x − 0.275`; below 4000 K, where the D series
 /// is not defined, a black body's (of that correlated temperature, as pbrt's `Spectra::D`).
 pub fn white_chromaticity(kelvin: f32) -> [f32; 2] {
-    let cct = kelvin as f64 * 1.4388 / 1.4380;
-    if cct < 4000.0 {
-        let xyz = crate::math::spectrum::spectrum_to_xyz(&daylight(kelvin));
-        let s = xyz.x + xyz.y + xyz.z;
-        return [xyz.x / s, xyz.y / s];
+    match crate::math::spectrum::daylight_chromaticity(kelvin) {
+        Some(xy) => xy.map(|c| c as f32),
+        None => {
+            // Below 4000 K `daylight` is the black body.
+            let xyz = crate::math::spectrum::spectrum_to_xyz(&daylight(kelvin));
+            let s = xyz.x + xyz.y + xyz.z;
+            [xyz.x / s, xyz.y / s]
+        }
     }
-    let x = if cct <= 7000.0 {
-        -4.607e9 / cct.powi(3) + 2.9678e6 / (cct * cct) + 0.09911e3 / cct + 0.244063
-    } else {
-        -2.0064e9 / cct.powi(3) + 1.9018e6 / (cct * cct) + 0.24748e3 / cct + 0.23704
-    };
-    let y = -3.0 * x * x + 2.870 * x - 0.275;
-    [x as f32, y as f32]
 }
 
 /// The names of pbrt-v4's measured camera sensors, in its order.

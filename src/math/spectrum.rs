@@ -266,16 +266,9 @@ const CIE_DAYLIGHT_S: [[f32; 3]; 54] = [
 /// `blackbody`'s 5 nm samples); else `S₀ + M₁ S₁ + M₂ S₂` with the CIE's `M₁`, `M₂` of the
 /// chromaticity `x` (its cubic in `1/T`) and `y = −3x² + 2.870x − 0.275`.
 pub fn daylight(kelvin: f32) -> Vec<(f32, f32)> {
-    let cct = kelvin as f64 * 1.4388 / 1.4380;
-    if cct < 4000.0 {
-        return blackbody(cct as f32, false);
-    }
-    let x = if cct <= 7000.0 {
-        -4.607e9 / cct.powi(3) + 2.9678e6 / (cct * cct) + 0.09911e3 / cct + 0.244063
-    } else {
-        -2.0064e9 / cct.powi(3) + 1.9018e6 / (cct * cct) + 0.24748e3 / cct + 0.23704
+    let Some([x, y]) = daylight_chromaticity(kelvin) else {
+        return blackbody((kelvin as f64 * 1.4388 / 1.4380) as f32, false);
     };
-    let y = -3.0 * x * x + 2.870 * x - 0.275;
     let m = 0.0241 + 0.2562 * x - 0.7341 * y;
     let m1 = (-1.3515 - 1.7703 * x + 5.9114 * y) / m;
     let m2 = (0.0300 - 31.4424 * x + 30.0717 * y) / m;
@@ -284,6 +277,23 @@ pub fn daylight(kelvin: f32) -> Vec<(f32, f32)> {
         .enumerate()
         .map(|(i, s)| (300.0 + 10.0 * i as f32, (s[0] as f64 + m1 * s[1] as f64 + m2 * s[2] as f64) as f32))
         .collect()
+}
+
+/// The chromaticity (x, y) of CIE daylight of colour temperature `kelvin` by the CIE's closed
+/// form: the correlated temperature on the 1968 Planck constant (`T · 1.4388/1.4380`), x its
+/// cubic in `1/T`, `y = −3x² + 2.870x − 0.275`; `None` below 4000 K, where the D series is not
+/// defined.
+pub fn daylight_chromaticity(kelvin: f32) -> Option<[f64; 2]> {
+    let cct = kelvin as f64 * 1.4388 / 1.4380;
+    if cct < 4000.0 {
+        return None;
+    }
+    let x = if cct <= 7000.0 {
+        -4.607e9 / cct.powi(3) + 2.9678e6 / (cct * cct) + 0.09911e3 / cct + 0.244063
+    } else {
+        -2.0064e9 / cct.powi(3) + 1.9018e6 / (cct * cct) + 0.24748e3 / cct + 0.23704
+    };
+    Some([x, -3.0 * x * x + 2.870 * x - 0.275])
 }
 
 /// x̄, ȳ, z̄ (CIE 1931 2°) and D65 (relative) at `lambda` nm, interpolated linearly in the 5 nm

@@ -98,11 +98,9 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
         SpectrumParam::Samples(v) if illuminant => Value::Rgb(unit_luminance(&v)),
         SpectrumParam::Samples(v) => Value::Spectrum(SpectrumValue::Samples(v)),
         SpectrumParam::Named(n) if illuminant && n == "stdillum-D65" => Value::Float(1.0),
-        SpectrumParam::Named(n) if illuminant && named_illuminant(&n).is_some() => {
-            Value::Rgb(unit_luminance(&named_illuminant(&n).unwrap_or_default()))
-        }
-        SpectrumParam::Named(n) => {
-            return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-A, -D50 and -D65 for lights)")))
+        SpectrumParam::Named(n) => match named_illuminant(&n).filter(|_| illuminant) {
+            Some(samples) => Value::Rgb(unit_luminance(&samples)),
+            None => return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-A, -D50 and -D65 for lights)")))
         }
         SpectrumParam::Blackbody(t) if illuminant => Value::Rgb(blackbody_rgb(t)),
         SpectrumParam::Blackbody(_) => return Err(ps.error_at(name, "a blackbody spectrum is for emitted light only")),
