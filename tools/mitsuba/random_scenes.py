@@ -53,6 +53,8 @@ mi.set_log_level(mi.LogLevel.Error)
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 ASSETS = os.path.join(ROOT, "scenes", "assets")
 NEUMANN = os.path.join(ROOT, "target", "release", "neumann")
+# Seconds either renderer may take for one scene (a neumann render that takes longer is flagged).
+TIMEOUT = 300
 
 
 def rgb(r, lo=0.05, hi=0.95):
@@ -323,7 +325,12 @@ def render_mitsuba(path, spp):
     """Mitsuba's four renders (seeds 1 to 4), in a process of their own: Mitsuba 3.9.1 crashes on
     some scenes (a segmentation fault), which must not end the run."""
     out = path[:-4] + "_m.npy"
-    p = subprocess.run([sys.executable, "-c", MITSUBA_RENDER, path, str(spp), out], capture_output=True, text=True)
+    try:
+        p = subprocess.run([sys.executable, "-c", MITSUBA_RENDER, path, str(spp), out], capture_output=True,
+                           text=True, timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        # Mitsuba 3.9.1 hangs on some scenes (a ptracer scene of 48 × 24 pixels ran for minutes).
+        raise RuntimeError(f"no image after {TIMEOUT} s")
     if p.returncode != 0:
         raise RuntimeError(p.stderr.strip()[-160:] or f"exit status {p.returncode}")
     return list(np.load(out))
@@ -332,7 +339,10 @@ def render_mitsuba(path, spp):
 def render_neumann(path, spp, seed):
     out = path[:-4] + f"_n{seed}.exr"
     cmd = [NEUMANN, "render", path, "-o", out, "--spp", str(spp), "--seed", str(seed), "--quiet"]
-    p = subprocess.run(cmd, capture_output=True, text=True)
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        return f"HANG: no image after {TIMEOUT} s"
     if p.returncode != 0:
         return p.stderr.strip()[-400:]
     return np.array(mi.Bitmap(out))[..., :3]
@@ -386,7 +396,10 @@ def main():
                 continue
             n = [render_neumann(path, opts.spp, s) for s in (1, 2, 3, 4)]
             if any(isinstance(x, str) for x in n):
-                print(f"{k}: neumann refuses it: {n[0]}", flush=True)
+                refusal = next(x for x in n if isinstance(x, str))
+                hang = refusal.startswith("HANG")
+                flagged += hang
+                print(f"{k}: neumann refuses it: {refusal}{'  MISMATCH' if hang else ''}", flush=True)
                 continue
             if m[0].shape != n[0].shape:
                 flagged += 1

@@ -8,6 +8,7 @@
 //! errors at `file:line:col`; a parameter that nothing reads is an error (pbrt-v4 stops on them
 //! too), and so is every directive, plugin or parameter neumann does not implement.
 
+mod illuminants;
 pub mod lexer;
 mod mesh;
 pub mod params;

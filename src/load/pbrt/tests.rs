@@ -1949,9 +1949,10 @@ fn subsurface_materials() {
     }
 }
 
-/// pbrt-v4's named standard illuminants A and D50 as light spectra: a sky of each has the
-/// CIE chromaticity of that illuminant (A (0.4476, 0.4074), D50 (0.3457, 0.3585)) at luminance 1
-/// (pbrt normalises lights to 1 nit); F-series illuminants remain an error.
+/// pbrt-v4's named standard illuminants (A, D50, D65, the fluorescent F1–F12, ACES' D60) as
+/// light spectra: a sky of each has the CIE's published chromaticity of that illuminant at
+/// luminance 1 (pbrt normalises lights to 1 nit); a named spectrum that is not an illuminant is
+/// an error.
 #[test]
 fn named_standard_illuminants() {
     let scene = |spd: &str| {
@@ -1962,9 +1963,25 @@ fn named_standard_illuminants() {
         glam::Vec3::new(0.357_576_1, 0.715_152_2, 0.119_192),
         glam::Vec3::new(0.180_437_5, 0.072_175, 0.950_304_1),
     );
-    for (spd, xy) in
-        [("stdillum-A", [0.4476, 0.4074]), ("stdillum-D50", [0.3457, 0.3585]), ("stdillum-D65", [0.3127, 0.3290])]
-    {
+    // The CIE's published chromaticities (CIE 15; ACES' D60 white point for illum-acesD60).
+    for (spd, xy) in [
+        ("stdillum-A", [0.4476, 0.4074]),
+        ("stdillum-D50", [0.3457, 0.3585]),
+        ("stdillum-D65", [0.3127, 0.3290]),
+        ("stdillum-F1", [0.3131, 0.3373]),
+        ("stdillum-F2", [0.3721, 0.3751]),
+        ("stdillum-F3", [0.4091, 0.3941]),
+        ("stdillum-F4", [0.4402, 0.4031]),
+        ("stdillum-F5", [0.3138, 0.3452]),
+        ("stdillum-F6", [0.3779, 0.3882]),
+        ("stdillum-F7", [0.3129, 0.3292]),
+        ("stdillum-F8", [0.3458, 0.3586]),
+        ("stdillum-F9", [0.3741, 0.3727]),
+        ("stdillum-F10", [0.3458, 0.3588]),
+        ("stdillum-F11", [0.3805, 0.3769]),
+        ("stdillum-F12", [0.4370, 0.4042]),
+        ("illum-acesD60", [0.32168, 0.33767]),
+    ] {
         let f = load(&scene(spd)).unwrap_or_else(|e| panic!("{spd}: {e}"));
         for px in crate::load::test_support::render(&f, 1, 1) {
             let xyz = to_xyz * px;
@@ -1973,8 +1990,9 @@ fn named_standard_illuminants() {
             assert!((xyz.x / s - xy[0]).abs() < 2e-3 && (xyz.y / s - xy[1]).abs() < 2e-3, "{spd}: {xyz}");
         }
     }
-    let e = err(&scene("stdillum-F4"));
-    assert!(e.contains("stdillum-F4") && e.contains("not available"), "{e}");
+    // A metal's curve is no light's spectrum.
+    let e = err(&scene("metal-Au-eta"));
+    assert!(e.contains("metal-Au-eta") && e.contains("not available"), "{e}");
 }
 
 /// Earlier pbrt-v4's integrator `rrthreshold` (pbrt-v4-scenes' transparent-machines gives 0):

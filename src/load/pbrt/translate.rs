@@ -100,7 +100,7 @@ fn spectrum_value(ps: &ParamSet, name: &str, s: SpectrumParam, illuminant: bool)
         SpectrumParam::Named(n) if illuminant && n == "stdillum-D65" => Value::Float(1.0),
         SpectrumParam::Named(n) => match named_illuminant(&n).filter(|_| illuminant) {
             Some(samples) => Value::Rgb(unit_luminance(&samples)),
-            None => return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics and stdillum-A, -D50 and -D65 for lights)")))
+            None => return Err(ps.error_at(name, format!("the named spectrum \"{n}\" is not available here (neumann knows pbrt's metal-*-eta/k for conductors, glass-* for dielectrics, and stdillum-A, -D50, -D65, -F1 … -F12 and illum-acesD60 for lights)")))
         }
         SpectrumParam::Blackbody(t) if illuminant => Value::Rgb(blackbody_rgb(t)),
         SpectrumParam::Blackbody(_) => return Err(ps.error_at(name, "a blackbody spectrum is for emitted light only")),
@@ -127,10 +127,11 @@ fn absolute_rgb(ps: &ParamSet, name: &str, s: SpectrumParam) -> Result<Rgb> {
     })
 }
 
-/// pbrt-v4's named standard illuminants that are defined by formulas (pbrt normalises each to
+/// pbrt-v4's named standard illuminants (pbrt normalises each to
 /// luminance 1, so only the shape matters): CIE illuminant A, Planck's law at 2856 K on the
 /// 1931 radiation constant (`S(λ) ∝ λ⁻⁵ / (exp(1.435 × 10⁷ / (2848 λ)) − 1)`, λ in nm, the
-/// CIE's definition), and D50, CIE daylight at 5000 K on the 1931 constant (5003 K).
+/// CIE's definition), and D50, CIE daylight at 5000 K on the 1931 constant (5003 K); and the
+/// tabulated ones ([`super::illuminants`]: F1–F12, ACES D60).
 fn named_illuminant(name: &str) -> Option<Vec<(f32, f32)>> {
     match name {
         "stdillum-A" => Some(
@@ -144,7 +145,7 @@ fn named_illuminant(name: &str) -> Option<Vec<(f32, f32)>> {
                 .collect(),
         ),
         "stdillum-D50" => Some(crate::math::spectrum::daylight(5000.0)),
-        _ => None,
+        _ => super::illuminants::tabulated(name),
     }
 }
 
@@ -589,8 +590,7 @@ pub fn is_named_spectrum(name: &str) -> bool {
         return METALS.iter().any(|m| metal == format!("{m}-eta") || metal == format!("{m}-k"));
     }
     if let Some(illum) = name.strip_prefix("stdillum-") {
-        return matches!(illum, "A" | "D50" | "D65")
-            || illum.strip_prefix('F').and_then(|n| n.parse::<u32>().ok()).is_some_and(|n| (1..=12).contains(&n));
+        return matches!(illum, "A" | "D50" | "D65") || super::illuminants::tabulated(name).is_some();
     }
     named_ior(name).is_some()
         || name == "illum-acesD60"
