@@ -54,7 +54,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 ASSETS = os.path.join(ROOT, "scenes", "assets")
 NEUMANN = os.path.join(ROOT, "target", "release", "neumann")
 # Seconds either renderer may take for one scene (a neumann render that takes longer is flagged).
-TIMEOUT = 300
+TIMEOUT = 180
 
 
 def rgb(r, lo=0.05, hi=0.95):
