@@ -34,6 +34,8 @@ pub struct SurfaceInteraction {
     pub prim: u32,
     /// Barycentric coordinates (b1, b2) of the hit in its triangle (zero on analytic shapes).
     pub bary: Vec2,
+    /// The time of the ray that found it ([`Ray::time`]), which the rays spawned here keep.
+    pub time: f32,
 }
 
 impl SurfaceInteraction {
@@ -53,7 +55,7 @@ impl SurfaceInteraction {
     /// Unbounded ray leaving the surface in direction `d`.
     #[inline]
     pub fn spawn_ray(&self, d: Vec3) -> Ray {
-        Ray::new(self.offset_origin(d), d)
+        Ray::new(self.offset_origin(d), d).at_time(self.time)
     }
 
     /// Shadow ray from this point to the point `p_to` (with error bound `err_to` and normal
@@ -63,7 +65,7 @@ impl SurfaceInteraction {
     pub fn spawn_ray_to(&self, p_to: Vec3, n_to: Vec3, err_to: Vec3) -> Ray {
         let o = self.offset_origin(p_to - self.p);
         let target = if n_to == Vec3::ZERO { p_to } else { offset_ray_origin(p_to, err_to, n_to, o - p_to) };
-        Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON)
+        Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON).at_time(self.time)
     }
 }
 

@@ -68,6 +68,8 @@ impl LightTracer {
     /// Traces one light path with random numbers from `rng`, calling `splat(film, value)` for
     /// each contribution that reaches the camera (film position in pixels of the whole film).
     pub fn trace(&self, scene: &Scene, rng: &mut Pcg32, splat: &mut impl FnMut(Vec2, Rgb)) {
+        // The path's time where shapes move (uniform over the shutter; drawn only then).
+        let time = scene.motion_shutter().map_or(0.0, |(open, close)| open + (close - open) * rng.next_f32());
         let mut u2 = || Vec2::new(rng.next_f32(), rng.next_f32());
         let Some((light_index, pmf)) = scene.sample_emitting_light(u2().x) else { return };
         let light: &Light = &scene.lights()[light_index as usize];
@@ -83,7 +85,7 @@ impl LightTracer {
                     let value = light.emitted_toward(&pos, cs.wi) * (cos * cs.weight * pos.inv_pdf / pmf);
                     if value.max_element() > 0.0 {
                         let o = offset_ray_origin(pos.p, pos.p_error, pos.ng, cs.wi);
-                        if !scene.occluded(&Ray::bounded(o, cs.p_lens - o, 1.0 - SHADOW_EPSILON)) {
+                        if !scene.occluded(&Ray::bounded(o, cs.p_lens - o, 1.0 - SHADOW_EPSILON).at_time(time)) {
                             splat(cs.film, value);
                         }
                     }
@@ -99,7 +101,7 @@ impl LightTracer {
         let mut beta = es.weight / pmf;
         let beta0 = luminance(beta).max(f32::MIN_POSITIVE);
         let origin = if es.n == Vec3::ZERO { es.p } else { offset_ray_origin(es.p, es.p_error, es.n, es.d) };
-        let mut ray = Ray::new(origin, es.d);
+        let mut ray = Ray::new(origin, es.d).at_time(time);
         // `segments`: path segments from the light to the current vertex.
         let mut segments = 1u32;
         while let Some(si) = scene.intersect(&ray) {

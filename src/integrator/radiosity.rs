@@ -182,6 +182,10 @@ pub enum RadiosityError {
     /// The patch size is not a positive number.
     #[error("patch size must be positive, got {0}")]
     PatchSize(f32),
+
+    /// A shape moves (radiosity solves a scene at rest).
+    #[error("{0}: radiosity solves a scene at rest; this shape moves")]
+    Moving(String),
     /// An area emitter's radiance varies over its surface.
     #[error("radiosity needs constant emission: an area emitter's radiance is a texture")]
     TexturedEmission,
@@ -226,6 +230,9 @@ impl Radiosity {
     pub fn solve(scene: &Scene, opts: &Options, cancel: &AtomicBool) -> Result<Radiosity, RadiosityError> {
         if !(opts.patch_size > 0.0 && opts.patch_size.is_finite()) {
             return Err(RadiosityError::PatchSize(opts.patch_size));
+        }
+        if let Some(s) = (0..scene.shapes().len() as u32).find(|&s| scene.shape_motion(s).is_some()) {
+            return Err(RadiosityError::Moving(scene.shape_label(s as usize)));
         }
         if scene.lights().iter().any(|l| matches!(l, Light::Area { radiance, .. } if !matches!(radiance, crate::texture::Texture::Constant(_)))) {
             return Err(RadiosityError::TexturedEmission);

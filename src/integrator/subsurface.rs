@@ -40,7 +40,7 @@ pub fn probe_exit(
     let (start, end) = bssrdf.sample_probe(channel, u.1, (u.2.x, u.2.y))?;
     let mut chosen: Option<SurfaceInteraction> = None;
     let mut count = 0u32;
-    let mut ray = Ray::bounded(start, end - start, 1.0);
+    let mut ray = Ray::bounded(start, end - start, 1.0).at_time(si.time);
     for _ in 0..MAX_PROBE_HITS {
         let Some(hit) = scene.intersect(&ray) else { break };
         if scene.shapes()[hit.shape as usize].bsdf == material {

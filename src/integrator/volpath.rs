@@ -109,7 +109,7 @@ pub fn transmittance(scene: &Scene, mut ray: Ray, mut medium: Option<u32>, rng: 
         let Some(si) = hit else { return tr };
         medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
         let o = si.offset_origin(ray.d);
-        ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON);
+        ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON).at_time(ray.time);
     }
     Rgb::ZERO
 }
@@ -140,7 +140,7 @@ impl Integrator for VolPathIntegrator {
         let mut eta = 1.0f32;
         // Unit direction (free-flight distances are lengths), keeping the camera's clip range.
         let len = camera_ray.d.length();
-        let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len);
+        let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len).at_time(camera_ray.time);
         let mut medium = scene.camera_medium();
         let mut prev: Option<PrevVertex> = None;
         let mut depth = 0u32;
@@ -198,7 +198,7 @@ impl Integrator for VolPathIntegrator {
                                         };
                                         transmittance(
                                             scene,
-                                            Ray::bounded(p, target - p, 1.0 - SHADOW_EPSILON),
+                                            Ray::bounded(p, target - p, 1.0 - SHADOW_EPSILON).at_time(ray.time),
                                             medium,
                                             &mut rng,
                                         )
@@ -213,7 +213,7 @@ impl Integrator for VolPathIntegrator {
                         // full, as after a specular bounce.
                         prev = Some(PrevVertex { ctx: light_ctx, pdf: s.pdf, delta: !nee });
                         non_specular = true;
-                        ray = Ray::new(p, s.value);
+                        ray = Ray::new(p, s.value).at_time(ray.time);
                         depth += 1;
                         crossings = 0;
                         if !super::russian_roulette(&mut beta, eta, depth, self.settings.rr_depth, sampler.next_1d()) {

@@ -109,8 +109,8 @@ impl Ratios {
 
 /// Where a shadow ray starts and how it reaches the light sample.
 enum ShadowOrigin {
-    /// From a point in a medium (no surface offset).
-    Medium(Vec3),
+    /// From a point in a medium (no surface offset), at the path's time.
+    Medium(Vec3, f32),
     /// From a surface interaction.
     Surface(crate::geometry::SurfaceInteraction),
 }
@@ -184,9 +184,9 @@ impl VolPathMisIntegrator {
         let (mut nee, mut uni) = (*path, *path);
         nee.update_scalar(p_light, Rgb::ONE);
         let mut ray = match origin {
-            ShadowOrigin::Medium(p) => {
+            ShadowOrigin::Medium(p, time) => {
                 let target = if ls.n == Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.p_error, ls.n, *p - ls.p) };
-                Ray::bounded(*p, target - *p, 1.0 - SHADOW_EPSILON)
+                Ray::bounded(*p, target - *p, 1.0 - SHADOW_EPSILON).at_time(*time)
             }
             ShadowOrigin::Surface(si) => {
                 medium = medium_after(scene, si.shape, si.ng, ls.wi, medium);
@@ -217,7 +217,7 @@ impl VolPathMisIntegrator {
             let Some(si) = hit else { return Some(LightPath { nee, uni, li: ls.li, sample: ls }) };
             medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
             let o = si.offset_origin(ray.d);
-            ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON);
+            ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON).at_time(ray.time);
         }
         None
     }
@@ -250,7 +250,7 @@ impl Integrator for VolPathMisIntegrator {
         let mut last: Option<LightSampleContext> = None;
         let mut eta = 1.0f32;
         let len = camera_ray.d.length();
-        let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len);
+        let mut ray = Ray::bounded(camera_ray.o, camera_ray.d / len, camera_ray.t_max * len).at_time(camera_ray.time);
         let mut medium = scene.camera_medium();
         let mut depth = 0u32;
         let mut crossings = 0u32;
@@ -302,7 +302,7 @@ impl Integrator for VolPathMisIntegrator {
                     let nee = medium_ref.sample_emitters;
                     count_direct = !nee;
                     if nee {
-                        let origin = ShadowOrigin::Medium(p);
+                        let origin = ShadowOrigin::Medium(p, ray.time);
                         if let Some(mut lp) =
                             self.sample_light(scene, &ctx, &origin, medium, &path, channel, sampler, &mut rng)
                         {
@@ -323,7 +323,7 @@ impl Integrator for VolPathMisIntegrator {
                     }
                     path.update_scalar(s.pdf, Rgb::splat(s.pdf));
                     path_nee.update_scalar(1.0, Rgb::splat(s.pdf));
-                    ray = Ray::new(p, s.value);
+                    ray = Ray::new(p, s.value).at_time(ray.time);
                     last = Some(ctx);
                     crossings = 0;
                     if !self.roulette(&mut path, eta, depth, sampler) {

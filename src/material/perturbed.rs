@@ -340,6 +340,7 @@ mod tests {
             shape: 0,
             prim: 0,
             bary: Vec2::ZERO,
+            time: 0.0,
         }
     }
 

@@ -6,6 +6,7 @@
 //! [`Transform::apply_normal`] uses the inverse transpose. World space is right-handed; the
 //! local shading frame ([`Frame`]) has its normal on +z.
 
+pub mod animated;
 pub mod bounds;
 pub mod color;
 pub mod cone;
@@ -20,6 +21,7 @@ pub mod spectrum;
 pub mod transform;
 pub mod trig;
 
+pub use animated::AnimatedTransform;
 pub use bounds::Bounds3;
 pub use color::{luminance, Rgb};
 pub use cone::DirectionCone;

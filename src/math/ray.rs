@@ -1,4 +1,5 @@
-//! Rays `o + t d`, `t ∈ (0, t_max)`.
+//! Rays `o + t d`, `t ∈ (0, t_max)`, at a time within the shutter interval (for scenes whose
+//! shapes move).
 
 use glam::Vec3;
 
@@ -12,19 +13,29 @@ pub struct Ray {
     pub d: Vec3,
     /// Largest parameter considered; `f32::INFINITY` for an unbounded ray.
     pub t_max: f32,
+    /// When the ray is traced (the shutter's units; 0 unless the camera samples a time): where
+    /// moving shapes are ([`crate::math::AnimatedTransform`]). Rays spawned along a path keep
+    /// their path's time.
+    pub time: f32,
 }
 
 impl Ray {
     /// Unbounded ray.
     #[inline]
     pub fn new(o: Vec3, d: Vec3) -> Ray {
-        Ray { o, d, t_max: f32::INFINITY }
+        Ray { o, d, t_max: f32::INFINITY, time: 0.0 }
     }
 
     /// Ray bounded to `(0, t_max)`.
     #[inline]
     pub fn bounded(o: Vec3, d: Vec3, t_max: f32) -> Ray {
-        Ray { o, d, t_max }
+        Ray { o, d, t_max, time: 0.0 }
+    }
+
+    /// This ray at `time`.
+    #[inline]
+    pub fn at_time(self, time: f32) -> Ray {
+        Ray { time, ..self }
     }
 
     /// The point at parameter `t`.

@@ -172,7 +172,7 @@ impl Transform {
     /// parameters `t` stay valid across the transform).
     #[inline]
     pub fn apply_ray(&self, r: &Ray) -> Ray {
-        Ray { o: self.apply_point(r.o), d: self.apply_vector(r.d), t_max: r.t_max }
+        Ray { o: self.apply_point(r.o), d: self.apply_vector(r.d), t_max: r.t_max, time: r.time }
     }
 
     /// Axis-aligned bounds of the transformed box (all eight corners).

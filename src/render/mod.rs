@@ -371,6 +371,7 @@ pub fn render_from(
     // Ray differentials where the integrator reads them, scaled to the spacing of the render's
     // samples (Mitsuba's 1/√spp).
     let differential_scale = integrator.wants_differentials().then(|| 1.0 / (settings.spp.max(1) as f32).sqrt());
+    let motion = scene.motion_shutter();
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -398,6 +399,12 @@ pub fn render_from(
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
                     let (ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
+                    // Where shapes move, a time uniform over the shutter interval (one more
+                    // dimension, drawn only then: static scenes' samples are unchanged).
+                    let ray = match motion {
+                        Some((open, close)) => ray.at_time(open + (close - open) * sampler.next_1d()),
+                        None => ray,
+                    };
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
                     let mut s = if ray_weight == 0.0 {

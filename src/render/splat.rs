@@ -132,6 +132,10 @@ pub fn render_light_paths_with(
                 let (x, y) = ((j % film_width) as f32, (j / film_width) as f32);
                 let film_pos = Vec2::new(x + rng.next_f32(), y + rng.next_f32());
                 let ray = cam.generate_ray(film_pos, Vec2::new(rng.next_f32(), rng.next_f32()));
+                let ray = match scene.motion_shutter() {
+                    Some((open, close)) => ray.at_time(open + (close - open) * rng.next_f32()),
+                    None => ray,
+                };
                 if scene.intersect(&ray).is_some() {
                     continue;
                 }

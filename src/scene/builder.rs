@@ -33,9 +33,30 @@ pub struct SceneBuilder {
     shape_labels: Vec<(String, Option<crate::props::Loc>)>,
     /// Each shape's texture attributes (by index; missing ones have none).
     texture_attributes: Vec<TextureAttributes>,
+    /// Each shape's motion (by index; missing ones stay put).
+    motions: Vec<Option<crate::math::AnimatedTransform>>,
+    /// The camera's shutter interval (0, 0 unless set).
+    shutter: (f32, f32),
 }
 
 impl SceneBuilder {
+    /// Makes shape `index` move: its geometry (a triangle mesh, given in its own space) is
+    /// placed by `motion` at each ray's time (motion blur). Building the scene fails where the
+    /// shape is not a triangle mesh or emits light.
+    pub fn set_shape_motion(&mut self, index: u32, motion: crate::math::AnimatedTransform) {
+        let i = index as usize;
+        if self.motions.len() <= i {
+            self.motions.resize(i + 1, None);
+        }
+        self.motions[i] = Some(motion);
+    }
+
+    /// The camera's shutter interval, whose times camera rays sample where shapes move (the
+    /// default, (0, 0), renders every moving shape where it is at time 0).
+    pub fn set_shutter(&mut self, open: f32, close: f32) {
+        self.shutter = (open, close);
+    }
+
     /// Gives shape `index` its texture attributes (Mitsuba's textures nested in a `<shape>`),
     /// which the `mesh_attribute` textures of its BSDF read after its mesh's own attributes.
     pub fn set_shape_textures(&mut self, index: u32, textures: TextureAttributes) {
@@ -153,6 +174,24 @@ impl SceneBuilder {
                 }
             }
         }
+        // Moving shapes: triangle meshes that do not emit, wound as a static mesh placed by the
+        // start transform would be (`TriangleMesh::transform` swaps two vertices of each
+        // triangle under a mirroring transform).
+        self.motions.resize(if self.motions.iter().any(Option::is_some) { self.shapes.len() } else { 0 }, None);
+        for (i, motion) in self.motions.iter().enumerate() {
+            let Some(motion) = motion else { continue };
+            if self.shapes[i].light.is_some() {
+                return Err(BuildError::MovingEmitter(i as u32));
+            }
+            let Geometry::Mesh(m) = &mut self.geometries[i] else { return Err(BuildError::MovingShape(i as u32)) };
+            if motion.start().swaps_handedness() {
+                for tri in &mut m.indices {
+                    tri.swap(1, 2);
+                }
+            }
+        }
+        let motions = &self.motions;
+        let moving = |shape: u32| motions.get(shape as usize).and_then(Option::as_ref);
         // Hits in a small scene read the triangles' normals from this cache (no cross product,
         // square root and division on the path's critical chain; see `Scene::interaction`).
         for g in &mut self.geometries {
@@ -169,14 +208,17 @@ impl SceneBuilder {
         for (s, g) in self.geometries.iter().enumerate() {
             for i in 0..g.primitive_count() {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
-                bounds.push(g.primitive_bounds(i));
+                bounds.push(match (g, moving(s as u32)) {
+                    (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.triangle(i)),
+                    _ => g.primitive_bounds(i),
+                });
             }
         }
         let geometries = &self.geometries;
         let triangle = |k: usize| {
             let r = refs[k];
             match &geometries[r.shape as usize] {
-                Geometry::Mesh(m) => Some(m.triangle(r.index as usize)),
+                Geometry::Mesh(m) if moving(r.shape).is_none() => Some(m.triangle(r.index as usize)),
                 _ => None,
             }
         };
@@ -202,6 +244,7 @@ impl SceneBuilder {
         let primitive = |k: u32| {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
+                Geometry::Mesh(_) if moving(r.shape).is_some() => Primitive::MovingTriangle,
                 Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
                 Geometry::Sphere(s) => Primitive::Sphere(*s),
                 Geometry::Disk(_) => Primitive::Disk,
@@ -211,7 +254,10 @@ impl SceneBuilder {
                 Geometry::Ellipsoids(_) => Primitive::Ellipsoid,
             }
         };
-        let is_triangle = |k: u32| matches!(geometries[refs[k as usize].shape as usize], Geometry::Mesh(_));
+        let is_triangle = |k: u32| {
+            let shape = refs[k as usize].shape;
+            matches!(geometries[shape as usize], Geometry::Mesh(_)) && moving(shape).is_none()
+        };
         bvh.remap_leaves(|first, count| {
             if (first..first + count).all(is_triangle) {
                 let (start, n) = (block_count as u32, count.div_ceil(LANES as u32));
@@ -282,6 +328,8 @@ impl SceneBuilder {
             refs: refs.into(),
             primitives: total,
             camera,
+            motion_shutter: self.motions.iter().any(Option::is_some).then_some(self.shutter),
+            motions: self.motions,
         })
     }
 }

@@ -24,6 +24,14 @@ pub enum BuildError {
     /// An emitting shape has no area to emit from.
     #[error("emitting shape {0} has no area")]
     EmitterWithoutArea(u32),
+
+    /// A moving shape that emits (pbrt-v4 refuses animated area lights too).
+    #[error("shape {0} moves and emits light: moving area lights are not implemented")]
+    MovingEmitter(u32),
+
+    /// A moving shape that is not a triangle mesh.
+    #[error("shape {0} moves but is not a triangle mesh: only triangle meshes move (motion blur)")]
+    MovingShape(u32),
     /// A light's power is not finite, or is negative.
     #[error("a light's power overflows single precision or is negative (check the emitters' scales)")]
     InvalidLightPower,

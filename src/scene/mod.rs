@@ -4,6 +4,7 @@
 
 mod builder;
 pub mod cornell;
+mod motion;
 mod error;
 
 pub use builder::SceneBuilder;
@@ -179,6 +180,8 @@ enum Primitive {
     Curve,
     /// One of Mitsuba's ellipsoids.
     Ellipsoid,
+    /// A triangle of a moving mesh (object space; placed at the ray's time).
+    MovingTriangle,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -202,6 +205,8 @@ enum HitKind {
     /// A curve piece's (u, v).
     Curve(Vec2, u32),
     Ellipsoid(u32),
+    /// A triangle of a moving mesh, with its index into `Scene::refs`.
+    MovingTriangle(TriangleHit, u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -249,6 +254,10 @@ pub struct Scene {
     /// Primitives (each counted once, however many references it has).
     primitives: usize,
     camera: Camera,
+    /// Each shape's motion (empty where nothing moves; `None` for shapes that stay put).
+    motions: Vec<Option<crate::math::AnimatedTransform>>,
+    /// The shutter interval whose times camera rays sample, where shapes move.
+    motion_shutter: Option<(f32, f32)>,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
     needs_dpdv: bool,
     /// Whether hits on spheres compute texture coordinates (some BSDF or emitter reads them;
@@ -442,7 +451,7 @@ impl Scene {
     pub fn intersect_hit(&self, ray: &Ray) -> Option<RayHit> {
         let (t, kind) = self.closest(ray)?;
         let barycentrics = match kind {
-            HitKind::Block(h, ..) | HitKind::Triangle(h, _) => Vec2::new(h.b1, h.b2),
+            HitKind::Block(h, ..) | HitKind::Triangle(h, _) | HitKind::MovingTriangle(h, _) => Vec2::new(h.b1, h.b2),
             _ => Vec2::ZERO,
         };
         Some(RayHit { t, prim: self.prim_ref(kind), barycentrics })
@@ -459,7 +468,8 @@ impl Scene {
             | HitKind::Cylinder(_, r)
             | HitKind::SdfVoxel(r)
             | HitKind::Curve(_, r)
-            | HitKind::Ellipsoid(r) => r,
+            | HitKind::Ellipsoid(r)
+            | HitKind::MovingTriangle(_, r) => r,
         }
     }
 
@@ -495,7 +505,7 @@ impl Scene {
         match &lp.prim {
             Primitive::Triangle(p) => intersect_triangle(pre, p, t_max).map(|h| (h.t, HitKind::Triangle(h, k))),
             Primitive::Sphere(s) => s.intersect(ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
-            _ => self.intersect_other(lp, ray, bspline, t_max),
+            _ => self.intersect_other(lp, ray, pre, bspline, t_max),
         }
     }
 
@@ -505,6 +515,7 @@ impl Scene {
         &self,
         lp: &LeafPrim,
         ray: &Ray,
+        pre: &RayPrecomp,
         bspline: &mut Option<BSplineRay>,
         t_max: f32,
     ) -> Option<(f32, HitKind)> {
@@ -546,7 +557,34 @@ impl Scene {
                 }
                 _ => None,
             },
+            Primitive::MovingTriangle => {
+                let p = self.moving_triangle(lp.r, ray.time)?;
+                intersect_triangle(pre, &p, t_max).map(|h| (h.t, HitKind::MovingTriangle(h, lp.r)))
+            }
         }
+    }
+
+    /// The vertices of the moving triangle `refs[r]` at `time` (world space).
+    #[inline]
+    fn moving_triangle(&self, r: u32, time: f32) -> Option<[Vec3; 3]> {
+        let r = self.refs[r as usize];
+        let (Geometry::Mesh(m), Some(Some(motion))) = (&self.geometries[r.shape as usize], self.motions.get(r.shape as usize))
+        else {
+            return None;
+        };
+        let at = motion.matrix_at(time);
+        Some(m.triangle(r.index as usize).map(|v| at.transform_point3(v)))
+    }
+
+    /// Whether shapes move (camera rays then sample a time in the shutter interval), and the
+    /// interval: `Some((open, close))`.
+    pub fn motion_shutter(&self) -> Option<(f32, f32)> {
+        self.motion_shutter
+    }
+
+    /// Shape `shape`'s motion, if it moves.
+    pub fn shape_motion(&self, shape: u32) -> Option<&crate::math::AnimatedTransform> {
+        self.motions.get(shape as usize).and_then(Option::as_ref)
     }
 
     fn interaction(&self, ray: &Ray, t: f32, kind: HitKind) -> SurfaceInteraction {
@@ -565,6 +603,9 @@ impl Scene {
     /// `∂p/∂v` where `dpdv` says.
     #[inline(always)]
     fn interaction_with(&self, ray: &Ray, t: f32, kind: HitKind, uv: bool, dpdv: bool) -> SurfaceInteraction {
+        // A moving triangle's vertices where the ray met them, and the mesh's transform then
+        // (for its shading normals).
+        let mut moved = None;
         let (h, p, r) = match kind {
             HitKind::Block(h, b, lane) => {
                 let block = &self.blocks[b as usize];
@@ -574,6 +615,11 @@ impl Scene {
                 LeafPrim { prim: Primitive::Triangle(p), r } => (h, p, r),
                 _ => unreachable!("HitKind::Triangle names a triangle"),
             },
+            HitKind::MovingTriangle(h, r) => {
+                let p = self.moving_triangle(r, ray.time).expect("HitKind::MovingTriangle names a moving triangle");
+                moved = self.shape_motion(self.refs[r as usize].shape).and_then(|m| m.at(ray.time));
+                (h, p, r)
+            }
             HitKind::Sphere(r)
             | HitKind::Disk(_, r)
             | HitKind::Cylinder(_, r)
@@ -589,9 +635,17 @@ impl Scene {
         // A small scene's cached normal is a load from cache; in a large mesh it is likely a
         // miss, and the vertices at hand (the ones it was computed from: the same bits) give it
         // by a cross product and a normalization instead.
-        let ng = if self.cached_normals { m.face_normal(i) } else { m.normal_of(&p) };
-        let crate::geometry::mesh::MeshSurface { ns, uv, dpdu, dpdv } =
+        let ng = if self.cached_normals && matches!(kind, HitKind::Block(..) | HitKind::Triangle(..)) {
+            m.face_normal(i)
+        } else {
+            m.normal_of(&p)
+        };
+        let crate::geometry::mesh::MeshSurface { mut ns, uv, dpdu, dpdv } =
             m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, dpdv);
+        if let (Some(t), false) = (moved, m.normals.is_empty()) {
+            // Vertex normals are the mesh's own (object space): placed as the vertices are.
+            ns = t.apply_normal(ns).normalize_or(ng);
+        }
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,
             p_error: triangle_point_error(&p, &h),
@@ -604,6 +658,7 @@ impl Scene {
             bary: crate::math::Vec2::new(h.b1, h.b2),
             shape: r.shape,
             prim: r.index,
+            time: ray.time,
         }
     }
 
@@ -620,14 +675,14 @@ impl Scene {
             // No parameterization: uv = 0 and a shading frame around the normal alone.
             let (p, p_error, ng, ns) = g.surface(r.index as usize, ray, t);
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
-            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary, time: ray.time };
         }
         if let (HitKind::Ellipsoid(_), Geometry::Ellipsoids(e)) = (kind, &self.geometries[r.shape as usize]) {
             // No parameterization (as in Mitsuba): uv = 0 and a shading frame around the normal.
             let sp = e.surface(r.index as usize, ray, t);
             let (uv, dpdu, dpdv, bary) = (Vec2::ZERO, Vec3::ZERO, Vec3::ZERO, Vec2::ZERO);
             let (p, p_error, ng, ns) = (sp.p, sp.p_error, sp.n, sp.n);
-            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+            return SurfaceInteraction { p, p_error, t, ng, ns, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary, time: ray.time };
         }
         if let HitKind::Curve(uv, _) = kind {
             // Mitsuba's round curves (a linear one gives no ∂p/∂u: a frame around the normal).
@@ -640,14 +695,14 @@ impl Scene {
             if let Some(s) = round {
                 let (p, p_error, n, uv, dpdu, dpdv) = (s.p, s.p_error, s.n, s.uv, s.dpdu, s.dpdv);
                 let (shape, prim, bary) = (r.shape, r.index, Vec2::ZERO);
-                return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary };
+                return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape, prim, bary, time: ray.time };
             }
         }
         if let (HitKind::Curve(uv, _), Geometry::Curves(c)) = (kind, &self.geometries[r.shape as usize]) {
             let s = c.surface(r.index as usize, ray, crate::geometry::curve::CurveHit { t, uv });
             let (p, p_error, n, dpdu, dpdv) = (s.p, s.p_error, s.n, s.dpdu, s.dpdv);
             let bary = Vec2::ZERO;
-            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary };
+            return SurfaceInteraction { p, p_error, t, ng: n, ns: n, uv, dpdu, dpdv, shape: r.shape, prim: r.index, bary, time: ray.time };
         }
         let ((sp, uv), (dpdu, dpdv)) = match (kind, &self.geometries[r.shape as usize]) {
             (HitKind::Sphere(_), Geometry::Sphere(s)) => {
@@ -659,7 +714,7 @@ impl Scene {
             _ => unreachable!("primitive kind and shape geometry always agree"),
         };
         let bary = crate::math::Vec2::ZERO;
-        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, dpdv, shape: r.shape, prim: 0, bary }
+        SurfaceInteraction { p: sp.p, p_error: sp.p_error, t, ng: sp.n, ns: sp.n, uv, dpdu, dpdv, shape: r.shape, prim: 0, bary, time: ray.time }
     }
 
     /// Whether anything blocks `ray` within `(0, ray.t_max)`.
