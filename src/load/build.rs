@@ -121,6 +121,7 @@ impl Builder {
         if let Some(sensor) = root.children.iter().find(|c| c.tag == "sensor") {
             self.shutter = (sensor.float("shutter_open", 0.0)?, sensor.float("shutter_close", 0.0)?);
         }
+        self.sb.set_shutter(self.shutter.0, self.shutter.1);
         let mut integrator = None;
         let mut sensor = None;
         for c in &root.children {
@@ -361,13 +362,18 @@ impl Builder {
     /// by `outer` after its own `to_world`; an unknown type names the shape plugins and `more`.
     fn geometry(&mut self, o: &Obj, outer: &Transform, more: &[&str]) -> Result<Geometry> {
         let to_world = *outer * o.transform("to_world")?;
+        self.geometry_placed(o, &to_world, more)
+    }
+
+    /// [`Builder::geometry`] placed by `to_world` (the identity for a moving shape's own space).
+    fn geometry_placed(&mut self, o: &Obj, to_world: &Transform, more: &[&str]) -> Result<Geometry> {
         let flip = o.bool("flip_normals", false)?;
         let plugin = shape_plugin(&o.ty).ok_or_else(|| {
             let mut names: Vec<&str> = SHAPE_PLUGINS.iter().map(|p| p.0).collect();
             names.extend(more);
             o.unknown_plugin(&names)
         })?;
-        let geometry = plugin(o, &to_world, flip, self)?;
+        let geometry = plugin(o, to_world, flip, self)?;
         check_finite_geometry(o, &geometry)?;
         Ok(geometry)
     }
@@ -411,7 +417,19 @@ impl Builder {
         o.check_children(&["bsdf", "emitter", "sensor"])?;
         let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
-        let geometry = self.geometry(o, outer, &["shapegroup", "instance", "merge"])?;
+        let more = ["shapegroup", "instance", "merge"];
+        let motion = shape_motion(o, outer)?;
+        let geometry = match &motion {
+            // A moving shape's geometry in its own space, placed at each ray's time.
+            Some(_) => {
+                let g = self.geometry_placed(o, &Transform::IDENTITY, &more)?;
+                if !matches!(g, Geometry::Mesh(_)) {
+                    return Err(o.error_at("to_world_end", format!("a moving {} (motion blur): only triangle meshes move", o.ty)));
+                }
+                g
+            }
+            None => self.geometry(o, outer, &more)?,
+        };
         let textures = self.texture_attributes(o, &geometry)?;
         for sensor in o.nested("sensor") {
             if sensor.ty != "irradiancemeter" {
@@ -549,7 +567,13 @@ impl Builder {
         if emission.as_ref().is_some_and(|e| !e.radiance().mesh_attributes().is_empty()) {
             return Err(o.error("a mesh_attribute texture as an area emitter's radiance is not implemented by neumann"));
         }
+        if let (Some(_), Some(e)) = (&motion, emitters.first()) {
+            return Err(e.error("a moving shape cannot emit (moving area lights are not implemented)"));
+        }
         let index = self.sb.add_emitting_shape(geometry, bsdf, emission);
+        if let Some(m) = motion {
+            self.sb.set_shape_motion(index, m);
+        }
         if !textures.is_empty() {
             self.sb.set_shape_textures(index, textures);
         }
@@ -1080,6 +1104,20 @@ impl Builder {
 
 /// The most BSDF evaluations one BSDF's evaluation may make (nested blends, twosided, masks).
 const MAX_BSDF_EVALUATIONS: u64 = 4096;
+
+/// A shape's motion (neumann's properties for pbrt-v4's animated transforms): `to_world` at
+/// time `motion_start` (0) and `to_world_end` at `motion_end` (1), both placed by `outer`; `None`
+/// without `to_world_end` or where the two transforms are the same.
+fn shape_motion(o: &Obj, outer: &Transform) -> Result<Option<crate::math::AnimatedTransform>> {
+    if o.get("to_world_end").is_none() {
+        return Ok(None);
+    }
+    let start = *outer * o.transform("to_world")?;
+    let end = *outer * o.transform("to_world_end")?;
+    let (t0, t1) = (o.float("motion_start", 0.0)?, o.float("motion_end", 1.0)?);
+    let motion = crate::math::AnimatedTransform::new(start, t0, end, t1).map_err(|e| o.error_at("to_world_end", e))?;
+    Ok(motion.is_animated().then_some(motion))
+}
 
 /// Rejects geometry whose coordinates are not finite, or so large that their differences
 /// overflow (a NaN or overflowing `to_world`, huge mesh coordinates): such shapes would be

@@ -181,7 +181,7 @@ mod tests {
         Transform::from_matrix(m).unwrap()
     }
 
-    /// Decomposition and interpolation reproduce the endpoints (also with a reflection and a
+    /// Decomposition and interpolation reproduce the endpoints (both mirroring, one with a
     /// shear), a pure translation moves linearly, a rotation turns at a constant rate about
     /// its axis, and times outside the interval hold the endpoint transforms.
     #[test]
@@ -191,7 +191,7 @@ mod tests {
             * Mat4::from_scale(Vec3::new(2.0, -1.0, 0.5)));
         let b = tf(Mat4::from_translation(Vec3::new(-1.0, 0.0, 3.0))
             * Mat4::from_axis_angle(Vec3::Y, -1.2)
-            * Mat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0, 1.5, 0.0, 0.0, 0.0, 0.0, 1.0]));
+            * Mat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0, -1.5, 0.0, 0.0, 0.0, 0.0, 1.0]));
         let at = AnimatedTransform::new(a, 2.0, b, 4.0).unwrap();
         for (time, expected) in [(2.0, a), (4.0, b), (1.0, a), (9.0, b)] {
             assert!(at.matrix_at(time).abs_diff_eq(*expected.matrix(), 1e-6), "{time}");
@@ -209,6 +209,7 @@ mod tests {
         assert!((p - Vec3::new(0.75f32.cos(), 0.75f32.sin(), 0.0)).length() < 1e-5, "{p}");
         assert!(!AnimatedTransform::fixed(a).is_animated() && at.is_animated());
         assert!(AnimatedTransform::new(a, 1.0, b, 1.0).is_err());
+        assert!(AnimatedTransform::new(a, 0.0, Transform::IDENTITY, 1.0).is_err(), "mirrors at one end only");
         assert!(AnimatedTransform::new(a, 1.0, a, 1.0).is_ok());
     }
 

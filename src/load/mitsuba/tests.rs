@@ -2904,3 +2904,51 @@ fn film_camera_sensors() {
     let e = err(&film(r#"<string name="max_component_of" value="input"/>"#));
     assert!(e.contains("test.xml:5:") && e.contains("output, sensor"), "{e}");
 }
+
+/// neumann's motion blur in Mitsuba XML: a rectangle with `to_world_end` slides over the
+/// shutter (`shutter_open` 0 to `shutter_close` 1) in front of a white emitter and covers the
+/// camera's central ray for its share of the time; a shape that does not move may give the same
+/// `to_world_end` as its `to_world`; a moving sphere, a moving emitter and `motion_start`
+/// without `to_world_end` are errors where they are written.
+#[test]
+fn shapes_move_with_to_world_end() {
+    let scene = |strip: &str| {
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="1"/></integrator>
+<sensor type="perspective"><float name="fov" value="0.5"/><float name="shutter_close" value="1"/>
+<transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film></sensor>
+<shape type="rectangle"><transform name="to_world"><scale value="50"/><rotate y="1" angle="180"/><translate z="10"/></transform>
+<emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+{strip}</scene>"#
+        )
+    };
+    let strip = |end: &str, more: &str| {
+        format!(
+            r#"<shape type="{}"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+<transform name="to_world"><scale x="0.25" y="4"/><translate x="-2" z="5"/></transform>
+<transform name="to_world_end"><scale x="0.25" y="4"/><translate x="{end}" z="5"/></transform>{more}</shape>"#,
+            if more.contains("sphere") { "sphere" } else { "rectangle" }
+        )
+    };
+    let mean = |text: &str| {
+        let f = load(text).unwrap_or_else(|e| panic!("{e}"));
+        crate::load::test_support::mean(&crate::load::test_support::render(&f, 4096, 1))
+    };
+    let m = mean(&scene(&strip("2", "")));
+    assert!((m - 0.875).abs() < 0.025, "{m}");
+    // At rest at x = -2: the ray is never covered; and no time is drawn.
+    let f = load(&scene(&strip("-2", ""))).unwrap();
+    assert!(f.scene.motion_shutter().is_none());
+    assert_eq!(crate::load::test_support::mean(&crate::load::test_support::render(&f, 64, 1)), 1.0);
+    // With motion_end 2 the strip is halfway when the shutter closes: covered for 1/8 again,
+    // at the shutter's end (x from -2 to 0).
+    let m = mean(&scene(&strip("2", r#"<float name="motion_end" value="2"/>"#)));
+    assert!((m - 0.875).abs() < 0.025, "{m}");
+    let e = err(&scene(&strip("2", "<!-- sphere -->")));
+    assert!(e.contains("test.xml:") && e.contains("only triangle meshes move"), "{e}");
+    let e = err(&scene(&strip("2", r#"<emitter type="area"/>"#)));
+    assert!(e.contains("test.xml:") && e.contains("cannot emit"), "{e}");
+    let e = err(&scene(r#"<shape type="rectangle"><float name="motion_start" value="0"/></shape>"#));
+    assert!(e.contains("motion_start"), "{e}");
+}

@@ -317,8 +317,12 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
     let t =
         crate::math::Transform::from_matrix(to_world).ok_or_else(|| cam.error("the camera transform is singular"))?;
     set(&mut s, "to_world", Value::Transform(t), &cam.loc);
-    for name in ["shutteropen", "shutterclose"] {
-        cam.float(name, 0.0)?;
+    // The shutter interval (pbrt-v4's default 0 to 1): the times camera rays sample where
+    // shapes move (the imaging ratio checks that it is not empty).
+    let (open, close) = (cam.float("shutteropen", 0.0)?, cam.float("shutterclose", 1.0)?);
+    if open <= close {
+        set(&mut s, "shutter_open", Value::Float(open as f64), &cam.loc);
+        set(&mut s, "shutter_close", Value::Float(close as f64), &cam.loc);
     }
     cam.string("__type")?;
     cam.check_unused()?;

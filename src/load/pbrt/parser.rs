@@ -30,8 +30,16 @@ pub enum MaterialRef {
 /// The attributes `AttributeBegin` saves.
 #[derive(Clone, Debug)]
 pub struct Graphics {
-    /// The current transform (object to world).
+    /// The current transform (object to world) at the start of the transform interval.
     pub ctm: Mat4,
+    /// The current transform at its end: another than `ctm` where `ActiveTransform` animated
+    /// it (the shapes that follow move: motion blur).
+    pub ctm_end: Mat4,
+    /// Which of the two the transform directives change (`ActiveTransform`): bit 0 the start,
+    /// bit 1 the end.
+    active: u8,
+    /// `TransformTimes`: the times of the start and end transforms (0, 1).
+    pub times: (f32, f32),
     /// `ReverseOrientation`.
     pub reverse: bool,
     /// The material.
@@ -50,6 +58,33 @@ pub struct Graphics {
     transform_only: bool,
 }
 
+impl Graphics {
+    /// Post-multiplies the active transforms by `m`.
+    fn concat(&mut self, m: Mat4) {
+        if self.active & 1 != 0 {
+            self.ctm *= m;
+        }
+        if self.active & 2 != 0 {
+            self.ctm_end *= m;
+        }
+    }
+
+    /// Sets the active transforms to `m`.
+    fn set(&mut self, m: Mat4) {
+        if self.active & 1 != 0 {
+            self.ctm = m;
+        }
+        if self.active & 2 != 0 {
+            self.ctm_end = m;
+        }
+    }
+
+    /// Whether the current transform moves (its start and end differ).
+    pub fn moving(&self) -> bool {
+        self.ctm != self.ctm_end
+    }
+}
+
 /// The state of a pbrt-v4 file being read.
 pub struct Parser {
     /// Where relative file names resolve (the main file's folder).
@@ -60,7 +95,7 @@ pub struct Parser {
     pub warnings: Vec<String>,
     pub(super) gs: Graphics,
     stack: Vec<Graphics>,
-    named_coords: HashMap<String, Mat4>,
+    named_coords: HashMap<String, (Mat4, Mat4)>,
     pub(super) named_materials: HashMap<String, Rc<Obj>>,
     /// How deeply each named material's objects nest (by the address of the material, which
     /// `named_materials` keeps alive): a mix of mixes of … is refused past
@@ -313,6 +348,9 @@ impl Parser {
             warnings: Vec::new(),
             gs: Graphics {
                 ctm: Mat4::IDENTITY,
+                ctm_end: Mat4::IDENTITY,
+                active: 0b11,
+                times: (0.0, 1.0),
                 reverse: false,
                 material: MaterialRef::Object(default_material),
                 area_light: None,
@@ -409,15 +447,14 @@ impl Parser {
         };
         let name = name.clone();
         c.pos += 1;
-        let ctm = &mut self.gs.ctm;
         match name.as_str() {
             "Translate" => {
                 let v = c.numbers(3, "Translate's x y z")?;
-                *ctm *= Mat4::from_translation(vec3(&v));
+                self.gs.concat(Mat4::from_translation(vec3(&v)));
             }
             "Scale" => {
                 let v = c.numbers(3, "Scale's x y z")?;
-                *ctm *= Mat4::from_scale(vec3(&v));
+                self.gs.concat(Mat4::from_scale(vec3(&v)));
             }
             "Rotate" => {
                 let v = c.numbers(4, "Rotate's angle x y z")?;
@@ -425,7 +462,7 @@ impl Parser {
                 if axis.length_squared() == 0.0 {
                     return Err(SceneError::at(&loc, "Rotate: the axis is zero"));
                 }
-                *ctm *= Mat4::from_axis_angle(axis.normalize(), (v[0] as f32).to_radians());
+                self.gs.concat(Mat4::from_axis_angle(axis.normalize(), (v[0] as f32).to_radians()));
             }
             "LookAt" => {
                 let v = c.numbers(9, "LookAt's eye, look and up points")?;
@@ -434,7 +471,7 @@ impl Parser {
                 let t = Transform::look_at(eye, look, up).ok_or_else(|| {
                     SceneError::at(&loc, "LookAt: the eye and look points coincide, or up is parallel to the view")
                 })?;
-                *ctm *= *t.inverse_matrix();
+                self.gs.concat(*t.inverse_matrix());
             }
             "Transform" | "ConcatTransform" => {
                 let v = c.numbers(16, &format!("{name}'s 16 matrix entries"))?;
@@ -445,19 +482,19 @@ impl Parser {
                     return Err(SceneError::at(&loc, format!("{name}: the matrix is not finite")));
                 }
                 if name == "Transform" {
-                    *ctm = m;
+                    self.gs.set(m);
                 } else {
-                    *ctm *= m;
+                    self.gs.concat(m);
                 }
             }
             "CoordinateSystem" => {
                 let n = c.string("the coordinate system's name")?;
-                self.named_coords.insert(n, self.gs.ctm);
+                self.named_coords.insert(n, (self.gs.ctm, self.gs.ctm_end));
             }
             "CoordSysTransform" => {
                 let n = c.string("the coordinate system's name")?;
                 match self.named_coords.get(&n) {
-                    Some(m) => self.gs.ctm = *m,
+                    Some(&(start, end)) => (self.gs.ctm, self.gs.ctm_end) = (start, end),
                     None => {
                         let names: Vec<&str> = self.named_coords.keys().map(String::as_str).collect();
                         return Err(SceneError::at(
@@ -471,25 +508,26 @@ impl Parser {
                 }
             }
             "ReverseOrientation" => self.gs.reverse = !self.gs.reverse,
-            "Identity" => self.gs.ctm = Mat4::IDENTITY,
+            "Identity" => self.gs.set(Mat4::IDENTITY),
             "ActiveTransform" => {
                 let Some(Token { kind: Kind::Ident(which), .. }) = c.tokens.get(c.pos) else {
                     return Err(c.err("expected StartTime, EndTime or All after ActiveTransform"));
                 };
                 c.pos += 1;
-                match which.as_str() {
-                    "All" => {}
-                    "StartTime" | "EndTime" => {
-                        return Err(SceneError::at(
-                            &loc,
-                            "ActiveTransform StartTime/EndTime: animated transforms (motion blur) are not implemented by neumann",
-                        ))
-                    }
+                self.gs.active = match which.as_str() {
+                    "All" => 0b11,
+                    "StartTime" => 0b01,
+                    "EndTime" => 0b10,
                     other => return Err(SceneError::at(&loc, format!("ActiveTransform {other}: expected StartTime, EndTime or All"))),
-                }
+                };
             }
             "TransformTimes" => {
-                c.numbers(2, "TransformTimes' start and end")?;
+                let v = c.numbers(2, "TransformTimes' start and end")?;
+                let (t0, t1) = (v[0] as f32, v[1] as f32);
+                if !(t0 <= t1 && t0.is_finite() && t1.is_finite()) {
+                    return Err(SceneError::at(&loc, format!("TransformTimes: need start ≤ end, got {t0} and {t1}")));
+                }
+                self.gs.times = (t0, t1);
             }
             "AttributeBegin" | "TransformBegin" => {
                 if self.stack.len() >= limits::MAX_NESTING * 8 {
@@ -513,7 +551,7 @@ impl Parser {
                     ));
                 }
                 if saved.transform_only {
-                    self.gs.ctm = saved.ctm;
+                    (self.gs.ctm, self.gs.ctm_end, self.gs.active) = (saved.ctm, saved.ctm_end, saved.active);
                 } else {
                     self.gs = saved;
                 }
@@ -537,13 +575,19 @@ impl Parser {
                 if self.world {
                     return Err(SceneError::at(&loc, "Camera must come before WorldBegin"));
                 }
+                if self.gs.moving() {
+                    return Err(SceneError::at(
+                        &loc,
+                        "Camera: the camera transform moves (ActiveTransform): a moving camera is not implemented by neumann (moving shapes are)",
+                    ));
+                }
                 // pbrt names the camera's space "camera".
                 let camera_from_world = self.gs.ctm;
                 let world_from_camera = camera_from_world.inverse();
                 if !world_from_camera.is_finite() {
                     return Err(SceneError::at(&loc, "Camera: the current transform is singular"));
                 }
-                self.named_coords.insert("camera".into(), world_from_camera);
+                self.named_coords.insert("camera".into(), (world_from_camera, world_from_camera));
                 let mut ps = ps;
                 ps.params.push(type_param(&ty, &loc));
                 self.camera = Some((ps, world_from_camera));
@@ -574,8 +618,8 @@ impl Parser {
                     return Err(SceneError::at(&loc, "WorldBegin appears twice"));
                 }
                 self.world = true;
-                self.gs.ctm = Mat4::IDENTITY;
-                self.named_coords.insert("world".into(), Mat4::IDENTITY);
+                (self.gs.ctm, self.gs.ctm_end, self.gs.active) = (Mat4::IDENTITY, Mat4::IDENTITY, 0b11);
+                self.named_coords.insert("world".into(), (Mat4::IDENTITY, Mat4::IDENTITY));
             }
             "WorldEnd" => {}
             "MakeNamedMedium" => {
@@ -688,6 +732,12 @@ impl Parser {
                 let ty = c.string("the shape type")?;
                 let mut ps = self.spectrum_files(c.params(format!("Shape \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "shape");
+                if self.current_object.is_some() && self.gs.moving() {
+                    return Err(SceneError::at(
+                        &loc,
+                        "Shape: a moving shape inside ObjectBegin (motion blur of instanced shapes) is not implemented by neumann",
+                    ));
+                }
                 let shapes = translate::shape(self, &ty, &ps)?;
                 ps.check_unused()?;
                 if let Some(al) = &self.gs.area_light {
@@ -723,6 +773,12 @@ impl Parser {
                         format!("ObjectInstance: no object named \"{n}\" (ObjectBegin defines them)"),
                     ));
                 };
+                if self.gs.moving() {
+                    return Err(SceneError::at(
+                        &loc,
+                        "ObjectInstance: a moving instance (motion blur of instances) is not implemented by neumann; moving shapes outside ObjectBegin are",
+                    ));
+                }
                 let instance = self.gs.ctm;
                 let copies: Vec<Rc<Obj>> = list.iter().map(|o| Rc::new(translate::placed(o, &instance))).collect();
                 self.shapes.extend(copies);

@@ -942,6 +942,12 @@ fn scaled(v: Value, s: f32) -> Value {
 /// `LightSource`.
 pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
     let ctm = p.gs.ctm;
+    if p.gs.moving() {
+        p.warnings.push(format!(
+            "warning: {}: the light's transform moves (ActiveTransform): lights stay at their start transform, as in pbrt-v4",
+            ps.loc.position()
+        ));
+    }
     let l = &ps.loc;
     let spectrum = |name: &str| -> Result<Value> {
         match ps.spectrum(name)? {
@@ -1136,6 +1142,12 @@ pub fn light(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Obj> {
 /// defaults, `scale`, `g` → Henyey–Greenstein) as Mitsuba's `homogeneous` (σₜ = σₐ + σₛ, albedo
 /// σₛ/σₜ).
 pub fn medium(p: &mut Parser, ps: &ParamSet) -> Result<Obj> {
+    if p.gs.moving() {
+        p.warnings.push(format!(
+            "warning: {}: the medium's transform moves (ActiveTransform): media stay at their start transform, as in pbrt-v4",
+            ps.loc.position()
+        ));
+    }
     let ty = ps.string("type")?.ok_or_else(|| ps.error("needs its \"string type\""))?;
     match ty.as_str() {
         "homogeneous" => homogeneous_medium(p, ps),
@@ -1743,6 +1755,22 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
             ))
         }
     };
+    let mut obj = obj;
+    if p.gs.moving() {
+        // pbrt-v4's animated shapes: placed by the transform interpolated at each ray's time.
+        if !matches!(ty, "trianglemesh" | "bilinearmesh" | "loopsubdiv" | "plymesh") {
+            return Err(ps.error(format!(
+                "this {ty} moves (ActiveTransform): neumann moves triangle meshes only (trianglemesh, plymesh, bilinearmesh, loopsubdiv)"
+            )));
+        }
+        if p.gs.area_light.is_some() {
+            return Err(ps.error("a moving shape cannot carry an AreaLightSource (animated area lights, which pbrt-v4 refuses too)"));
+        }
+        let (t0, t1) = p.gs.times;
+        set(&mut obj, "to_world_end", Value::Transform(transform(p.gs.ctm_end, ps)?), &ps.loc);
+        set(&mut obj, "motion_start", Value::Float(t0 as f64), &ps.loc);
+        set(&mut obj, "motion_end", Value::Float(t1 as f64), &ps.loc);
+    }
     Ok(vec![Rc::new(obj)])
 }
 
