@@ -423,8 +423,12 @@ impl Builder {
             // A moving shape's geometry in its own space, placed at each ray's time.
             Some(_) => {
                 let g = self.geometry_placed(o, &Transform::IDENTITY, &more)?;
-                if !matches!(g, Geometry::Mesh(_)) {
+                let (Geometry::Mesh(mesh), Some(m)) = (&g, &motion) else {
                     return Err(o.error_at("to_world_end", format!("a moving {} (motion blur): only triangle meshes move", o.ty)));
+                };
+                let b = m.motion_bounds(&mesh.positions);
+                if !(b.min.is_finite() && b.max.is_finite()) {
+                    return Err(o.error_at("to_world_end", "the moving shape's coordinates are not finite over its motion"));
                 }
                 g
             }

@@ -147,6 +147,9 @@ fn slerp(a: Quat, b: Quat, t: f32) -> Quat {
 /// decomposition by averaging `R` with its inverse transpose until it settles). A reflection
 /// stays in `S` (`R` is made a proper rotation).
 fn decompose(m: &Mat4) -> Result<(Vec3, Quat, Mat3), String> {
+    if !m.is_finite() {
+        return Err("a moving transform must be finite".into());
+    }
     if m.row(3) != glam::Vec4::new(0.0, 0.0, 0.0, 1.0) {
         return Err("a moving transform must be affine (no projection)".into());
     }
