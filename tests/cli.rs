@@ -575,7 +575,7 @@ fn gltf_scenes_render_and_choose_their_camera() {
 #[test]
 fn pbrt_scenes_render() {
     let out = temp("pbrt.png");
-    for name in ["pbrt_demo", "pbrt_procedural", "pbrt_media", "pbrt_subsurface", "pbrt_nanovdb"] {
+    for name in ["pbrt_demo", "pbrt_procedural", "pbrt_media", "pbrt_subsurface", "pbrt_nanovdb", "pbrt_motion"] {
         let scene = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("scenes/{name}.pbrt"));
         let r = neumann().arg("render").arg(&scene).args(["--res", "24x16", "--spp", "2", "--quiet", "-o"]).arg(&out).output().unwrap();
         let stdout = String::from_utf8_lossy(&r.stdout);
