@@ -436,6 +436,9 @@ impl Builder {
         };
         let textures = self.texture_attributes(o, &geometry)?;
         for sensor in o.nested("sensor") {
+            if motion.is_some() {
+                return Err(sensor.error("an irradiancemeter cannot measure a moving shape"));
+            }
             if sensor.ty != "irradiancemeter" {
                 return Err(sensor.error("only an irradiancemeter can be nested in a <shape> (it measures that shape)"));
             }

@@ -2908,8 +2908,8 @@ fn film_camera_sensors() {
 /// neumann's motion blur in Mitsuba XML: a rectangle with `to_world_end` slides over the
 /// shutter (`shutter_open` 0 to `shutter_close` 1) in front of a white emitter and covers the
 /// camera's central ray for its share of the time; a shape that does not move may give the same
-/// `to_world_end` as its `to_world`; a moving sphere, a moving emitter and `motion_start`
-/// without `to_world_end` are errors where they are written.
+/// `to_world_end` as its `to_world`; a moving sphere, a moving emitter, an irradiancemeter on
+/// a moving shape and `motion_start` without `to_world_end` are errors where they are written.
 #[test]
 fn shapes_move_with_to_world_end() {
     let scene = |strip: &str| {
@@ -2949,6 +2949,8 @@ fn shapes_move_with_to_world_end() {
     assert!(e.contains("test.xml:") && e.contains("only triangle meshes move"), "{e}");
     let e = err(&scene(&strip("2", r#"<emitter type="area"/>"#)));
     assert!(e.contains("test.xml:") && e.contains("cannot emit"), "{e}");
+    let e = err(&scene(&strip("2", r#"<sensor type="irradiancemeter"><film type="hdrfilm"/></sensor>"#)));
+    assert!(e.contains("test.xml:") && e.contains("cannot measure a moving shape"), "{e}");
     let e = err(&scene(r#"<shape type="rectangle"><float name="motion_start" value="0"/></shape>"#));
     assert!(e.contains("motion_start"), "{e}");
 }
