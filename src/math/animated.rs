@@ -40,20 +40,6 @@ impl AnimatedTransform {
         Ok(AnimatedTransform { start, end, t0, t1, translate: [ts, te], rotate: [rs, re], scale: [ss, se] })
     }
 
-    /// A transform that does not move.
-    pub fn fixed(t: Transform) -> AnimatedTransform {
-        let (translate, rotate, scale) = decompose(t.matrix()).unwrap_or((Vec3::ZERO, Quat::IDENTITY, Mat3::IDENTITY));
-        AnimatedTransform {
-            start: t,
-            end: t,
-            t0: 0.0,
-            t1: 1.0,
-            translate: [translate; 2],
-            rotate: [rotate; 2],
-            scale: [scale; 2],
-        }
-    }
-
     /// Whether the transform changes over time.
     pub fn is_animated(&self) -> bool {
         self.start != self.end
@@ -62,16 +48,6 @@ impl AnimatedTransform {
     /// The start transform (at `t0` and before).
     pub fn start(&self) -> &Transform {
         &self.start
-    }
-
-    /// The end transform (at `t1` and after).
-    pub fn end(&self) -> &Transform {
-        &self.end
-    }
-
-    /// The times `(t0, t1)`.
-    pub fn times(&self) -> (f32, f32) {
-        (self.t0, self.t1)
     }
 
     /// The matrix at `time`.
@@ -210,7 +186,7 @@ mod tests {
         let spin = AnimatedTransform::new(Transform::IDENTITY, 0.0, tf(Mat4::from_rotation_z(1.5)), 1.0).unwrap();
         let p = spin.matrix_at(0.5).transform_point3(Vec3::X);
         assert!((p - Vec3::new(0.75f32.cos(), 0.75f32.sin(), 0.0)).length() < 1e-5, "{p}");
-        assert!(!AnimatedTransform::fixed(a).is_animated() && at.is_animated());
+        assert!(!AnimatedTransform::new(a, 0.0, a, 0.0).unwrap().is_animated() && at.is_animated());
         assert!(AnimatedTransform::new(a, 1.0, b, 1.0).is_err());
         assert!(AnimatedTransform::new(a, 0.0, Transform::IDENTITY, 1.0).is_err(), "mirrors at one end only");
         assert!(AnimatedTransform::new(a, 1.0, a, 1.0).is_ok());
