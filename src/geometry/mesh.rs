@@ -456,6 +456,7 @@ impl TriangleMesh {
     /// warp; a parallelogram mesh directly as `o + u.x e1 + u.y e2`); pdf `1 / area` per unit
     /// area. Returns the point (with its geometric normal), the
     /// shading normal there, and the pdf. `None` before [`TriangleMesh::prepare_sampling`].
+    #[inline]
     pub fn sample_area(&self, u: Vec2) -> Option<(SurfacePoint, Vec3, f32)> {
         if let Some(q) = &self.parallelogram {
             self.area_distribution.as_ref()?;

@@ -154,6 +154,7 @@ impl Geometry {
 
     /// A uniformly distributed point on the surface; `pdf` is per unit **area** (`1 / area`).
     /// `None` for a mesh whose sampling was not prepared.
+    #[inline]
     pub fn sample_area(&self, u: Vec2) -> Option<ShapeSample> {
         let (sp, ns, pdf) = match self {
             Geometry::Mesh(m) => m.sample_area(u)?,
@@ -223,6 +224,7 @@ impl Geometry {
     /// unit direction from `p_ref` to it. Spheres sample the cone they subtend; meshes and
     /// disks sample area uniformly and convert (`p_ω = p_A r² / |cos θ|`). `None` if nothing
     /// can be sampled (grazing or degenerate).
+    #[inline]
     pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<(ShapeSample, Vec3)> {
         if let Geometry::Sphere(s) = self {
             let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;

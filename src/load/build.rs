@@ -18,6 +18,7 @@ use crate::geometry::{shape_plugin, Geometry, MeshFile, MeshSource, SHAPE_PLUGIN
 use crate::image::{GridVolume, Image, ImageSource, VolumeSource};
 use crate::integrator::{integrator_from_props, AnyIntegrator};
 use crate::light::LightSamplerKind;
+use crate::math::AnimatedTransform;
 use crate::light::{area_opacity_from_props, area_radiance_from_props, emitter_plugin, ShapeEmission, EMITTER_PLUGINS};
 use crate::load::image::load_image;
 use crate::load::memory::MemoryFiles;
@@ -138,7 +139,7 @@ impl Builder {
                     }
                     sensor = Some(c.clone());
                 }
-                "shape" => self.shape(c, &Transform::IDENTITY)?,
+                "shape" => self.shape(c, &Transform::IDENTITY, None)?,
                 // An area emitter with an id is attached to the shapes that <ref> it.
                 "emitter" if is_shape_emitter(&c.ty) && c.id.is_some() => {}
                 "emitter" => self.emitter(c)?,
@@ -378,8 +379,10 @@ impl Builder {
         Ok(geometry)
     }
 
-    /// Adds the shape `o`, placed by `outer` after its own `to_world` (instances).
-    fn shape(&mut self, o: &Rc<Obj>, outer: &Transform) -> Result<()> {
+    /// Adds the shape `o`, placed by `outer` after its own `to_world` (instances); or, in an
+    /// instance that moves, placed by its own `to_world` in the instance's space and moved by
+    /// `outer_motion` (the instance's transform over the shutter).
+    fn shape(&mut self, o: &Rc<Obj>, outer: &Transform, outer_motion: Option<&AnimatedTransform>) -> Result<()> {
         o.built.set(true);
         match o.ty.as_str() {
             "shapegroup" => {
@@ -392,7 +395,7 @@ impl Builder {
                 // memory: the same surfaces, the same image. neumann adds them one by one.
                 o.check_children(&["shape"])?;
                 for s in o.children.iter().filter(|c| c.tag == "shape") {
-                    self.shape(s, outer)?;
+                    self.shape(s, outer, outer_motion)?;
                 }
                 return Ok(());
             }
@@ -404,11 +407,18 @@ impl Builder {
                 };
                 group.built.set(true);
                 let t = *outer * o.transform("to_world")?;
+                // An instance with `to_world_end` moves its shapes (pbrt-v4's animated object
+                // instances): each placed in the instance's space by its own `to_world`, the
+                // instance's transform interpolated at each ray's time.
+                let motion = shape_motion(o, outer)?;
+                if let (Some(_), Some(_)) = (&motion, outer_motion) {
+                    return Err(o.error_at("to_world_end", "an instance inside a moving instance cannot move"));
+                }
                 for s in group.children.iter().filter(|c| c.tag == "shape") {
                     if s.ty == "shapegroup" || s.ty == "instance" {
                         return Err(SceneError::at(&s.loc, "shapegroups cannot contain shapegroups or instances"));
                     }
-                    self.shape(s, &t)?;
+                    self.shape(s, &t, motion.as_ref())?;
                 }
                 return Ok(());
             }
@@ -418,17 +428,31 @@ impl Builder {
         let interior = o.object_opt("interior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let exterior = o.object_opt("exterior", "medium")?.map(|m| self.medium_index(&m)).transpose()?;
         let more = ["shapegroup", "instance", "merge"];
-        let motion = shape_motion(o, outer)?;
+        // A moving shape's geometry in its own space (or, in a moving instance, in the
+        // instance's), placed at each ray's time by `motion`.
+        let (motion, own_space) = match (shape_motion(o, outer)?, outer_motion) {
+            (Some(_), Some(_)) => {
+                return Err(o.error_at("to_world_end", "a shape inside a moving instance cannot move by itself as well"))
+            }
+            (Some(m), None) => (Some(m), Transform::IDENTITY),
+            (None, Some(m)) => (Some(*m), o.transform("to_world")?),
+            (None, None) => (None, Transform::IDENTITY),
+        };
+        // Errors of a moving shape: at its `to_world_end`, or at the shape where the instance
+        // it is in moves it.
+        let motion_error = |message: String| match outer_motion {
+            Some(_) => o.error(format!("{message} (it moves with the instance it is in)")),
+            None => o.error_at("to_world_end", message),
+        };
         let geometry = match &motion {
-            // A moving shape's geometry in its own space, placed at each ray's time.
-            Some(_) => {
-                let g = self.geometry_placed(o, &Transform::IDENTITY, &more)?;
-                let (Geometry::Mesh(mesh), Some(m)) = (&g, &motion) else {
-                    return Err(o.error_at("to_world_end", format!("a moving {} (motion blur): only triangle meshes move", o.ty)));
+            Some(m) => {
+                let g = self.geometry_placed(o, &own_space, &more)?;
+                let Geometry::Mesh(mesh) = &g else {
+                    return Err(motion_error(format!("a moving {} (motion blur): only triangle meshes move", o.ty)));
                 };
                 let b = m.motion_bounds(&mesh.positions);
                 if !(b.min.is_finite() && b.max.is_finite()) {
-                    return Err(o.error_at("to_world_end", "the moving shape's coordinates are not finite over its motion"));
+                    return Err(motion_error("the moving shape's coordinates are not finite over its motion".into()));
                 }
                 g
             }

@@ -603,9 +603,8 @@ impl Scene {
     /// `∂p/∂v` where `dpdv` says.
     #[inline(always)]
     fn interaction_with(&self, ray: &Ray, t: f32, kind: HitKind, uv: bool, dpdv: bool) -> SurfaceInteraction {
-        // A moving triangle's vertices where the ray met them, and the mesh's transform then
-        // (for its shading normals).
-        let mut moved = None;
+        // Whether the hit is on a moving triangle (whose vertices are placed at the ray's time).
+        let mut moving = false;
         let (h, p, r) = match kind {
             HitKind::Block(h, b, lane) => {
                 let block = &self.blocks[b as usize];
@@ -617,7 +616,7 @@ impl Scene {
             },
             HitKind::MovingTriangle(h, r) => {
                 let p = self.moving_triangle(r, ray.time).expect("HitKind::MovingTriangle names a moving triangle");
-                moved = self.shape_motion(self.refs[r as usize].shape).and_then(|m| m.at(ray.time));
+                moving = true;
                 (h, p, r)
             }
             HitKind::Sphere(r)
@@ -642,9 +641,12 @@ impl Scene {
         };
         let crate::geometry::mesh::MeshSurface { mut ns, uv, dpdu, dpdv } =
             m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, dpdv);
-        if let (Some(t), false) = (moved, m.normals.is_empty()) {
-            // Vertex normals are the mesh's own (object space): placed as the vertices are.
-            ns = t.apply_normal(ns).normalize_or(ng);
+        if moving && !m.normals.is_empty() {
+            // Vertex normals are the mesh's own (object space): placed as the vertices are, by
+            // the mesh's transform at the ray's time (its inverse made only here, where needed).
+            if let Some(t) = self.shape_motion(r.shape).and_then(|a| a.at(ray.time)) {
+                ns = t.apply_normal(ns).normalize_or(ng);
+            }
         }
         SurfaceInteraction {
             p: p[0] * h.b0 + p[1] * h.b1 + p[2] * h.b2,

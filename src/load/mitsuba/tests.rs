@@ -2910,6 +2910,7 @@ fn film_camera_sensors() {
 /// camera's central ray for its share of the time; a shape that does not move may give the same
 /// `to_world_end` as its `to_world`; a moving sphere, a moving emitter, an irradiancemeter on
 /// a moving shape and `motion_start` without `to_world_end` are errors where they are written.
+/// An `instance` with `to_world_end` moves its shapegroup's shapes with it.
 #[test]
 fn shapes_move_with_to_world_end() {
     let scene = |strip: &str| {
@@ -2953,4 +2954,23 @@ fn shapes_move_with_to_world_end() {
     assert!(e.contains("test.xml:") && e.contains("cannot measure a moving shape"), "{e}");
     let e = err(&scene(r#"<shape type="rectangle"><float name="motion_start" value="0"/></shape>"#));
     assert!(e.contains("motion_start"), "{e}");
+    // An instance with `to_world_end` moves its shapegroup's shapes (pbrt-v4's animated
+    // instances): the same strip, defined in a shapegroup, slides with its instance.
+    let group = |shape: &str, end: &str| {
+        format!(
+            r#"<shape type="shapegroup" id="g">{shape}</shape>
+<shape type="instance"><ref id="g"/><transform name="to_world"><translate x="-2"/></transform>
+<transform name="to_world_end"><translate x="{end}"/></transform></shape>"#
+        )
+    };
+    let strip_in_group = r#"<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+<transform name="to_world"><scale x="0.25" y="4"/><translate z="5"/></transform></shape>"#;
+    let m = mean(&scene(&group(strip_in_group, "2")));
+    assert!((m - 0.875).abs() < 0.025, "moving instance: {m}");
+    let f = load(&scene(&group(strip_in_group, "-2"))).unwrap();
+    assert!(f.scene.motion_shutter().is_none(), "an instance at rest draws no time");
+    let e = err(&scene(&group(r#"<shape type="sphere"/>"#, "2")));
+    assert!(e.contains("test.xml:") && e.contains("only triangle meshes move") && e.contains("instance"), "{e}");
+    let e = err(&scene(&group(&strip("2", ""), "2")));
+    assert!(e.contains("test.xml:") && e.contains("cannot move by itself"), "{e}");
 }

@@ -9,7 +9,7 @@ use crate::load::limits;
 use crate::load::memory::MemoryFiles;
 use crate::load::FileResolver;
 use crate::math::{Mat4, Transform, Vec3};
-use crate::props::{Loc, Obj, SceneError, SourceFile};
+use crate::props::{Loc, Obj, SceneError, SourceFile, Value};
 use std::cell::Cell;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -774,14 +774,30 @@ impl Parser {
                     ));
                 };
                 if self.gs.moving() {
-                    return Err(SceneError::at(
-                        &loc,
-                        "ObjectInstance: a moving instance (motion blur of instances) is not implemented by neumann; moving shapes outside ObjectBegin are",
-                    ));
+                    // pbrt-v4's animated instance: the object's shapes, each placed in the
+                    // instance's space by its own transform, moved together by the instance's
+                    // transform interpolated at each ray's time (an `instance` of a
+                    // `shapegroup` with `to_world_end`, as the XML builder reads it).
+                    let placed = |m: Mat4| {
+                        Transform::from_matrix(m)
+                            .ok_or_else(|| SceneError::at(&loc, "ObjectInstance: the current transform is singular"))
+                    };
+                    let (start, end) = (placed(self.gs.ctm)?, placed(self.gs.ctm_end)?);
+                    let mut group = Obj::new("shape", "shapegroup", loc.clone());
+                    group.children = list.clone();
+                    let mut instance = Obj::new("shape", "instance", loc.clone());
+                    let (t0, t1) = self.gs.times;
+                    instance.set("to_world", Value::Transform(start), loc.clone());
+                    instance.set("to_world_end", Value::Transform(end), loc.clone());
+                    instance.set("motion_start", Value::Float(f64::from(t0)), loc.clone());
+                    instance.set("motion_end", Value::Float(f64::from(t1)), loc.clone());
+                    instance.children.push(Rc::new(group));
+                    self.shapes.push(Rc::new(instance));
+                } else {
+                    let instance = self.gs.ctm;
+                    let copies: Vec<Rc<Obj>> = list.iter().map(|o| Rc::new(translate::placed(o, &instance))).collect();
+                    self.shapes.extend(copies);
                 }
-                let instance = self.gs.ctm;
-                let copies: Vec<Rc<Obj>> = list.iter().map(|o| Rc::new(translate::placed(o, &instance))).collect();
-                self.shapes.extend(copies);
             }
             "Include" | "Import" => {
                 let f = c.string("the file name")?;
