@@ -18,9 +18,11 @@ use crate::props::{Obj, Result as PropResult};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_disk_concentric};
 use std::sync::Arc;
 
+pub mod motion;
 pub mod realistic;
 
 pub use crate::props::fov::FovAxis;
+pub use motion::CameraMotion;
 pub use realistic::LensSystem;
 
 /// A camera that cannot be built from its parameters.
@@ -47,6 +49,9 @@ pub enum CameraError {
     /// An irradiance meter's shape has no area to sample.
     #[error("an irradiancemeter needs a shape with an area (a mesh, rectangle, disk, sphere or cylinder)")]
     MeterShape,
+    /// The camera cannot move as asked (motion blur).
+    #[error("{0}")]
+    Motion(String),
 }
 
 /// How camera space maps to rays.
@@ -97,6 +102,17 @@ pub struct RayDifferentials {
 }
 
 impl RayDifferentials {
+    /// The differentials moved by the world-to-world map `m` (a moving camera's, at its ray's
+    /// time): those of the camera placed where it then is.
+    pub fn moved(self, m: &Transform) -> RayDifferentials {
+        RayDifferentials {
+            o_x: m.apply_point(self.o_x),
+            o_y: m.apply_point(self.o_y),
+            d_x: m.apply_vector(self.d_x),
+            d_y: m.apply_vector(self.d_y),
+        }
+    }
+
     /// Mitsuba's `scale_differential`: the offset rays moved toward `ray` to the fraction `s`
     /// of their offset (a render of N samples per pixel uses `s = 1/√N`, the spacing of its
     /// samples).
@@ -169,6 +185,8 @@ pub struct Camera {
     scene_sphere: (Vec3, f32),
     /// A realistic camera's lens.
     lens: Option<Arc<LensSystem>>,
+    /// Where the camera moves over the shutter (motion blur; `None`: it stays at `to_world`).
+    motion: Option<CameraMotion>,
 }
 
 impl Camera {
@@ -210,6 +228,7 @@ impl Camera {
             distant: None,
             scene_sphere: (Vec3::ZERO, 1.0),
             lens: None,
+            motion: None,
         })
     }
 
@@ -359,6 +378,69 @@ impl Camera {
     /// Film height in pixels.
     pub fn height(&self) -> u32 {
         self.height
+    }
+
+    /// The camera moving from its `to_world` at time `t0` to `end` at `t1` (motion blur: pbrt-v4's
+    /// animated camera transform), its rays drawing their time uniformly over `shutter`. The
+    /// same camera where `end` is its `to_world`. Perspective, thin-lens, orthographic,
+    /// spherical and realistic cameras move; meters, distant sensors and batches are an error,
+    /// as are the transforms [`crate::math::AnimatedTransform::new`] refuses.
+    pub fn with_motion(mut self, end: Transform, t0: f32, t1: f32, shutter: (f32, f32)) -> Result<Camera, CameraError> {
+        let name = match self.projection {
+            Projection::Perspective | Projection::Orthographic | Projection::Spherical(_) | Projection::Realistic => None,
+            Projection::Radiancemeter => Some("radiancemeter"),
+            Projection::Irradiancemeter => Some("irradiancemeter"),
+            Projection::Distant => Some("distant sensor"),
+            Projection::Batch => Some("batch sensor"),
+        };
+        if let Some(name) = name {
+            return Err(CameraError::Motion(format!("a {name} cannot move (motion blur moves perspective, thin-lens, orthographic, spherical and realistic cameras)")));
+        }
+        self.motion = CameraMotion::new(self.to_world, t0, end, t1, shutter).map_err(CameraError::Motion)?;
+        Ok(self)
+    }
+
+    /// The shutter interval camera rays draw their time from where the camera moves; `None`
+    /// for a camera at rest.
+    pub fn motion_shutter(&self) -> Option<(f32, f32)> {
+        self.motion.as_ref().map(CameraMotion::shutter)
+    }
+
+    /// The world-to-world map from the camera's start placement to where it is at `time`
+    /// (`None` for a camera at rest).
+    #[inline]
+    pub fn moved_by(&self, time: f32) -> Option<Transform> {
+        self.motion.as_ref().and_then(|m| m.moved_by(time))
+    }
+
+    /// [`Camera::sample_ray`] at `time`: the ray of the camera where it is then, carrying
+    /// `time`.
+    #[inline]
+    pub fn sample_ray_at(&self, film: Vec2, u_lens: Vec2, time: f32) -> (Ray, f32) {
+        let (ray, weight) = self.sample_ray(film, u_lens);
+        let ray = match self.moved_by(time) {
+            Some(m) => motion::moved_ray(&m, &ray),
+            None => ray,
+        };
+        (ray.at_time(time), weight)
+    }
+
+    /// [`Camera::sample_wi`] for the camera where it is at `time` (light tracing's
+    /// connections from a light path of that time).
+    pub fn sample_wi_at(&self, p: Vec3, u_lens: Vec2, time: f32) -> Option<CameraSample> {
+        let Some(m) = self.moved_by(time) else { return self.sample_wi(p, u_lens) };
+        // The point where it is relative to the camera's start placement, connected there,
+        // and the lens point moved back to where the camera is.
+        let cs = self.sample_wi(m.inverse().apply_point(p), u_lens)?;
+        let p_lens = m.apply_point(cs.p_lens);
+        let w = p_lens - p;
+        let dist = w.length();
+        if dist <= 0.0 || dist.is_nan() {
+            return None;
+        }
+        // The importance's 1/r² at the moved distance (the same where the motion is rigid).
+        let weight = cs.weight * (cs.dist / dist) * (cs.dist / dist);
+        weight.is_finite().then_some(CameraSample { film: cs.film, p_lens, wi: w / dist, dist, weight })
     }
 
     /// Centre of projection (world).

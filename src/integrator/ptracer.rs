@@ -80,7 +80,7 @@ impl LightTracer {
         let (u_pos, u_lens) = (u2(), u2());
         if !self.settings.hide_emitters && self.allows(1) {
             if let Some(pos) = light.sample_le_position(shapes, u_pos) {
-                if let Some(cs) = camera.sample_wi(pos.p, u_lens) {
+                if let Some(cs) = camera.sample_wi_at(pos.p, u_lens, time) {
                     let cos = pos.ng.dot(cs.wi).abs();
                     let value = light.emitted_toward(&pos, cs.wi) * (cos * cs.weight * pos.inv_pdf / pmf);
                     if value.max_element() > 0.0 {
@@ -116,7 +116,7 @@ impl LightTracer {
 
             // Connect this vertex to the camera.
             if self.allows(segments + 1) && !bsdf.is_delta() {
-                if let Some(cs) = camera.sample_wi(si.p, u_lens) {
+                if let Some(cs) = camera.sample_wi_at(si.p, u_lens, time) {
                     let wi = frame.to_local(cs.wi);
                     let f = bsdf.eval_adjoint(&ctx, wo, wi) * shading_correction(si.ns, si.ng, w_prev, cs.wi);
                     let value = beta * f * cs.weight;

@@ -292,6 +292,16 @@ impl Builder {
             None if o.ty == "realistic" => self.realistic_from_props(o, film.width, film.height)?,
             None => Camera::from_props(o, film.width, film.height)?,
         };
+        // neumann's moving camera (pbrt-v4's animated camera transform): `to_world` at
+        // `motion_start` (0), `to_world_end` at `motion_end` (1), over the sensor's shutter.
+        let camera = match o.get("to_world_end") {
+            Some(_) => {
+                let end = o.transform("to_world_end")?;
+                let (t0, t1) = (o.float("motion_start", 0.0)?, o.float("motion_end", 1.0)?);
+                camera.with_motion(end, t0, t1, self.shutter).map_err(|e| o.error_at("to_world_end", e.to_string()))?
+            }
+            None => camera,
+        };
         let SamplerSettings { kind, spp, seed } = sampler;
         Ok(SensorSettings { camera, spp, sampler: kind, seed, film })
     }

@@ -371,7 +371,7 @@ pub fn render_from(
     // Ray differentials where the integrator reads them, scaled to the spacing of the render's
     // samples (Mitsuba's 1/√spp).
     let differential_scale = integrator.wants_differentials().then(|| 1.0 / (settings.spp.max(1) as f32).sqrt());
-    let motion = scene.motion_shutter();
+    let motion = scene.motion_shutter().or(cam.motion_shutter());
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -398,12 +398,19 @@ pub fn render_from(
                     let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
-                    let (ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
-                    // Where shapes move, a time uniform over the shutter interval (one more
-                    // dimension, drawn only then: static scenes' samples are unchanged).
-                    let ray = match motion {
-                        Some((open, close)) => ray.at_time(open + (close - open) * sampler.next_1d()),
-                        None => ray,
+                    let (start_ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
+                    // Where shapes or the camera move, a time uniform over the shutter interval
+                    // (one more dimension, drawn only then: static scenes' samples are
+                    // unchanged), and the camera's ray moved to where the camera then is.
+                    let (ray, moved) = match motion {
+                        Some((open, close)) => {
+                            let time = open + (close - open) * sampler.next_1d();
+                            match cam.moved_by(time) {
+                                Some(m) => (crate::camera::motion::moved_ray(&m, &start_ray).at_time(time), Some(m)),
+                                None => (start_ray.at_time(time), None),
+                            }
+                        }
+                        None => (start_ray, None),
                     };
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
@@ -411,8 +418,10 @@ pub fn render_from(
                         // A realistic camera's lens stopped the ray: the sample sees nothing.
                         crate::integrator::RadianceSample { l: Rgb::ZERO, alpha: 0.0 }
                     } else {
-                        let differentials = differential_scale
-                            .map(|scale| cam.ray_differentials(film_pos, u_lens, &ray).scaled(&ray, scale));
+                        let differentials = differential_scale.map(|scale| {
+                            let d = cam.ray_differentials(film_pos, u_lens, &start_ray);
+                            moved.as_ref().map_or(d, |m| d.moved(m)).scaled(&ray, scale)
+                        });
                         integrator.sample_aovs(
                             scene,
                             &ray,

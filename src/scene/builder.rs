@@ -156,6 +156,11 @@ impl SceneBuilder {
     /// tracing starts paths from. Errors name what is missing or inconsistent.
     pub fn build(mut self) -> Result<Scene, BuildError> {
         let camera = self.camera.take().ok_or(BuildError::NoCamera)?;
+        // The shutter where shapes move, else the moving camera's own.
+        let motion_shutter = match self.motions.iter().any(Option::is_some) {
+            true => Some(self.shutter),
+            false => camera.motion_shutter(),
+        };
         for (i, s) in self.shapes.iter().enumerate() {
             if s.bsdf as usize >= self.bsdfs.len() {
                 return Err(BuildError::MissingBsdf { shape: i, bsdf: s.bsdf, count: self.bsdfs.len() });
@@ -328,7 +333,7 @@ impl SceneBuilder {
             refs: refs.into(),
             primitives: total,
             camera,
-            motion_shutter: self.motions.iter().any(Option::is_some).then_some(self.shutter),
+            motion_shutter,
             motions: self.motions,
         })
     }

@@ -576,8 +576,8 @@ impl Scene {
         Some(m.triangle(r.index as usize).map(|v| at.transform_point3(v)))
     }
 
-    /// Whether shapes move (camera rays then sample a time in the shutter interval), and the
-    /// interval: `Some((open, close))`.
+    /// Whether shapes or the camera move (camera rays then sample a time in the shutter
+    /// interval), and the interval: `Some((open, close))`.
     pub fn motion_shutter(&self) -> Option<(f32, f32)> {
         self.motion_shutter
     }

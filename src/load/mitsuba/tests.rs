@@ -2905,6 +2905,40 @@ fn film_camera_sensors() {
     assert!(e.contains("test.xml:5:") && e.contains("output, sensor"), "{e}");
 }
 
+/// neumann's moving sensor in Mitsuba XML (what pbrt-v4's animated camera transform
+/// translates to): a perspective sensor with `to_world_end` slides from x = 0 to x = 4 past a
+/// black strip at x = 2 and sees it over its central ray for an eighth of the shutter; with
+/// `shutter_close` 0 (Mitsuba's default) it stays at its start. A moving radiancemeter is an
+/// error at its `to_world_end`.
+#[test]
+fn sensors_move_with_to_world_end() {
+    let scene = |sensor: &str, shutter: f32| {
+        let fov = if sensor == "perspective" { r#"<float name="fov" value="0.5"/>"# } else { "" };
+        format!(
+            r#"<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="1"/></integrator>
+<sensor type="{sensor}">{fov}<float name="shutter_close" value="{shutter}"/>
+<transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+<transform name="to_world_end"><lookat origin="4, 0, 0" target="4, 0, 1" up="0, 1, 0"/></transform>
+<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film></sensor>
+<shape type="rectangle"><transform name="to_world"><scale value="50"/><rotate y="1" angle="180"/><translate z="10"/></transform>
+<emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
+<shape type="rectangle"><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
+<transform name="to_world"><scale x="0.25" y="4"/><translate x="2" z="5"/></transform></shape></scene>"#
+        )
+    };
+    let mean = |text: &str| {
+        let f = load(text).unwrap_or_else(|e| panic!("{e}"));
+        crate::load::test_support::mean(&crate::load::test_support::render(&f, 4096, 2))
+    };
+    let m = mean(&scene("perspective", 1.0));
+    assert!((m - 0.875).abs() < 0.025, "moving sensor: {m}");
+    let f = load(&scene("perspective", 0.0)).unwrap();
+    assert!(f.scene.motion_shutter().is_some_and(|s| s == (0.0, 0.0)));
+    assert_eq!(crate::load::test_support::mean(&crate::load::test_support::render(&f, 64, 1)), 1.0);
+    let e = err(&scene("radiancemeter", 1.0));
+    assert!(e.contains("test.xml:") && e.contains("radiancemeter cannot move"), "{e}");
+}
+
 /// neumann's motion blur in Mitsuba XML: a rectangle with `to_world_end` slides over the
 /// shutter (`shutter_open` 0 to `shutter_close` 1) in front of a white emitter and covers the
 /// camera's central ray for its share of the time; a shape that does not move may give the same

@@ -226,8 +226,7 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
         f.check_unused()?;
     }
     let mut s = obj("sensor", "perspective", &cam.loc);
-    // pbrt's camera space has +x at the image's right; Mitsuba's at its left.
-    let to_world = world_from_camera * Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    // pbrt's camera space has +x at the image's right; Mitsuba's at its left (below).
     let aspect = width as f32 / height as f32;
     match ty.as_str() {
         "perspective" => {
@@ -312,11 +311,20 @@ fn sensor(p: &mut parser::Parser, loc: &Loc) -> Result<Obj> {
                 .error_at("screenwindow", "a screen window other than the default is not implemented by neumann yet"));
         }
     }
-    let to_world =
-        if ty == "orthographic" { to_world * Mat4::from_scale(Vec3::new(half, half, 1.0)) } else { to_world };
-    let t =
-        crate::math::Transform::from_matrix(to_world).ok_or_else(|| cam.error("the camera transform is singular"))?;
-    set(&mut s, "to_world", Value::Transform(t), &cam.loc);
+    // Camera space as Mitsuba's (+x left; the orthographic window's scale), after pbrt's
+    // world-from-camera transform: at the start and, for a moving camera, at the end.
+    let camera_space = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0))
+        * if ty == "orthographic" { Mat4::from_scale(Vec3::new(half, half, 1.0)) } else { Mat4::IDENTITY };
+    let placed = |world_from_camera: Mat4| {
+        crate::math::Transform::from_matrix(world_from_camera * camera_space)
+            .ok_or_else(|| cam.error("the camera transform is singular"))
+    };
+    set(&mut s, "to_world", Value::Transform(placed(world_from_camera)?), &cam.loc);
+    if let Some((end, (t0, t1))) = p.camera_motion.take() {
+        set(&mut s, "to_world_end", Value::Transform(placed(end)?), &cam.loc);
+        set(&mut s, "motion_start", Value::Float(f64::from(t0)), &cam.loc);
+        set(&mut s, "motion_end", Value::Float(f64::from(t1)), &cam.loc);
+    }
     // The shutter interval (pbrt-v4's default 0 to 1): the times camera rays sample where
     // shapes move (the imaging ratio checks that it is not empty).
     let (open, close) = (cam.float("shutteropen", 0.0)?, cam.float("shutterclose", 1.0)?);

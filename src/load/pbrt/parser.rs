@@ -113,6 +113,8 @@ pub struct Parser {
     objects: HashMap<String, Vec<Rc<Obj>>>,
     current_object: Option<(String, Vec<Rc<Obj>>)>,
     pub(super) camera: Option<(ParamSet, Mat4)>,
+    /// A moving camera's world-from-camera transform at the end, and the transform times.
+    pub(super) camera_motion: Option<(Mat4, (f32, f32))>,
     pub(super) film: Option<ParamSet>,
     pub(super) sampler: Option<ParamSet>,
     pub(super) filter: Option<ParamSet>,
@@ -371,6 +373,7 @@ impl Parser {
             objects: HashMap::new(),
             current_object: None,
             camera: None,
+            camera_motion: None,
             film: None,
             sampler: None,
             filter: None,
@@ -575,19 +578,15 @@ impl Parser {
                 if self.world {
                     return Err(SceneError::at(&loc, "Camera must come before WorldBegin"));
                 }
-                if self.gs.moving() {
-                    return Err(SceneError::at(
-                        &loc,
-                        "Camera: the camera transform moves (ActiveTransform): a moving camera is not implemented by neumann (moving shapes are)",
-                    ));
-                }
-                // pbrt names the camera's space "camera".
-                let camera_from_world = self.gs.ctm;
-                let world_from_camera = camera_from_world.inverse();
-                if !world_from_camera.is_finite() {
+                // pbrt names the camera's space "camera". A moving transform (ActiveTransform)
+                // moves the camera: pbrt-v4 interpolates its world-from-camera transform.
+                let world_from_camera = self.gs.ctm.inverse();
+                let world_from_camera_end = self.gs.ctm_end.inverse();
+                if !(world_from_camera.is_finite() && world_from_camera_end.is_finite()) {
                     return Err(SceneError::at(&loc, "Camera: the current transform is singular"));
                 }
-                self.named_coords.insert("camera".into(), (world_from_camera, world_from_camera));
+                self.named_coords.insert("camera".into(), (world_from_camera, world_from_camera_end));
+                self.camera_motion = self.gs.moving().then_some((world_from_camera_end, self.gs.times));
                 let mut ps = ps;
                 ps.params.push(type_param(&ty, &loc));
                 self.camera = Some((ps, world_from_camera));
