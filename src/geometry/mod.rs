@@ -30,7 +30,7 @@ pub use interaction::SurfaceInteraction;
 pub use mesh::TriangleMesh;
 pub use bspline_curve::BSplineCurves;
 pub use roundcurve::LinearCurves;
-pub use registry::{shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
+pub use registry::{is_similarity, shape_plugin, MeshFile, MeshSource, ShapePlugin, SHAPE_PLUGINS};
 pub use mesh::MeshError;
 pub use sdfgrid::{SdfGrid, SdfGridError};
 pub use shape::{Geometry, ShapeSample};

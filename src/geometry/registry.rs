@@ -227,7 +227,7 @@ fn sdfgrid(o: &Obj, to_world: &Transform, flip: bool, files: &mut dyn MeshSource
 
 /// Whether a linear map's columns `cols` are orthogonal and of one positive length (a
 /// similarity: uniform scale, rotation, possibly a reflection), to a relative 10⁻⁴.
-fn is_similarity(cols: &[Vec3; 3]) -> bool {
+pub fn is_similarity(cols: &[Vec3; 3]) -> bool {
     let r = cols[0].length();
     let uniform = cols.iter().all(|c| (c.length() - r).abs() <= 1e-4 * r);
     let orthogonal = (cols[0].dot(cols[1])).abs() <= 1e-4 * r * r

@@ -457,10 +457,32 @@ impl Builder {
         let geometry = match &motion {
             Some(m) => {
                 let g = self.geometry_placed(o, &own_space, &more)?;
-                let Geometry::Mesh(mesh) = &g else {
-                    return Err(motion_error(format!("a moving {} (motion blur): only triangle meshes move", o.ty)));
+                let b = match &g {
+                    Geometry::Mesh(mesh) => m.motion_bounds(&mesh.positions),
+                    Geometry::Sphere(_) | Geometry::Disk(_) | Geometry::Cylinder(_) => {
+                        if m.start().swaps_handedness() {
+                            return Err(motion_error(format!("a moving {} whose transform mirrors is not implemented", o.ty)));
+                        }
+                        // A sphere moved by a transform that scales unevenly would be an
+                        // ellipsoid, which a sphere at rest is not (Mitsuba's rule keeps it round).
+                        let similar = |t: &Transform| {
+                            crate::geometry::is_similarity(&[Vec3::X, Vec3::Y, Vec3::Z].map(|a| t.apply_vector(a)))
+                        };
+                        if matches!(g, Geometry::Sphere(_)) && !(similar(m.start()) && similar(m.end())) {
+                            return Err(motion_error(
+                                "a moving sphere whose transform scales unevenly or shears (an ellipsoid) is not implemented".into(),
+                            ));
+                        }
+                        let b = g.bounds();
+                        m.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
+                    }
+                    _ => {
+                        return Err(motion_error(format!(
+                            "a moving {} (motion blur): only triangle meshes, spheres, disks and cylinders move",
+                            o.ty
+                        )))
+                    }
                 };
-                let b = m.motion_bounds(&mesh.positions);
                 if !(b.min.is_finite() && b.max.is_finite()) {
                     return Err(motion_error("the moving shape's coordinates are not finite over its motion".into()));
                 }

@@ -50,6 +50,11 @@ impl AnimatedTransform {
         &self.start
     }
 
+    /// The end transform (at `t1` and after).
+    pub fn end(&self) -> &Transform {
+        &self.end
+    }
+
     /// The matrix at `time`.
     pub fn matrix_at(&self, time: f32) -> Mat4 {
         if !self.is_animated() || time <= self.t0 {

@@ -188,11 +188,17 @@ impl SceneBuilder {
             if self.shapes[i].light.is_some() {
                 return Err(BuildError::MovingEmitter(i as u32));
             }
-            let Geometry::Mesh(m) = &mut self.geometries[i] else { return Err(BuildError::MovingShape(i as u32)) };
-            if motion.start().swaps_handedness() {
-                for tri in &mut m.indices {
-                    tri.swap(1, 2);
+            match &mut self.geometries[i] {
+                Geometry::Mesh(m) => {
+                    if motion.start().swaps_handedness() {
+                        for tri in &mut m.indices {
+                            tri.swap(1, 2);
+                        }
+                    }
                 }
+                // Quadrics are tested in their own space, the ray moved there at its time.
+                Geometry::Sphere(_) | Geometry::Disk(_) | Geometry::Cylinder(_) if !motion.start().swaps_handedness() => {}
+                _ => return Err(BuildError::MovingShape(i as u32)),
             }
         }
         let motions = &self.motions;
@@ -215,6 +221,11 @@ impl SceneBuilder {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
                 bounds.push(match (g, moving(s as u32)) {
                     (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.triangle(i)),
+                    // A quadric within its own-space box: the box's corners wherever they move.
+                    (_, Some(motion)) => {
+                        let b = g.primitive_bounds(i);
+                        motion.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
+                    }
                     _ => g.primitive_bounds(i),
                 });
             }
@@ -250,6 +261,7 @@ impl SceneBuilder {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
                 Geometry::Mesh(_) if moving(r.shape).is_some() => Primitive::MovingTriangle,
+                _ if moving(r.shape).is_some() => Primitive::MovingQuadric,
                 Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
                 Geometry::Sphere(s) => Primitive::Sphere(*s),
                 Geometry::Disk(_) => Primitive::Disk,

@@ -29,8 +29,9 @@ pub enum BuildError {
     #[error("shape {0} moves and emits light: moving area lights are not implemented")]
     MovingEmitter(u32),
 
-    /// A moving shape that is not a triangle mesh.
-    #[error("shape {0} moves but is not a triangle mesh: only triangle meshes move (motion blur)")]
+    /// A moving shape that cannot move: neither a triangle mesh nor a sphere, disk or
+    /// cylinder, or one of those three under a mirroring transform.
+    #[error("shape {0} moves but cannot: triangle meshes move, and spheres, disks and cylinders whose transform does not mirror (motion blur)")]
     MovingShape(u32),
     /// A light's power is not finite, or is negative.
     #[error("a light's power overflows single precision or is negative (check the emitters' scales)")]

@@ -182,6 +182,8 @@ enum Primitive {
     Ellipsoid,
     /// A triangle of a moving mesh (object space; placed at the ray's time).
     MovingTriangle,
+    /// A moving sphere, disk or cylinder (object space: the ray is moved there at its time).
+    MovingQuadric,
 }
 
 /// Identifies a primitive: shape index and primitive index within the shape.
@@ -421,7 +423,11 @@ impl Scene {
     /// arctangent and arc cosine are skipped there), computed here then, the same bits.
     pub fn uv_at(&self, ray: &Ray, si: &SurfaceInteraction) -> Vec2 {
         match &self.geometries[si.shape as usize] {
-            Geometry::Sphere(s) if !self.needs_uv => s.surface_uv(ray, si.t),
+            Geometry::Sphere(s) if !self.needs_uv => match self.shape_motion(si.shape).and_then(|m| m.at(ray.time)) {
+                // A moving sphere's (u, v) in its own space, the ray moved there.
+                Some(at) => s.surface_uv(&at.inverse().apply_ray(ray), si.t),
+                None => s.surface_uv(ray, si.t),
+            },
             _ => si.uv,
         }
     }
@@ -561,6 +567,18 @@ impl Scene {
                 let p = self.moving_triangle(lp.r, ray.time)?;
                 intersect_triangle(pre, &p, t_max).map(|h| (h.t, HitKind::MovingTriangle(h, lp.r)))
             }
+            Primitive::MovingQuadric => {
+                // The ray in the shape's own space at its time (its direction not renormalized,
+                // so that distances along it keep their parameter t).
+                let shape = self.refs[lp.r as usize].shape;
+                let ray = self.shape_motion(shape)?.at(ray.time)?.inverse().apply_ray(ray);
+                match geometry() {
+                    Geometry::Sphere(s) => s.intersect(&ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
+                    Geometry::Disk(d) => d.intersect(&ray, t_max).map(|(t, q)| (t, HitKind::Disk(q, lp.r))),
+                    Geometry::Cylinder(c) => c.intersect(&ray, t_max).map(|(t, q)| (t, HitKind::Cylinder(q, lp.r))),
+                    _ => None,
+                }
+            }
         }
     }
 
@@ -665,6 +683,27 @@ impl Scene {
     }
 
     fn analytic_interaction(
+        &self,
+        ray: &Ray,
+        t: f32,
+        kind: HitKind,
+        r: PrimRef,
+        needs_uv: bool,
+        needs_dpdv: bool,
+    ) -> SurfaceInteraction {
+        if let Some(at) = self.shape_motion(r.shape).and_then(|m| m.at(ray.time)) {
+            // A moving quadric: its interaction in its own space, where the ray met it (the
+            // same t), placed by its transform at the ray's time.
+            let own = at.inverse().apply_ray(ray);
+            let si = self.analytic_interaction_at_rest(&own, t, kind, r, needs_uv, needs_dpdv);
+            return motion::placed_interaction(&at, si);
+        }
+        self.analytic_interaction_at_rest(ray, t, kind, r, needs_uv, needs_dpdv)
+    }
+
+    /// [`Scene::analytic_interaction`] of a shape that does not move (or in a moving one's own
+    /// space).
+    fn analytic_interaction_at_rest(
         &self,
         ray: &Ray,
         t: f32,

@@ -2193,7 +2193,7 @@ fn moving_object_instances_move_their_shapes_together() {
     let head = "Camera \"perspective\"\nWorldBegin\nObjectBegin \"a\"\n";
     let moved = "ObjectEnd\nActiveTransform EndTime\nTranslate 1 0 0\nObjectInstance \"a\"\n";
     for (object, what) in [
-        ("Shape \"sphere\"\n", "only triangle meshes move"),
+        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n", "only triangle meshes, spheres, disks and cylinders move"),
         ("AreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n", "test.pbrt:"),
     ] {
         let e = err(&format!("{head}{object}{moved}"));
@@ -2240,10 +2240,18 @@ fn active_transform_moves_shapes_over_the_shutter() {
         let expected = ratio * (1.0 - covered);
         assert!((m - expected).abs() < 0.025 * ratio, "{camera} {times}: {m} vs {expected}");
     }
+    // Spheres, disks and cylinders move too: a sphere of radius 0.25 covers the ray for an eighth.
+    let ball = scene("", "", true).replace(
+        "Shape \"trianglemesh\" \"point3 P\" [-0.25 -4 0  0.25 -4 0  0.25 4 0  -0.25 4 0] \"integer indices\" [0 1 2 0 2 3]",
+        "Shape \"sphere\" \"float radius\" 0.25",
+    );
+    assert!(ball.contains("sphere"));
+    let m = mean(&ball);
+    assert!((m - 0.875).abs() < 0.025, "moving sphere: {m}");
     // What neumann does not move is an error where it is written; a moving light stays put.
     let head = "Camera \"perspective\"\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\n";
     for (shape, what) in [
-        ("Shape \"sphere\"\n", "this sphere moves"),
+        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n", "this curve moves"),
         ("AreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n", "AreaLightSource"),
         ("ObjectBegin \"a\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n", "inside ObjectBegin"),
     ] {

@@ -1758,9 +1758,9 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
     let mut obj = obj;
     if p.gs.moving() {
         // pbrt-v4's animated shapes: placed by the transform interpolated at each ray's time.
-        if !matches!(ty, "trianglemesh" | "bilinearmesh" | "loopsubdiv" | "plymesh") {
+        if !matches!(ty, "trianglemesh" | "bilinearmesh" | "loopsubdiv" | "plymesh" | "sphere" | "disk" | "cylinder") {
             return Err(ps.error(format!(
-                "this {ty} moves (ActiveTransform): neumann moves triangle meshes only (trianglemesh, plymesh, bilinearmesh, loopsubdiv)"
+                "this {ty} moves (ActiveTransform): neumann moves triangle meshes (trianglemesh, plymesh, bilinearmesh, loopsubdiv), spheres, disks and cylinders"
             )));
         }
         if p.gs.area_light.is_some() {
