@@ -731,12 +731,6 @@ impl Parser {
                 let ty = c.string("the shape type")?;
                 let mut ps = self.spectrum_files(c.params(format!("Shape \"{ty}\""), loc.clone())?)?;
                 self.with_attributes(&mut ps, "shape");
-                if self.current_object.is_some() && self.gs.moving() {
-                    return Err(SceneError::at(
-                        &loc,
-                        "Shape: a moving shape inside ObjectBegin (motion blur of instanced shapes) is not implemented by neumann",
-                    ));
-                }
                 let shapes = translate::shape(self, &ty, &ps)?;
                 ps.check_unused()?;
                 if let Some(al) = &self.gs.area_light {

@@ -1829,6 +1829,10 @@ pub fn placed(o: &Obj, instance: &Mat4) -> Obj {
                 had = true;
                 Value::Transform(Transform::from_matrix(*instance * *t.matrix()).unwrap_or(*t))
             }
+            // A moving shape's end placement (a moving shape in an object): placed likewise.
+            ("to_world_end", Value::Transform(t)) => {
+                Value::Transform(Transform::from_matrix(*instance * *t.matrix()).unwrap_or(*t))
+            }
             (_, v) => v.clone(),
         };
         props.push(Prop::new(&p.name, value, p.loc.clone()));
