@@ -201,6 +201,20 @@ impl SceneBuilder {
                 _ => return Err(BuildError::MovingShape(i as u32)),
             }
         }
+        // A moving mesh is traced in its own space (pbrt-v4's animated primitives, Embree's
+        // motion-blurred instances): the ray moved there at its time traverses a BVH of the
+        // mesh at rest, built here as a scene of its own; the scene's BVH holds the mesh as one
+        // primitive bounded over its whole motion.
+        let mut objects: Vec<Option<Box<Scene>>> = Vec::new();
+        for (i, motion) in self.motions.iter().enumerate() {
+            let (Some(_), Geometry::Mesh(m)) = (motion, &self.geometries[i]) else { continue };
+            let mut b = SceneBuilder::new();
+            let bsdf = b.add_bsdf(crate::material::Bsdf::Diffuse(crate::material::Diffuse::new(Rgb::ZERO)));
+            b.add_shape(Geometry::Mesh(m.clone()), bsdf, None);
+            b.set_camera(Camera::perspective(crate::math::Transform::IDENTITY, 90.0, crate::camera::FovAxis::X, 1, 1)?);
+            objects.resize_with(self.shapes.len(), || None);
+            objects[i] = Some(Box::new(b.build()?));
+        }
         let motions = &self.motions;
         let moving = |shape: u32| motions.get(shape as usize).and_then(Option::as_ref);
         // Hits in a small scene read the triangles' normals from this cache (no cross product,
@@ -213,14 +227,19 @@ impl SceneBuilder {
         // Primitives and their bounds.
         // (The vectors below are sized exactly and dropped as soon as they are used: a scene of
         // millions of triangles peaks at what its BVH build holds.)
-        let total: usize = self.geometries.iter().map(Geometry::primitive_count).sum();
+        // (A moving mesh is one primitive.)
+        let count = |s: usize, g: &Geometry| match (g, moving(s as u32)) {
+            (Geometry::Mesh(_), Some(_)) => 1,
+            _ => g.primitive_count(),
+        };
+        let total: usize = self.geometries.iter().enumerate().map(|(s, g)| count(s, g)).sum();
         let mut refs = Vec::with_capacity(total);
         let mut bounds = Vec::with_capacity(total);
         for (s, g) in self.geometries.iter().enumerate() {
-            for i in 0..g.primitive_count() {
+            for i in 0..count(s, g) {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
                 bounds.push(match (g, moving(s as u32)) {
-                    (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.triangle(i)),
+                    (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.positions),
                     // A quadric within its own-space box: the box's corners wherever they move.
                     (_, Some(motion)) => {
                         let b = g.primitive_bounds(i);
@@ -260,7 +279,7 @@ impl SceneBuilder {
         let primitive = |k: u32| {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
-                Geometry::Mesh(_) if moving(r.shape).is_some() => Primitive::MovingTriangle,
+                Geometry::Mesh(_) if moving(r.shape).is_some() => Primitive::MovingMesh,
                 _ if moving(r.shape).is_some() => Primitive::MovingQuadric,
                 Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
                 Geometry::Sphere(s) => Primitive::Sphere(*s),
@@ -347,6 +366,7 @@ impl SceneBuilder {
             camera,
             motion_shutter,
             motions: self.motions,
+            objects,
         })
     }
 }

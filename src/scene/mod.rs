@@ -180,8 +180,8 @@ enum Primitive {
     Curve,
     /// One of Mitsuba's ellipsoids.
     Ellipsoid,
-    /// A triangle of a moving mesh (object space; placed at the ray's time).
-    MovingTriangle,
+    /// A moving mesh, whole (traced in its own space: [`Scene::objects`]).
+    MovingMesh,
     /// A moving sphere, disk or cylinder (object space: the ray is moved there at its time).
     MovingQuadric,
 }
@@ -207,8 +207,9 @@ enum HitKind {
     /// A curve piece's (u, v).
     Curve(Vec2, u32),
     Ellipsoid(u32),
-    /// A triangle of a moving mesh, with its index into `Scene::refs`.
-    MovingTriangle(TriangleHit, u32),
+    /// A triangle of a moving mesh: the hit in the mesh's own space, the mesh's index into
+    /// `Scene::refs` and the triangle's index in the mesh.
+    MovingTriangle(TriangleHit, u32, u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -258,6 +259,10 @@ pub struct Scene {
     camera: Camera,
     /// Each shape's motion (empty where nothing moves; `None` for shapes that stay put).
     motions: Vec<Option<crate::math::AnimatedTransform>>,
+    /// Each moving mesh at rest in its own space, as a scene of its one shape (its BVH and
+    /// triangle blocks), which rays moved there at their time traverse (empty where no mesh
+    /// moves).
+    objects: Vec<Option<Box<Scene>>>,
     /// The shutter interval whose times camera rays sample, where shapes move.
     motion_shutter: Option<(f32, f32)>,
     /// Whether hits compute `∂p/∂v` (some BSDF is a bump map; zero otherwise).
@@ -457,7 +462,7 @@ impl Scene {
     pub fn intersect_hit(&self, ray: &Ray) -> Option<RayHit> {
         let (t, kind) = self.closest(ray)?;
         let barycentrics = match kind {
-            HitKind::Block(h, ..) | HitKind::Triangle(h, _) | HitKind::MovingTriangle(h, _) => Vec2::new(h.b1, h.b2),
+            HitKind::Block(h, ..) | HitKind::Triangle(h, _) | HitKind::MovingTriangle(h, ..) => Vec2::new(h.b1, h.b2),
             _ => Vec2::ZERO,
         };
         Some(RayHit { t, prim: self.prim_ref(kind), barycentrics })
@@ -475,12 +480,13 @@ impl Scene {
             | HitKind::SdfVoxel(r)
             | HitKind::Curve(_, r)
             | HitKind::Ellipsoid(r)
-            | HitKind::MovingTriangle(_, r) => r,
+            | HitKind::MovingTriangle(_, r, _) => r,
         }
     }
 
-    /// Shape index and, for a triangle, its index in the mesh (0 for analytic shapes) of
-    /// primitive `prim` of a [`RayHit`]. Panics if `prim` is not a primitive of this scene.
+    /// Shape index and, for a triangle, its index in the mesh (0 for analytic shapes and for
+    /// a moving mesh, which the scene's BVH holds whole) of primitive `prim` of a [`RayHit`].
+    /// Panics if `prim` is not a primitive of this scene.
     pub fn primitive(&self, prim: u32) -> (u32, u32) {
         let r = self.refs[prim as usize];
         (r.shape, r.index)
@@ -511,7 +517,7 @@ impl Scene {
         match &lp.prim {
             Primitive::Triangle(p) => intersect_triangle(pre, p, t_max).map(|h| (h.t, HitKind::Triangle(h, k))),
             Primitive::Sphere(s) => s.intersect(ray, t_max).map(|h| (h.t, HitKind::Sphere(lp.r))),
-            _ => self.intersect_other(lp, ray, pre, bspline, t_max),
+            _ => self.intersect_other(lp, ray, bspline, t_max),
         }
     }
 
@@ -521,7 +527,6 @@ impl Scene {
         &self,
         lp: &LeafPrim,
         ray: &Ray,
-        pre: &RayPrecomp,
         bspline: &mut Option<BSplineRay>,
         t_max: f32,
     ) -> Option<(f32, HitKind)> {
@@ -563,9 +568,19 @@ impl Scene {
                 }
                 _ => None,
             },
-            Primitive::MovingTriangle => {
-                let p = self.moving_triangle(lp.r, ray.time)?;
-                intersect_triangle(pre, &p, t_max).map(|h| (h.t, HitKind::MovingTriangle(h, lp.r)))
+            Primitive::MovingMesh => {
+                // The mesh at rest, traversed by the ray moved to its own space at its time
+                // (its direction not renormalized: the same t).
+                let shape = self.refs[lp.r as usize].shape;
+                let object = self.objects.get(shape as usize)?.as_deref()?;
+                let mut own = self.shape_motion(shape)?.at(ray.time)?.inverse().apply_ray(ray);
+                own.t_max = t_max;
+                let (t, kind) = object.closest(&own)?;
+                let (h, triangle) = match kind {
+                    HitKind::Block(h, ..) | HitKind::Triangle(h, _) => (h, object.refs[object.prim_ref(kind) as usize].index),
+                    _ => return None,
+                };
+                Some((t, HitKind::MovingTriangle(h, lp.r, triangle)))
             }
             Primitive::MovingQuadric => {
                 // The ray in the shape's own space at its time (its direction not renormalized,
@@ -582,16 +597,15 @@ impl Scene {
         }
     }
 
-    /// The vertices of the moving triangle `refs[r]` at `time` (world space).
+    /// The vertices of triangle `triangle` of the moving mesh `shape` at `time` (world space).
     #[inline]
-    fn moving_triangle(&self, r: u32, time: f32) -> Option<[Vec3; 3]> {
-        let r = self.refs[r as usize];
-        let (Geometry::Mesh(m), Some(Some(motion))) = (&self.geometries[r.shape as usize], self.motions.get(r.shape as usize))
+    fn moving_triangle(&self, shape: u32, triangle: u32, time: f32) -> Option<[Vec3; 3]> {
+        let (Geometry::Mesh(m), Some(Some(motion))) = (&self.geometries[shape as usize], self.motions.get(shape as usize))
         else {
             return None;
         };
         let at = motion.matrix_at(time);
-        Some(m.triangle(r.index as usize).map(|v| at.transform_point3(v)))
+        Some(m.triangle(triangle as usize).map(|v| at.transform_point3(v)))
     }
 
     /// Whether shapes or the camera move (camera rays then sample a time in the shutter
@@ -621,8 +635,9 @@ impl Scene {
     /// `∂p/∂v` where `dpdv` says.
     #[inline(always)]
     fn interaction_with(&self, ray: &Ray, t: f32, kind: HitKind, uv: bool, dpdv: bool) -> SurfaceInteraction {
-        // Whether the hit is on a moving triangle (whose vertices are placed at the ray's time).
-        let mut moving = false;
+        // The triangle's index in its mesh where the hit is on a moving one (whose vertices are
+        // placed at the ray's time).
+        let mut moving = None;
         let (h, p, r) = match kind {
             HitKind::Block(h, b, lane) => {
                 let block = &self.blocks[b as usize];
@@ -632,9 +647,10 @@ impl Scene {
                 LeafPrim { prim: Primitive::Triangle(p), r } => (h, p, r),
                 _ => unreachable!("HitKind::Triangle names a triangle"),
             },
-            HitKind::MovingTriangle(h, r) => {
-                let p = self.moving_triangle(r, ray.time).expect("HitKind::MovingTriangle names a moving triangle");
-                moving = true;
+            HitKind::MovingTriangle(h, r, triangle) => {
+                let shape = self.refs[r as usize].shape;
+                let p = self.moving_triangle(shape, triangle, ray.time).expect("HitKind::MovingTriangle names a moving triangle");
+                moving = Some(triangle);
                 (h, p, r)
             }
             HitKind::Sphere(r)
@@ -648,7 +664,8 @@ impl Scene {
         };
         let r = self.refs[r as usize];
         let Geometry::Mesh(m) = &self.geometries[r.shape as usize] else { unreachable!("triangles belong to meshes") };
-        let i = r.index as usize;
+        let index = moving.unwrap_or(r.index);
+        let i = index as usize;
         // A small scene's cached normal is a load from cache; in a large mesh it is likely a
         // miss, and the vertices at hand (the ones it was computed from: the same bits) give it
         // by a cross product and a normalization instead.
@@ -659,7 +676,7 @@ impl Scene {
         };
         let crate::geometry::mesh::MeshSurface { mut ns, uv, dpdu, dpdv } =
             m.surface_at(i, &p, [h.b0, h.b1, h.b2], ng, dpdv);
-        if moving && !m.normals.is_empty() {
+        if moving.is_some() && !m.normals.is_empty() {
             // Vertex normals are the mesh's own (object space): placed as the vertices are, by
             // the mesh's transform at the ray's time (its inverse made only here, where needed).
             if let Some(t) = self.shape_motion(r.shape).and_then(|a| a.at(ray.time)) {
@@ -677,7 +694,7 @@ impl Scene {
             dpdv,
             bary: crate::math::Vec2::new(h.b1, h.b2),
             shape: r.shape,
-            prim: r.index,
+            prim: index,
             time: ray.time,
         }
     }
