@@ -699,6 +699,8 @@ impl Scene {
         }
     }
 
+    /// The surface interaction of an analytic shape's hit `kind` at `t` along `ray` (a moving
+    /// one's computed in its own space and placed where it is at the ray's time).
     fn analytic_interaction(
         &self,
         ray: &Ray,
