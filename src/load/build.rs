@@ -483,7 +483,10 @@ impl Builder {
                         )))
                     }
                 };
-                if !(b.min.is_finite() && b.max.is_finite()) {
+                // (A mesh without triangles has no bounds, and is nothing: no error.)
+                let empty = matches!(&g, Geometry::Mesh(mesh) if mesh.is_empty());
+                let finite = b.min.is_finite() && b.max.is_finite();
+                if !(empty || finite) {
                     return Err(motion_error("the moving shape's coordinates are not finite over its motion".into()));
                 }
                 g

@@ -229,7 +229,7 @@ impl SceneBuilder {
         // millions of triangles peaks at what its BVH build holds.)
         // (A moving mesh is one primitive.)
         let count = |s: usize, g: &Geometry| match (g, moving(s as u32)) {
-            (Geometry::Mesh(_), Some(_)) => 1,
+            (Geometry::Mesh(m), Some(_)) => usize::from(!m.is_empty()),
             _ => g.primitive_count(),
         };
         let total: usize = self.geometries.iter().enumerate().map(|(s, g)| count(s, g)).sum();

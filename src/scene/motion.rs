@@ -199,6 +199,10 @@ mod tests {
             }
         }
         assert!(hits > 300, "too few hits compared: {hits}");
+        // A moving mesh without triangles is nothing, as one at rest.
+        let mut empty = TriangleMesh::rectangle();
+        empty.indices.clear();
+        assert!(scene(empty, Some(motion)).intersect(&Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z).at_time(0.5)).is_none());
     }
 
     /// A sphere, a disk and a cylinder (each 0.5 wide across x, black) slide along x from -2 to
