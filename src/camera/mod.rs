@@ -413,16 +413,24 @@ impl Camera {
         self.motion.as_ref().and_then(|m| m.moved_by(time))
     }
 
+    /// A ray made at the camera's start placement (by [`Camera::sample_ray`] or
+    /// [`Camera::generate_ray`]) moved to where the camera is at `time`, carrying `time`; with
+    /// the start-to-`time` map that moved it (`None` at rest or at the start), for the ray's
+    /// differentials.
+    #[inline]
+    pub fn ray_at_time(&self, ray: &Ray, time: f32) -> (Ray, Option<Transform>) {
+        match self.moved_by(time) {
+            Some(m) => (motion::moved_ray(&m, ray).at_time(time), Some(m)),
+            None => (ray.at_time(time), None),
+        }
+    }
+
     /// [`Camera::sample_ray`] at `time`: the ray of the camera where it is then, carrying
     /// `time`.
     #[inline]
     pub fn sample_ray_at(&self, film: Vec2, u_lens: Vec2, time: f32) -> (Ray, f32) {
         let (ray, weight) = self.sample_ray(film, u_lens);
-        let ray = match self.moved_by(time) {
-            Some(m) => motion::moved_ray(&m, &ray),
-            None => ray,
-        };
-        (ray.at_time(time), weight)
+        (self.ray_at_time(&ray, time).0, weight)
     }
 
     /// [`Camera::sample_wi`] for the camera where it is at `time` (light tracing's

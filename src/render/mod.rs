@@ -403,13 +403,7 @@ pub fn render_from(
                     // (one more dimension, drawn only then: static scenes' samples are
                     // unchanged), and the camera's ray moved to where the camera then is.
                     let (ray, moved) = match motion {
-                        Some((open, close)) => {
-                            let time = open + (close - open) * sampler.next_1d();
-                            match cam.moved_by(time) {
-                                Some(m) => (crate::camera::motion::moved_ray(&m, &start_ray).at_time(time), Some(m)),
-                                None => (start_ray.at_time(time), None),
-                            }
-                        }
+                        Some((open, close)) => cam.ray_at_time(&start_ray, open + (close - open) * sampler.next_1d()),
                         None => (start_ray, None),
                     };
                     sample_terms.fill(Rgb::ZERO);

@@ -133,10 +133,7 @@ pub fn render_light_paths_with(
                 let film_pos = Vec2::new(x + rng.next_f32(), y + rng.next_f32());
                 let ray = cam.generate_ray(film_pos, Vec2::new(rng.next_f32(), rng.next_f32()));
                 let ray = match scene.motion_shutter() {
-                    Some((open, close)) => {
-                        let time = open + (close - open) * rng.next_f32();
-                        cam.moved_by(time).map_or(ray, |m| crate::camera::motion::moved_ray(&m, &ray)).at_time(time)
-                    }
+                    Some((open, close)) => cam.ray_at_time(&ray, open + (close - open) * rng.next_f32()).0,
                     None => ray,
                 };
                 if scene.intersect(&ray).is_some() {
