@@ -808,11 +808,33 @@ impl Scene {
             return false;
         }
         for k in first..first + count {
-            if self.intersect_prim(k, ray, pre, bspline, t_max).is_some() {
+            // SAFETY: leaf payloads index `prims` (built together).
+            let blocked = match unsafe { &self.prims.get_unchecked(k as usize).prim } {
+                Primitive::MovingMesh => self.moving_mesh_occludes(k, ray, t_max),
+                _ => self.intersect_prim(k, ray, pre, bspline, t_max).is_some(),
+            };
+            if blocked {
                 return true;
             }
         }
         false
+    }
+
+    /// Whether the moving mesh of mixed-leaf primitive `k` blocks `ray` within `(0, t_max)`:
+    /// the any-hit traversal of the mesh at rest by the ray moved to its own space at its time
+    /// (which stops at the first triangle found, where [`Scene::intersect_prim`] looks for the
+    /// closest).
+    #[inline(never)]
+    fn moving_mesh_occludes(&self, k: u32, ray: &Ray, t_max: f32) -> bool {
+        let shape = self.refs[self.prims[k as usize].r as usize].shape;
+        let (Some(Some(object)), Some(at)) =
+            (self.objects.get(shape as usize), self.shape_motion(shape).and_then(|m| m.at(ray.time)))
+        else {
+            return false;
+        };
+        let mut own = at.inverse().apply_ray(ray);
+        own.t_max = t_max;
+        object.occluded(&own)
     }
 
     /// Prefetches a leaf's data (at most its first two triangle blocks or primitives).

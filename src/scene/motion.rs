@@ -184,9 +184,17 @@ mod tests {
                 let o = centre + crate::sampling::sample_uniform_sphere(crate::math::Vec2::new(rng.next_f32(), rng.next_f32())).value * 5.0;
                 let target = centre + Vec3::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * 1.6;
                 let ray = Ray::new(o, (target - o).normalize());
+                // Shadow rays (the any-hit traversal of the mesh in its own space) agree, also
+                // with their extent ending just before and just after the hit.
+                assert_eq!(moving.occluded(&ray.at_time(time)), fixed.occluded(&ray), "t {time}: occlusion");
                 match (moving.intersect(&ray.at_time(time)), fixed.intersect(&ray)) {
                     (Some(a), Some(b)) => {
                         hits += 1;
+                        for (scale, blocked) in [(0.999, false), (1.001, true)] {
+                            let shadow = Ray { t_max: b.t * scale, ..ray };
+                            assert_eq!(fixed.occluded(&shadow), blocked, "t {time}: shadow ray at rest");
+                            assert_eq!(moving.occluded(&shadow.at_time(time)), blocked, "t {time}: shadow ray");
+                        }
                         assert_eq!(a.prim, b.prim, "t {time}: triangle");
                         assert!((a.t - b.t).abs() < 1e-4 && (a.p - b.p).length() < 1e-4, "t {time}: {} vs {}", a.p, b.p);
                         assert!((a.ng - b.ng).length() < 1e-4 && (a.ns - b.ns).length() < 1e-4, "t {time}: normals");
