@@ -232,6 +232,13 @@ impl Geometry {
             return (wi != Vec3::ZERO)
                 .then_some((ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf }, wi));
         }
+        if let Geometry::Mesh(m) = self {
+            // The mesh's own sample inlined here (a quad light's is a few multiplications): its
+            // result then stays in registers, where through `Geometry::sample_area`'s return
+            // it went through memory.
+            let (sp, ns, pdf) = m.sample_area(u)?;
+            return area_to_solid_angle_sample(ShapeSample { p: sp.p, ng: sp.n, ns, p_error: sp.p_error, pdf }, p_ref);
+        }
         area_to_solid_angle_sample(self.sample_area(u)?, p_ref)
     }
 

@@ -43,6 +43,15 @@ impl Diffuse {
         cosine_hemisphere_pdf(wi)
     }
 
+    /// [`Diffuse::eval`] and [`Diffuse::pdf`] in one (the same bits as the two calls).
+    #[inline]
+    pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        (ctx.eval(&self.reflectance) * (INV_PI * wi.z), cosine_hemisphere_pdf(wi))
+    }
+
     /// Cosine-weighted `wi`; weight ρ. `None` from the back side.
     #[inline]
     pub fn sample(&self, ctx: &BsdfContext, wo: Vec3, _u1: f32, u: Vec2) -> Option<BsdfSample> {

@@ -376,6 +376,7 @@ impl Bsdf {
     #[inline]
     pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         match self {
+            Bsdf::Diffuse(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::RoughConductor(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::RoughDielectric(b) => b.eval_pdf(ctx, wo, wi),
             Bsdf::Principled(b) => b.eval_pdf(ctx, wo, wi),
