@@ -59,6 +59,12 @@ impl Geometry {
         }
     }
 
+    /// Whether the shape is made of many BVH primitives (a mesh's triangles, curve pieces,
+    /// SDF voxels, ellipsoids), not one (a sphere, disk or cylinder).
+    pub fn is_piecewise(&self) -> bool {
+        !matches!(self, Geometry::Sphere(_) | Geometry::Disk(_) | Geometry::Cylinder(_))
+    }
+
     /// Number of primitives the BVH holds for this shape.
     pub fn primitive_count(&self) -> usize {
         match self {

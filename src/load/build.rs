@@ -476,11 +476,13 @@ impl Builder {
                         let b = g.bounds();
                         m.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
                     }
+                    // Curves, SDF grids and ellipsoid clouds: traced in their own space too.
                     _ => {
-                        return Err(motion_error(format!(
-                            "a moving {} (motion blur): only triangle meshes, spheres, disks and cylinders move",
-                            o.ty
-                        )))
+                        if m.start().swaps_handedness() {
+                            return Err(motion_error(format!("a moving {} whose transform mirrors is not implemented", o.ty)));
+                        }
+                        let b = g.bounds();
+                        m.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
                     }
                 };
                 // (A mesh without triangles has no bounds, and is nothing: no error.)

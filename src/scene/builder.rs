@@ -196,21 +196,34 @@ impl SceneBuilder {
                         }
                     }
                 }
-                // Quadrics are tested in their own space, the ray moved there at its time.
-                Geometry::Sphere(_) | Geometry::Disk(_) | Geometry::Cylinder(_) if !motion.start().swaps_handedness() => {}
+                // Quadrics, curves, SDF grids and ellipsoid clouds are tested in their own space,
+                // the ray moved there at its time.
+                Geometry::Sphere(_)
+                | Geometry::Disk(_)
+                | Geometry::Cylinder(_)
+                | Geometry::Curves(_)
+                | Geometry::LinearCurves(_)
+                | Geometry::BSplineCurves(_)
+                | Geometry::SdfGrid(_)
+                | Geometry::Ellipsoids(_)
+                    if !motion.start().swaps_handedness() => {}
                 _ => return Err(BuildError::MovingShape(i as u32)),
             }
         }
-        // A moving mesh is traced in its own space (pbrt-v4's animated primitives, Embree's
+        // A moving shape of many primitives (a mesh's triangles, curve pieces, SDF voxels,
+        // ellipsoids) is traced in its own space (pbrt-v4's animated primitives, Embree's
         // motion-blurred instances): the ray moved there at its time traverses a BVH of the
-        // mesh at rest, built here as a scene of its own; the scene's BVH holds the mesh as one
-        // primitive bounded over its whole motion.
+        // shape at rest, built here as a scene of its own; the scene's BVH holds the shape as
+        // one primitive bounded over its whole motion.
         let mut objects: Vec<Option<Box<Scene>>> = Vec::new();
         for (i, motion) in self.motions.iter().enumerate() {
-            let (Some(_), Geometry::Mesh(m)) = (motion, &self.geometries[i]) else { continue };
+            let (Some(_), g) = (motion, &self.geometries[i]) else { continue };
+            if !g.is_piecewise() {
+                continue;
+            }
             let mut b = SceneBuilder::new();
             let bsdf = b.add_bsdf(crate::material::Bsdf::Diffuse(crate::material::Diffuse::new(Rgb::ZERO)));
-            b.add_shape(Geometry::Mesh(m.clone()), bsdf, None);
+            b.add_shape(g.clone(), bsdf, None);
             b.set_camera(Camera::perspective(crate::math::Transform::IDENTITY, 90.0, crate::camera::FovAxis::X, 1, 1)?);
             objects.resize_with(self.shapes.len(), || None);
             objects[i] = Some(Box::new(b.build()?));
@@ -227,9 +240,9 @@ impl SceneBuilder {
         // Primitives and their bounds.
         // (The vectors below are sized exactly and dropped as soon as they are used: a scene of
         // millions of triangles peaks at what its BVH build holds.)
-        // (A moving mesh is one primitive.)
-        let count = |s: usize, g: &Geometry| match (g, moving(s as u32)) {
-            (Geometry::Mesh(m), Some(_)) => usize::from(!m.is_empty()),
+        // (A moving shape of many primitives is one.)
+        let count = |s: usize, g: &Geometry| match moving(s as u32) {
+            Some(_) if g.is_piecewise() => usize::from(g.primitive_count() > 0),
             _ => g.primitive_count(),
         };
         let total: usize = self.geometries.iter().enumerate().map(|(s, g)| count(s, g)).sum();
@@ -240,7 +253,12 @@ impl SceneBuilder {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
                 bounds.push(match (g, moving(s as u32)) {
                     (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.positions),
-                    // A quadric within its own-space box: the box's corners wherever they move.
+                    // A shape of many primitives, or a quadric, within its own-space box: the
+                    // box's corners wherever they move.
+                    (_, Some(motion)) if g.is_piecewise() => {
+                        let b = g.bounds();
+                        motion.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
+                    }
                     (_, Some(motion)) => {
                         let b = g.primitive_bounds(i);
                         motion.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
@@ -279,7 +297,7 @@ impl SceneBuilder {
         let primitive = |k: u32| {
             let r = refs[k as usize];
             match &geometries[r.shape as usize] {
-                Geometry::Mesh(_) if moving(r.shape).is_some() => Primitive::MovingMesh,
+                g if moving(r.shape).is_some() && g.is_piecewise() => Primitive::MovingObject,
                 _ if moving(r.shape).is_some() => Primitive::MovingQuadric,
                 Geometry::Mesh(m) => Primitive::Triangle(m.triangle(r.index as usize)),
                 Geometry::Sphere(s) => Primitive::Sphere(*s),

@@ -29,9 +29,9 @@ pub enum BuildError {
     #[error("shape {0} moves and emits light: moving area lights are not implemented")]
     MovingEmitter(u32),
 
-    /// A moving shape that cannot move: neither a triangle mesh nor a sphere, disk or
-    /// cylinder, or one of those three under a mirroring transform.
-    #[error("shape {0} moves but cannot: triangle meshes move, and spheres, disks and cylinders whose transform does not mirror (motion blur)")]
+    /// A moving shape whose transform mirrors (other than a triangle mesh, which moves
+    /// whatever its transform).
+    #[error("shape {0} moves under a mirroring transform, which only a triangle mesh can (motion blur)")]
     MovingShape(u32),
     /// A light's power is not finite, or is negative.
     #[error("a light's power overflows single precision or is negative (check the emitters' scales)")]

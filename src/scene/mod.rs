@@ -180,8 +180,9 @@ enum Primitive {
     Curve,
     /// One of Mitsuba's ellipsoids.
     Ellipsoid,
-    /// A moving mesh, whole (traced in its own space: [`Scene::objects`]).
-    MovingMesh,
+    /// A moving shape of many primitives (a mesh, curves, an SDF grid, ellipsoids), whole
+    /// (traced in its own space: [`Scene::objects`]).
+    MovingObject,
     /// A moving sphere, disk or cylinder (object space: the ray is moved there at its time).
     MovingQuadric,
 }
@@ -210,6 +211,9 @@ enum HitKind {
     /// A triangle of a moving mesh: the hit in the mesh's own space, the mesh's index into
     /// `Scene::refs` and the triangle's index in the mesh.
     MovingTriangle(TriangleHit, u32, u32),
+    /// A piece of a moving curve, SDF grid or ellipsoid cloud: its (u, v) on a curve (zero on
+    /// the others), the shape's index into `Scene::refs` and the piece's index in the shape.
+    MovingPiece(Vec2, u32, u32),
 }
 
 /// A closest hit before its surface interaction is computed: what a ray-tracing kernel returns
@@ -259,9 +263,9 @@ pub struct Scene {
     camera: Camera,
     /// Each shape's motion (empty where nothing moves; `None` for shapes that stay put).
     motions: Vec<Option<crate::math::AnimatedTransform>>,
-    /// Each moving mesh at rest in its own space, as a scene of its one shape (its BVH and
-    /// triangle blocks), which rays moved there at their time traverse (empty where no mesh
-    /// moves).
+    /// Each moving shape of many primitives (mesh, curves, SDF grid, ellipsoids) at rest in
+    /// its own space, as a scene of its one shape (its BVH and triangle blocks), which rays
+    /// moved there at their time traverse (empty where no such shape moves).
     objects: Vec<Option<Box<Scene>>>,
     /// The shutter interval whose times camera rays sample, where shapes move.
     motion_shutter: Option<(f32, f32)>,
@@ -480,7 +484,8 @@ impl Scene {
             | HitKind::SdfVoxel(r)
             | HitKind::Curve(_, r)
             | HitKind::Ellipsoid(r)
-            | HitKind::MovingTriangle(_, r, _) => r,
+            | HitKind::MovingTriangle(_, r, _)
+            | HitKind::MovingPiece(_, r, _) => r,
         }
     }
 
@@ -568,19 +573,24 @@ impl Scene {
                 }
                 _ => None,
             },
-            Primitive::MovingMesh => {
-                // The mesh at rest, traversed by the ray moved to its own space at its time
+            Primitive::MovingObject => {
+                // The shape at rest, traversed by the ray moved to its own space at its time
                 // (its direction not renormalized: the same t).
                 let shape = self.refs[lp.r as usize].shape;
                 let object = self.objects.get(shape as usize)?.as_deref()?;
                 let mut own = self.shape_motion(shape)?.at(ray.time)?.inverse().apply_ray(ray);
                 own.t_max = t_max;
                 let (t, kind) = object.closest(&own)?;
-                let (h, triangle) = match kind {
-                    HitKind::Block(h, ..) | HitKind::Triangle(h, _) => (h, object.refs[object.prim_ref(kind) as usize].index),
-                    _ => return None,
-                };
-                Some((t, HitKind::MovingTriangle(h, lp.r, triangle)))
+                // The primitive's index in the shape (the object scene holds that shape alone).
+                let piece = object.refs[object.prim_ref(kind) as usize].index;
+                Some((
+                    t,
+                    match kind {
+                        HitKind::Block(h, ..) | HitKind::Triangle(h, _) => HitKind::MovingTriangle(h, lp.r, piece),
+                        HitKind::Curve(uv, _) => HitKind::MovingPiece(uv, lp.r, piece),
+                        _ => HitKind::MovingPiece(Vec2::ZERO, lp.r, piece),
+                    },
+                ))
             }
             Primitive::MovingQuadric => {
                 // The ray in the shape's own space at its time (its direction not renormalized,
@@ -660,6 +670,17 @@ impl Scene {
             | HitKind::Curve(_, r)
             | HitKind::Ellipsoid(r) => {
                 return self.analytic_interaction(ray, t, kind, self.refs[r as usize], uv, dpdv);
+            }
+            HitKind::MovingPiece(piece_uv, r, piece) => {
+                // The piece's interaction in the shape's own space, placed where the shape is at
+                // the ray's time (`analytic_interaction` moves the ray there and back).
+                let shape = self.refs[r as usize].shape;
+                let at_rest = match self.geometries[shape as usize] {
+                    Geometry::SdfGrid(_) => HitKind::SdfVoxel(r),
+                    Geometry::Ellipsoids(_) => HitKind::Ellipsoid(r),
+                    _ => HitKind::Curve(piece_uv, r),
+                };
+                return self.analytic_interaction(ray, t, at_rest, PrimRef { shape, index: piece }, uv, dpdv);
             }
         };
         let r = self.refs[r as usize];
@@ -810,7 +831,7 @@ impl Scene {
         for k in first..first + count {
             // SAFETY: leaf payloads index `prims` (built together).
             let blocked = match unsafe { &self.prims.get_unchecked(k as usize).prim } {
-                Primitive::MovingMesh => self.moving_mesh_occludes(k, ray, t_max),
+                Primitive::MovingObject => self.moving_object_occludes(k, ray, t_max),
                 _ => self.intersect_prim(k, ray, pre, bspline, t_max).is_some(),
             };
             if blocked {
@@ -820,12 +841,12 @@ impl Scene {
         false
     }
 
-    /// Whether the moving mesh of mixed-leaf primitive `k` blocks `ray` within `(0, t_max)`:
-    /// the any-hit traversal of the mesh at rest by the ray moved to its own space at its time
-    /// (which stops at the first triangle found, where [`Scene::intersect_prim`] looks for the
-    /// closest).
+    /// Whether the moving shape of mixed-leaf primitive `k` (a [`Primitive::MovingObject`])
+    /// blocks `ray` within `(0, t_max)`: the any-hit traversal of the shape at rest by the ray
+    /// moved to its own space at its time (which stops at the first primitive found, where
+    /// [`Scene::intersect_prim`] looks for the closest).
     #[inline(never)]
-    fn moving_mesh_occludes(&self, k: u32, ray: &Ray, t_max: f32) -> bool {
+    fn moving_object_occludes(&self, k: u32, ray: &Ray, t_max: f32) -> bool {
         let shape = self.refs[self.prims[k as usize].r as usize].shape;
         let (Some(Some(object)), Some(at)) =
             (self.objects.get(shape as usize), self.shape_motion(shape).and_then(|m| m.at(ray.time)))

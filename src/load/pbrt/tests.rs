@@ -2193,8 +2193,10 @@ fn moving_object_instances_move_their_shapes_together() {
     assert!((m - expected).abs() < 0.005, "turning instance: {m} vs {expected}");
     let head = "Camera \"perspective\"\nWorldBegin\nObjectBegin \"a\"\n";
     let moved = "ObjectEnd\nActiveTransform EndTime\nTranslate 1 0 0\nObjectInstance \"a\"\n";
+    // A curve moves with its instance too.
+    let curve = "Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n";
+    assert!(load(&format!("{head}{curve}{moved}")).unwrap().scene.motion_shutter().is_some());
     for (object, what) in [
-        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n", "only triangle meshes, spheres, disks and cylinders move"),
         ("AreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n", "test.pbrt:"),
         (
             "ActiveTransform EndTime\nTranslate 0 1 0\nActiveTransform All\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n",
@@ -2261,10 +2263,17 @@ fn active_transform_moves_shapes_over_the_shutter() {
     assert!(ball.contains("sphere"));
     let m = mean(&ball);
     assert!((m - 0.875).abs() < 0.025, "moving sphere: {m}");
+    // Curves move too: a vertical tube 0.5 wide covers the ray for an eighth.
+    let strand = scene("", "", true).replace(
+        "Shape \"trianglemesh\" \"point3 P\" [-0.25 -4 0  0.25 -4 0  0.25 4 0  -0.25 4 0] \"integer indices\" [0 1 2 0 2 3]",
+        "Shape \"curve\" \"point3 P\" [0 -4 0  0 -1 0  0 1 0  0 4 0] \"string type\" \"cylinder\" \"float width\" 0.5",
+    );
+    assert!(strand.contains("curve"));
+    let m = mean(&strand);
+    assert!((m - 0.875).abs() < 0.025, "moving curve: {m}");
     // What neumann does not move is an error where it is written; a moving light stays put.
     let head = "Camera \"perspective\"\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\n";
     for (shape, what) in [
-        ("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0]\n", "this curve moves"),
         ("AreaLightSource \"diffuse\"\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n", "AreaLightSource"),
     ] {
         let e = err(&format!("{head}{shape}"));

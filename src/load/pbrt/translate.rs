@@ -1757,12 +1757,8 @@ pub fn shape(p: &mut Parser, ty: &str, ps: &ParamSet) -> Result<Vec<Rc<Obj>>> {
     };
     let mut obj = obj;
     if p.gs.moving() {
-        // pbrt-v4's animated shapes: placed by the transform interpolated at each ray's time.
-        if !matches!(ty, "trianglemesh" | "bilinearmesh" | "loopsubdiv" | "plymesh" | "sphere" | "disk" | "cylinder") {
-            return Err(ps.error(format!(
-                "this {ty} moves (ActiveTransform): neumann moves triangle meshes (trianglemesh, plymesh, bilinearmesh, loopsubdiv), spheres, disks and cylinders"
-            )));
-        }
+        // pbrt-v4's animated shapes (every kind): placed by the transform interpolated at each
+        // ray's time.
         if p.gs.area_light.is_some() {
             return Err(ps.error("a moving shape cannot carry an AreaLightSource (animated area lights, which pbrt-v4 refuses too)"));
         }
