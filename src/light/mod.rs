@@ -24,6 +24,7 @@ pub use registry::{
     area_opacity_from_props, area_radiance_from_props, emitter_plugin, timed_sunsky, EmitterPlugin, EMITTER_PLUGINS,
 };
 pub use sampler::{LightSampleContext, LightSampler, LightSamplerKind, InvalidLightPower};
+pub(crate) use sampler::selection_powers;
 pub use sun_position::{day_number, sun_direction, DateTime, Location};
 pub use sunsky::{SunPlacement, SunSky, SunSkyError, SunSkyParams};
 
@@ -292,6 +293,26 @@ impl Light {
             }
             Light::Projector(p) => p.power(),
             Light::Goniometric(g) => g.power(),
+        }
+    }
+
+    /// [`Light::power`] where single precision overflows: the lights at infinity (whose power
+    /// is their flux through the scene's bounding sphere or cross-section, `∝ R²`) in double
+    /// precision, so that a scene some 10¹⁹ units wide still has one. Otherwise `power` itself
+    /// (an area or point light whose power overflows stays infinite: its emission does).
+    pub fn power_f64(&self, shapes: &[Geometry]) -> f64 {
+        let p = self.power(shapes);
+        if p.is_finite() {
+            return f64::from(p);
+        }
+        let pi = std::f64::consts::PI;
+        let r2 = |r: f32| f64::from(r) * f64::from(r);
+        match self {
+            Light::Constant { radiance, radius, .. } => 4.0 * pi * pi * r2(*radius) * f64::from(luminance(*radiance)),
+            Light::EnvMap { map, radius, .. } => pi * r2(*radius) * f64::from(map.integral_luminance()),
+            Light::SunSky { sky, radius, .. } => pi * r2(*radius) * f64::from(sky.integral_luminance()),
+            Light::Directional { irradiance, radius, .. } => pi * r2(*radius) * f64::from(luminance(*irradiance)),
+            _ => f64::from(p),
         }
     }
 

@@ -20,6 +20,20 @@ use crate::sampling::AliasTable;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InvalidLightPower;
 
+/// The lights' powers as the alias tables that choose by power take them: each light's
+/// [`Light::power`], or, where one overflows single precision but not double (the lights at
+/// infinity of a scene some 10¹⁹ units wide), all of them relative to the largest. `None` if a
+/// power is infinite, NaN or negative.
+pub(crate) fn selection_powers(lights: &[Light], shapes: &[Geometry]) -> Option<Vec<f32>> {
+    let powers: Vec<f64> = lights.iter().map(|l| l.power_f64(shapes)).collect();
+    let max = powers.iter().copied().fold(0.0, f64::max);
+    if !max.is_finite() || powers.iter().any(|p| !(*p >= 0.0)) {
+        return None;
+    }
+    let scale = if max > f64::from(f32::MAX) { 1.0 / max } else { 1.0 };
+    Some(powers.iter().map(|p| (p * scale) as f32).collect())
+}
+
 /// Which light sampler a render uses.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LightSamplerKind {
@@ -104,7 +118,7 @@ impl LightSampler {
         if lights.is_empty() {
             return Ok(LightSampler::Empty);
         }
-        let powers: Vec<f32> = lights.iter().map(|l| l.power(shapes)).collect();
+        let powers = selection_powers(lights, shapes).ok_or(InvalidLightPower)?;
         if powers.iter().all(|&p| p == 0.0) {
             return Ok(match kind {
                 LightSamplerKind::Uniform => LightSampler::Uniform { count: lights.len() as u32 },

@@ -126,7 +126,14 @@ impl Bounds3 {
             return (Vec3::ZERO, 0.0);
         }
         let c = self.centroid();
-        (c, (self.max - c).length())
+        let d = self.max - c;
+        let m = d.abs().max_element();
+        if m > 1e18 {
+            // |d|² would overflow single precision: the length of d / m, times m, a hair longer
+            // for the rounding (a box some 10¹⁹ units wide and more still has a finite sphere).
+            return (c, m * (d / m).length() * (1.0 + 1e-6));
+        }
+        (c, d.length())
     }
 
     /// Slab test: the parametric interval `(t0, t1)` of the ray inside the box, clipped to
@@ -151,6 +158,22 @@ impl Bounds3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bounding sphere holds the box's corners, also where the box is too wide for its
+    /// diagonal's square in single precision.
+    #[test]
+    fn bounding_sphere_holds_the_corners() {
+        for (lo, hi) in [(Vec3::new(-1.0, 2.0, 0.5), Vec3::new(3.0, 2.5, 4.0)), (Vec3::ZERO, Vec3::new(1e30, 1.0, -3e29))] {
+            let b = Bounds3::new(lo, hi);
+            let (c, r) = b.bounding_sphere();
+            assert!(r.is_finite(), "{r}");
+            for k in 0..8 {
+                let d = b.corner(k) - c;
+                let m = d.abs().max_element().max(1.0);
+                assert!((d / m).length() <= r / m, "corner {k}: {} > {r}", m * (d / m).length());
+            }
+        }
+    }
 
     #[test]
     fn union_and_empty() {

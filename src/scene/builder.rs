@@ -351,7 +351,7 @@ impl SceneBuilder {
         let infinite_lights =
             (0..self.lights.len() as u32).filter(|&i| self.lights[i as usize].is_infinite()).collect();
         let light_sampler = LightSampler::new(LightSamplerKind::default(), &self.lights, &self.geometries)?;
-        let powers: Vec<f32> = self.lights.iter().map(|l| l.power(&self.geometries)).collect();
+        let powers = crate::light::selection_powers(&self.lights, &self.geometries).unwrap_or_default();
         let emission_distribution = if powers.is_empty() { None } else { AliasTable::new(&powers) };
         // ∂p/∂v is computed at hits only where a bump map reads it.
         let needs_dpdv = self.bsdfs.iter().any(Bsdf::perturbs_with_height);

@@ -76,6 +76,20 @@ mod tests {
         let m = off.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
         off.add_shape(Geometry::Sphere(Sphere::new(Vec3::Z, 1.0, false)), m, Some(Rgb::ZERO));
         assert!(off.build().is_ok());
+        // A scene some 10³⁰ units wide under a constant sky: the sky's power (its flux through
+        // the scene's bounding sphere, ∝ R²) overflows single precision, not double, and the
+        // scene builds and renders, finite.
+        let mut wide = SceneBuilder::new();
+        wide.set_camera(Camera::perspective(Transform::IDENTITY, 40.0, FovAxis::X, 4, 4).unwrap());
+        let m = wide.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        wide.add_shape(Geometry::Sphere(Sphere::new(Vec3::new(0.0, 0.0, 5.0), 1.0, false)), m, None);
+        wide.add_shape(Geometry::Sphere(Sphere::new(Vec3::new(1e30, 0.0, 0.0), 1.0, false)), m, None);
+        wide.add_constant_environment(Rgb::ONE);
+        let scene = wide.build().unwrap();
+        let settings = crate::render::RenderSettings { spp: 4, ..Default::default() };
+        let out = crate::render::render(&scene, &crate::integrator::PathIntegrator::default(), &settings, &Default::default());
+        let (mean, _) = out.unwrap().film.mean_and_std_error();
+        assert!(mean.is_finite() && mean > 0.1, "{mean}");
         let e: BuildError = Camera::perspective(Transform::IDENTITY, 200.0, FovAxis::X, 4, 4).unwrap_err().into();
         assert_eq!(e, BuildError::Camera(CameraError::FieldOfView(200.0)));
         assert!(e.to_string().contains("(0, 180)"), "{e}");
