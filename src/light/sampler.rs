@@ -27,7 +27,7 @@ pub struct InvalidLightPower;
 pub(crate) fn selection_powers(lights: &[Light], shapes: &[Geometry]) -> Option<Vec<f32>> {
     let powers: Vec<f64> = lights.iter().map(|l| l.power_f64(shapes)).collect();
     let max = powers.iter().copied().fold(0.0, f64::max);
-    if !max.is_finite() || powers.iter().any(|p| !(*p >= 0.0)) {
+    if !max.is_finite() || powers.iter().any(|p| p.is_nan() || *p < 0.0) {
         return None;
     }
     let scale = if max > f64::from(f32::MAX) { 1.0 / max } else { 1.0 };
