@@ -459,7 +459,8 @@ impl Builder {
                 let g = self.geometry_placed(o, &own_space, &more)?;
                 let b = match &g {
                     Geometry::Mesh(mesh) => m.motion_bounds(&mesh.positions),
-                    Geometry::Sphere(_) | Geometry::Disk(_) | Geometry::Cylinder(_) => {
+                    // Every other shape is traced in its own space, the ray moved there.
+                    _ => {
                         if m.start().swaps_handedness() {
                             return Err(motion_error(format!("a moving {} whose transform mirrors is not implemented", o.ty)));
                         }
@@ -472,14 +473,6 @@ impl Builder {
                             return Err(motion_error(
                                 "a moving sphere whose transform scales unevenly or shears (an ellipsoid) is not implemented".into(),
                             ));
-                        }
-                        let b = g.bounds();
-                        m.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
-                    }
-                    // Curves, SDF grids and ellipsoid clouds: traced in their own space too.
-                    _ => {
-                        if m.start().swaps_handedness() {
-                            return Err(motion_error(format!("a moving {} whose transform mirrors is not implemented", o.ty)));
                         }
                         let b = g.bounds();
                         m.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))

@@ -196,17 +196,9 @@ impl SceneBuilder {
                         }
                     }
                 }
-                // Quadrics, curves, SDF grids and ellipsoid clouds are tested in their own space,
-                // the ray moved there at its time.
-                Geometry::Sphere(_)
-                | Geometry::Disk(_)
-                | Geometry::Cylinder(_)
-                | Geometry::Curves(_)
-                | Geometry::LinearCurves(_)
-                | Geometry::BSplineCurves(_)
-                | Geometry::SdfGrid(_)
-                | Geometry::Ellipsoids(_)
-                    if !motion.start().swaps_handedness() => {}
+                // Every other shape is tested in its own space, the ray moved there at its time
+                // (where a mirroring transform would turn its frames).
+                _ if !motion.start().swaps_handedness() => {}
                 _ => return Err(BuildError::MovingShape(i as u32)),
             }
         }
@@ -253,14 +245,10 @@ impl SceneBuilder {
                 refs.push(PrimRef { shape: s as u32, index: i as u32 });
                 bounds.push(match (g, moving(s as u32)) {
                     (Geometry::Mesh(m), Some(motion)) => motion.motion_bounds(&m.positions),
-                    // A shape of many primitives, or a quadric, within its own-space box: the
-                    // box's corners wherever they move.
-                    (_, Some(motion)) if g.is_piecewise() => {
-                        let b = g.bounds();
-                        motion.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
-                    }
+                    // Any other shape (one primitive) within its own-space box: the box's
+                    // corners wherever they move.
                     (_, Some(motion)) => {
-                        let b = g.primitive_bounds(i);
+                        let b = g.bounds();
                         motion.motion_bounds(&std::array::from_fn::<Vec3, 8, _>(|k| b.corner(k)))
                     }
                     _ => g.primitive_bounds(i),

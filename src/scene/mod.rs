@@ -576,10 +576,7 @@ impl Scene {
             Primitive::MovingObject => {
                 // The shape at rest, traversed by the ray moved to its own space at its time
                 // (its direction not renormalized: the same t).
-                let shape = self.refs[lp.r as usize].shape;
-                let object = self.objects.get(shape as usize)?.as_deref()?;
-                let mut own = self.shape_motion(shape)?.at(ray.time)?.inverse().apply_ray(ray);
-                own.t_max = t_max;
+                let (object, own) = self.moving_object(lp, ray, t_max)?;
                 let (t, kind) = object.closest(&own)?;
                 // The primitive's index in the shape (the object scene holds that shape alone).
                 let piece = object.refs[object.prim_ref(kind) as usize].index;
@@ -847,15 +844,19 @@ impl Scene {
     /// [`Scene::intersect_prim`] looks for the closest).
     #[inline(never)]
     fn moving_object_occludes(&self, k: u32, ray: &Ray, t_max: f32) -> bool {
-        let shape = self.refs[self.prims[k as usize].r as usize].shape;
-        let (Some(Some(object)), Some(at)) =
-            (self.objects.get(shape as usize), self.shape_motion(shape).and_then(|m| m.at(ray.time)))
-        else {
-            return false;
-        };
-        let mut own = at.inverse().apply_ray(ray);
+        self.moving_object(&self.prims[k as usize], ray, t_max).is_some_and(|(object, own)| object.occluded(&own))
+    }
+
+    /// The object scene of the moving shape of leaf primitive `lp` (a
+    /// [`Primitive::MovingObject`]) and `ray` moved to its own space at the ray's time, extent
+    /// `t_max` (its direction not renormalized: the same t).
+    #[inline]
+    fn moving_object(&self, lp: &LeafPrim, ray: &Ray, t_max: f32) -> Option<(&Scene, Ray)> {
+        let shape = self.refs[lp.r as usize].shape;
+        let object = self.objects.get(shape as usize)?.as_deref()?;
+        let mut own = self.shape_motion(shape)?.at(ray.time)?.inverse().apply_ray(ray);
         own.t_max = t_max;
-        object.occluded(&own)
+        Some((object, own))
     }
 
     /// Prefetches a leaf's data (at most its first two triangle blocks or primitives).
