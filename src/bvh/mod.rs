@@ -230,7 +230,7 @@ impl Bvh {
 
     /// [`Bvh::closest_hit`] with the leaf work as a [`ClosestLeaf`] (whose `visit` the
     /// traversal inlines when it is `#[inline(always)]`).
-    #[inline]
+    #[inline(always)]
     pub fn closest_hit_visit(&self, ray: &Ray, t_max: f32, leaf: impl ClosestLeaf) {
         if self.nodes.is_empty() || !traceable(ray, t_max) {
             return;

@@ -57,7 +57,7 @@ impl DirectIntegrator {
             // Covered where a surface is hit behind the hidden emitters (Mitsuba's `direct`).
             let (hit, ray) = trace::skip_hidden_emitters(scene, camera_ray);
             let covered = hit.is_some();
-            (hit, ray, covered)
+            (hit.map(|h| h.interaction()), ray, covered)
         } else {
             let hit = scene.intersect(camera_ray);
             let covered = hit.is_some();
@@ -75,12 +75,10 @@ impl DirectIntegrator {
             l += scene.lights()[i as usize].le(si.ns, wo, si.uv);
         }
         let bsdf = &scene.bsdfs()[shape.bsdf as usize];
-        let frame = si.frame();
-        let wo_local = frame.to_local(wo);
         // Textures and normal maps looked up once for this vertex's BSDF calls.
         let memo = TextureMemo::default();
-        let ctx = scene.bsdf_context(&si).with_memo(&memo);
-        let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
+        let vertex = trace::SurfaceVertex::new(scene, &si, bsdf, &memo, wo);
+        let (ctx, frame, wo_local) = (&vertex.ctx, vertex.frame, vertex.wo_local);
         let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();
 
@@ -98,7 +96,7 @@ impl DirectIntegrator {
         for _ in 0..nb {
             let u = sampler.next_1d();
             let u2 = sampler.next_2d();
-            let Some(bs) = bsdf.sample(&ctx, wo_local, u, u2) else { continue };
+            let Some(bs) = bsdf.sample(ctx, wo_local, u, u2) else { continue };
             let wi = frame.to_world(bs.wi);
             let prev = PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta };
             let mut le = Rgb::ZERO;

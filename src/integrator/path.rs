@@ -177,34 +177,45 @@ impl PathIntegrator {
         // `anyNonSpecularBounces`, which starts regularization).
         let mut non_specular = false;
         loop {
-            let hit = if depth == 0 && hide {
-                // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
-                ray = through;
-                hit
-            } else {
-                match scene.intersect_deferred(&ray) {
-                    None => None,
-                    Some(hit) => {
-                        // At the path's last vertex only emission counts: the surface
-                        // interaction of a shape that does not emit is not needed.
-                        if depth + 1 >= max_depth && hit.light().is_none() {
-                            break;
-                        }
-                        Some(hit.interaction())
-                    }
-                }
-            };
-            let Some(si) = hit else {
-                // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling
-                // (hidden, where asked, from camera rays that crossed null surfaces only).
+            // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling
+            // (hidden, where asked, from camera rays that crossed null surfaces only).
+            let escape = |ray: &Ray, record: &mut dyn FnMut(u32, Rgb)| {
                 if !(hide && null_only) {
                     let d = ray.d.normalize();
                     trace::escaped(scene, ray.o, d, prev.as_ref(), hide, &mis, |le, w| {
                         record(depth + 1, beta * le * w)
                     });
                 }
-                break;
+            };
+            // The surface interaction is bound where it is made (not moved out of an `Option`:
+            // a copy of it right after the call that wrote it field by field would wait for
+            // those stores to reach the cache).
+            let si = if depth == 0 && hide {
+                // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
+                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
+                ray = through;
+                match hit {
+                    Some(hit) => hit.interaction(),
+                    None => {
+                        escape(&ray, &mut record);
+                        break;
+                    }
+                }
+            } else {
+                match scene.intersect_deferred(&ray) {
+                    None => {
+                        escape(&ray, &mut record);
+                        break;
+                    }
+                    Some(hit) => {
+                        // At the path's last vertex only emission counts: the surface
+                        // interaction of a shape that does not emit is not needed.
+                        if depth + 1 >= max_depth && hit.light().is_none() {
+                            break;
+                        }
+                        hit.interaction()
+                    }
+                }
             };
             let wo = -ray.d.normalize();
             let shape = scene.shapes()[si.shape as usize];
@@ -228,12 +239,10 @@ impl PathIntegrator {
             } else {
                 &scene.bsdfs()[shape.bsdf as usize]
             };
-            let frame = si.frame();
-            let wo_local = frame.to_local(wo);
             // Textures and normal maps looked up once for this vertex's BSDF calls.
             let memo = TextureMemo::default();
-            let ctx = scene.bsdf_context(&si).with_memo(&memo);
-            let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
+            let vertex = trace::SurfaceVertex::new(scene, &si, bsdf, &memo, wo);
+            let (ctx, frame, wo_local) = (&vertex.ctx, vertex.frame, vertex.wo_local);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
 
             // Direct light (its random numbers are drawn whether used or not, so that every
@@ -245,12 +254,12 @@ impl PathIntegrator {
             let u_light2 = sampler.next_2d();
             let u_bsdf = sampler.next_1d();
             let u_bsdf2 = sampler.next_2d();
-            let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
+            let bs = bsdf.sample(ctx, wo_local, u_bsdf, u_bsdf2);
             if !bsdf.is_delta() {
                 let c = match self.strategy {
                     DirectStrategy::Bsdf => Rgb::ZERO,
                     DirectStrategy::Uniform | DirectStrategy::Cosine => {
-                        self.direct_by_direction(scene, &si, &frame, bsdf, &ctx, wo_local, u_light2)
+                        self.direct_by_direction(scene, &si, &frame, bsdf, ctx, wo_local, u_light2)
                     }
                     DirectStrategy::Mis | DirectStrategy::Light => trace::sample_direct_bsdf(
                         scene,

@@ -309,7 +309,23 @@ pub struct SurfaceVertex<'a> {
     pub wo_local: Vec3,
 }
 
-impl SurfaceVertex<'_> {
+impl<'a> SurfaceVertex<'a> {
+    /// The vertex at `si` as `bsdf` sees it from the unit world direction `wo`, its texture
+    /// lookups kept in `memo`. Made in place: the context is not copied after its fields were
+    /// written (a copy right after such stores waits for them to reach the cache).
+    #[inline(always)]
+    pub fn new(
+        scene: &'a Scene,
+        si: &'a SurfaceInteraction,
+        bsdf: &'a Bsdf,
+        memo: &'a crate::material::TextureMemo,
+        wo: Vec3,
+    ) -> SurfaceVertex<'a> {
+        let frame = si.frame();
+        let wo_local = frame.to_local(wo);
+        SurfaceVertex { bsdf, ctx: scene.bsdf_context(si).with_memo(memo), frame, wo_local }
+    }
+
     /// BSDF × |cos θᵢ| toward the unit world direction `wi`.
     #[inline]
     pub fn eval(&self, wi: Vec3) -> Rgb {
@@ -353,15 +369,18 @@ pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnc
 /// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them (`None` if the
 /// ray escapes or gives up), and the ray that reached it (to take its direction). The hidden
 /// emitters passed through do not cover the pixel (Mitsuba's `valid_ray`).
+///
+/// The hit comes with its surface interaction not yet computed (the emitters passed through
+/// compute theirs, to leave them): the caller computes it where it keeps it.
 #[inline]
-pub fn skip_hidden_emitters(scene: &Scene, ray: &Ray) -> (Option<SurfaceInteraction>, Ray) {
+pub fn skip_hidden_emitters<'a>(scene: &'a Scene, ray: &Ray) -> (Option<crate::scene::DeferredHit<'a>>, Ray) {
     let mut ray = *ray;
     for _ in 0..=MAX_HIDDEN_SKIPS {
-        let Some(si) = scene.intersect(&ray) else { return (None, ray) };
-        if scene.shapes()[si.shape as usize].light.is_none() {
-            return (Some(si), ray);
+        let Some(hit) = scene.intersect_deferred(&ray) else { return (None, ray) };
+        if hit.light().is_none() {
+            return (Some(hit), ray);
         }
-        ray = si.spawn_ray(ray.d);
+        ray = hit.interaction().spawn_ray(ray.d);
     }
     (None, ray)
 }

@@ -24,7 +24,7 @@ use crate::geometry::interaction::SHADOW_EPSILON;
 use crate::light::LightSampleContext;
 use crate::material::TextureMemo;
 use crate::math::float::offset_ray_origin;
-use crate::math::{Frame, Ray, Rgb, Vec3};
+use crate::math::{Ray, Rgb, Vec3};
 use crate::medium::{FreeFlight, Medium};
 use crate::sampling::{Pcg32, Sampler};
 use crate::scene::Scene;
@@ -270,12 +270,10 @@ impl Integrator for VolPathIntegrator {
                 covered = true;
                 break;
             }
-            let frame: Frame = si.frame();
-            let wo_local = frame.to_local(wo);
             // Textures and normal maps looked up once for this vertex's BSDF calls.
             let memo = TextureMemo::default();
-            let ctx = scene.bsdf_context(&si).with_memo(&memo);
-            let vertex = trace::SurfaceVertex { bsdf, ctx, frame, wo_local };
+            let vertex = trace::SurfaceVertex::new(scene, &si, bsdf, &memo, wo);
+            let (ctx, frame, wo_local) = (&vertex.ctx, vertex.frame, vertex.wo_local);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
             if !bsdf.is_delta() && !last {
@@ -287,7 +285,7 @@ impl Integrator for VolPathIntegrator {
                     });
             }
             let (u_bsdf, u_bsdf2) = (sampler.next_1d(), sampler.next_2d());
-            let bs = bsdf.sample(&ctx, wo_local, u_bsdf, u_bsdf2);
+            let bs = bsdf.sample(ctx, wo_local, u_bsdf, u_bsdf2);
             // Coverage, Mitsuba 3.9.1's `valid_ray` in its volumetric path tracers: a surface
             // vertex whose sample is not a null crossing, the last one too (or a scattering in a
             // medium the path goes on from).
@@ -304,7 +302,7 @@ impl Integrator for VolPathIntegrator {
             // material it refracted into (the BSSRDF's probe finds that point).
             let vertex = if let Some(sss) = bsdf.subsurface().filter(|_| !bs.null && bs.wi.z * wo_local.z < 0.0) {
                 let u = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
-                let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, &ctx, &si, shape.bsdf, u, &mut rng)
+                let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, ctx, &si, shape.bsdf, u, &mut rng)
                 else {
                     break;
                 };

@@ -402,9 +402,15 @@ pub fn render_from(
                     // Where shapes or the camera move, a time uniform over the shutter interval
                     // (one more dimension, drawn only then: static scenes' samples are
                     // unchanged), and the camera's ray moved to where the camera then is.
+                    // (Borrowed, not copied: a copy right after the camera wrote the ray field by
+                    // field would wait for those stores to reach the cache.)
+                    let at_time;
                     let (ray, moved) = match motion {
-                        Some((open, close)) => cam.ray_at_time(&start_ray, open + (close - open) * sampler.next_1d()),
-                        None => (start_ray, None),
+                        Some((open, close)) => {
+                            at_time = cam.ray_at_time(&start_ray, open + (close - open) * sampler.next_1d());
+                            (&at_time.0, at_time.1.as_ref())
+                        }
+                        None => (&start_ray, None),
                     };
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
@@ -414,11 +420,11 @@ pub fn render_from(
                     } else {
                         let differentials = differential_scale.map(|scale| {
                             let d = cam.ray_differentials(film_pos, u_lens, &start_ray);
-                            moved.as_ref().map_or(d, |m| d.moved(m)).scaled(&ray, scale)
+                            moved.map_or(d, |m| d.moved(m)).scaled(ray, scale)
                         });
                         integrator.sample_aovs(
                             scene,
-                            &ray,
+                            ray,
                             differentials.as_ref(),
                             &mut sampler,
                             &mut sample_terms,

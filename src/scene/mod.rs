@@ -453,7 +453,7 @@ impl Scene {
     /// not yet computed: for callers that may need only which shape was hit (the last vertex
     /// of a path, where only an emitter matters). [`DeferredHit::interaction`] gives what
     /// [`Scene::intersect`] would have.
-    #[inline]
+    #[inline(always)]
     pub fn intersect_deferred<'a>(&'a self, ray: &Ray) -> Option<DeferredHit<'a>> {
         let (t, kind) = self.closest(ray)?;
         Some(DeferredHit { scene: self, ray: *ray, t, kind })
