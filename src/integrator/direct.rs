@@ -55,9 +55,10 @@ impl DirectIntegrator {
         // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
         let (hit, ray, covered) = if hide {
             // Covered where a surface is hit behind the hidden emitters (Mitsuba's `direct`).
-            let (hit, ray) = trace::skip_hidden_emitters(scene, camera_ray);
+            let mut ray = *camera_ray;
+            let hit = trace::skip_hidden_emitters(scene, &mut ray).map(|h| h.interaction());
             let covered = hit.is_some();
-            (hit.map(|h| h.interaction()), ray, covered)
+            (hit, ray, covered)
         } else {
             let hit = scene.intersect(camera_ray);
             let covered = hit.is_some();

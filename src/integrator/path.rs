@@ -192,9 +192,7 @@ impl PathIntegrator {
             // those stores to reach the cache).
             let si = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                let (hit, through) = trace::skip_hidden_emitters(scene, &ray);
-                ray = through;
-                match hit {
+                match trace::skip_hidden_emitters(scene, &mut ray) {
                     Some(hit) => hit.interaction(),
                     None => {
                         escape(&ray, &mut record);

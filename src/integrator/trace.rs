@@ -367,22 +367,12 @@ pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnc
 
 /// Follows a camera ray through emitters hidden from the camera (`hide_emitters`): the first
 /// hit that is not an emitting shape, after at most [`MAX_HIDDEN_SKIPS`] of them (`None` if the
-/// ray escapes or gives up), and the ray that reached it (to take its direction). The hidden
-/// emitters passed through do not cover the pixel (Mitsuba's `valid_ray`).
-///
-/// The hit comes with its surface interaction not yet computed (the emitters passed through
-/// compute theirs, to leave them): the caller computes it where it keeps it.
+/// ray escapes or gives up); `ray` becomes the ray that reached it (to take its direction). The
+/// hidden emitters passed through do not cover the pixel (Mitsuba's `valid_ray`). The hit comes
+/// with its surface interaction not yet computed: the caller computes it where it keeps it.
 #[inline]
-pub fn skip_hidden_emitters<'a>(scene: &'a Scene, ray: &Ray) -> (Option<crate::scene::DeferredHit<'a>>, Ray) {
-    let mut ray = *ray;
-    for _ in 0..=MAX_HIDDEN_SKIPS {
-        let Some(hit) = scene.intersect_deferred(&ray) else { return (None, ray) };
-        if hit.light().is_none() {
-            return (Some(hit), ray);
-        }
-        ray = hit.interaction().spawn_ray(ray.d);
-    }
-    (None, ray)
+pub fn skip_hidden_emitters<'a>(scene: &'a Scene, ray: &'a mut Ray) -> Option<crate::scene::DeferredHit<'a>> {
+    scene.intersect_deferred_past_emitters(ray, MAX_HIDDEN_SKIPS)
 }
 
 impl PathSettings {

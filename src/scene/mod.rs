@@ -69,7 +69,9 @@ pub fn bvh_options(primitives: usize) -> BuildOptions {
 #[derive(Clone, Copy, Debug)]
 pub struct DeferredHit<'a> {
     scene: &'a Scene,
-    ray: Ray,
+    /// The ray (borrowed: a copy right after its maker wrote it field by field would wait for
+    /// those stores to reach the cache).
+    ray: &'a Ray,
     t: f32,
     kind: HitKind,
 }
@@ -96,7 +98,7 @@ impl DeferredHit<'_> {
     /// The surface interaction at the hit, as [`Scene::intersect`] returns it.
     #[inline]
     pub fn interaction(&self) -> SurfaceInteraction {
-        self.scene.interaction(&self.ray, self.t, self.kind)
+        self.scene.interaction(self.ray, self.t, self.kind)
     }
 }
 
@@ -454,9 +456,28 @@ impl Scene {
     /// of a path, where only an emitter matters). [`DeferredHit::interaction`] gives what
     /// [`Scene::intersect`] would have.
     #[inline(always)]
-    pub fn intersect_deferred<'a>(&'a self, ray: &Ray) -> Option<DeferredHit<'a>> {
+    pub fn intersect_deferred<'a>(&'a self, ray: &'a Ray) -> Option<DeferredHit<'a>> {
         let (t, kind) = self.closest(ray)?;
-        Some(DeferredHit { scene: self, ray: *ray, t, kind })
+        Some(DeferredHit { scene: self, ray, t, kind })
+    }
+
+    /// [`Scene::intersect_deferred`] past emitting shapes: the closest hit on a shape that does
+    /// not emit, each emitter in the way crossed by a ray spawned past it in the same direction,
+    /// at most `max_skips` of them (`None` where the ray escapes or meets more). `ray` becomes
+    /// the ray that reached the hit.
+    pub fn intersect_deferred_past_emitters<'a>(&'a self, ray: &'a mut Ray, max_skips: u32) -> Option<DeferredHit<'a>> {
+        let mut skips = 0;
+        loop {
+            let (t, kind) = self.closest(ray)?;
+            if self.shapes[self.refs[self.prim_ref(kind) as usize].shape as usize].light.is_none() {
+                return Some(DeferredHit { scene: self, ray, t, kind });
+            }
+            if skips == max_skips {
+                return None;
+            }
+            *ray = self.interaction(ray, t, kind).spawn_ray(ray.d);
+            skips += 1;
+        }
     }
 
     /// The closest hit along `ray` within `(0, ray.t_max)` without its surface interaction
@@ -1147,4 +1168,36 @@ mod tests {
         }
         hits
     }
+
+    /// Past emitters: a ray through two emitting shells finds the diffuse sphere inside them
+    /// (at the distance a plain query from the last crossing ray finds), moved past both; one
+    /// allowed crossing gives up; a ray that misses the sphere escapes past the shells.
+    #[test]
+    fn deferred_hits_past_emitters() {
+        use crate::geometry::Sphere;
+        let mut b = SceneBuilder::new();
+        let m = b.add_bsdf(crate::material::Bsdf::Diffuse(Diffuse::new(Rgb::splat(0.5))));
+        b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, 1.0, false)), m, None);
+        for r in [2.0, 3.0] {
+            b.add_shape(Geometry::Sphere(Sphere::new(Vec3::ZERO, r, false)), m, Some(Rgb::ONE));
+        }
+        b.set_camera(Camera::perspective(Transform::IDENTITY, 30.0, FovAxis::X, 1, 1).unwrap());
+        let scene = b.build().unwrap();
+        let start = Ray::new(Vec3::new(0.1, 0.2, -10.0), Vec3::Z);
+        let mut ray = start;
+        let hit = scene.intersect_deferred_past_emitters(&mut ray, 8).expect("the inner sphere");
+        assert_eq!(hit.light(), None);
+        let si = hit.interaction();
+        assert!((si.p.length() - 1.0).abs() < 1e-5 && si.p.z < 0.0, "{:?}", si.p);
+        let t = hit.t();
+        // It crossed the two shells' near sides: it starts at the inner one's.
+        assert!(ray.o.z > -2.0 && ray.o.z < -1.0, "{:?}", ray.o);
+        assert_eq!(scene.intersect_deferred(&ray).map(|h| h.t()), Some(t));
+        let mut ray = start;
+        assert!(scene.intersect_deferred_past_emitters(&mut ray, 1).is_none());
+        let mut ray = Ray::new(Vec3::new(1.5, 0.0, -10.0), Vec3::Z);
+        assert!(scene.intersect_deferred_past_emitters(&mut ray, 8).is_none());
+        assert!(ray.o.z > 0.0, "the escaping ray left past the last shell: {:?}", ray.o);
+    }
+
 }
