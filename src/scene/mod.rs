@@ -86,13 +86,13 @@ impl DeferredHit<'_> {
     /// Index of the shape hit (into [`Scene::shapes`]).
     #[inline]
     pub fn shape(&self) -> u32 {
-        self.scene.refs[self.scene.prim_ref(self.kind) as usize].shape
+        self.scene.shape_hit(self.kind)
     }
 
     /// The light the shape hit carries (index into [`Scene::lights`]), if it emits.
     #[inline]
     pub fn light(&self) -> Option<u32> {
-        self.scene.shapes[self.shape() as usize].light
+        self.scene.light_hit(self.kind)
     }
 
     /// The surface interaction at the hit, as [`Scene::intersect`] returns it.
@@ -469,7 +469,7 @@ impl Scene {
         let mut skips = 0;
         loop {
             let (t, kind) = self.closest(ray)?;
-            if self.shapes[self.refs[self.prim_ref(kind) as usize].shape as usize].light.is_none() {
+            if self.light_hit(kind).is_none() {
                 return Some(DeferredHit { scene: self, ray, t, kind });
             }
             if skips == max_skips {
@@ -491,6 +491,18 @@ impl Scene {
             _ => Vec2::ZERO,
         };
         Some(RayHit { t, prim: self.prim_ref(kind), barycentrics })
+    }
+
+    /// The shape a hit is on (index into `shapes`).
+    #[inline]
+    fn shape_hit(&self, kind: HitKind) -> u32 {
+        self.refs[self.prim_ref(kind) as usize].shape
+    }
+
+    /// The light the shape a hit is on carries, if it emits.
+    #[inline]
+    fn light_hit(&self, kind: HitKind) -> Option<u32> {
+        self.shapes[self.shape_hit(kind) as usize].light
     }
 
     /// The index into `refs` of the primitive a hit names.
@@ -1199,5 +1211,4 @@ mod tests {
         assert!(scene.intersect_deferred_past_emitters(&mut ray, 8).is_none());
         assert!(ray.o.z > 0.0, "the escaping ray left past the last shell: {:?}", ray.o);
     }
-
 }
