@@ -595,14 +595,14 @@ pub(crate) mod tests {
         let brute = tris
             .iter()
             .filter_map(|t| intersect_triangle(&pre, t, f32::INFINITY))
-            .map(|h| h.t)
+            .map(|h| h.t())
             .fold(f32::INFINITY, f32::min);
         let mut best = f32::INFINITY;
         bvh.closest_hit(ray, f32::INFINITY, |first, count, t_max| {
             for k in first..first + count {
                 if let Some(h) = intersect_triangle(&pre, &ordered[k as usize], *t_max) {
-                    *t_max = h.t;
-                    best = h.t;
+                    *t_max = h.t();
+                    best = h.t();
                 }
             }
         });

@@ -61,17 +61,39 @@ impl RayPrecomp {
     }
 }
 
-/// A triangle hit: ray parameter and barycentrics `(b0, b1, b2)` of vertices `p0, p1, p2`.
+/// A triangle hit: ray parameter `t` and barycentrics `(b0, b1, b2)` of vertices `p0, p1, p2`,
+/// the four lanes of one SIMD register. It is written and copied whole, so that a read of some
+/// of its parts right after the traversal wrote it is forwarded from that one store (as four
+/// fields, the compiler wrote and read them in different groupings, and a read spanning two
+/// writes waits for them to reach the cache).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleHit {
+pub struct TriangleHit(Vec4);
+
+impl TriangleHit {
+    /// The hit at ray parameter `t` with barycentrics `(b0, b1, b2)`.
+    #[inline(always)]
+    pub fn new(t: f32, b0: f32, b1: f32, b2: f32) -> TriangleHit {
+        TriangleHit(Vec4::new(t, b0, b1, b2))
+    }
+
+    /// `(t, e0 / det, e1 / det, e2 / det)` from the edge functions and `1 / det`, in one
+    /// vector product (the same bits as the three scalar products).
+    #[inline(always)]
+    pub fn from_edges(t: f32, e: [f32; 3], inv_det: f32) -> TriangleHit {
+        TriangleHit(Vec4::new(t, e[0], e[1], e[2]) * Vec4::new(1.0, inv_det, inv_det, inv_det))
+    }
+
     /// Ray parameter.
-    pub t: f32,
-    /// Barycentric weight of `p0`.
-    pub b0: f32,
-    /// Barycentric weight of `p1`.
-    pub b1: f32,
-    /// Barycentric weight of `p2`.
-    pub b2: f32,
+    #[inline(always)]
+    pub fn t(self) -> f32 {
+        self.0.x
+    }
+
+    /// Barycentric weights `(b0, b1, b2)` of `p0, p1, p2`.
+    #[inline(always)]
+    pub fn barycentrics(self) -> [f32; 3] {
+        [self.0.y, self.0.z, self.0.w]
+    }
 }
 
 /// Intersects the precomputed ray with the triangle `p` within `(0, t_max)`.
@@ -113,7 +135,7 @@ pub fn intersect_triangle(r: &RayPrecomp, p: &[Vec3; 3], t_max: f32) -> Option<T
     if !(t > bound && t < f32::INFINITY) {
         return None;
     }
-    Some(TriangleHit { t, b0: e0 * inv_det, b1: e1 * inv_det, b2: e2 * inv_det })
+    Some(TriangleHit::new(t, e0 * inv_det, e1 * inv_det, e2 * inv_det))
 }
 
 /// Arithmetic shared by one `f32` and four SIMD lanes (`Vec4`), so that the scalar and the
@@ -182,7 +204,8 @@ fn max_abs3<T: Lane>(v: [T; 3]) -> T {
 /// Absolute error bound of the hit point `b0 p0 + b1 p1 + b2 p2` (pbrt-v4 §6.8.5).
 #[inline]
 pub fn triangle_point_error(p: &[Vec3; 3], h: &TriangleHit) -> Vec3 {
-    gamma(7) * ((h.b0 * p[0]).abs() + (h.b1 * p[1]).abs() + (h.b2 * p[2]).abs())
+    let [b0, b1, b2] = h.barycentrics();
+    gamma(7) * ((b0 * p[0]).abs() + (b1 * p[1]).abs() + (b2 * p[2]).abs())
 }
 
 #[cfg(test)]
@@ -195,8 +218,9 @@ mod tests {
         let tri = [Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)];
         let ray = Ray::new(Vec3::ZERO, Vec3::Z);
         let h = intersect_triangle(&RayPrecomp::new(&ray), &tri, f32::INFINITY).unwrap();
-        assert!((h.t - 2.0).abs() < 1e-6);
-        let p = tri[0] * h.b0 + tri[1] * h.b1 + tri[2] * h.b2;
+        assert!((h.t() - 2.0).abs() < 1e-6);
+        let [b0, b1, b2] = h.barycentrics();
+        let p = tri[0] * b0 + tri[1] * b1 + tri[2] * b2;
         assert!(p.truncate().length() < 1e-6);
         assert!(intersect_triangle(&RayPrecomp::new(&ray), &tri, 1.5).is_none(), "t_max respected");
         let back = Ray::new(Vec3::ZERO, -Vec3::Z);
@@ -224,7 +248,7 @@ mod tests {
                         let mut tri = finite;
                         tri[vertex][axis] = bad;
                         let hit = intersect_triangle(&pre, &tri, f32::INFINITY);
-                        assert!(hit.is_none_or(|h| h.t.is_finite() && h.t > 0.0), "{tri:?}: {hit:?}");
+                        assert!(hit.is_none_or(|h| h.t().is_finite() && h.t() > 0.0), "{tri:?}: {hit:?}");
                         // The SIMD block tests (four lanes, and eight where the CPU has AVX) agree.
                         let block = crate::geometry::triangle8::Triangle8::new(&[(tri, 0)]);
                         for avx in [None, crate::math::simd::Avx::detect()] {
@@ -282,7 +306,8 @@ mod tests {
             let target = (tri[0] + tri[1] + tri[2]) / 3.0;
             let ray = Ray::new(o, target - o);
             if let Some(h) = intersect_triangle(&RayPrecomp::new(&ray), &tri, f32::INFINITY) {
-                let p = tri[0] * h.b0 + tri[1] * h.b1 + tri[2] * h.b2;
+                let [b0, b1, b2] = h.barycentrics();
+                let p = tri[0] * b0 + tri[1] * b1 + tri[2] * b2;
                 let err = triangle_point_error(&tri, &h);
                 // Distance of p from the triangle's plane (in f64) is within the error box.
                 let n = (tri[1] - tri[0]).as_dvec3().cross((tri[2] - tri[0]).as_dvec3()).normalize();

@@ -99,7 +99,7 @@ impl Triangle8 {
             return low;
         }
         match (low, self.half_closest(1, r, t_max)) {
-            (Some(a), Some(b)) => Some(if b.1.t < a.1.t { b } else { a }),
+            (Some(a), Some(b)) => Some(if b.1.t() < a.1.t() { b } else { a }),
             (a, b) => a.or(b),
         }
     }
@@ -173,7 +173,7 @@ impl Triangle8 {
         let mut best: Option<(usize, TriangleHit)> = None;
         for k in lanes {
             if let Some(h) = intersect_triangle(r, &self.triangle(k), t_max) {
-                if best.is_none_or(|(_, b)| h.t < b.t) {
+                if best.is_none_or(|(_, b)| h.t() < b.t()) {
                     best = Some((k, h));
                 }
             }
@@ -450,7 +450,7 @@ where
 /// `f32: Mul<L>` bound hides `f32 * f32`).
 #[inline(always)]
 fn hit(t: f32, e: [f32; 3], inv_det: f32) -> TriangleHit {
-    TriangleHit { t, b0: e[0] * inv_det, b1: e[1] * inv_det, b2: e[2] * inv_det }
+    TriangleHit::from_edges(t, e, inv_det)
 }
 
 /// Whether any lane is hit.
@@ -488,7 +488,7 @@ mod tests {
             let scalar = tris
                 .iter()
                 .filter_map(|(p, id)| intersect_triangle(&pre, p, t_max).map(|h| (h, *id)))
-                .min_by(|a, b| a.0.t.total_cmp(&b.0.t));
+                .min_by(|a, b| a.0.t().total_cmp(&b.0.t()));
             let simd = block.intersect(&pre, t_max);
             assert_eq!(block.occludes(&pre, t_max), scalar.is_some());
             #[cfg(target_arch = "x86_64")]
@@ -499,9 +499,9 @@ mod tests {
             match (scalar, simd.map(|(lane, h)| (h, block.id[lane]))) {
                 (None, None) => {}
                 (Some((a, ida)), Some((b, idb))) => {
-                    assert_eq!(a.t, b.t);
+                    assert_eq!(a.t(), b.t());
                     assert_eq!(ida, idb);
-                    for (x, y) in [(a.b0, b.b0), (a.b1, b.b1), (a.b2, b.b2)] {
+                    for (x, y) in a.barycentrics().into_iter().zip(b.barycentrics()) {
                         assert!((x - y).abs() <= 1e-6, "{a:?} vs {b:?}");
                     }
                     hits += 1;
@@ -556,7 +556,7 @@ mod tests {
                 let pre = RayPrecomp::new(&ray);
                 let (lane, h) = block.intersect(&pre, f32::INFINITY).expect("edge ray leaked");
                 assert!([7, 8].contains(&block.id[lane]));
-                assert_eq!(h.t, 2.0);
+                assert_eq!(h.t(), 2.0);
                 assert!(block.occludes(&pre, f32::INFINITY));
                 #[cfg(target_arch = "x86_64")]
                 if let Some(avx) = Avx::detect() {

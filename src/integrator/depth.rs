@@ -12,7 +12,7 @@ use super::{Integrator, RadianceSample};
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
-use crate::scene::Scene;
+use crate::scene::{HitSlot, Scene};
 
 /// The distance to the first surface.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,7 +32,7 @@ impl Integrator for DepthIntegrator {
     }
 
     fn sample(&self, scene: &Scene, ray: &Ray, _: &mut Sampler, _: &mut [Rgb]) -> RadianceSample {
-        match scene.intersect_deferred(ray) {
+        match scene.intersect_deferred(ray, &mut HitSlot::default()) {
             Some(hit) => RadianceSample { l: Rgb::splat(hit.t() * ray.d.length()), alpha: 1.0 },
             None => RadianceSample { l: Rgb::ZERO, alpha: 0.0 },
         }

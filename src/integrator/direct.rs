@@ -15,7 +15,7 @@ use crate::material::TextureMemo;
 use crate::math::{Ray, Rgb};
 use crate::props::{Obj, Result as PropResult};
 use crate::sampling::Sampler;
-use crate::scene::Scene;
+use crate::scene::{HitSlot, Scene};
 
 /// The direct-illumination integrator.
 #[derive(Clone, Copy, Debug)]
@@ -56,7 +56,7 @@ impl DirectIntegrator {
         let (hit, ray, covered) = if hide {
             // Covered where a surface is hit behind the hidden emitters (Mitsuba's `direct`).
             let mut ray = *camera_ray;
-            let hit = trace::skip_hidden_emitters(scene, &mut ray).map(|h| h.interaction());
+            let hit = trace::skip_hidden_emitters(scene, &mut ray, &mut HitSlot::default()).map(|h| h.interaction());
             let covered = hit.is_some();
             (hit, ray, covered)
         } else {
@@ -102,7 +102,7 @@ impl DirectIntegrator {
             let prev = PrevVertex { ctx: light_ctx, pdf: bs.pdf, delta: bs.delta };
             let mut le = Rgb::ZERO;
             // Only an emitter's surface interaction is needed.
-            match scene.intersect_deferred(&si.spawn_ray(wi)) {
+            match scene.intersect_deferred(&si.spawn_ray(wi), &mut HitSlot::default()) {
                 Some(hit) => {
                     if let Some(i) = hit.light() {
                         let hit = hit.interaction();

@@ -20,7 +20,7 @@ use crate::light::LightSampleContext;
 use crate::material::{Bsdf, BsdfContext, TextureMemo};
 use crate::math::{Frame, Ray, Rgb, Vec3};
 use crate::sampling::{sample_cosine_hemisphere_malley, sample_uniform_hemisphere, sample_uniform_sphere, Sampler};
-use crate::scene::Scene;
+use crate::scene::{HitSlot, Scene};
 
 pub use super::trace::MisHeuristic;
 
@@ -126,7 +126,7 @@ impl PathIntegrator {
             return Rgb::ZERO;
         }
         w = frame.to_world(w).normalize();
-        let le = match scene.intersect_deferred(&si.spawn_ray(w)) {
+        let le = match scene.intersect_deferred(&si.spawn_ray(w), &mut HitSlot::default()) {
             Some(hit) => match hit.light() {
                 Some(i) => {
                     let hit = hit.interaction();
@@ -155,7 +155,7 @@ impl PathIntegrator {
     ) -> bool {
         let max_depth = self.settings.max_segments();
         if max_depth == 0 {
-            return scene.intersect_deferred(camera_ray).is_some();
+            return scene.intersect_deferred(camera_ray, &mut HitSlot::default()).is_some();
         }
         // Whether every vertex the path went on from so far was a null crossing (a `null`
         // surface, a mask's cut-out): camera rays see through those, so with `hide_emitters` the
@@ -176,6 +176,8 @@ impl PathIntegrator {
         // Whether the path went on from a vertex by a non-delta BSDF sample (pbrt-v4's
         // `anyNonSpecularBounces`, which starts regularization).
         let mut non_specular = false;
+        // Where each closest-hit query leaves its hit.
+        let mut slot = HitSlot::default();
         loop {
             // Escaped: environment light, MIS-weighted like any emitter found by BSDF sampling
             // (hidden, where asked, from camera rays that crossed null surfaces only).
@@ -192,7 +194,7 @@ impl PathIntegrator {
             // those stores to reach the cache).
             let si = if depth == 0 && hide {
                 // Hidden emitters are invisible to camera rays (Mitsuba 3): the ray passes through.
-                match trace::skip_hidden_emitters(scene, &mut ray) {
+                match trace::skip_hidden_emitters(scene, &mut ray, &mut slot) {
                     Some(hit) => hit.interaction(),
                     None => {
                         escape(&ray, &mut record);
@@ -200,7 +202,7 @@ impl PathIntegrator {
                     }
                 }
             } else {
-                match scene.intersect_deferred(&ray) {
+                match scene.intersect_deferred(&ray, &mut slot) {
                     None => {
                         escape(&ray, &mut record);
                         break;

@@ -371,8 +371,12 @@ pub fn occlusion<'a>(scene: &'a Scene, si: &'a SurfaceInteraction) -> impl FnOnc
 /// hidden emitters passed through do not cover the pixel (Mitsuba's `valid_ray`). The hit comes
 /// with its surface interaction not yet computed: the caller computes it where it keeps it.
 #[inline]
-pub fn skip_hidden_emitters<'a>(scene: &'a Scene, ray: &'a mut Ray) -> Option<crate::scene::DeferredHit<'a>> {
-    scene.intersect_deferred_past_emitters(ray, MAX_HIDDEN_SKIPS)
+pub fn skip_hidden_emitters<'a>(
+    scene: &'a Scene,
+    ray: &'a mut Ray,
+    slot: &'a mut crate::scene::HitSlot,
+) -> Option<crate::scene::DeferredHit<'a>> {
+    scene.intersect_deferred_past_emitters(ray, MAX_HIDDEN_SKIPS, slot)
 }
 
 impl PathSettings {

@@ -106,7 +106,7 @@ pub fn transmittance(scene: &Scene, mut ray: Ray, mut medium: Option<u32>, rng: 
                 return tr;
             }
         }
-        let Some(si) = hit else { return tr };
+        let Some(si) = &hit else { return tr };
         medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
         let o = si.offset_origin(ray.d);
         ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON).at_time(ray.time);
@@ -225,7 +225,10 @@ impl Integrator for VolPathIntegrator {
                 }
             }
 
-            let Some(si) = hit else {
+            // Bound by reference (moved out of the `Option`, the interaction would be copied by
+            // wide loads right after `intersect` wrote it field by field, and wait for those
+            // stores to reach the cache).
+            let Some(si) = &hit else {
                 trace::escaped(scene, ray.o, ray.d, prev.as_ref(), hide, &mis, |le, w| l += beta * le * w);
                 break;
             };
@@ -256,7 +259,7 @@ impl Integrator for VolPathIntegrator {
                 }
                 if bsdf.is_null() {
                     // (`None`: a filter that lets nothing through.)
-                    let Some((t, _)) = null_transmission(scene, &si, ray.d) else { break };
+                    let Some((t, _)) = null_transmission(scene, si, ray.d) else { break };
                     beta *= t;
                     medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
                 }
@@ -272,7 +275,7 @@ impl Integrator for VolPathIntegrator {
             }
             // Textures and normal maps looked up once for this vertex's BSDF calls.
             let memo = TextureMemo::default();
-            let vertex = trace::SurfaceVertex::new(scene, &si, bsdf, &memo, wo);
+            let vertex = trace::SurfaceVertex::new(scene, si, bsdf, &memo, wo);
             let (ctx, frame, wo_local) = (&vertex.ctx, vertex.frame, vertex.wo_local);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             let (u_light, u_light2) = (sampler.next_1d(), sampler.next_2d());
@@ -302,7 +305,7 @@ impl Integrator for VolPathIntegrator {
             // material it refracted into (the BSSRDF's probe finds that point).
             let vertex = if let Some(sss) = bsdf.subsurface().filter(|_| !bs.null && bs.wi.z * wo_local.z < 0.0) {
                 let u = (sampler.next_1d(), sampler.next_1d(), sampler.next_2d());
-                let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, ctx, &si, shape.bsdf, u, &mut rng)
+                let Some((exit, w)) = super::subsurface::probe_exit(scene, sss, ctx, si, shape.bsdf, u, &mut rng)
                 else {
                     break;
                 };

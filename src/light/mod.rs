@@ -758,7 +758,7 @@ mod tests {
                     Geometry::Mesh(m) => (0..m.len()).find_map(|i| {
                         let pre = crate::geometry::triangle::RayPrecomp::new(&ray);
                         crate::geometry::triangle::intersect_triangle(&pre, &m.triangle(i), f32::INFINITY)
-                            .map(|h| (ray.at(h.t), m.face_normal(i)))
+                            .map(|h| (ray.at(h.t()), m.face_normal(i)))
                     }),
                     Geometry::Sphere(s) => {
                         // Inside the subtended cone, with f32 tolerance at the silhouette (where

@@ -248,7 +248,7 @@ mod tests {
                                 Geometry::Mesh(m) => (0..m.len()).find_map(|t| {
                                     let pre = crate::geometry::triangle::RayPrecomp::new(&ray);
                                     crate::geometry::triangle::intersect_triangle(&pre, &m.triangle(t), f32::INFINITY)
-                                        .map(|h| (ray.at(h.t), m.face_normal(t)))
+                                        .map(|h| (ray.at(h.t()), m.face_normal(t)))
                                 }),
                                 Geometry::Sphere(s) => s.intersect(&ray, f32::INFINITY).map(|h| {
                                     let (sp, _) = s.surface(&ray, h.t);
