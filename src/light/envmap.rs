@@ -347,7 +347,8 @@ impl EnvMap {
         let y = (uv.y * (h - 1) as f32).clamp(0.0, (h - 1) as f32);
         let (i, j) = ((x as i64).min(w - 1), (y as i64).min(h - 2));
         let (fx, fy) = (x - i as f32, y - j as f32);
-        let (i1, j1) = ((i + 1) % w, j + 1);
+        // The next column, wrapping around (a select: `% w` was an integer division).
+        let (i1, j1) = (if i + 1 < w { i + 1 } else { 0 }, j + 1);
         let px = |a: i64, b: i64| self.image.pixels[(b * w + a) as usize];
         let top = px(i, j) * (1.0 - fx) + px(i1, j) * fx;
         let bottom = px(i, j1) * (1.0 - fx) + px(i1, j1) * fx;

@@ -289,16 +289,16 @@ impl Principled {
         (if wh.z < 0.0 { -wh } else { wh }, eta_path)
     }
 
-    /// `f(wo, wi) |cos θᵢ|`.
+    /// `f(wo, wi) |cos θᵢ|`. (The pair is read where `pair` wrote it, by reference.)
     pub fn eval(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> Rgb {
         let p = self.params(ctx);
-        self.pair(&p, wo, wi).map_or(Rgb::ZERO, |q| self.eval_pair(ctx, &p, &q, wo, wi))
+        self.pair(&p, wo, wi).as_ref().map_or(Rgb::ZERO, |q| self.eval_pair(ctx, &p, q, wo, wi))
     }
 
     /// Density of [`Principled::sample`] choosing `wi`.
     pub fn pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> f32 {
         let p = self.params(ctx);
-        self.pair(&p, wo, wi).map_or(0.0, |q| self.pdf_pair(ctx, &p, &q, wo, wi))
+        self.pair(&p, wo, wi).as_ref().map_or(0.0, |q| self.pdf_pair(ctx, &p, q, wo, wi))
     }
 
     /// [`Principled::eval`] and [`Principled::pdf`] at once (the same bits), sharing the
@@ -306,7 +306,8 @@ impl Principled {
     pub fn eval_pdf(&self, ctx: &BsdfContext, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         let p = self.params(ctx);
         self.pair(&p, wo, wi)
-            .map_or((Rgb::ZERO, 0.0), |q| (self.eval_pair(ctx, &p, &q, wo, wi), self.pdf_pair(ctx, &p, &q, wo, wi)))
+            .as_ref()
+            .map_or((Rgb::ZERO, 0.0), |q| (self.eval_pair(ctx, &p, q, wo, wi), self.pdf_pair(ctx, &p, q, wo, wi)))
     }
 
     /// What the value and the density of `(wo, wi)` share; `None` where both are 0 (`wo` in
@@ -470,12 +471,15 @@ impl Principled {
             let wi = reflect_about(wo, m);
             (compatible(m, wo, wi, cos_o, true) && cos_o * wi.z > 0.0).then_some(wi)?
         };
-        let q = self.pair(&p, wo, wi)?;
-        let pdf = self.pdf_pair(ctx, &p, &q, wo, wi);
+        // Read in place (see `eval`): moved out of the `Option` right after `pair` wrote it,
+        // it would be copied by wide loads that wait for `pair`'s stores to reach the cache.
+        let q = self.pair(&p, wo, wi);
+        let q = q.as_ref()?;
+        let pdf = self.pdf_pair(ctx, &p, q, wo, wi);
         if pdf <= 0.0 {
             return None;
         }
-        let weight = self.eval_pair(ctx, &p, &q, wo, wi) / pdf;
+        let weight = self.eval_pair(ctx, &p, q, wo, wi) / pdf;
         weight.is_finite().then_some(BsdfSample { wi, pdf, weight, delta: false, null: false, eta })
     }
 
