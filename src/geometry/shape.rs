@@ -233,10 +233,18 @@ impl Geometry {
     #[inline]
     pub fn sample_solid_angle(&self, p_ref: Vec3, u: Vec2) -> Option<(ShapeSample, Vec3)> {
         if let Geometry::Sphere(s) = self {
-            let (sp, pdf) = s.sample_solid_angle(p_ref, u)?;
+            // Read in place: moved out of the `Option`, the sample would be copied by wide loads
+            // right after the call wrote it field by field (a store-forwarding stall).
+            let sampled = s.sample_solid_angle(p_ref, u);
+            let (sp, pdf) = sampled.as_ref()?;
             let wi = (sp.p - p_ref).normalize_or_zero();
-            return (wi != Vec3::ZERO)
-                .then_some((ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf }, wi));
+            // Built in the return value (`then_some` built it on the stack field by field and
+            // copied it with wide loads: another stall).
+            return if wi == Vec3::ZERO {
+                None
+            } else {
+                Some((ShapeSample { p: sp.p, ng: sp.n, ns: sp.n, p_error: sp.p_error, pdf: *pdf }, wi))
+            };
         }
         if let Geometry::Mesh(m) = self {
             // The mesh's own sample inlined here (a quad light's is a few multiplications): its
@@ -275,5 +283,9 @@ fn area_to_solid_angle_sample(s: ShapeSample, p_ref: Vec3) -> Option<(ShapeSampl
     let dist = dist2.sqrt();
     let wi = d / dist;
     let pdf = pdf_area * dist2 * dist / ng.dot(d).abs();
-    (pdf > 0.0 && pdf.is_finite()).then_some((ShapeSample { p, ng, ns, p_error, pdf }, wi))
+    if pdf > 0.0 && pdf.is_finite() {
+        Some((ShapeSample { p, ng, ns, p_error, pdf }, wi))
+    } else {
+        None
+    }
 }
