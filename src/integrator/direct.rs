@@ -64,7 +64,8 @@ impl DirectIntegrator {
             let covered = hit.is_some();
             (hit, *camera_ray, covered)
         };
-        let Some(si) = hit else {
+        // By reference (a move would copy it by wide loads right after `intersect` wrote it).
+        let Some(si) = &hit else {
             let mut l = Rgb::ZERO;
             trace::escaped(scene, ray.o, ray.d.normalize(), None, hide, &mis, |le, w| l += le * w);
             return (l, covered);
@@ -78,7 +79,7 @@ impl DirectIntegrator {
         let bsdf = &scene.bsdfs()[shape.bsdf as usize];
         // Textures and normal maps looked up once for this vertex's BSDF calls.
         let memo = TextureMemo::default();
-        let vertex = trace::SurfaceVertex::new(scene, &si, bsdf, &memo, wo);
+        let vertex = trace::SurfaceVertex::new(scene, si, bsdf, &memo, wo);
         let (ctx, frame, wo_local) = (&vertex.ctx, vertex.frame, vertex.wo_local);
         let light_ctx = LightSampleContext { p: si.p, n: si.ns };
         let delta_bsdf = bsdf.is_delta();
@@ -90,7 +91,7 @@ impl DirectIntegrator {
             if delta_bsdf {
                 continue;
             }
-            l += trace::sample_direct_bsdf(scene, &light_ctx, (u, u2), &mis, &vertex, trace::occlusion(scene, &si));
+            l += trace::sample_direct_bsdf(scene, &light_ctx, (u, u2), &mis, &vertex, trace::occlusion(scene, si));
         }
 
         // BSDF sampling: emission found along the sampled direction.

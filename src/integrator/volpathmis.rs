@@ -214,7 +214,7 @@ impl VolPathMisIntegrator {
                     return None;
                 }
             }
-            let Some(si) = hit else { return Some(LightPath { nee, uni, li: ls.li, sample: ls }) };
+            let Some(si) = &hit else { return Some(LightPath { nee, uni, li: ls.li, sample: ls }) };
             medium = medium_after(scene, si.shape, si.ng, ray.d, medium);
             let o = si.offset_origin(ray.d);
             ray = Ray::bounded(o, target - o, 1.0 - SHADOW_EPSILON).at_time(ray.time);
@@ -333,8 +333,10 @@ impl Integrator for VolPathMisIntegrator {
                 }
             }
 
-            // Emission found by the path.
-            let Some(si) = hit else {
+            // Emission found by the path. (The interaction bound by reference: moved out of the
+            // `Option` right after `intersect` wrote it, it would be copied by wide loads that
+            // wait for those stores to reach the cache.)
+            let Some(si) = &hit else {
                 for &i in scene.infinite_lights() {
                     if depth == 0 && hide {
                         break;
@@ -369,7 +371,7 @@ impl Integrator for VolPathMisIntegrator {
                 }
                 if bsdf.is_null() {
                     // (`None`: a filter that lets nothing through.)
-                    let Some((t, _)) = null_transmission(scene, &si, ray.d) else { break };
+                    let Some((t, _)) = null_transmission(scene, si, ray.d) else { break };
                     if t != Rgb::ONE {
                         path.update_scalar(1.0, t);
                         path_nee.update_scalar(1.0, t);
@@ -390,10 +392,10 @@ impl Integrator for VolPathMisIntegrator {
             let wo_local = frame.to_local(wo);
             // Textures and normal maps looked up once for this vertex's BSDF calls.
             let memo = TextureMemo::default();
-            let ctx = scene.bsdf_context(&si).with_memo(&memo);
+            let ctx = scene.bsdf_context(si).with_memo(&memo);
             let light_ctx = LightSampleContext { p: si.p, n: si.ns };
             if !bsdf.is_delta() && !at_last {
-                let origin = ShadowOrigin::Surface(si);
+                let origin = ShadowOrigin::Surface(*si);
                 if let Some(mut lp) =
                     self.sample_light(scene, &light_ctx, &origin, medium, &path, channel, sampler, &mut rng)
                 {
