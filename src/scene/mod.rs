@@ -156,7 +156,7 @@ impl crate::bvh::ClosestLeaf for &mut LeafTest<'_> {
     }
 }
 
-impl crate::bvh::AnyLeaf for LeafTest<'_> {
+impl crate::bvh::AnyLeaf for &mut LeafTest<'_> {
     #[inline(always)]
     fn hit(&mut self, first: u32, count: u32, t_max: f32, avx: Option<Avx>) -> bool {
         self.scene.occluded_in_leaf(self.ray, self.pre, &mut self.bspline, first, count, t_max, avx)
@@ -857,7 +857,10 @@ impl Scene {
     #[inline]
     pub fn occluded(&self, ray: &Ray) -> bool {
         let pre = RayPrecomp::new(ray);
-        self.bvh.any_hit_visit(ray, ray.t_max, LeafTest { scene: self, ray, pre: &pre, bspline: None, best: &mut None })
+        // By reference: moved into the traversal, the leaf test (with its room for a curve
+        // frame) was copied by wide loads right after its fields were written one by one.
+        let mut leaf = LeafTest { scene: self, ray, pre: &pre, bspline: None, best: &mut None };
+        self.bvh.any_hit_visit(ray, ray.t_max, &mut leaf)
     }
 
     /// Whether a primitive of a leaf blocks the ray within `(0, t_max)`.
