@@ -420,7 +420,8 @@ where
             return None;
         }
         let e = [c.e[0].lane(lane), c.e[1].lane(lane), c.e[2].lane(lane)];
-        Some((lane, hit(t_min, e, inv_det.lane(lane))))
+        // (Its products are `TriangleHit`'s own: here the `f32: Mul<L>` bound hides `f32 * f32`.)
+        Some((lane, TriangleHit::from_edges(t_min, e, inv_det.lane(lane))))
     }
 }
 
@@ -444,13 +445,6 @@ where
     f32: Mul<L, Output = L>,
 {
     edges(isa, v, part, r, t_max, ClosestLane)
-}
-
-/// The hit at `t` with edge functions `e` and `1 / det` (outside the generic code, whose
-/// `f32: Mul<L>` bound hides `f32 * f32`).
-#[inline(always)]
-fn hit(t: f32, e: [f32; 3], inv_det: f32) -> TriangleHit {
-    TriangleHit::from_edges(t, e, inv_det)
 }
 
 /// Whether any lane is hit.
