@@ -76,11 +76,10 @@ impl TriangleHit {
         TriangleHit(Vec4::new(t, b0, b1, b2))
     }
 
-    /// `(t, e0 / det, e1 / det, e2 / det)` from the edge functions and `1 / det`, in one
-    /// vector product (the same bits as the three scalar products).
+    /// The hit `(t, b0, b1, b2)` as one vector (as the SIMD tests gather it from their lanes).
     #[inline(always)]
-    pub fn from_edges(t: f32, e: [f32; 3], inv_det: f32) -> TriangleHit {
-        TriangleHit(Vec4::new(t, e[0], e[1], e[2]) * Vec4::new(1.0, inv_det, inv_det, inv_det))
+    pub fn from_vec4(v: Vec4) -> TriangleHit {
+        TriangleHit(v)
     }
 
     /// Ray parameter.

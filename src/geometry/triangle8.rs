@@ -207,7 +207,8 @@ pub(crate) trait Lanes: Lane + Sub<Output = Self> {
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     fn recip(self) -> Self;
     fn min_element(self) -> f32;
-    fn lane(self, k: usize) -> f32;
+    /// Lane `k` of each of `v`, gathered into one vector.
+    fn gather(v: [Self; 4], k: usize) -> Vec4;
 }
 
 /// The comparisons of [`Lanes`], forwarded to the lane type's own.
@@ -223,7 +224,7 @@ macro_rules! forward_compare {
 /// [`Lanes`] for a lane type whose methods have the trait's names, with the few that differ
 /// given as closures.
 macro_rules! forward_lanes {
-    ($ty:ty, $mask:ty, $isa:ty, $n:expr, $splat:expr, $load:expr, $lane:expr) => {
+    ($ty:ty, $mask:ty, $isa:ty, $n:expr, $splat:expr, $load:expr, $gather:expr) => {
         impl Lanes for $ty {
             type Mask = $mask;
             type Isa = $isa;
@@ -262,8 +263,8 @@ macro_rules! forward_lanes {
                 <$ty>::min_element(self)
             }
             #[inline(always)]
-            fn lane(self, k: usize) -> f32 {
-                $lane(self, k)
+            fn gather(v: [$ty; 4], k: usize) -> Vec4 {
+                $gather(v, k)
             }
         }
     };
@@ -276,7 +277,7 @@ forward_lanes!(
     4,
     |_, x| Vec4::splat(x),
     |_, row: &[f32; LANES], part: usize| Vec4::from_slice(&row[4 * part..4 * part + 4]),
-    |v: Vec4, k: usize| v.as_ref()[k]
+    crate::math::simd::gather_lane4
 );
 
 #[cfg(target_arch = "x86_64")]
@@ -287,7 +288,7 @@ forward_lanes!(
     8,
     crate::math::simd::F32x8::splat,
     |avx, row: &[f32; LANES], _| crate::math::simd::F32x8::load(avx, row),
-    |v: crate::math::simd::F32x8, k: usize| v.to_array()[k]
+    crate::math::simd::F32x8::gather_lane
 );
 
 #[cfg(target_arch = "x86_64")]
@@ -419,9 +420,10 @@ where
             // t_min is NaN (overflowing coordinates): no hit.
             return None;
         }
-        let e = [c.e[0].lane(lane), c.e[1].lane(lane), c.e[2].lane(lane)];
-        // (Its products are `TriangleHit`'s own: here the `f32: Mul<L>` bound hides `f32 * f32`.)
-        Some((lane, TriangleHit::from_edges(t_min, e, inv_det.lane(lane))))
+        // The barycentrics `e / det` of every lane (the scalar test's products), then the
+        // closest lane's `(t, b0, b1, b2)` gathered in registers.
+        let b = c.e.map(|e| e * inv_det);
+        Some((lane, TriangleHit::from_vec4(L::gather([t, b[0], b[1], b[2]], lane))))
     }
 }
 

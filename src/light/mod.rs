@@ -28,7 +28,7 @@ pub(crate) use sampler::selection_powers;
 pub use sun_position::{day_number, sun_direction, DateTime, Location};
 pub use sunsky::{SunPlacement, SunSky, SunSkyError, SunSkyParams};
 
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, ShapeSample};
 use crate::math::{luminance, Rgb, Vec2, Vec3, PI};
 use crate::texture::Texture;
 
@@ -196,6 +196,16 @@ pub struct LightSample {
     pub p_error: Vec3,
     /// Whether the light is a delta distribution in direction (unreachable by BSDF sampling).
     pub delta: bool,
+}
+
+/// An area light's sample: the shape's sample `s` seen along `wi` (unit, toward it) with emitted
+/// radiance `li`; `None` on the back of a one-sided emitter, which does not emit.
+#[inline(always)]
+fn area_light_sample(s: &ShapeSample, wi: Vec3, li: Rgb, two_sided: bool) -> Option<LightSample> {
+    if !two_sided && s.ns.dot(wi) >= 0.0 {
+        return None;
+    }
+    Some(LightSample { wi, li, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
 }
 
 impl LightSample {
@@ -419,20 +429,21 @@ impl Light {
         match self {
             Light::Area { shape, radiance, two_sided } => {
                 let shape = &shapes[*shape as usize];
-                let (s, wi, li) = match radiance {
+                // The shape's sample read in place: moved out of the `Option`, it was copied by
+                // wide loads right after the call wrote it field by field (a store-forwarding
+                // stall, most of this function's own time on a sphere light).
+                match radiance {
                     Texture::Constant(c) => {
-                        let (s, wi) = shape.sample_solid_angle(p_ref, u)?;
-                        (s, wi, *c)
+                        let sampled = shape.sample_solid_angle(p_ref, u);
+                        let (s, wi) = sampled.as_ref()?;
+                        area_light_sample(s, *wi, *c, *two_sided)
                     }
                     t => {
-                        let (s, wi, uv) = shape.sample_solid_angle_uv(p_ref, u)?;
-                        (s, wi, t.eval(uv))
+                        let sampled = shape.sample_solid_angle_uv(p_ref, u);
+                        let (s, wi, uv) = sampled.as_ref()?;
+                        area_light_sample(s, *wi, t.eval(*uv), *two_sided)
                     }
-                };
-                if !*two_sided && s.ns.dot(wi) >= 0.0 {
-                    return None; // one-sided: the back does not emit
                 }
-                Some(LightSample { wi, li, pdf: s.pdf, p: s.p, n: s.ng, p_error: s.p_error, delta: false })
             }
             Light::Constant { radiance, center, radius } => {
                 let s = crate::sampling::sample_uniform_sphere(u);

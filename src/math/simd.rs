@@ -143,6 +143,54 @@ impl F32x8 {
     }
 }
 
+/// Lane `k` (below 4) of each of four vectors, gathered into one: `(a[k], b[k], c[k], d[k])`
+/// for `v = [a, b, c, d]`, bit for bit. In registers (the other lanes masked off, then the four
+/// folded together by shuffles and ors): reading the lanes back one by one from a stored
+/// vector waits on that store.
+#[inline(always)]
+pub fn gather_lane4(v: [glam::Vec4; 4], k: usize) -> glam::Vec4 {
+    debug_assert!(k < 4);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86-64.
+    unsafe {
+        let one_hot = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_set_epi32(3, 2, 1, 0), _mm_set1_epi32(k as i32)));
+        let [a, b, c, d] = v.map(|x| _mm_and_ps(__m128::from(x), one_hot));
+        fold_one_hot4(a, b, c, d).into()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    glam::Vec4::new(v[0][k], v[1][k], v[2][k], v[3][k])
+}
+
+/// `(Σ a, Σ b, Σ c, Σ d)` as bits (an or of the lanes) of four vectors that are zero but in
+/// one lane, the same lane in each.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn fold_one_hot4(a: __m128, b: __m128, c: __m128, d: __m128) -> __m128 {
+    // (a0|a2, b0|b2, a1|a3, b1|b3) and the same of c and d.
+    let ab = _mm_or_ps(_mm_unpacklo_ps(a, b), _mm_unpackhi_ps(a, b));
+    let cd = _mm_or_ps(_mm_unpacklo_ps(c, d), _mm_unpackhi_ps(c, d));
+    _mm_or_ps(_mm_movelh_ps(ab, cd), _mm_movehl_ps(cd, ab))
+}
+
+#[cfg(target_arch = "x86_64")]
+impl F32x8 {
+    /// Lane `k` (below 8) of each of four vectors, gathered into one: `(a[k], b[k], c[k],
+    /// d[k])` for `v = [a, b, c, d]`, bit for bit, in registers (see [`gather_lane4`]).
+    #[inline(always)]
+    pub fn gather_lane(v: [F32x8; 4], k: usize) -> glam::Vec4 {
+        debug_assert!(k < 8);
+        unsafe {
+            let iota = _mm256_set_ps(7.0, 6.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.0);
+            let one_hot = _mm256_cmp_ps::<_CMP_EQ_OQ>(iota, _mm256_set1_ps(k as f32));
+            let [a, b, c, d] = v.map(|x| {
+                let m = _mm256_and_ps(x.0, one_hot);
+                _mm_or_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps::<1>(m))
+            });
+            fold_one_hot4(a, b, c, d).into()
+        }
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 impl M8 {
     /// Bit k set where lane k holds.
@@ -259,6 +307,37 @@ mod tests {
                 assert_eq!(x.min_element(), expected, "round {round}");
             }
             assert!(F32x8::splat(avx, a[0]).to_array().iter().all(|v| v.to_bits() == a[0].to_bits()));
+        }
+    }
+
+    /// Gathering lane k of four vectors gives exactly those lanes' bits (NaN payloads, −0,
+    /// infinities, subnormals included), at every k, for both widths.
+    #[test]
+    fn gathered_lanes_keep_their_bits() {
+        let mut rng = Pcg32::new(17, 3);
+        let special = [f32::NAN, -f32::NAN, f32::from_bits(0x7fc0_1234), -0.0, 0.0, f32::INFINITY, -1e-40, 1.5];
+        let avx = Avx::detect();
+        for round in 0..500 {
+            let rows: [[f32; 8]; 4] = std::array::from_fn(|r| {
+                std::array::from_fn(|k| {
+                    if (round + 3 * r + k) % 5 == 0 {
+                        special[(round + r + k) % special.len()]
+                    } else {
+                        rng.next_f32() * 200.0 - 100.0
+                    }
+                })
+            });
+            let bits = |v: Vec4| v.to_array().map(f32::to_bits);
+            for k in 0..4 {
+                let v = rows.map(|row| Vec4::from_slice(&row[..4]));
+                assert_eq!(bits(gather_lane4(v, k)), rows.map(|row| row[k].to_bits()), "round {round} lane {k}");
+            }
+            if let Some(avx) = avx {
+                for k in 0..8 {
+                    let v = rows.map(|row| F32x8::load(avx, &row));
+                    assert_eq!(bits(F32x8::gather_lane(v, k)), rows.map(|row| row[k].to_bits()), "round {round} lane {k}");
+                }
+            }
         }
     }
 }
