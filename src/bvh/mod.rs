@@ -288,9 +288,32 @@ impl Bvh {
                     // (reversed: among equal distances the lower slot goes deeper), push them
                     // in that order, and continue with the nearest.
                     let key = |slot: usize| u64::from(t_near[slot].to_bits()) << 32 | (7 - slot) as u64;
+                    let c = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask & (mask.wrapping_sub(1)) == 0 {
+                        // Three or four (the common case): a sorting network of five
+                        // compare-exchanges without branches (a missing fourth key is 0, sorted
+                        // last), where the insertion sort's data-dependent branches mispredicted.
+                        let d = mask.trailing_zeros() as usize;
+                        let n = 3 + (mask != 0) as usize;
+                        let mut k = [key(a), key(b), key(c), if mask != 0 { key(d) } else { 0 }];
+                        for (i, j) in [(0, 1), (2, 3), (0, 2), (1, 3), (1, 2)] {
+                            let (hi, lo) = (k[i].max(k[j]), k[i].min(k[j]));
+                            (k[i], k[j]) = (hi, lo);
+                        }
+                        for (e, &k) in k[..3].iter().enumerate() {
+                            let slot = 7 - (k & 7) as usize;
+                            stack[sp + e].write((node.child[slot], node.count[slot], t_near[slot]));
+                        }
+                        sp += n - 1;
+                        let (nearest, next) = (7 - (k[n - 1] & 7) as usize, 7 - (k[n - 2] & 7) as usize);
+                        self.prefetch_closest(node.child[next], node.count[next], &leaf);
+                        (child, count) = (node.child[nearest], node.count[nearest]);
+                        continue;
+                    }
                     let mut keys = [0u64; WIDTH];
-                    (keys[0], keys[1]) = (key(a), key(b));
-                    let mut n = 2;
+                    (keys[0], keys[1], keys[2]) = (key(a), key(b), key(c));
+                    let mut n = 3;
                     while mask != 0 {
                         keys[n] = key(mask.trailing_zeros() as usize);
                         mask &= mask - 1;
