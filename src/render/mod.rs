@@ -398,7 +398,11 @@ pub fn render_from(
                     let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
-                    let (start_ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
+                    // Bound in place (a move out of the returned pair was a copy by wide loads
+                    // right after the camera wrote the ray field by field: a store-forwarding
+                    // stall).
+                    let sampled = cam.sample_ray(film_pos, u_lens);
+                    let (start_ray, ray_weight) = (&sampled.0, sampled.1);
                     // Where shapes or the camera move, a time uniform over the shutter interval
                     // (one more dimension, drawn only then: static scenes' samples are
                     // unchanged), and the camera's ray moved to where the camera then is.
@@ -407,10 +411,10 @@ pub fn render_from(
                     let at_time;
                     let (ray, moved) = match motion {
                         Some((open, close)) => {
-                            at_time = cam.ray_at_time(&start_ray, open + (close - open) * sampler.next_1d());
+                            at_time = cam.ray_at_time(start_ray, open + (close - open) * sampler.next_1d());
                             (&at_time.0, at_time.1.as_ref())
                         }
-                        None => (&start_ray, None),
+                        None => (start_ray, None),
                     };
                     sample_terms.fill(Rgb::ZERO);
                     aovs.fill(0.0);
@@ -419,7 +423,7 @@ pub fn render_from(
                         crate::integrator::RadianceSample { l: Rgb::ZERO, alpha: 0.0 }
                     } else {
                         let differentials = differential_scale.map(|scale| {
-                            let d = cam.ray_differentials(film_pos, u_lens, &start_ray);
+                            let d = cam.ray_differentials(film_pos, u_lens, start_ray);
                             moved.map_or(d, |m| d.moved(m)).scaled(ray, scale)
                         });
                         integrator.sample_aovs(
