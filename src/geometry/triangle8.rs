@@ -222,7 +222,7 @@ macro_rules! forward_compare {
 }
 
 /// [`Lanes`] for a lane type whose methods have the trait's names, with the few that differ
-/// given as closures.
+/// given as closures or functions.
 macro_rules! forward_lanes {
     ($ty:ty, $mask:ty, $isa:ty, $n:expr, $splat:expr, $load:expr, $gather:expr) => {
         impl Lanes for $ty {

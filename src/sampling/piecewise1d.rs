@@ -5,9 +5,9 @@
 //! `∫f = Σ f_i Δ`. Its CDF is piecewise linear; inverting it is a search for the piece
 //! followed by a linear solve inside it. The 2D version builds on this one.
 //!
-//! The search starts from a guide table (Chen and Asau's cutpoint method, 1974): for `G` (a
-//! power of two, at least `n` up to 2²⁴ pieces) equal cells of `u`, the pieces that may hold an inverse for a `u`
-//! in each. It finds the very piece a binary search over the whole CDF finds (the same bits),
+//! The search starts from a guide table (Chen and Asau's cutpoint method, 1974): for `G` equal
+//! cells of `u` (the power of two at least `n`, at most 2²⁴), the pieces that may hold an
+//! inverse for a `u` in each. It finds the very piece a binary search over the whole CDF finds (the same bits),
 //! in a short search over the few pieces a cell holds instead of `log₂ n` steps of dependent
 //! loads: about a tenth of the time of a render lit by an environment map went to the search.
 
