@@ -7,9 +7,10 @@
 //!
 //! The search starts from a guide table (Chen and Asau's cutpoint method, 1974): for `G` equal
 //! cells of `u` (the power of two at least `n`, at most 2²⁴), the pieces that may hold an
-//! inverse for a `u` in each. It finds the very piece a binary search over the whole CDF finds (the same bits),
-//! in a short search over the few pieces a cell holds instead of `log₂ n` steps of dependent
-//! loads: about a tenth of the time of a render lit by an environment map went to the search.
+//! inverse for a `u` in each. It finds the very piece a binary search over the whole CDF finds
+//! (the same bits), in a short search over the few pieces a cell holds instead of `log₂ n` steps
+//! of dependent loads: about a tenth of the time of a render lit by an environment map went to
+//! the search.
 
 use super::Sample;
 use crate::math::ONE_MINUS_EPSILON;
