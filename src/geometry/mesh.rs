@@ -467,6 +467,16 @@ impl TriangleMesh {
         self.sample_area_uv(u).map(|(sp, ns, pdf, _)| (sp, ns, pdf))
     }
 
+    /// What [`TriangleMesh::sample_area`]'s parallelogram shortcut computes with, for samplers
+    /// that do its arithmetic themselves (the path tracer's lanes): the corner, the two edges
+    /// and the unit normal, the corner mismatch added to error bounds, and the density `1 /
+    /// area`. `None` where the mesh is not sampled as a parallelogram.
+    pub(crate) fn parallelogram_sampling(&self) -> Option<([Vec3; 4], f32, f32)> {
+        let q = self.parallelogram.as_ref()?;
+        self.area_distribution.as_ref()?;
+        Some(([q.o, q.e1, q.e2, q.n], q.mismatch, 1.0 / self.total_area))
+    }
+
     /// [`TriangleMesh::sample_area`] that also gives the point's texture coordinates (a
     /// triangle by area, then a uniform point in it; the same density, without the
     /// parallelogram shortcut): for emitters whose radiance is a texture.

@@ -11,6 +11,7 @@ pub mod direct;
 pub(crate) mod fixtures;
 pub mod moment;
 pub mod path;
+mod path_lanes;
 pub mod ptracer;
 pub mod radiosity;
 pub mod subsurface;
@@ -82,6 +83,23 @@ pub trait Integrator: Sync {
     /// driver computes them only then).
     fn wants_differentials(&self) -> bool {
         false
+    }
+
+    /// How many camera samples [`Integrator::sample_lanes`] traces at once in `scene` (paths in
+    /// SIMD lanes, [`crate::math::lanes`]), or 0 where it does not: the render loop then calls
+    /// [`Integrator::sample_aovs`] sample by sample. Never asked with terms, AOVs or ray
+    /// differentials.
+    fn lanes(&self, _scene: &Scene) -> usize {
+        0
+    }
+
+    /// [`Integrator::sample`] of `rays.len()` (at most [`Integrator::lanes`]) camera samples at
+    /// once, `samplers[k]` the sampler of sample `k` positioned after its camera's draws; the
+    /// results bit for bit those of `sample`, into `out`.
+    fn sample_lanes(&self, scene: &Scene, rays: &[Ray], samplers: &mut [Sampler], out: &mut [RadianceSample]) {
+        for ((ray, sampler), out) in rays.iter().zip(samplers).zip(out) {
+            *out = self.sample(scene, ray, sampler, &mut []);
+        }
     }
 
     /// [`Integrator::sample`] that also writes one value per [`Integrator::aov_names`] entry

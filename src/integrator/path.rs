@@ -318,6 +318,18 @@ impl Integrator for PathIntegrator {
     fn has_terms(&self) -> bool {
         true
     }
+
+    fn lanes(&self, scene: &Scene) -> usize {
+        if self.lane_support(scene) {
+            super::path_lanes::lane_width()
+        } else {
+            0
+        }
+    }
+
+    fn sample_lanes(&self, scene: &Scene, rays: &[Ray], samplers: &mut [Sampler], out: &mut [RadianceSample]) {
+        super::path_lanes::trace_lanes_dispatch(self, scene, rays, samplers, out);
+    }
 }
 
 #[cfg(test)]

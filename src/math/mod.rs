@@ -12,6 +12,7 @@ pub mod color;
 pub mod cone;
 pub mod float;
 pub mod frame;
+pub mod lanes;
 pub mod quadrature;
 pub mod ray;
 pub mod simd;

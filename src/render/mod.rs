@@ -372,6 +372,9 @@ pub fn render_from(
     // samples (Mitsuba's 1/√spp).
     let differential_scale = integrator.wants_differentials().then(|| 1.0 / (settings.spp.max(1) as f32).sqrt());
     let motion = scene.motion_shutter().or(cam.motion_shutter());
+    // Samples the integrator traces at once in SIMD lanes (0: one at a time). Not with the
+    // Neumann-series terms, AOVs or ray differentials, which only the one-at-a-time entry fills.
+    let lanes = if terms == 0 && aov_count == 0 && differential_scale.is_none() { integrator.lanes(scene) } else { 0 };
     let render_tile = |k: usize, first: u32, count: u32| {
         let (x0, y0, w, h) = tiles[k];
         let mut sampler = prototype.clone();
@@ -382,13 +385,62 @@ pub fn render_from(
         let mut sample_terms = vec![Rgb::ZERO; terms];
         let mut aovs = vec![0.0f32; aov_count];
         let mut taken = 0u64;
+        // Paths in SIMD lanes: the tile's samples, pixel after pixel, traced `lanes` at a time
+        // (a batch spans pixels, so that passes of few samples per pixel fill the lanes too),
+        // each with its own sampler (a copy positioned after its camera draws), its camera ray,
+        // film position and weight; each finished as below, in the same order.
+        let mut lane_samplers = vec![prototype.clone(); lanes];
+        let mut lane_rays = Vec::with_capacity(lanes);
+        let mut lane_camera: Vec<([u32; 2], u32, Vec2, f32)> = Vec::with_capacity(lanes);
+        let mut lane_out = vec![crate::integrator::RadianceSample { l: Rgb::ZERO, alpha: 0.0 }; lanes];
+        let flush = |tile: &mut TileBuffer,
+                     rays: &mut Vec<crate::math::Ray>,
+                     camera: &mut Vec<([u32; 2], u32, Vec2, f32)>,
+                     samplers: &mut [crate::sampling::Sampler],
+                     out: &mut [crate::integrator::RadianceSample]| {
+            let m = rays.len();
+            integrator.sample_lanes(scene, rays, &mut samplers[..m], &mut out[..m]);
+            for (&(at, i, u_film, ray_weight), &out) in camera.iter().zip(&out[..m]) {
+                let mut s = if ray_weight == 0.0 { crate::integrator::RadianceSample { l: Rgb::ZERO, alpha: 0.0 } } else { out };
+                if ray_weight != 1.0 {
+                    s.l *= ray_weight;
+                }
+                let alpha = settings.alpha.then_some(s.alpha);
+                let l = if settings.transform.is_identity() { s.l } else { settings.transform.apply(s.l) };
+                let sample = FilmSample { l, alpha, terms: &[], aovs: &[], half: i % 2 == 1 };
+                tile.put(at, u_film, &settings.filter, sample);
+            }
+            rays.clear();
+            camera.clear();
+        };
         for y in y0..y0 + h {
             for x in x0..x0 + w {
                 if adaptive.is_some() && !active[(y * width + x) as usize].load(Ordering::Relaxed) {
                     continue;
                 }
                 taken += u64::from(count);
-                for i in first..first + count {
+                let pixel = [(x + rx).wrapping_sub(shift), (y + ry).wrapping_sub(shift)];
+                let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
+                let mut next = first;
+                while lanes > 1 && next < first + count {
+                    // Into the batch: the camera's draws and ray for the sample, as below.
+                    sampler.start_pixel_sample(pixel, next, 0);
+                    let u_film = sampler.next_2d();
+                    let film_pos = centre + (u_film - Vec2::splat(0.5));
+                    let u_lens = sampler.next_2d();
+                    let (mut ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
+                    if let Some((open, close)) = motion {
+                        ray = cam.ray_at_time(&ray, open + (close - open) * sampler.next_1d()).0;
+                    }
+                    lane_samplers[lane_rays.len()].clone_from(&sampler);
+                    lane_rays.push(ray);
+                    lane_camera.push(([x, y], next, u_film, ray_weight));
+                    if lane_rays.len() == lanes {
+                        flush(&mut tile, &mut lane_rays, &mut lane_camera, &mut lane_samplers, &mut lane_out);
+                    }
+                    next += 1;
+                }
+                for i in next..first + count {
                     // Seeded by the film pixel (those left of or above the film wrap around), so a
                     // pixel's samples do not depend on whether the border is sampled.
                     sampler.start_pixel_sample([(x + rx).wrapping_sub(shift), (y + ry).wrapping_sub(shift)], i, 0);
@@ -452,6 +504,9 @@ pub fn render_from(
                     tile.put([x, y], u_film, &settings.filter, sample);
                 }
             }
+        }
+        if !lane_rays.is_empty() {
+            flush(&mut tile, &mut lane_rays, &mut lane_camera, &mut lane_samplers, &mut lane_out);
         }
         (tile, taken)
     };
@@ -618,6 +673,40 @@ mod tests {
         let (film, _) = Film::from_state_bytes(&bytes).unwrap();
         let e = render_from(&other, &integrator, &RenderSettings { spp: 32, ..Default::default() }, &never, Some((film, 16)), &mut |_, _| {});
         assert!(matches!(e, Err(RenderError::Resume(_))));
+    }
+
+    /// The render loop's batches in SIMD lanes (spanning pixels and passes) give the film the
+    /// one-sample-at-a-time loop gives, byte for byte: the Cornell box (constant diffuse BSDFs,
+    /// which the path tracer traces in lanes) with a box and a Gaussian filter (splats over
+    /// neighbours), with adaptive sampling (pixels that stop), one and two threads.
+    #[test]
+    fn lanes_render_the_film_of_one_sample_at_a_time() {
+        use crate::film::state::StateInfo;
+        use crate::integrator::PathIntegrator;
+        /// The path tracer without its lanes.
+        struct OneAtATime(PathIntegrator);
+        impl Integrator for OneAtATime {
+            fn name(&self) -> &'static str {
+                "path, one sample at a time"
+            }
+            fn sample(&self, scene: &Scene, ray: &crate::math::Ray, sampler: &mut crate::sampling::Sampler, terms: &mut [Rgb]) -> crate::integrator::RadianceSample {
+                self.0.sample(scene, ray, sampler, terms)
+            }
+        }
+        let scene = crate::scene::cornell::cornell_box(23, 17).unwrap();
+        let path = PathIntegrator::default();
+        assert!(path.lane_support(&scene));
+        let never = AtomicBool::new(false);
+        let info = StateInfo { fingerprint: 1, spp_done: 0, seed: 0 };
+        for settings in [
+            RenderSettings { spp: 13, seed: 5, threads: 1, ..Default::default() },
+            RenderSettings { spp: 24, seed: 6, threads: 2, tile_size: 8, filter: Filter::gaussian(0.5).unwrap(), ..Default::default() },
+            RenderSettings { spp: 64, seed: 7, threads: 2, noise_threshold: Some(0.05), ..Default::default() },
+        ] {
+            let lanes = render(&scene, &path, &settings, &never).unwrap();
+            let single = render(&scene, &OneAtATime(path.clone()), &settings, &never).unwrap();
+            assert!(lanes.film.state_bytes(&info) == single.film.state_bytes(&info), "{settings:?}");
+        }
     }
 
     /// Adaptive sampling: the less noisy pixels stop early, the noisy ones go on; a threshold every pixel meets ends the render at the minimum; the

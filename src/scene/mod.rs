@@ -101,6 +101,12 @@ impl DeferredHit<'_> {
     pub fn interaction(&self) -> SurfaceInteraction {
         self.scene.interaction(self.ray, self.t, self.kind)
     }
+
+    /// [`DeferredHit::interaction`] written into `out`.
+    #[inline]
+    pub fn interaction_into(&self, out: &mut SurfaceInteraction) {
+        self.scene.interaction_to(self.ray, self.t, self.kind, out)
+    }
 }
 
 /// Where a closest-hit query ([`Scene::intersect_deferred`]) leaves its hit: owned by the
@@ -471,6 +477,21 @@ impl Scene {
         Some(DeferredHit { scene: self, ray, t, kind })
     }
 
+    /// [`Scene::intersect_deferred`] leaving its hit in `slot` only (read it with
+    /// [`Scene::deferred`]).
+    #[inline(always)]
+    pub fn intersect_into(&self, ray: &Ray, slot: &mut HitSlot) {
+        self.closest(ray, &mut slot.0);
+    }
+
+    /// The hit [`Scene::intersect_into`] left in `slot` for `ray`, as
+    /// [`Scene::intersect_deferred`] gives it.
+    #[inline(always)]
+    pub fn deferred<'a>(&'a self, ray: &'a Ray, slot: &'a HitSlot) -> Option<DeferredHit<'a>> {
+        let (t, kind) = slot.0.as_ref()?;
+        Some(DeferredHit { scene: self, ray, t: *t, kind })
+    }
+
     /// [`Scene::intersect_deferred`] past emitting shapes: the closest hit on a shape that does
     /// not emit, each emitter in the way crossed by a ray spawned past it in the same direction,
     /// at most `max_skips` of them (`None` where the ray escapes or meets more). `ray` becomes
@@ -685,6 +706,13 @@ impl Scene {
 
     fn interaction(&self, ray: &Ray, t: f32, kind: &HitKind) -> SurfaceInteraction {
         self.interaction_with(ray, t, kind, self.needs_uv, self.needs_dpdv)
+    }
+
+    /// [`Scene::interaction`] written into `out` (its fields stored there directly: a record
+    /// returned and then moved is copied by wide loads right after its narrow stores).
+    #[inline(never)]
+    fn interaction_to(&self, ray: &Ray, t: f32, kind: &HitKind, out: &mut SurfaceInteraction) {
+        *out = self.interaction_with(ray, t, kind, self.needs_uv, self.needs_dpdv);
     }
 
     /// The closest surface hit along `ray` within `(0, ray.t_max)` with every part of its
