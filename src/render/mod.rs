@@ -419,35 +419,35 @@ pub fn render_from(
                     continue;
                 }
                 taken += u64::from(count);
+                // Seeded by the film pixel (those left of or above the film wrap around), so a
+                // pixel's samples do not depend on whether the border is sampled.
                 let pixel = [(x + rx).wrapping_sub(shift), (y + ry).wrapping_sub(shift)];
                 let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
-                let mut next = first;
-                while lanes > 1 && next < first + count {
-                    // Into the batch: the camera's draws and ray for the sample, as below.
-                    sampler.start_pixel_sample(pixel, next, 0);
-                    let u_film = sampler.next_2d();
-                    let film_pos = centre + (u_film - Vec2::splat(0.5));
-                    let u_lens = sampler.next_2d();
-                    let (mut ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
-                    if let Some((open, close)) = motion {
-                        ray = cam.ray_at_time(&ray, open + (close - open) * sampler.next_1d()).0;
+                if lanes > 1 {
+                    for i in first..first + count {
+                        // Into the batch: the camera's draws and ray for the sample, as below.
+                        sampler.start_pixel_sample(pixel, i, 0);
+                        let u_film = sampler.next_2d();
+                        let film_pos = centre + (u_film - Vec2::splat(0.5));
+                        let u_lens = sampler.next_2d();
+                        let (mut ray, ray_weight) = cam.sample_ray(film_pos, u_lens);
+                        if let Some((open, close)) = motion {
+                            ray = cam.ray_at_time(&ray, open + (close - open) * sampler.next_1d()).0;
+                        }
+                        lane_samplers[lane_rays.len()].clone_from(&sampler);
+                        lane_rays.push(ray);
+                        lane_camera.push(([x, y], i, u_film, ray_weight));
+                        if lane_rays.len() == lanes {
+                            flush(&mut tile, &mut lane_rays, &mut lane_camera, &mut lane_samplers, &mut lane_out);
+                        }
                     }
-                    lane_samplers[lane_rays.len()].clone_from(&sampler);
-                    lane_rays.push(ray);
-                    lane_camera.push(([x, y], next, u_film, ray_weight));
-                    if lane_rays.len() == lanes {
-                        flush(&mut tile, &mut lane_rays, &mut lane_camera, &mut lane_samplers, &mut lane_out);
-                    }
-                    next += 1;
+                    continue;
                 }
-                for i in next..first + count {
-                    // Seeded by the film pixel (those left of or above the film wrap around), so a
-                    // pixel's samples do not depend on whether the border is sampled.
-                    sampler.start_pixel_sample([(x + rx).wrapping_sub(shift), (y + ry).wrapping_sub(shift)], i, 0);
+                for i in first..first + count {
+                    sampler.start_pixel_sample(pixel, i, 0);
                     // Uniform over the pixel; the filter weighs the sample where it is splatted
                     // (Mitsuba 3's reconstruction).
                     let u_film = sampler.next_2d();
-                    let centre = Vec2::new((x + rx) as f32 + 0.5, (y + ry) as f32 + 0.5) - shift as f32;
                     let film_pos = centre + (u_film - Vec2::splat(0.5));
                     let u_lens = sampler.next_2d();
                     // Bound in place (a move out of the returned pair was a copy by wide loads
