@@ -69,3 +69,59 @@ pub trait ImageSource {
     /// 8- and 16-bit values decoded as sRGB, linear (`raw`) or by the power `gamma`.
     fn pbrt_scalar_image(&mut self, o: &Obj, name: &str, raw: bool, gamma: Option<f32>) -> Result<Arc<Image>>;
 }
+
+/// Checks that every chunk of the OpenEXR file at `path` declares no more data than the file
+/// holds after the chunk's start. The decoder allocates a chunk's declared size (up to the
+/// header's largest block, which a wide image makes gigabytes) before reading it, so a few bytes
+/// claiming a huge chunk would otherwise take that memory. Reads the headers and offset tables
+/// as the decoder does, then each chunk's size field at its offset.
+pub fn exr_chunks_fit(path: &std::path::Path) -> std::result::Result<(), String> {
+    use exr::meta::{header::Header, BlockDescription, MetaData, Requirements};
+    use std::io::{Read, Seek, SeekFrom};
+    let bad = |e: exr::error::Error| format!("not a readable OpenEXR file: {e}");
+    let file = std::fs::File::open(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    let len = file.metadata().map_err(|e| format!("cannot read the file: {e}"))?.len();
+    let mut read = exr::io::PeekRead::new(std::io::BufReader::new(file));
+    exr::meta::magic_number::validate_exr(&mut read).map_err(bad)?;
+    let requirements = Requirements::read(&mut read).map_err(bad)?;
+    let headers = Header::read_all(&mut read, &requirements, false).map_err(bad)?;
+    let tables = MetaData::read_offset_tables(&mut read, &headers).map_err(bad)?;
+    let mut file = std::fs::File::open(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    for (header, table) in headers.iter().zip(&tables) {
+        // Before the data: the part number (multi-part files), the block's coordinates (a
+        // scan line's y, or a tile's four coordinates), then its byte count(s).
+        let part = if requirements.is_multilayer() { 4 } else { 0 };
+        let coordinates = match header.blocks {
+            BlockDescription::Tiles(_) => 16,
+            BlockDescription::ScanLines => 4,
+        };
+        for &offset in table {
+            let start = offset.checked_add(part + coordinates).filter(|&p| p <= len);
+            let Some(start) = start else {
+                return Err(format!("a chunk's offset {offset} lies beyond the file's {len} bytes"));
+            };
+            // Deep data: the sizes of the packed offset table and sample data (u64 each);
+            // flat: the compressed pixels' size (i32).
+            let mut field = [0u8; 16];
+            let field = &mut field[..if header.deep { 16 } else { 4 }];
+            file.seek(SeekFrom::Start(start))
+                .and_then(|_| file.read_exact(field))
+                .map_err(|_| format!("a chunk at offset {offset} is cut short by the end of the file"))?;
+            let (declared, after) = if header.deep {
+                let a = u64::from_le_bytes(field[..8].try_into().expect("8 bytes"));
+                let b = u64::from_le_bytes(field[8..].try_into().expect("8 bytes"));
+                (a.saturating_add(b), start + 24)
+            } else {
+                (i32::from_le_bytes(field.try_into().expect("4 bytes")) as i64 as u64, start + 4)
+            };
+            let left = len.saturating_sub(after);
+            if declared > left {
+                return Err(format!(
+                    "a chunk at offset {offset} declares {} bytes, more than the {left} the file holds after it",
+                    declared as i64
+                ));
+            }
+        }
+    }
+    Ok(())
+}

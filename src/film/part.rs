@@ -366,6 +366,7 @@ pub fn read_part(path: &Path) -> Result<Part, PartError> {
             describe_rect(info.image)
         )));
     }
+    crate::image::exr_chunks_fit(path).map_err(&fail)?;
     let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| fail(format!("not a readable OpenEXR file: {e}")))?;
     let layer = image.layer_data.first().ok_or_else(|| fail("an OpenEXR file without a layer".into()))?;
     let channel = |name: &str| -> Option<Vec<f32>> {

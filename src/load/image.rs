@@ -262,6 +262,7 @@ fn load_exr_pixels<T: Clone + 'static>(
         let size = header.layer_size;
         limits::check_image_size(path, size.width() as u64, size.height() as u64).map_err(message)?;
     }
+    crate::image::exr_chunks_fit(path)?;
     let image = read_first_rgba_layer_from_file(
         path,
         move |resolution, _| {
@@ -355,6 +356,40 @@ mod tests {
         assert!(close(&rgb, &[0.4, 1.0]), "{rgb:?}");
     }
     use crate::film::output::{write_image, ImageInfo};
+
+    /// An OpenEXR chunk that declares more bytes than the file holds is refused before the
+    /// decoder allocates them (a 2×2 image whose first chunk claims a gigabyte; the intact file
+    /// loads); a chunk offset past the end of the file too.
+    #[test]
+    fn exr_chunks_larger_than_the_file_are_errors() {
+        let dir = std::env::temp_dir().join(format!("neumann-img-chunk-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("ok.exr");
+        let px = vec![Rgb::new(0.25, 2.0, 0.0); 4];
+        write_image(&path, 2, 2, &px, &ImageInfo::default()).unwrap();
+        assert!(load_image(&path, false).is_ok());
+        let bytes = std::fs::read(&path).unwrap();
+        // The first chunk's offset, read as the decoder reads it.
+        let mut read = exr::io::PeekRead::new(std::io::Cursor::new(&bytes));
+        exr::meta::magic_number::validate_exr(&mut read).unwrap();
+        let requirements = exr::meta::Requirements::read(&mut read).unwrap();
+        let headers = exr::meta::header::Header::read_all(&mut read, &requirements, false).unwrap();
+        let tables = exr::meta::MetaData::read_offset_tables(&mut read, &headers).unwrap();
+        let first = tables[0][0] as usize;
+        // The byte count (i32) after the block's coordinates: a tile's four, a scan line's y.
+        let at = first + if matches!(headers[0].blocks, exr::meta::BlockDescription::Tiles(_)) { 16 } else { 4 };
+        let mut huge = bytes.clone();
+        huge[at..at + 4].copy_from_slice(&1_000_000_000i32.to_le_bytes());
+        std::fs::write(dir.join("huge.exr"), &huge).unwrap();
+        let e = load_image(&dir.join("huge.exr"), false).unwrap_err().to_string();
+        assert!(e.contains("declares 1000000000 bytes"), "{e}");
+        let mut far = bytes.clone();
+        let table_at = first - 8 * tables[0].len();
+        far[table_at..table_at + 8].copy_from_slice(&(1u64 << 40).to_le_bytes());
+        std::fs::write(dir.join("far.exr"), &far).unwrap();
+        let e = load_image(&dir.join("far.exr"), false).unwrap_err().to_string();
+        assert!(e.contains("beyond the file"), "{e}");
+    }
 
     #[test]
     fn exr_and_png_round_trip() {
