@@ -81,12 +81,15 @@ pub fn exr_chunks_fit(path: &std::path::Path) -> std::result::Result<(), String>
     let bad = |e: exr::error::Error| format!("not a readable OpenEXR file: {e}");
     let file = std::fs::File::open(path).map_err(|e| format!("cannot read the file: {e}"))?;
     let len = file.metadata().map_err(|e| format!("cannot read the file: {e}"))?.len();
-    let mut read = exr::io::PeekRead::new(std::io::BufReader::new(file));
+    // Headers through a buffered reader of the file, chunks by seeks on the file itself (a
+    // `&File` reads and seeks; the seeks start from absolute offsets, wherever the buffer left it).
+    let mut read = exr::io::PeekRead::new(std::io::BufReader::new(&file));
     exr::meta::magic_number::validate_exr(&mut read).map_err(bad)?;
     let requirements = Requirements::read(&mut read).map_err(bad)?;
     let headers = Header::read_all(&mut read, &requirements, false).map_err(bad)?;
     let tables = MetaData::read_offset_tables(&mut read, &headers).map_err(bad)?;
-    let mut file = std::fs::File::open(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    drop(read);
+    let mut file = &file;
     for (header, table) in headers.iter().zip(&tables) {
         // Before the data: the part number (multi-part files), the block's coordinates (a
         // scan line's y, or a tile's four coordinates), then its byte count(s).
@@ -112,13 +115,16 @@ pub fn exr_chunks_fit(path: &std::path::Path) -> std::result::Result<(), String>
                 let b = u64::from_le_bytes(field[8..].try_into().expect("8 bytes"));
                 (a.saturating_add(b), start + 24)
             } else {
-                (i32::from_le_bytes(field.try_into().expect("4 bytes")) as i64 as u64, start + 4)
+                let size = i32::from_le_bytes(field.try_into().expect("4 bytes"));
+                if size < 0 {
+                    return Err(format!("a chunk at offset {offset} declares a negative size ({size} bytes)"));
+                }
+                (size as u64, start + 4)
             };
             let left = len.saturating_sub(after);
             if declared > left {
                 return Err(format!(
-                    "a chunk at offset {offset} declares {} bytes, more than the {left} the file holds after it",
-                    declared as i64
+                    "a chunk at offset {offset} declares {declared} bytes, more than the {left} the file holds after it"
                 ));
             }
         }

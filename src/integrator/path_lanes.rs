@@ -7,7 +7,8 @@
 //! frame, the direction to the viewer, the BSDF's value, density and sample, the MIS weights,
 //! the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
 //! by lane with the scalar code: ray queries, surface interactions, emission found by the path,
-//! light selection and light samples, sampler draws, environment light of escaped rays. Those
+//! light selection and light samples, environment light of escaped rays (and the sampler's
+//! draws, but for the independent sampler's, which run in lanes: [`Pcg32Lanes`]). Those
 //! loops visit the set lanes only (`ones`): testing each lane in turn mispredicted a branch on
 //! every unpredictable lane, which cost more than the lanes saved. Per-lane records (the surface
 //! interaction, the previous vertex) are written in place, never moved: a moved record is read
@@ -29,6 +30,7 @@ use crate::light::{Light, LightSampleContext};
 use crate::material::{Bsdf, Diffuse};
 use crate::math::lanes::{sin_cos_quarter, Fw, Mw, V3w};
 use crate::math::{Ray, Rgb, Vec3, INV_PI};
+use crate::sampling::rng::Pcg32Lanes;
 use crate::sampling::Sampler;
 use crate::scene::{HitSlot, Scene};
 use crate::texture::Texture;
@@ -209,6 +211,14 @@ impl PathIntegrator {
         let mut has: Mw<W>;
         let mut slots: [HitSlot; W] = std::array::from_fn(|_| HitSlot::default());
         let mut depth = 0u32;
+        // The independent sampler's generators in lanes, where every lane has one (a lane
+        // draws exactly what its sampler would); other samplers draw lane by lane.
+        let mut rng = samplers.iter_mut().all(|s| matches!(s, Sampler::Independent(_))).then(|| {
+            Pcg32Lanes::<W>::gather(samplers.iter_mut().map(|s| match s {
+                Sampler::Independent(s) => &*s.rng_mut(),
+                _ => unreachable!("every sampler is independent"),
+            }))
+        });
         loop {
             // The closest hits of the live lanes' rays, one by one.
             for k in ones(live) {
@@ -262,12 +272,20 @@ impl PathIntegrator {
             let d = V3w::<W>::from_fn(|k| ray[k].d);
             let wo_local = frame.to_local(-d.normalize());
             let mut rho = V3w::<W>::splat(Rgb::ZERO);
-            let mut u = [[0.0f32; W]; 6];
             for k in ones(has) {
                 set(&mut rho, k, albedo(scene, si[k].shape));
-                let sampler = &mut samplers[k];
-                let (a, b, c, e) = (sampler.next_1d(), sampler.next_2d(), sampler.next_1d(), sampler.next_2d());
-                (u[0][k], u[1][k], u[2][k], u[3][k], u[4][k], u[5][k]) = (a, b.x, b.y, c, e.x, e.y);
+            }
+            let mut u = [[0.0f32; W]; 6];
+            if let Some(rng) = &mut rng {
+                for d in &mut u {
+                    *d = rng.next_f32(&has.0);
+                }
+            } else {
+                for k in ones(has) {
+                    let sampler = &mut samplers[k];
+                    let (a, b, c, e) = (sampler.next_1d(), sampler.next_2d(), sampler.next_1d(), sampler.next_2d());
+                    (u[0][k], u[1][k], u[2][k], u[3][k], u[4][k], u[5][k]) = (a, b.x, b.y, c, e.x, e.y);
+                }
             }
 
             // The BSDF sample that continues the path (cosine-weighted, above the surface only).
@@ -367,14 +385,22 @@ impl PathIntegrator {
             beta = V3w::select(live, beta * rho, beta);
             let wi_world = frame.to_world(wi_bsdf);
             depth += 1;
-            let mut u_rr = [0.0f32; W];
             for k in ones(live) {
                 let s = &si[k];
                 (prev[k].ctx.p, prev[k].ctx.n, prev[k].pdf) = (s.p, s.ns, pdf_bsdf.0[k]);
-                has_prev[k] = true;
                 ray[k] = s.spawn_ray(wi_world.lane(k));
-                u_rr[k] = samplers[k].next_1d();
+                has_prev[k] = true;
             }
+            let u_rr = match &mut rng {
+                Some(rng) => rng.next_f32(&live.0),
+                None => {
+                    let mut u_rr = [0.0f32; W];
+                    for k in ones(live) {
+                        u_rr[k] = samplers[k].next_1d();
+                    }
+                    u_rr
+                }
+            };
             let m = beta.max_element();
             let mut survive = live & m.gt(Fw::splat(0.0));
             if depth >= self.settings.rr_depth {
@@ -386,6 +412,12 @@ impl PathIntegrator {
             if !live.any() {
                 break;
             }
+        }
+        if let Some(rng) = &rng {
+            rng.scatter(samplers.iter_mut().filter_map(|s| match s {
+                Sampler::Independent(s) => Some(s.rng_mut()),
+                _ => None,
+            }));
         }
         for k in 0..n {
             out[k] = RadianceSample { l: rgb(&l, k), alpha: trace::coverage(scene, covered.test(k), false) };

@@ -383,6 +383,11 @@ mod tests {
         std::fs::write(dir.join("huge.exr"), &huge).unwrap();
         let e = load_image(&dir.join("huge.exr"), false).unwrap_err().to_string();
         assert!(e.contains("declares 1000000000 bytes"), "{e}");
+        let mut negative = bytes.clone();
+        negative[at..at + 4].copy_from_slice(&(-7i32).to_le_bytes());
+        std::fs::write(dir.join("negative.exr"), &negative).unwrap();
+        let e = load_image(&dir.join("negative.exr"), false).unwrap_err().to_string();
+        assert!(e.contains("declares a negative size (-7 bytes)"), "{e}");
         let mut far = bytes.clone();
         let table_at = first - 8 * tables[0].len();
         far[table_at..table_at + 8].copy_from_slice(&(1u64 << 40).to_le_bytes());

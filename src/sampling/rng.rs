@@ -91,6 +91,55 @@ impl Pcg32 {
     }
 }
 
+/// `W` PCG32 generators side by side (the path tracer's lanes, [`crate::math::lanes`]): each
+/// lane steps exactly as its [`Pcg32`] would, in vector instructions (the 64-bit LCG step and
+/// the XSH-RR output lane by lane in loops of fixed length, which the lanes' kernels inline and
+/// vectorize), so that lane `k` draws the bits its generator draws.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub(crate) struct Pcg32Lanes<const W: usize> {
+    state: [u64; W],
+    inc: [u64; W],
+}
+
+impl<const W: usize> Pcg32Lanes<W> {
+    /// Lanes holding `rngs[k]` (lanes past `rngs.len()` hold the default generator).
+    #[inline(always)]
+    pub(crate) fn gather<'a>(rngs: impl Iterator<Item = &'a Pcg32>) -> Self {
+        let mut lanes = Pcg32Lanes { state: [DEFAULT_STATE; W], inc: [DEFAULT_STREAM; W] };
+        for (k, r) in rngs.take(W).enumerate() {
+            (lanes.state[k], lanes.inc[k]) = (r.state, r.inc);
+        }
+        lanes
+    }
+
+    /// Writes lane `k`'s generator back into `rngs[k]`.
+    #[inline(always)]
+    pub(crate) fn scatter<'a>(&self, rngs: impl Iterator<Item = &'a mut Pcg32>) {
+        for (k, r) in rngs.take(W).enumerate() {
+            (r.state, r.inc) = (self.state[k], self.inc[k]);
+        }
+    }
+
+    /// [`Pcg32::next_f32`] in the lanes whose `mask[k]` is nonzero (the others' generators do
+    /// not move; their value is that of a step not taken, to be ignored).
+    #[inline(always)]
+    pub(crate) fn next_f32(&mut self, mask: &[u32; W]) -> [f32; W] {
+        let mut out = [0.0f32; W];
+        for k in 0..W {
+            let old = self.state[k];
+            // All ones where the lane steps: the blend of new and old state.
+            let keep = (mask[k] as i32 as i64 as u64) ^ u64::MAX;
+            let new = old.wrapping_mul(MULT).wrapping_add(self.inc[k]);
+            self.state[k] = (new & !keep) | (old & keep);
+            let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+            let rot = (old >> 59) as u32;
+            out[k] = (xorshifted.rotate_right(rot) >> 8) as f32 * (1.0 / 16_777_216.0);
+        }
+        out
+    }
+}
+
 /// A jump of a fixed number of outputs, valid on every stream: skipping `delta` steps of the LCG
 /// `s ← MULT·s + inc` is the affine map `s ← mult·s + plus·inc`, whose coefficients do not
 /// depend on the stream.
@@ -133,6 +182,25 @@ mod tests {
         for e in expected {
             assert_eq!(r.next_u32(), e);
         }
+    }
+
+    /// Lanes step as their generators do, bit for bit, and only where their mask is set.
+    #[test]
+    fn lanes_draw_what_each_generator_draws() {
+        let mut rngs: Vec<Pcg32> = (0..5).map(|k| Pcg32::new(17 + k, 3 * k + 1)).collect();
+        let mut lanes = Pcg32Lanes::<8>::gather(rngs.iter());
+        let mut reference = rngs.clone();
+        for step in 0..40u32 {
+            let mask: [u32; 8] = std::array::from_fn(|k| if !(k as u32 + step).is_multiple_of(3) { u32::MAX } else { 0 });
+            let got = lanes.next_f32(&mask);
+            for (k, r) in reference.iter_mut().enumerate() {
+                if mask[k] != 0 {
+                    assert_eq!(got[k].to_bits(), r.next_f32().to_bits(), "lane {k}, step {step}");
+                }
+            }
+        }
+        lanes.scatter(rngs.iter_mut());
+        assert_eq!(rngs, reference);
     }
 
     #[test]

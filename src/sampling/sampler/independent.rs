@@ -52,6 +52,13 @@ impl IndependentSampler {
         }
     }
 
+    /// The generator the next numbers come from (the path tracer's lanes draw from it in
+    /// vector instructions, [`crate::sampling::rng::Pcg32Lanes`]).
+    #[inline(always)]
+    pub(crate) fn rng_mut(&mut self) -> &mut Pcg32 {
+        &mut self.rng
+    }
+
     /// Next uniform number.
     #[inline(always)]
     pub fn next_1d(&mut self) -> f32 {
