@@ -363,7 +363,7 @@ impl TriangleMesh {
 
     /// Geometric normal of triangle `i` (unit, front side): cached after
     /// [`TriangleMesh::prepare_normals`], computed otherwise.
-    #[inline]
+    #[inline(always)]
     pub fn face_normal(&self, i: usize) -> Vec3 {
         match self.face_normals.get(i) {
             Some(&n) => n,
