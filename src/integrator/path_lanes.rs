@@ -4,7 +4,7 @@
 //! The lanes share the path's depth (they start together and each bounce advances every live
 //! lane), so a lane that ends (escaped, absorbed by Russian roulette, past `max_depth`) is masked
 //! off until the batch is done. What is the same work in every lane runs in lanes: the shading
-//! frame, the direction to the viewer, the BSDF's value, density and sample, the MIS weights,
+//! frame, the direction to the viewer, a constant diffuse BSDF's value, density and sample, the MIS weights,
 //! the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
 //! by lane with the scalar code: ray queries, surface interactions, emission found by the path,
 //! light selection and light samples, environment light of escaped rays (and the sampler's
@@ -18,16 +18,19 @@
 //! with its own sampler, positioned after the camera's draws), so that passes of few samples
 //! per pixel fill the lanes too.
 //!
-//! Scenes it takes ([`PathIntegrator::lane_support`]): every BSDF `diffuse` with a constant
-//! reflectance, any shapes and lights; the default strategy (light and BSDF sampling, power
-//! heuristic), no `hide_emitters`, no regularization. Anything else is traced by the scalar code.
+//! Scenes it takes ([`PathIntegrator::lane_support`]): every BSDF `diffuse`, `conductor`,
+//! `roughconductor`, `plastic` or `roughplastic` (a `diffuse` of constant reflectance in lanes,
+//! the others lane by lane with the scalar BSDF code: the lanes then still share the rest of
+//! the vertex, the sampler and the MIS arithmetic), any shapes and lights, `hide_emitters` or
+//! not; the default strategy (light and BSDF sampling, power heuristic), no regularization.
+//! Anything else is traced by the scalar code.
 
 use super::path::{DirectStrategy, MisHeuristic, PathIntegrator};
 use super::trace::{self, Mis, PrevVertex};
 use super::RadianceSample;
 use crate::geometry::{Geometry, SurfaceInteraction};
 use crate::light::{Light, LightSampleContext};
-use crate::material::{Bsdf, Diffuse};
+use crate::material::{Bsdf, Diffuse, TextureMemo};
 use crate::math::lanes::{sin_cos_quarter, Fw, Mw, V3w};
 use crate::math::{Ray, Rgb, Vec3, INV_PI};
 use crate::sampling::rng::Pcg32Lanes;
@@ -135,14 +138,24 @@ fn set<const W: usize>(v: &mut V3w<W>, k: usize, c: Vec3) {
     (v.x.0[k], v.y.0[k], v.z.0[k]) = (c.x, c.y, c.z);
 }
 
-/// The reflectance of shape `shape`'s BSDF, a constant `diffuse` in the scenes the lanes take
-/// (0 for any other, which [`PathIntegrator::lane_support`] keeps out).
+/// The reflectance of shape `shape`'s BSDF where it is a constant `diffuse` (the BSDF the lanes
+/// evaluate in lanes); `None` for the others, which go lane by lane.
 #[inline(always)]
-fn albedo(scene: &Scene, shape: u32) -> Rgb {
+fn albedo(scene: &Scene, shape: u32) -> Option<Rgb> {
     match &scene.bsdfs()[scene.shapes()[shape as usize].bsdf as usize] {
-        Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(c) }) => *c,
-        _ => Rgb::ZERO,
+        Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(c) }) => Some(*c),
+        _ => None,
     }
+}
+
+/// Whether the lanes take BSDF `b`: a constant `diffuse` runs in lanes; the others listed here
+/// lane by lane with the scalar code (they never pass light straight through, as `null` and
+/// `mask` do, whose crossings the lanes do not track).
+fn lane_bsdf(b: &Bsdf) -> bool {
+    matches!(
+        b,
+        Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::RoughConductor(_) | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_)
+    )
 }
 
 impl PathIntegrator {
@@ -151,12 +164,8 @@ impl PathIntegrator {
         self.strategy == DirectStrategy::Mis
             && self.heuristic == MisHeuristic::Power
             && !self.regularize
-            && !self.settings.hide_emitters
             && self.settings.max_segments() > 0
-            && scene
-                .bsdfs()
-                .iter()
-                .all(|b| matches!(b, Bsdf::Diffuse(d) if matches!(d.reflectance, Texture::Constant(_))))
+            && scene.bsdfs().iter().all(lane_bsdf)
     }
 
     /// `rays.len() ≤ W` camera samples at once, `samplers[k]` lane `k`'s sampler positioned
@@ -176,6 +185,7 @@ impl PathIntegrator {
         let n = rays.len();
         debug_assert!(n <= W && samplers.len() == n && out.len() == n && self.lane_support(scene));
         let max_depth = self.settings.max_segments();
+        let hide = self.settings.hide_emitters;
         let mis = Mis::POWER;
         let mut ray: [Ray; W] = [Ray::new(Vec3::ZERO, Vec3::Z); W];
         ray[..n].copy_from_slice(rays);
@@ -183,7 +193,7 @@ impl PathIntegrator {
         let mut covered = Mw::<W>::NONE;
         let mut l = V3w::<W>::splat(Vec3::ZERO);
         let mut beta = V3w::<W>::splat(Vec3::ONE);
-        let eta = Fw::<W>::splat(1.0);
+        let mut eta = Fw::<W>::splat(1.0);
         // The previous vertex of each lane's path (where `has_prev[k]`), its fields written in
         // place: a record built and then moved is copied by a wide load spanning its narrower
         // stores, which waits for them to reach the cache.
@@ -220,20 +230,32 @@ impl PathIntegrator {
             }))
         });
         loop {
+            // Camera rays pass through emitters hidden from the camera (`hide_emitters`), and
+            // what they escape to stays hidden: as the scalar path does.
+            let hidden = hide && depth == 0;
             // The closest hits of the live lanes' rays, one by one.
-            for k in ones(live) {
-                scene.intersect_into(&ray[k], &mut slots[k]);
+            if !hidden {
+                for k in ones(live) {
+                    scene.intersect_into(&ray[k], &mut slots[k]);
+                }
             }
             // Lane by lane: emission found by the path, escapes.
             has = Mw::NONE;
             for k in ones(live) {
                 let b = rgb(&beta, k);
-                let hit = scene.deferred(&ray[k], &slots[k]);
+                let hit = if hidden {
+                    trace::skip_hidden_emitters(scene, &mut ray[k], &mut slots[k])
+                } else {
+                    scene.deferred(&ray[k], &slots[k])
+                };
                 let Some(hit) = hit else {
-                    let d = ray[k].d.normalize();
-                    let mut lk = rgb(&l, k);
-                    trace::escaped(scene, ray[k].o, d, has_prev[k].then_some(&prev[k]), false, &mis, |le, w| lk += b * le * w);
-                    set(&mut l, k, lk);
+                    if !hidden {
+                        let d = ray[k].d.normalize();
+                        let mut lk = rgb(&l, k);
+                        let prev = has_prev[k].then_some(&prev[k]);
+                        trace::escaped(scene, ray[k].o, d, prev, hide, &mis, |le, w| lk += b * le * w);
+                        set(&mut l, k, lk);
+                    }
                     live.0[k] = 0;
                     continue;
                 };
@@ -247,7 +269,7 @@ impl PathIntegrator {
                 if let Some(light_index) = scene.shapes()[s.shape as usize].light {
                     let le = scene.lights()[light_index as usize].le(s.ns, wo, s.uv);
                     if le != Rgb::ZERO {
-                        let weight = trace::emission_weight(has_prev[k].then_some(&prev[k]), false, &mis, |c| {
+                        let weight = trace::emission_weight(has_prev[k].then_some(&prev[k]), hide, &mis, |c| {
                             trace::light_pdf_at(scene, c, light_index, s.p, s.ng)
                         });
                         let lk = rgb(&l, k) + b * le * weight;
@@ -272,9 +294,15 @@ impl PathIntegrator {
             let d = V3w::<W>::from_fn(|k| ray[k].d);
             let wo_local = frame.to_local(-d.normalize());
             let mut rho = V3w::<W>::splat(Rgb::ZERO);
+            // The lanes whose BSDF is a constant diffuse one (in lanes); the rest go lane by lane.
+            let mut plain = Mw::<W>::NONE;
             for k in ones(has) {
-                set(&mut rho, k, albedo(scene, si[k].shape));
+                if let Some(c) = albedo(scene, si[k].shape) {
+                    set(&mut rho, k, c);
+                    plain.0[k] = u32::MAX;
+                }
             }
+            let generic = has & !plain;
             let mut u = [[0.0f32; W]; 6];
             if let Some(rng) = &mut rng {
                 for d in &mut u {
@@ -361,11 +389,38 @@ impl PathIntegrator {
                 ls_pdf = Fw::select(quad, pdf, ls_pdf);
                 sampled = sampled | ok;
             }
+            // The other BSDFs lane by lane, by the scalar code in the scalar path's order: the
+            // sample that continues the path, then the value and density toward the light
+            // sample (none for a delta BSDF, whose vertex takes no light sample).
+            let zero = V3w::<W>::splat(Vec3::ZERO);
+            let (mut g_f, mut g_pdf) = (zero, Fw::<W>::splat(0.0));
+            let (mut g_ok, mut g_delta) = (Mw::<W>::NONE, Mw::<W>::NONE);
+            let (mut g_weight, mut g_wi) = (zero, V3w::<W>::splat(Vec3::Z));
+            let (mut g_sample_pdf, mut g_eta) = (Fw::<W>::splat(0.0), Fw::<W>::splat(1.0));
+            for k in ones(generic) {
+                let s = &si[k];
+                let bsdf = &scene.bsdfs()[scene.shapes()[s.shape as usize].bsdf as usize];
+                let memo = TextureMemo::default();
+                let vertex = trace::SurfaceVertex::new(scene, s, bsdf, &memo, -ray[k].d.normalize());
+                let u_bsdf = crate::math::Vec2::new(u[4][k], u[5][k]);
+                if let Some(bs) = bsdf.sample(&vertex.ctx, vertex.wo_local, u[3][k], u_bsdf) {
+                    set(&mut g_weight, k, bs.weight);
+                    set(&mut g_wi, k, vertex.frame.to_world(bs.wi));
+                    (g_ok.0[k], g_delta.0[k]) = (u32::MAX, if bs.delta { u32::MAX } else { 0 });
+                    (g_sample_pdf.0[k], g_eta.0[k]) = (bs.pdf, bs.eta);
+                }
+                if !bsdf.is_delta() && sampled.test(k) {
+                    let (f, pdf) = vertex.eval_pdf(ls_wi.lane(k), !delta.test(k));
+                    set(&mut g_f, k, f);
+                    g_pdf.0[k] = pdf;
+                }
+            }
+
             let wi = frame.to_local(ls_wi);
             let lit = sampled & above & wi.z.gt(Fw::splat(0.0));
-            let zero = V3w::<W>::splat(Vec3::ZERO);
             let f = V3w::select(lit, rho.scale(INV_PI * wi.z), zero);
             let pdf = Fw::select(lit, wi.z.max(Fw::splat(0.0)) * INV_PI, Fw::splat(0.0));
+            let (f, pdf) = (V3w::select(generic, g_f, f), Fw::select(generic, g_pdf, pdf));
             let mut visible = sampled & !(f.x.eq(Fw::splat(0.0)) & f.y.eq(Fw::splat(0.0)) & f.z.eq(Fw::splat(0.0)));
             for k in ones(visible) {
                 if scene.occluded(&si[k].spawn_ray_to(ls_p.lane(k), ls_n.lane(k), ls_err.lane(k))) {
@@ -381,13 +436,16 @@ impl PathIntegrator {
 
             // Continue by the BSDF sample; Russian roulette.
             covered = covered | has;
-            live = live & above;
-            beta = V3w::select(live, beta * rho, beta);
-            let wi_world = frame.to_world(wi_bsdf);
+            live = live & ((plain & above) | (generic & g_ok));
+            beta = V3w::select(live, beta * V3w::select(generic, g_weight, rho), beta);
+            eta = Fw::select(live & generic, eta * g_eta, eta);
+            let wi_world = V3w::select(generic, g_wi, frame.to_world(wi_bsdf));
+            let pdf_next = Fw::select(generic, g_sample_pdf, pdf_bsdf);
             depth += 1;
             for k in ones(live) {
                 let s = &si[k];
-                (prev[k].ctx.p, prev[k].ctx.n, prev[k].pdf) = (s.p, s.ns, pdf_bsdf.0[k]);
+                (prev[k].ctx.p, prev[k].ctx.n, prev[k].pdf) = (s.p, s.ns, pdf_next.0[k]);
+                prev[k].delta = g_delta.test(k);
                 ray[k] = s.spawn_ray(wi_world.lane(k));
                 has_prev[k] = true;
             }
@@ -420,7 +478,7 @@ impl PathIntegrator {
             }));
         }
         for k in 0..n {
-            out[k] = RadianceSample { l: rgb(&l, k), alpha: trace::coverage(scene, covered.test(k), false) };
+            out[k] = RadianceSample { l: rgb(&l, k), alpha: trace::coverage(scene, covered.test(k), hide) };
         }
     }
 }
@@ -497,9 +555,42 @@ mod tests {
 
     /// A diffuse room of every light kind the lanes meet: an open box of meshes (one face
     /// lit, one-sided), a sphere that emits, a point light (a delta light sample) and a
-    /// constant sky through the open side (escaped rays), with a diffuse sphere inside.
-    fn room() -> Scene {
+    /// constant sky through the open side (escaped rays), with a diffuse sphere inside; where
+    /// `glossy`, also spheres of each BSDF the lanes take lane by lane (a rough conductor of
+    /// each microfacet distribution, a mirror, smooth and rough plastic).
+    fn room(glossy: bool) -> Scene {
         let mut b = SceneBuilder::new();
+        if glossy {
+            use crate::material::microfacet::{Microfacet, MicrofacetType, Roughness};
+            use crate::material::{Conductor, ConductorIor, Plastic, RoughConductor, RoughPlastic};
+            let gold = || Some(ConductorIor::constant(Rgb::new(0.14, 0.37, 1.44), Rgb::new(3.98, 2.38, 1.6)));
+            let bsdfs = [
+                Bsdf::RoughConductor(RoughConductor {
+                    roughness: Roughness::from(Microfacet::new(MicrofacetType::Ggx, 0.2, 0.2)),
+                    ior: gold(),
+                    specular_reflectance: Rgb::ONE.into(),
+                }),
+                Bsdf::RoughConductor(RoughConductor {
+                    roughness: Roughness::from(Microfacet::new(MicrofacetType::Beckmann, 0.3, 0.1)),
+                    ior: None,
+                    specular_reflectance: Rgb::splat(0.8).into(),
+                }),
+                Bsdf::Conductor(Conductor { ior: gold(), specular_reflectance: Rgb::ONE.into() }),
+                Bsdf::Plastic(Plastic::new(Rgb::new(0.2, 0.5, 0.3), Rgb::ONE, 1.5, false)),
+                Bsdf::RoughPlastic(RoughPlastic::new(
+                    Microfacet::new(MicrofacetType::Ggx, 0.15, 0.15),
+                    Rgb::new(0.5, 0.2, 0.1),
+                    Rgb::ONE,
+                    1.5,
+                    false,
+                )),
+            ];
+            for (i, bsdf) in bsdfs.into_iter().enumerate() {
+                let m = b.add_bsdf(bsdf);
+                let at = Vec3::new(-0.7 + 0.35 * i as f32, -0.8, 0.3 - 0.15 * i as f32);
+                b.add_shape(Geometry::Sphere(Sphere::new(at, 0.17, false)), m, None);
+            }
+        }
         let white = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.8, 0.7, 0.6))));
         let red = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.6, 0.1, 0.1))));
         let faces = [
@@ -534,84 +625,89 @@ mod tests {
     }
 
     /// Every sample traced in lanes is the scalar path tracer's, bit for bit: full and partial
-    /// batches of each width, several depths (with and without Russian roulette), two samplers.
+    /// batches of each width, several depths (with and without Russian roulette), two samplers,
+    /// a diffuse room and one with the BSDFs the lanes take lane by lane, emitters shown and
+    /// hidden from the camera.
     #[test]
     fn lanes_match_the_scalar_path_tracer_bit_for_bit() {
-        let scene = room();
-        let cam = scene.camera();
-        for (max_depth, rr_depth) in [(1, 5), (2, 5), (3, 1), (8, 2), (-1, 5)] {
-            let integrator = PathIntegrator {
-                settings: PathSettings { max_depth, rr_depth, ..Default::default() },
-                ..Default::default()
-            };
-            assert!(integrator.lane_support(&scene));
-            for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
-                let mut sampler = kind.make(64, 7);
-                let mut rays = Vec::new();
-                let mut samplers = Vec::new();
-                for i in 0..64u32 {
-                    let pixel = [i % 8, (i / 8) % 8];
-                    sampler.start_pixel_sample(pixel, i, 0);
-                    let film = Vec2::new(pixel[0] as f32, pixel[1] as f32) + sampler.next_2d();
-                    let (ray, _) = cam.sample_ray(film, sampler.next_2d());
-                    rays.push(ray);
-                    samplers.push(sampler.clone());
-                }
-                let expected: Vec<RadianceSample> = rays
-                    .iter()
-                    .zip(&samplers)
-                    .map(|(r, s)| integrator.sample(&scene, r, &mut s.clone(), &mut []))
-                    .collect();
-                let mut lit = 0;
-                for width in [4usize, 8, 16] {
-                    for batch in [width, width - 1, 1] {
-                        let mut out = vec![RadianceSample { l: Rgb::ZERO, alpha: 0.0 }; rays.len()];
-                        let mut s = samplers.clone();
-                        for ((r, m), o) in rays.chunks(batch).zip(s.chunks_mut(batch)).zip(out.chunks_mut(batch)) {
-                            match width {
-                                4 => integrator.trace_lanes::<4>(&scene, r, m, o),
-                                8 => integrator.trace_lanes::<8>(&scene, r, m, o),
-                                _ => integrator.trace_lanes::<16>(&scene, r, m, o),
-                            }
-                        }
-                        for (k, (a, e)) in out.iter().zip(&expected).enumerate() {
-                            let bits = |s: &RadianceSample| {
-                                [s.l.x.to_bits(), s.l.y.to_bits(), s.l.z.to_bits(), s.alpha.to_bits()]
-                            };
-                            assert_eq!(bits(a), bits(e), "max_depth {max_depth}, {kind:?}, width {width}, batch {batch}, sample {k}: {a:?} vs {e:?}");
-                            lit += usize::from(a.l != Rgb::ZERO);
-                        }
-                        // The dispatcher (whatever width this CPU runs) gives the same.
-                        let mut s = samplers.clone();
-                        let n = rays.len().min(lane_width().max(1));
-                        trace_lanes_dispatch(&integrator, &scene, &rays[..n], &mut s[..n], &mut out[..n]);
-                        assert!(out[..n]
-                            .iter()
-                            .zip(&expected)
-                            .all(|(a, e)| a.l.to_array().map(f32::to_bits) == e.l.to_array().map(f32::to_bits)));
-                    }
-                }
-                assert!(lit > 100, "too few samples see light to test anything: {lit}");
+        let cases = [(1, 5, false), (2, 5, false), (3, 1, false), (8, 2, false), (-1, 5, false), (2, 5, true), (-1, 2, true)];
+        for (glossy, hide_emitters) in [(false, false), (true, false), (true, true)] {
+            for &(max_depth, rr_depth, _) in cases.iter().filter(|c| !hide_emitters || c.2) {
+                check_lanes(&room(glossy), PathSettings { max_depth, rr_depth, hide_emitters });
             }
         }
     }
 
-    /// Scenes with a BSDF other than a constant diffuse one, or settings the lanes do not
-    /// implement, are left to the scalar code.
+    /// [`lanes_match_the_scalar_path_tracer_bit_for_bit`] for one scene and setting.
+    fn check_lanes(scene: &Scene, settings: PathSettings) {
+        let cam = scene.camera();
+        let glossy = scene.bsdfs().len() > 2;
+        let integrator = PathIntegrator { settings, ..Default::default() };
+        assert!(integrator.lane_support(scene));
+        for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
+            let mut sampler = kind.make(64, 7);
+            let mut rays = Vec::new();
+            let mut samplers = Vec::new();
+            for i in 0..64u32 {
+                let pixel = [i % 8, (i / 8) % 8];
+                sampler.start_pixel_sample(pixel, i, 0);
+                let film = Vec2::new(pixel[0] as f32, pixel[1] as f32) + sampler.next_2d();
+                let (ray, _) = cam.sample_ray(film, sampler.next_2d());
+                rays.push(ray);
+                samplers.push(sampler.clone());
+            }
+            let expected: Vec<RadianceSample> = rays
+                .iter()
+                .zip(&samplers)
+                .map(|(r, s)| integrator.sample(scene, r, &mut s.clone(), &mut []))
+                .collect();
+            let mut lit = 0;
+            for width in [4usize, 8, 16] {
+                for batch in [width, width - 1, 1] {
+                    let mut out = vec![RadianceSample { l: Rgb::ZERO, alpha: 0.0 }; rays.len()];
+                    let mut s = samplers.clone();
+                    for ((r, m), o) in rays.chunks(batch).zip(s.chunks_mut(batch)).zip(out.chunks_mut(batch)) {
+                        match width {
+                            4 => integrator.trace_lanes::<4>(scene, r, m, o),
+                            8 => integrator.trace_lanes::<8>(scene, r, m, o),
+                            _ => integrator.trace_lanes::<16>(scene, r, m, o),
+                        }
+                    }
+                    for (k, (a, e)) in out.iter().zip(&expected).enumerate() {
+                        let bits = |s: &RadianceSample| {
+                            [s.l.x.to_bits(), s.l.y.to_bits(), s.l.z.to_bits(), s.alpha.to_bits()]
+                        };
+                        assert_eq!(bits(a), bits(e), "{settings:?}, glossy {glossy}, {kind:?}, width {width}, batch {batch}, sample {k}: {a:?} vs {e:?}");
+                        lit += usize::from(a.l != Rgb::ZERO);
+                    }
+                    // The dispatcher (whatever width this CPU runs) gives the same.
+                    let mut s = samplers.clone();
+                    let n = rays.len().min(lane_width().max(1));
+                    trace_lanes_dispatch(&integrator, scene, &rays[..n], &mut s[..n], &mut out[..n]);
+                    assert!(out[..n]
+                        .iter()
+                        .zip(&expected)
+                        .all(|(a, e)| a.l.to_array().map(f32::to_bits) == e.l.to_array().map(f32::to_bits)));
+                }
+            }
+            assert!(lit > 100, "too few samples see light to test anything: {lit} ({settings:?})");
+        }
+    }
+
+    /// Scenes with a BSDF the lanes do not take (one that passes light straight through), or
+    /// settings the lanes do not implement, are left to the scalar code.
     #[test]
-    fn lanes_take_constant_diffuse_scenes_with_the_default_strategy_only() {
-        let scene = room();
+    fn lanes_take_their_bsdfs_with_the_default_strategy_only() {
+        let scene = room(true);
         let path = PathIntegrator::default();
         assert!(path.lane_support(&scene));
         assert_eq!(path.lanes(&scene), lane_width());
+        let hidden = PathIntegrator { settings: PathSettings { hide_emitters: true, ..Default::default() }, ..Default::default() };
+        assert!(hidden.lane_support(&scene));
         for other in [
             PathIntegrator { strategy: DirectStrategy::Light, ..Default::default() },
             PathIntegrator { heuristic: MisHeuristic::Balance, ..Default::default() },
             PathIntegrator { regularize: true, ..Default::default() },
-            PathIntegrator {
-                settings: PathSettings { hide_emitters: true, ..Default::default() },
-                ..Default::default()
-            },
             PathIntegrator::with_max_depth(0),
         ] {
             assert!(!other.lane_support(&scene) && other.lanes(&scene) == 0);
