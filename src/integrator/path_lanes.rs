@@ -19,11 +19,11 @@
 //! per pixel fill the lanes too.
 //!
 //! Scenes it takes ([`PathIntegrator::lane_support`]): every BSDF `diffuse`, `conductor`,
-//! `roughconductor`, `plastic` or `roughplastic` (a `diffuse` of constant reflectance in lanes,
-//! the others lane by lane with the scalar BSDF code: the lanes then still share the rest of
-//! the vertex, the sampler and the MIS arithmetic), any shapes and lights, `hide_emitters` or
-//! not; the default strategy (light and BSDF sampling, power heuristic), no regularization.
-//! Anything else is traced by the scalar code.
+//! `roughconductor`, `plastic`, `roughplastic`, `dielectric` or `roughdielectric` (a `diffuse`
+//! of constant reflectance in lanes, the others lane by lane with the scalar BSDF code: the
+//! lanes then still share the rest of the vertex, the sampler and the MIS arithmetic), any
+//! shapes and lights, `hide_emitters` or not; the default strategy (light and BSDF sampling,
+//! power heuristic), no regularization. Anything else is traced by the scalar code.
 
 use super::path::{DirectStrategy, MisHeuristic, PathIntegrator};
 use super::trace::{self, Mis, PrevVertex};
@@ -154,7 +154,13 @@ fn albedo(scene: &Scene, shape: u32) -> Option<Rgb> {
 fn lane_bsdf(b: &Bsdf) -> bool {
     matches!(
         b,
-        Bsdf::Diffuse(_) | Bsdf::Conductor(_) | Bsdf::RoughConductor(_) | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_)
+        Bsdf::Diffuse(_)
+            | Bsdf::Conductor(_)
+            | Bsdf::RoughConductor(_)
+            | Bsdf::Plastic(_)
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::Dielectric(_)
+            | Bsdf::RoughDielectric(_)
     )
 }
 
@@ -557,12 +563,12 @@ mod tests {
     /// lit, one-sided), a sphere that emits, a point light (a delta light sample) and a
     /// constant sky through the open side (escaped rays), with a diffuse sphere inside; where
     /// `glossy`, also spheres of each BSDF the lanes take lane by lane (a rough conductor of
-    /// each microfacet distribution, a mirror, smooth and rough plastic).
+    /// each microfacet distribution, a mirror, smooth and rough plastic, smooth and rough glass).
     fn room(glossy: bool) -> Scene {
         let mut b = SceneBuilder::new();
         if glossy {
             use crate::material::microfacet::{Microfacet, MicrofacetType, Roughness};
-            use crate::material::{Conductor, ConductorIor, Plastic, RoughConductor, RoughPlastic};
+            use crate::material::{Conductor, ConductorIor, Dielectric, Plastic, RoughConductor, RoughDielectric, RoughPlastic};
             let gold = || Some(ConductorIor::constant(Rgb::new(0.14, 0.37, 1.44), Rgb::new(3.98, 2.38, 1.6)));
             let bsdfs = [
                 Bsdf::RoughConductor(RoughConductor {
@@ -584,11 +590,24 @@ mod tests {
                     1.5,
                     false,
                 )),
+                Bsdf::Dielectric(Dielectric {
+                    eta: 1.5,
+                    specular_reflectance: Rgb::ONE.into(),
+                    specular_transmittance: Rgb::ONE.into(),
+                }),
+                Bsdf::RoughDielectric(RoughDielectric {
+                    roughness: Roughness::from(Microfacet::new(MicrofacetType::Ggx, 0.25, 0.25)),
+                    eta: 1.33,
+                    specular_reflectance: Rgb::ONE.into(),
+                    specular_transmittance: Rgb::splat(0.9).into(),
+                }),
             ];
             for (i, bsdf) in bsdfs.into_iter().enumerate() {
                 let m = b.add_bsdf(bsdf);
-                let at = Vec3::new(-0.7 + 0.35 * i as f32, -0.8, 0.3 - 0.15 * i as f32);
-                b.add_shape(Geometry::Sphere(Sphere::new(at, 0.17, false)), m, None);
+                let at = Vec3::new(-0.75 + 0.25 * i as f32, -0.8 + 0.2 * (i % 2) as f32, 0.3 - 0.1 * i as f32);
+                // The glass spheres larger: paths through them test the lanes' η (Russian roulette).
+                let r = if i >= 5 { 0.3 } else { 0.17 };
+                b.add_shape(Geometry::Sphere(Sphere::new(at, r, false)), m, None);
             }
         }
         let white = b.add_bsdf(Bsdf::Diffuse(Diffuse::new(Rgb::new(0.8, 0.7, 0.6))));
@@ -645,10 +664,10 @@ mod tests {
         let integrator = PathIntegrator { settings, ..Default::default() };
         assert!(integrator.lane_support(scene));
         for kind in [SamplerKind::Independent, SamplerKind::Sobol] {
-            let mut sampler = kind.make(64, 7);
+            let mut sampler = kind.make(256, 7);
             let mut rays = Vec::new();
             let mut samplers = Vec::new();
-            for i in 0..64u32 {
+            for i in 0..256u32 {
                 let pixel = [i % 8, (i / 8) % 8];
                 sampler.start_pixel_sample(pixel, i, 0);
                 let film = Vec2::new(pixel[0] as f32, pixel[1] as f32) + sampler.next_2d();
