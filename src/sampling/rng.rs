@@ -45,17 +45,15 @@ impl Pcg32 {
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(MULT).wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
+        self.state = lcg_step(old, self.inc);
+        xsh_rr(old)
     }
 
     /// Next uniform `f32` in `[0, 1)`: the top 24 bits of [`Pcg32::next_u32`] times 2⁻²⁴, so
     /// every value is exact and 1 is never returned.
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        unit_f32(self.next_u32())
     }
 
     /// Next uniform `f64` in `[0, 1)` (53 random bits).
@@ -89,6 +87,25 @@ impl Pcg32 {
     pub fn jump(&mut self, s: &Stride) {
         self.state = s.mult.wrapping_mul(self.state).wrapping_add(s.plus.wrapping_mul(self.inc));
     }
+}
+
+/// The LCG's step from state `old` on the stream of increment `inc`.
+#[inline(always)]
+fn lcg_step(old: u64, inc: u64) -> u64 {
+    old.wrapping_mul(MULT).wrapping_add(inc)
+}
+
+/// PCG32's output for the state `old` (XSH-RR: xorshift high, random rotation).
+#[inline(always)]
+fn xsh_rr(old: u64) -> u32 {
+    let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+    xorshifted.rotate_right((old >> 59) as u32)
+}
+
+/// An output's top 24 bits as a uniform `f32` in `[0, 1)` (exact; never 1).
+#[inline(always)]
+fn unit_f32(x: u32) -> f32 {
+    (x >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 /// `W` PCG32 generators side by side (the path tracer's lanes, [`crate::math::lanes`]): each
@@ -130,11 +147,8 @@ impl<const W: usize> Pcg32Lanes<W> {
             let old = self.state[k];
             // All ones where the lane steps: the blend of new and old state.
             let keep = (mask[k] as i32 as i64 as u64) ^ u64::MAX;
-            let new = old.wrapping_mul(MULT).wrapping_add(self.inc[k]);
-            self.state[k] = (new & !keep) | (old & keep);
-            let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-            let rot = (old >> 59) as u32;
-            out[k] = (xorshifted.rotate_right(rot) >> 8) as f32 * (1.0 / 16_777_216.0);
+            self.state[k] = (lcg_step(old, self.inc[k]) & !keep) | (old & keep);
+            out[k] = unit_f32(xsh_rr(old));
         }
         out
     }
