@@ -734,8 +734,8 @@ impl Scene {
     /// [`Scene::interaction_with`] handed to `finish` where each kind of hit makes it: each
     /// record goes straight where `finish` puts it (one record chosen between the kinds' and
     /// then stored is assembled on the stack by narrow stores and copied by wide loads, which
-    /// wait for those stores: a failed store-to-load forward, a third of the interaction's
-    /// time in the path tracer's lanes).
+    /// wait for those stores: a failed store-to-load forward, which perf put at 29 % of
+    /// `interaction_to`'s cycles in the path tracer's lanes on the Cornell box).
     #[inline(always)]
     fn interaction_then<R>(
         &self,
