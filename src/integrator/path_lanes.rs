@@ -7,7 +7,8 @@
 //! frame, the direction to the viewer, a constant diffuse BSDF's value, density and sample, the MIS weights,
 //! the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
 //! by lane with the scalar code: ray queries, surface interactions, emission found by the path,
-//! light selection and light samples, environment light of escaped rays (and the sampler's
+//! light selection, light samples (but those of rectangles and of whole spheres seen from
+//! outside, of constant radiance, which run in lanes), environment light of escaped rays (and the sampler's
 //! draws, but for the independent sampler's, which run in lanes: [`Pcg32Lanes`]). Those
 //! loops visit the set lanes only (`ones`): testing each lane in turn mispredicted a branch on
 //! every unpredictable lane, which cost more than the lanes saved. Per-lane records (the surface
@@ -28,62 +29,16 @@
 use super::path::{DirectStrategy, MisHeuristic, PathIntegrator};
 use super::trace::{self, Mis, PrevVertex};
 use super::RadianceSample;
+use crate::geometry::sphere::sample_cone_lanes;
 use crate::geometry::{Geometry, SurfaceInteraction};
 use crate::light::{Light, LightSampleContext};
 use crate::material::{Bsdf, Diffuse, TextureMemo};
-use crate::math::lanes::{sin_cos_quarter, Fw, Mw, V3w};
+use crate::math::lanes::{sin_cos_quarter, FrameW, Fw, Mw, V3w};
 use crate::math::{Ray, Rgb, Vec3, INV_PI};
 use crate::sampling::rng::Pcg32Lanes;
 use crate::sampling::Sampler;
 use crate::scene::{HitSlot, Scene};
 use crate::texture::Texture;
-
-/// The frame `(s, t, n)` of each lane ([`crate::math::Frame`] in lanes).
-#[derive(Clone, Copy)]
-struct FrameW<const W: usize> {
-    s: V3w<W>,
-    t: V3w<W>,
-    n: V3w<W>,
-}
-
-impl<const W: usize> FrameW<W> {
-    /// [`crate::math::Frame::from_z`] in lanes.
-    #[inline(always)]
-    fn from_z(n: V3w<W>) -> Self {
-        let sign = Fw::splat(1.0).copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let s = V3w::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = V3w::new(b, sign + n.y * n.y * a, -n.y);
-        FrameW { s, t, n }
-    }
-
-    /// [`crate::math::Frame::from_zx`] in lanes: Gram–Schmidt where the tangent is usable,
-    /// [`FrameW::from_z`] in the other lanes.
-    #[inline(always)]
-    fn from_zx(n: V3w<W>, s: V3w<W>) -> Self {
-        let s2 = s.length_squared();
-        let s = s - n.scale(n.dot(s));
-        let len2 = s.length_squared();
-        let fallback = s2.eq(Fw::splat(0.0)) | len2.ne(len2) | len2.le(s2 * 1e-12) | !s2.is_finite();
-        let s = s / len2.sqrt();
-        let gram = FrameW { s, t: n.cross(s), n };
-        let z = FrameW::from_z(n);
-        FrameW { s: V3w::select(fallback, z.s, gram.s), t: V3w::select(fallback, z.t, gram.t), n }
-    }
-
-    /// World → local, as [`crate::math::Frame::to_local`].
-    #[inline(always)]
-    fn to_local(self, v: V3w<W>) -> V3w<W> {
-        V3w::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
-    }
-
-    /// Local → world, as [`crate::math::Frame::to_world`].
-    #[inline(always)]
-    fn to_world(self, v: V3w<W>) -> V3w<W> {
-        self.s.scale(v.x) + self.t.scale(v.y) + self.n.scale(v.z)
-    }
-}
 
 /// [`crate::sampling::power_heuristic`] with one sample of each strategy, in lanes.
 #[inline(always)]
@@ -344,6 +299,11 @@ impl PathIntegrator {
             let mut two_sided = Mw::<W>::NONE;
             let (mut q_o, mut q_e1, mut q_e2) = (ls_p, ls_p, ls_p);
             let (mut q_mismatch, mut q_density) = (Fw::<W>::splat(0.0), Fw::<W>::splat(0.0));
+            // Lanes whose light is a whole sphere of constant radiance seen from outside: the
+            // cone it subtends sampled in lanes below, as `Sphere::sample_solid_angle`,
+            // `Geometry::sample_solid_angle` and `Light::sample_li` compute it.
+            let (mut ball, mut flip) = (Mw::<W>::NONE, Mw::<W>::NONE);
+            let (mut b_c, mut b_r) = (ls_p, Fw::<W>::splat(1.0));
             for k in ones(has) {
                 let s = &si[k];
                 let ctx = LightSampleContext { p: s.p, n: s.ns };
@@ -351,17 +311,33 @@ impl PathIntegrator {
                 pmf.0[k] = p;
                 let light = &scene.lights()[index as usize];
                 if let Light::Area { shape, radiance: Texture::Constant(c), two_sided: both } = light {
-                    if let Geometry::Mesh(m) = &scene.geometries()[*shape as usize] {
-                        if let Some(([o, e1, e2, n], mismatch, density)) = m.parallelogram_sampling() {
-                            (quad.0[k], two_sided.0[k]) = (u32::MAX, if *both { u32::MAX } else { 0 });
-                            set(&mut q_o, k, o);
-                            set(&mut q_e1, k, e1);
-                            set(&mut q_e2, k, e2);
-                            set(&mut ls_n, k, n);
+                    match &scene.geometries()[*shape as usize] {
+                        Geometry::Mesh(m) => {
+                            if let Some(([o, e1, e2, n], mismatch, density)) = m.parallelogram_sampling() {
+                                (quad.0[k], two_sided.0[k]) = (u32::MAX, if *both { u32::MAX } else { 0 });
+                                set(&mut q_o, k, o);
+                                set(&mut q_e1, k, e1);
+                                set(&mut q_e2, k, e2);
+                                set(&mut ls_n, k, n);
+                                set(&mut ls_li, k, *c);
+                                (q_mismatch.0[k], q_density.0[k]) = (mismatch, density);
+                                continue;
+                            }
+                        }
+                        // A whole sphere seen from outside: its cone sampled in lanes below.
+                        Geometry::Sphere(sphere)
+                            if !sphere.clip.is_partial()
+                                && (s.p - sphere.center).length_squared()
+                                    > sphere.radius * sphere.radius * (1.0 + 1e-4) =>
+                        {
+                            (ball.0[k], two_sided.0[k]) = (u32::MAX, if *both { u32::MAX } else { 0 });
+                            flip.0[k] = if sphere.flip { u32::MAX } else { 0 };
+                            set(&mut b_c, k, sphere.center);
+                            b_r.0[k] = sphere.radius;
                             set(&mut ls_li, k, *c);
-                            (q_mismatch.0[k], q_density.0[k]) = (mismatch, density);
                             continue;
                         }
+                        _ => {}
                     }
                 }
                 let Some(ls) = light.sample_li(scene.geometries(), s.p, crate::math::Vec2::new(u[1][k], u[2][k]))
@@ -375,13 +351,13 @@ impl PathIntegrator {
                 set(&mut ls_err, k, ls.p_error);
                 (ls_pdf.0[k], sampled.0[k], delta.0[k]) = (ls.pdf, u32::MAX, if ls.delta { u32::MAX } else { 0 });
             }
+            let p_ref = V3w::<W>::from_fn(|k| si[k].p);
             if quad.any() {
                 // The point: o + u₁ e₁ + u₂ e₂ with its error bound; its density per solid
                 // angle from the vertex, p_A r³ / |n · d|; none where the light faces away.
                 let (a, b) = (q_e1.scale(Fw(u[1])), q_e2.scale(Fw(u[2])));
                 let err = (q_o.abs() + a.abs() + b.abs()).scale(Fw::splat(crate::math::float::gamma(6))) + q_mismatch;
                 let p = q_o + a + b;
-                let p_ref = V3w::<W>::from_fn(|k| si[k].p);
                 let d = p - p_ref;
                 let dist2 = d.length_squared();
                 let dist = dist2.sqrt();
@@ -393,6 +369,22 @@ impl PathIntegrator {
                 ls_p = V3w::select(quad, p, ls_p);
                 ls_err = V3w::select(quad, err, ls_err);
                 ls_pdf = Fw::select(quad, pdf, ls_pdf);
+                sampled = sampled | ok;
+            }
+            if ball.any() {
+                // The point in the cone, the unit direction to it (none where it has no length)
+                // and, for a one-sided light, none where the light faces away.
+                let (p, v, err, pdf) = sample_cone_lanes(b_c, b_r, p_ref, Fw(u[1]), Fw(u[2]));
+                let n = V3w::select(flip, -v, v);
+                let d = p - p_ref;
+                let rcp = 1.0 / d.length();
+                let wi = d.scale(rcp);
+                let ok = ball & rcp.is_finite() & rcp.gt(Fw::splat(0.0)) & (two_sided | !n.dot(wi).ge(Fw::splat(0.0)));
+                ls_wi = V3w::select(ball, wi, ls_wi);
+                ls_p = V3w::select(ball, p, ls_p);
+                ls_n = V3w::select(ball, n, ls_n);
+                ls_err = V3w::select(ball, err, ls_err);
+                ls_pdf = Fw::select(ball, pdf, ls_pdf);
                 sampled = sampled | ok;
             }
             // The other BSDFs lane by lane, by the scalar code in the scalar path's order: the

@@ -108,6 +108,12 @@ impl<const W: usize> Fw<W> {
         self.zip(sign, f32::copysign)
     }
 
+    /// Lane-wise clamp to `[lo, hi]`, as `f32::clamp` (NaN stays NaN).
+    #[inline(always)]
+    pub fn clamp(self, lo: f32, hi: f32) -> Self {
+        self.map(|x| x.clamp(lo, hi))
+    }
+
     /// `a` in the lanes of `m`, `b` elsewhere.
     #[inline(always)]
     pub fn select(m: Mw<W>, a: Self, b: Self) -> Self {
@@ -416,6 +422,56 @@ impl<const W: usize> Neg for V3w<W> {
     #[inline(always)]
     fn neg(self) -> V3w<W> {
         V3w { x: -self.x, y: -self.y, z: -self.z }
+    }
+}
+
+/// The frame `(s, t, n)` of each lane ([`crate::math::Frame`] in lanes).
+#[derive(Clone, Copy)]
+pub struct FrameW<const W: usize> {
+    /// First tangent.
+    pub s: V3w<W>,
+    /// Second tangent.
+    pub t: V3w<W>,
+    /// Normal.
+    pub n: V3w<W>,
+}
+
+impl<const W: usize> FrameW<W> {
+    /// [`crate::math::Frame::from_z`] in lanes.
+    #[inline(always)]
+    pub fn from_z(n: V3w<W>) -> Self {
+        let sign = Fw::splat(1.0).copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = V3w::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = V3w::new(b, sign + n.y * n.y * a, -n.y);
+        FrameW { s, t, n }
+    }
+
+    /// [`crate::math::Frame::from_zx`] in lanes: Gram–Schmidt where the tangent is usable,
+    /// [`FrameW::from_z`] in the other lanes.
+    #[inline(always)]
+    pub fn from_zx(n: V3w<W>, s: V3w<W>) -> Self {
+        let s2 = s.length_squared();
+        let s = s - n.scale(n.dot(s));
+        let len2 = s.length_squared();
+        let fallback = s2.eq(Fw::splat(0.0)) | len2.ne(len2) | len2.le(s2 * 1e-12) | !s2.is_finite();
+        let s = s / len2.sqrt();
+        let gram = FrameW { s, t: n.cross(s), n };
+        let z = FrameW::from_z(n);
+        FrameW { s: V3w::select(fallback, z.s, gram.s), t: V3w::select(fallback, z.t, gram.t), n }
+    }
+
+    /// World → local, as [`crate::math::Frame::to_local`].
+    #[inline(always)]
+    pub fn to_local(self, v: V3w<W>) -> V3w<W> {
+        V3w::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    /// Local → world, as [`crate::math::Frame::to_world`].
+    #[inline(always)]
+    pub fn to_world(self, v: V3w<W>) -> V3w<W> {
+        self.s.scale(v.x) + self.t.scale(v.y) + self.n.scale(v.z)
     }
 }
 
