@@ -4,8 +4,9 @@
 //! The lanes share the path's depth (they start together and each bounce advances every live
 //! lane), so a lane that ends (escaped, absorbed by Russian roulette, past `max_depth`) is masked
 //! off until the batch is done. What is the same work in every lane runs in lanes: the shading
-//! frame, the direction to the viewer, a constant diffuse BSDF's value, density and sample, the MIS weights,
-//! the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
+//! frame, the direction to the viewer, the value, density and sample of a constant `diffuse`
+//! BSDF and of a `roughconductor` of constant parameters ([`RoughConductorW`]), the MIS
+//! weights, the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
 //! by lane with the scalar code: ray queries, surface interactions, emission found by the path,
 //! light selection, light samples (but those of rectangles and of whole spheres seen from
 //! outside, of constant radiance, which run in lanes), environment light of escaped rays (and the sampler's
@@ -21,8 +22,9 @@
 //!
 //! Scenes it takes ([`PathIntegrator::lane_support`]): every BSDF `diffuse`, `conductor`,
 //! `roughconductor`, `plastic`, `roughplastic`, `dielectric` or `roughdielectric` (a `diffuse`
-//! of constant reflectance in lanes, the others lane by lane with the scalar BSDF code: the
-//! lanes then still share the rest of the vertex, the sampler and the MIS arithmetic), any
+//! of constant reflectance and a GGX or Beckmann `roughconductor` of constant parameters in
+//! lanes, the others lane by lane with the scalar BSDF code: the lanes then still share the
+//! rest of the vertex, the sampler and the MIS arithmetic), any
 //! shapes and lights, `hide_emitters` or not; the default strategy (light and BSDF sampling,
 //! power heuristic), no regularization. Anything else is traced by the scalar code.
 
@@ -32,8 +34,9 @@ use super::RadianceSample;
 use crate::geometry::sphere::sample_cone_lanes;
 use crate::geometry::{Geometry, SurfaceInteraction};
 use crate::light::{Light, LightSampleContext};
+use crate::material::lanes::RoughConductorW;
 use crate::material::{Bsdf, Diffuse, TextureMemo};
-use crate::math::lanes::{sin_cos_quarter, FrameW, Fw, Mw, V3w};
+use crate::math::lanes::{ones, sin_cos_quarter, FrameW, Fw, Mw, V3w};
 use crate::math::{Ray, Rgb, Vec3, INV_PI};
 use crate::sampling::rng::Pcg32Lanes;
 use crate::sampling::Sampler;
@@ -67,20 +70,6 @@ fn sample_cosine_hemisphere<const W: usize>(ux: Fw<W>, uy: Fw<W>) -> (V3w<W>, Fw
     (V3w::new(dx, dy, z), z * INV_PI)
 }
 
-/// The set lanes of `m`, lowest first (a loop over them branches once per set lane, where
-/// testing each lane in turn mispredicts on the unpredictable ones).
-#[inline(always)]
-fn ones<const W: usize>(m: Mw<W>) -> impl Iterator<Item = usize> {
-    let mut bits = m.bits();
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
-}
-
 /// Lane `k` of `v` as an `Rgb`.
 #[inline(always)]
 fn rgb<const W: usize>(v: &V3w<W>, k: usize) -> Rgb {
@@ -93,17 +82,8 @@ fn set<const W: usize>(v: &mut V3w<W>, k: usize, c: Vec3) {
     (v.x.0[k], v.y.0[k], v.z.0[k]) = (c.x, c.y, c.z);
 }
 
-/// The reflectance of shape `shape`'s BSDF where it is a constant `diffuse` (the BSDF the lanes
-/// evaluate in lanes); `None` for the others, which go lane by lane.
-#[inline(always)]
-fn albedo(scene: &Scene, shape: u32) -> Option<Rgb> {
-    match &scene.bsdfs()[scene.shapes()[shape as usize].bsdf as usize] {
-        Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(c) }) => Some(*c),
-        _ => None,
-    }
-}
-
-/// Whether the lanes take BSDF `b`: a constant `diffuse` runs in lanes; the others listed here
+/// Whether the lanes take BSDF `b`: a constant `diffuse` and a constant GGX or Beckmann
+/// `roughconductor` run in lanes; the others listed here
 /// lane by lane with the scalar code (they never pass light straight through, as `null` and
 /// `mask` do, whose crossings the lanes do not track).
 fn lane_bsdf(b: &Bsdf) -> bool {
@@ -182,6 +162,8 @@ impl PathIntegrator {
         let mut has: Mw<W>;
         let mut slots: [HitSlot; W] = std::array::from_fn(|_| HitSlot::default());
         let mut depth = 0u32;
+        // The vertex's rough conductors in lanes (cleared and filled at each vertex).
+        let mut conductors = RoughConductorW::<W>::default();
         // The independent sampler's generators in lanes, where every lane has one (a lane
         // draws exactly what its sampler would); other samplers draw lane by lane.
         let mut rng = samplers.iter_mut().all(|s| matches!(s, Sampler::Independent(_))).then(|| {
@@ -257,13 +239,20 @@ impl PathIntegrator {
             let mut rho = V3w::<W>::splat(Rgb::ZERO);
             // The lanes whose BSDF is a constant diffuse one (in lanes); the rest go lane by lane.
             let mut plain = Mw::<W>::NONE;
+            // The lanes whose BSDF is a `roughconductor` of constant parameters (in lanes).
+            let mut rough = Mw::<W>::NONE;
+            conductors.clear();
             for k in ones(has) {
-                if let Some(c) = albedo(scene, si[k].shape) {
-                    set(&mut rho, k, c);
-                    plain.0[k] = u32::MAX;
+                match &scene.bsdfs()[scene.shapes()[si[k].shape as usize].bsdf as usize] {
+                    Bsdf::Diffuse(Diffuse { reflectance: Texture::Constant(c) }) => {
+                        set(&mut rho, k, *c);
+                        plain.0[k] = u32::MAX;
+                    }
+                    Bsdf::RoughConductor(b) if conductors.set(k, b) => rough.0[k] = u32::MAX,
+                    _ => {}
                 }
             }
-            let generic = has & !plain;
+            let generic = has & !plain & !rough;
             let mut u = [[0.0f32; W]; 6];
             if let Some(rng) = &mut rng {
                 for d in &mut u {
@@ -415,6 +404,21 @@ impl PathIntegrator {
             }
 
             let wi = frame.to_local(ls_wi);
+            // The rough conductors in lanes, their results where the lane-by-lane BSDFs put
+            // theirs: the value and density toward the light sample (no density toward a
+            // delta light's: the scalar path evaluates the value alone there), and the sample
+            // that continues the path (η unchanged: their `g_eta` stays 1).
+            if rough.any() {
+                let (rf, rpdf) = conductors.eval_pdf(wo_local, wi);
+                g_f = V3w::select(rough, rf, g_f);
+                g_pdf = Fw::select(rough & !delta, rpdf, g_pdf);
+                let r = conductors.sample(wo_local, Fw(u[4]), Fw(u[5]));
+                g_ok = g_ok | (rough & r.ok);
+                g_weight = V3w::select(rough, r.weight, g_weight);
+                g_wi = V3w::select(rough, frame.to_world(r.wi), g_wi);
+                g_sample_pdf = Fw::select(rough, r.pdf, g_sample_pdf);
+            }
+            let generic = generic | rough;
             let lit = sampled & above & wi.z.gt(Fw::splat(0.0));
             let f = V3w::select(lit, rho.scale(INV_PI * wi.z), zero);
             let pdf = Fw::select(lit, wi.z.max(Fw::splat(0.0)) * INV_PI, Fw::splat(0.0));

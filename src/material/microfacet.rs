@@ -191,6 +191,15 @@ impl Microfacet {
         Sample::solid_angle(m, self.pdf(wi, m))
     }
 
+    /// The normal [`Microfacet::sample`] samples, without its density (GGX and Beckmann).
+    #[inline]
+    pub(crate) fn sample_visible_normal(&self, wi: Vec3, u: Vec2) -> Vec3 {
+        match self.kind {
+            MicrofacetType::Ggx => self.sample_ggx_visible(wi, u),
+            _ => self.sample_beckmann_visible(wi, u),
+        }
+    }
+
     /// Heitz 2018: sample the visible hemisphere of the stretched (α = 1) configuration as a
     /// disk warped toward the projected hemisphere, then unstretch.
     fn sample_ggx_visible(&self, wi: Vec3, u: Vec2) -> Vec3 {
@@ -332,11 +341,11 @@ impl GgxView {
 
 /// Where [`Microfacet::lambda`] of Beckmann stops evaluating: `1 / (1 + Λ(a))` is exactly 1 from
 /// here on.
-const BECKMANN_LAMBDA_ZERO: f32 = 4.0;
+pub(crate) const BECKMANN_LAMBDA_ZERO: f32 = 4.0;
 
 /// Beckmann's Smith `Λ` at `a = 1 / (α tan θ)`: `(erf(a) − 1) / 2 + e^(−a²) / (2a√π)`.
 #[inline]
-fn beckmann_lambda(a: f32) -> f32 {
+pub(crate) fn beckmann_lambda(a: f32) -> f32 {
     0.5 * (erf(a) - 1.0) + exp(-a * a) * INV_SQRT_PI / (2.0 * a)
 }
 

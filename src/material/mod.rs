@@ -17,6 +17,7 @@ mod filter;
 pub mod fresnel;
 pub mod hair;
 pub mod layered;
+pub(crate) mod lanes;
 mod measured;
 mod memo;
 pub mod microfacet;

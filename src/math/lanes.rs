@@ -297,6 +297,20 @@ impl<const W: usize> Not for Mw<W> {
     }
 }
 
+/// The set lanes of `m`, lowest first (a loop over them branches once per set lane, where
+/// testing each lane in turn mispredicts on the unpredictable ones).
+#[inline(always)]
+pub fn ones<const W: usize>(m: Mw<W>) -> impl Iterator<Item = usize> {
+    let mut bits = m.bits();
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
 /// `W` three-component vectors (points, directions, normals or RGB), one per lane, as three
 /// [`Fw`]: the lane form of [`crate::math::Vec3`], its operations in glam's order.
 #[derive(Clone, Copy, Debug, PartialEq)]
