@@ -6,11 +6,12 @@
 //! off until the batch is done. What is the same work in every lane runs in lanes: the shading
 //! frame, the direction to the viewer, the value, density and sample of a constant `diffuse`
 //! BSDF and of a `roughconductor` of constant parameters ([`RoughConductorW`]), the MIS
-//! weights, the throughput and Russian roulette. What branches by lane or reads scattered memory runs lane
-//! by lane with the scalar code: ray queries, surface interactions, emission found by the path,
-//! light selection, light samples (but those of rectangles and of whole spheres seen from
-//! outside, of constant radiance, which run in lanes), environment light of escaped rays (and the sampler's
-//! draws, but for the independent sampler's, which run in lanes: [`Pcg32Lanes`]). Those
+//! weights, the throughput and Russian roulette. What branches by lane or reads scattered
+//! memory runs lane by lane with the scalar code: ray queries, surface interactions, emission
+//! found by the path, light selection, light samples (but those of rectangles and of whole
+//! spheres seen from outside, of constant radiance, which run in lanes), environment light of
+//! escaped rays (and the sampler's draws, but for the independent sampler's, which run in
+//! lanes: [`Pcg32Lanes`]). Those
 //! loops visit the set lanes only (`ones`): testing each lane in turn mispredicted a branch on
 //! every unpredictable lane, which cost more than the lanes saved. Per-lane records (the surface
 //! interaction, the previous vertex) are written in place, never moved: a moved record is read
@@ -83,9 +84,9 @@ fn set<const W: usize>(v: &mut V3w<W>, k: usize, c: Vec3) {
 }
 
 /// Whether the lanes take BSDF `b`: a constant `diffuse` and a constant GGX or Beckmann
-/// `roughconductor` run in lanes; the others listed here
-/// lane by lane with the scalar code (they never pass light straight through, as `null` and
-/// `mask` do, whose crossings the lanes do not track).
+/// `roughconductor` run in lanes; the others listed here lane by lane with the scalar code
+/// (they never pass light straight through, as `null` and `mask` do, whose crossings the lanes
+/// do not track).
 fn lane_bsdf(b: &Bsdf) -> bool {
     matches!(
         b,

@@ -31,24 +31,28 @@ pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> (f32, f32, f32, f32) {
 /// Unpolarized Fresnel reflectance of a conductor with complex index `eta + i k` (per channel,
 /// relative to the exterior) at incidence `cos θᵢ ∈ [0, 1]`; exact formula (no approximation).
 pub fn fresnel_conductor(cos_theta_i: f32, eta: Rgb, k: Rgb) -> Rgb {
-    let f = |eta: f32, k: f32| -> f32 {
-        let c = cos_theta_i.clamp(0.0, 1.0) as f64;
-        let (eta, k) = (eta as f64, k as f64);
-        let c2 = c * c;
-        let s2 = 1.0 - c2;
-        let (eta2, k2) = (eta * eta, k * k);
-        let t0 = eta2 - k2 - s2;
-        let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
-        let t1 = a2b2 + c2;
-        let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
-        let t2 = 2.0 * c * a;
-        let rs = (t1 - t2) / (t1 + t2);
-        let t3 = c2 * a2b2 + s2 * s2;
-        let t4 = t2 * s2;
-        let rp = rs * (t3 - t4) / (t3 + t4);
-        (0.5 * (rp + rs)) as f32
-    };
+    let f = |eta: f32, k: f32| fresnel_conductor_channel(cos_theta_i, eta, k);
     Rgb::new(f(eta.x, k.x), f(eta.y, k.y), f(eta.z, k.z))
+}
+
+/// [`fresnel_conductor`] of one channel (index `eta + i k`), in double precision.
+#[inline(always)]
+pub(crate) fn fresnel_conductor_channel(cos_theta_i: f32, eta: f32, k: f32) -> f32 {
+    let c = cos_theta_i.clamp(0.0, 1.0) as f64;
+    let (eta, k) = (eta as f64, k as f64);
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let (eta2, k2) = (eta * eta, k * k);
+    let t0 = eta2 - k2 - s2;
+    let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
+    let t1 = a2b2 + c2;
+    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
+    let t2 = 2.0 * c * a;
+    let rs = (t1 - t2) / (t1 + t2);
+    let t3 = c2 * a2b2 + s2 * s2;
+    let t4 = t2 * s2;
+    let rp = rs * (t3 - t4) / (t3 + t4);
+    (0.5 * (rp + rs)) as f32
 }
 
 /// Mirror reflection of `wi` about the local normal +z.

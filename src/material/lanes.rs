@@ -9,6 +9,7 @@
 //! them; values are `f |cos θᵢ|`, densities per unit solid angle of `wi`.
 
 use super::conductor::RoughConductor;
+use super::fresnel::fresnel_conductor_channel;
 use super::microfacet::{beckmann_lambda, Microfacet, MicrofacetType, BECKMANN_LAMBDA_ZERO};
 use crate::math::lanes::{ones, Fw, Mw, V3w};
 use crate::math::special::exp;
@@ -244,26 +245,12 @@ impl<const W: usize> RoughConductorW<W> {
 }
 
 /// [`super::fresnel::fresnel_conductor`] of one channel in the lanes of `lanes` (0 in the
-/// others), in double precision as there (the same operations in the same order).
+/// others), lane by lane by the same function.
 #[inline(always)]
 fn fresnel_conductor<const W: usize>(lanes: Mw<W>, cos_theta_i: Fw<W>, eta: Fw<W>, k: Fw<W>) -> Fw<W> {
     let mut out = [0.0f32; W];
     for i in ones(lanes) {
-        let c = cos_theta_i.0[i].clamp(0.0, 1.0) as f64;
-        let (eta, k) = (eta.0[i] as f64, k.0[i] as f64);
-        let c2 = c * c;
-        let s2 = 1.0 - c2;
-        let (eta2, k2) = (eta * eta, k * k);
-        let t0 = eta2 - k2 - s2;
-        let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
-        let t1 = a2b2 + c2;
-        let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
-        let t2 = 2.0 * c * a;
-        let rs = (t1 - t2) / (t1 + t2);
-        let t3 = c2 * a2b2 + s2 * s2;
-        let t4 = t2 * s2;
-        let rp = rs * (t3 - t4) / (t3 + t4);
-        out[i] = (0.5 * (rp + rs)) as f32;
+        out[i] = fresnel_conductor_channel(cos_theta_i.0[i], eta.0[i], k.0[i]);
     }
     Fw(out)
 }
